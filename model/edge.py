@@ -1,0 +1,218 @@
+"""Edge commands and the per-edge setup: octant folding, increments and the initial value.
+
+Everything here runs once per edge; it may multiply and divide (the hardware uses a
+sequential divider). The per-column loop in `step.py` uses only what `setup` returns.
+Coordinates are image coordinates (x right, y down, pixel (x, y) centred on integers) in
+sub-pixel units: a vertex coordinate X means X / 2**subpixel_bits pixels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+from .config import EdgeConfig
+
+INSIDE_SIDES = ("left", "right")
+
+
+class EdgeError(ValueError):
+    """An edge command the configured antialiaser cannot draw."""
+
+
+@dataclass(frozen=True)
+class Edge:
+    """One edge command: P0 -> P1 in sub-pixel units, the inside side and two intensities.
+
+    inside is the side of the direction of travel P0 -> P1 (as seen on the image, y down) that
+    gets i_in; the other side gets i_out. i_in None means full scale.
+    """
+
+    x0: int
+    y0: int
+    x1: int
+    y1: int
+    inside: str = "left"
+    i_in: int | None = None
+    i_out: int = 0
+
+    @classmethod
+    def from_pixels(cls, config: EdgeConfig, x0, y0, x1, y1, **kwargs) -> Edge:
+        """Build an edge from pixel coordinates (numbers or strings like '10.25')."""
+        scale = config.subpixel_scale
+        fixed = []
+        for name, value in zip(("X0", "Y0", "X1", "Y1"), (x0, y0, x1, y1), strict=True):
+            try:
+                exact = Fraction(value) * scale
+            except (ValueError, TypeError, ZeroDivisionError):
+                raise EdgeError(f"{name} must be a number, not {value!r}") from None
+            if exact.denominator != 1:
+                raise EdgeError(
+                    f"{name} = {value} is not a multiple of the sub-pixel step "
+                    f"1/{scale} (subpixel_bits = {config.subpixel_bits})"
+                )
+            fixed.append(int(exact))
+        return cls(*fixed, **kwargs)
+
+    def intensities(self, config: EdgeConfig) -> tuple[int, int]:
+        i_in = config.full_scale if self.i_in is None else self.i_in
+        return i_in, self.i_out
+
+
+def validate(config: EdgeConfig, edge: Edge) -> None:
+    """Raise EdgeError naming what is wrong with the edge and what is allowed."""
+    hi = config.max_vertex
+    scale = config.subpixel_scale
+    for name in ("x0", "y0", "x1", "y1"):
+        value = getattr(edge, name)
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise EdgeError(f"{name.upper()} must be an integer in sub-pixel units, not {value!r}")
+        if not 0 <= value <= hi:
+            raise EdgeError(
+                f"{name.upper()} = {Fraction(value, scale)} px is outside the configured range "
+                f"[0, {Fraction(hi, scale)}] px (coord_bits = {config.coord_bits}, "
+                f"subpixel_bits = {config.subpixel_bits})"
+            )
+    if edge.x0 == edge.x1 and edge.y0 == edge.y1:
+        raise EdgeError("zero-length edge: P0 and P1 are the same point")
+    if edge.inside not in INSIDE_SIDES:
+        raise EdgeError(f"inside must be 'left' or 'right', not {edge.inside!r}")
+    i_in, i_out = edge.intensities(config)
+    for name, value in (("I_in", i_in), ("I_out", i_out)):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int)
+            or not (0 <= value <= config.full_scale)
+        ):
+            raise EdgeError(
+                f"{name} must be an integer in [0, {config.full_scale}] "
+                f"(intensity_bits = {config.intensity_bits}), not {value!r}"
+            )
+    if i_in == i_out:
+        # The evaluation function is scaled by I_in - I_out; at zero it cannot choose pixels.
+        raise EdgeError(
+            f"I_in equals I_out ({i_in}): the edge has nothing to antialias; "
+            "draw its pixels with the fill instead"
+        )
+
+
+@dataclass(frozen=True)
+class EdgeSetup:
+    """Per-edge constants and the initial state of the stepping loop (see docs/model.md)."""
+
+    x_major: bool
+    columns: int  # columns to step, >= 1
+    x: int  # screen pixel of the first column's primary write
+    y: int
+    col_dx: int  # screen step of one column (along the major axis)
+    col_dy: int
+    row_dx: int  # screen step of one row (along the minor axis, the stepping direction)
+    row_dy: int
+    du: int  # |major delta| in sub-pixel units: the remainder modulus
+    dv: int  # |minor delta|
+    ifix: int  # |I_in - I_out| << F
+    jq: int  # initial accumulator, quotient and remainder
+    jr: int
+    kq: int  # per-column increment
+    kr: int
+    khq: int  # half increment (the exit threshold k/2)
+    khr: int
+    value_base: int  # intensity of the B side (coverage of A = 0)
+    value_sign: int  # +1 if the A side is brighter, else -1
+    inside_is_a: bool  # the A side (towards smaller minor coordinate) is inside
+    seg_thresholds: tuple[int, ...]  # segment j starts at d >= seg_thresholds[j - 1]
+    seg_intercepts: tuple[int, ...]  # subtracted from the slope term on segment j
+
+    @property
+    def k(self) -> Fraction:
+        return Fraction(self.dv, self.du)
+
+
+def floor_div(a: int, b: int) -> int:
+    return a // b  # Python floors toward -inf for negative numerators too
+
+
+def segment_constants(config: EdgeConfig, kq: int) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """Thresholds j*K/(2N) and intercepts K*(8j(j+1)+1)/(64N^2) of the N-segment estimate."""
+    n = config.segments
+    if n == 0:
+        return (), ()
+    log2n = n.bit_length() - 1
+    thresholds = tuple((j * kq) >> (log2n + 1) for j in range(1, n))
+    intercepts = tuple(((8 * j * (j + 1) + 1) * kq) >> (6 + 2 * log2n) for j in range(n))
+    return thresholds, intercepts
+
+
+def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
+    """Fold the edge into the first octant and compute the loop's constants and start state."""
+    validate(config, edge)
+    s, F = config.subpixel_bits, config.F  # noqa: N806
+    S = config.subpixel_scale  # noqa: N806
+    dx, dy = edge.x1 - edge.x0, edge.y1 - edge.y0
+    x_major = abs(dx) >= abs(dy)
+    if x_major:
+        p0, q0, dp, dq = edge.x0, edge.y0, dx, dy
+    else:
+        p0, q0, dp, dq = edge.y0, edge.x0, dy, dx
+    step_major = 1 if dp > 0 else -1
+    step_minor = 1 if dq >= 0 else -1
+    du, dv = abs(dp), abs(dq)
+    # Normalised coordinates: u along the major axis, v along the minor, both increasing.
+    u0, v0, u1 = step_major * p0, step_minor * q0, step_major * (p0 + dp)
+
+    # Columns whose interior the edge's projection overlaps: floor(u0 + 1/2) .. ceil(u1 - 1/2).
+    c0 = floor_div(2 * u0 + S, 2 * S)
+    c1 = -floor_div(S - 2 * u1, 2 * S)
+    columns = c1 - c0 + 1
+
+    # Line height at the centre of column c0: vc = num / den pixels.
+    num = v0 * du + dv * (c0 * S - u0)
+    den = S * du
+    row0 = floor_div(2 * num + den, 2 * den)  # row whose span [y - 1/2, y + 1/2) holds vc
+    mf = 2 * num + den - 2 * row0 * den  # f = vc - (row0 - 1/2) = mf / (2 den), in [0, 1)
+
+    i_in, i_out = edge.intensities(config)
+    # Orientation of the folding map: a swap or one mirror flips left and right.
+    det = (1 if x_major else -1) * step_major * step_minor
+    # In the folded frame the left of travel (du, dv) is the side of smaller v: the A side.
+    inside_is_a = (edge.inside == "left") == (det == 1)
+    i_a, i_b = (i_in, i_out) if inside_is_a else (i_out, i_in)
+    ifix = abs(i_a - i_b) << F
+
+    jq, jr = divmod(abs(i_a - i_b) * mf << (F - s - 1), du)
+    kq, kr = divmod(abs(i_a - i_b) * dv << F, du)
+    khq, khr = divmod(abs(i_a - i_b) * dv << (F - 1), du)
+    if config.accumulator == "truncated":
+        jr = kr = khr = 0  # the paper's fixed point: remainders dropped
+    thresholds, intercepts = segment_constants(config, kq)
+
+    def screen(major: int, minor: int) -> tuple[int, int]:
+        return (major, minor) if x_major else (minor, major)
+
+    x, y = screen(step_major * c0, step_minor * row0)
+    col_dx, col_dy = screen(step_major, 0)
+    row_dx, row_dy = screen(0, step_minor)
+    return EdgeSetup(
+        x_major=x_major,
+        columns=columns,
+        x=x,
+        y=y,
+        col_dx=col_dx,
+        col_dy=col_dy,
+        row_dx=row_dx,
+        row_dy=row_dy,
+        du=du,
+        dv=dv,
+        ifix=ifix,
+        jq=jq,
+        jr=jr,
+        kq=kq,
+        kr=kr,
+        khq=khq,
+        khr=khr,
+        value_base=i_b,
+        value_sign=1 if i_a >= i_b else -1,
+        inside_is_a=inside_is_a,
+        seg_thresholds=thresholds,
+        seg_intercepts=intercepts,
+    )
