@@ -131,8 +131,8 @@ class EdgeConfig:
 
     def register_widths(self) -> dict[str, RegisterWidth]:
         """The width table of the stepping loop, shared with the hardware."""
-        W, s, I, F = self.coord_bits, self.subpixel_bits, self.intensity_bits, self.F  # noqa: N806
-        acc = I + F  # holds [0, |I_d| * 2**F] with |I_d| < 2**I
+        W, s = self.coord_bits, self.subpixel_bits  # noqa: N806
+        acc = self.intensity_bits + self.F  # holds [0, |I_d| * 2**F] with |I_d| < 2**I
         return {
             # pixel coordinates of writes: columns 0 .. 2**W, rows one beyond on either side
             "x": RegisterWidth(W + 2, signed=True),
@@ -152,7 +152,7 @@ class EdgeConfig:
             "t": RegisterWidth(acc + 1, signed=True),  # triangle estimate before clamping
             "area": RegisterWidth(acc + 1),  # a pixel's scaled area, [0, ifix]
             "seg_const": RegisterWidth(acc),  # per-edge thresholds and intercepts
-            "value": RegisterWidth(I),  # output intensity
+            "value": RegisterWidth(self.intensity_bits),  # output intensity
         }
 
     def with_(self, **changes) -> EdgeConfig:

@@ -37,7 +37,7 @@ def _clamped_mean(a, b):
 
 
 def _edge_frame(config: EdgeConfig, edge: Edge, number):
-    """Pixel-unit endpoints, the major axis, and whether inside is toward larger minor coordinate."""
+    """Pixel-unit endpoints, the major axis, and whether inside lies toward larger minor."""
     scale = config.subpixel_scale
     x0, y0, x1, y1 = (number(v) / scale for v in (edge.x0, edge.y0, edge.x1, edge.y1))
     dx, dy = x1 - x0, y1 - y0
