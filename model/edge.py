@@ -69,8 +69,8 @@ def validate(config: EdgeConfig, edge: Edge) -> None:
             raise EdgeError(f"{name.upper()} must be an integer in sub-pixel units, not {value!r}")
         if not 0 <= value <= hi:
             raise EdgeError(
-                f"{name.upper()} = {Fraction(value, scale)} px is outside the configured range "
-                f"[0, {Fraction(hi, scale)}] px (coord_bits = {config.coord_bits}, "
+                f"{name.upper()} = {value / scale:g} px is outside the configured range "
+                f"[0, {hi / scale}] px (coord_bits = {config.coord_bits}, "
                 f"subpixel_bits = {config.subpixel_bits})"
             )
     if edge.x0 == edge.x1 and edge.y0 == edge.y1:

@@ -1,0 +1,99 @@
+"""The command line: output formats, and one-line errors with exit status 2 for bad input."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from edgeaa.cli import main
+from edgeaa.model import Edge, EdgeConfig, run_edge
+
+
+def run_cli(capsys, *argv):
+    status = main(list(argv))
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err
+
+
+def test_edge_json_matches_model(capsys):
+    status, out, err = run_cli(capsys, "edge", "1.5", "2", "9.25", "5.0625", "--json")
+    assert status == 0 and err == ""
+    rows = json.loads(out)
+    config = EdgeConfig()
+    result = run_edge(config, Edge.from_pixels(config, "1.5", "2", "9.25", "5.0625"))
+    assert [(r["x"], r["y"], r["value"]) for r in rows] == [
+        (w.x, w.y, w.value) for w in result.writes
+    ]
+    assert [r["coverage"] for r in rows] == [result.coverage(w) for w in result.writes]
+
+
+def test_edge_options_reach_the_model(capsys):
+    argv = ["edge", "10", "0", "3", "9.5", "--inside", "right", "--mode", "seg4"]
+    argv += ["--accumulator", "truncated", "--i-in", "10", "--i-out", "200", "--json"]
+    argv += ["--coord-bits", "12", "--subpixel-bits", "2", "--frac-bits", "30"]
+    status, out, _ = run_cli(capsys, *argv)
+    assert status == 0
+    config = EdgeConfig(
+        coord_bits=12, subpixel_bits=2, frac_bits=30, mode="seg4", accumulator="truncated"
+    )
+    edge = Edge.from_pixels(config, 10, 0, 3, "9.5", inside="right", i_in=10, i_out=200)
+    expected = run_edge(config, edge)
+    assert [(r["x"], r["y"], r["value"]) for r in json.loads(out)] == [
+        (w.x, w.y, w.value) for w in expected.writes
+    ]
+    # The defaults would give other writes: the options really changed something.
+    default = run_edge(EdgeConfig(), Edge.from_pixels(EdgeConfig(), 10, 0, 3, "9.5"))
+    assert [(w.x, w.y, w.value) for w in default.writes] != [
+        (w.x, w.y, w.value) for w in expected.writes
+    ]
+
+
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["edge", "0", "0", "0", "0"], "zero-length edge"),
+        (["edge", "0", "0", "3000", "1"], "outside the configured range [0, 2047.9375] px"),
+        (["edge", "0", "0", "-1", "1"], "outside the configured range"),
+        (["edge", "0", "0", "3.03", "1"], "not a multiple of the sub-pixel step 1/16"),
+        (["edge", "0", "0", "3", "1", "--mode", "foo"], "invalid choice: 'foo'"),
+        (["edge", "0", "0", "3", "1", "--coord-bits", "40"], "coord_bits must be in [2, 16]"),
+        (["edge", "0", "0", "3", "1", "--subpixel-bits", "9"], "subpixel_bits must be in [0, 8]"),
+        (["edge", "0", "0", "3", "1", "--frac-bits", "3"], "frac_bits must be in [6, 48]"),
+        (["edge", "0", "0", "3", "1", "--i-in", "300"], "I_in must be an integer in [0, 255]"),
+        (["edge", "0", "0", "3", "1", "--i-in", "0"], "I_in equals I_out"),
+        (["edge", "0", "0", "x", "1"], "X1 must be a number"),
+        (["edge", "0", "0"], "required"),
+        (["nonsense"], "invalid choice"),
+    ],
+)
+def test_bad_input_is_one_line_with_status_2(capsys, argv, fragment):
+    status, out, err = run_cli(capsys, *argv)
+    assert status == 2
+    assert fragment in err
+    assert err.count("\n") == 1, f"expected one line, got {err!r}"
+    assert "Traceback" not in err and out == ""
+
+
+def test_console_script_exit_status():
+    proc = subprocess.run(
+        [sys.executable, "-m", "edgeaa", "edge", "0", "0", "0", "0"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == "edgeaa: error: zero-length edge: P0 and P1 are the same point"
+
+
+def test_demo_reports_each_mode_within_its_bound(capsys, tmp_path):
+    plot = tmp_path / "demo.png"
+    status, out, _ = run_cli(capsys, "demo", "--spokes", "16", "-o", str(plot))
+    assert status == 0
+    assert plot.stat().st_size > 10_000
+    rows = {line.split()[0]: line.split() for line in out.splitlines()[2:6]}
+    assert set(rows) == {"pw", "paper", "seg2", "seg4"}
+    for mode, (_, writes, _worst, worst_over_k, bound_over_k) in rows.items():
+        assert int(writes) > 0
+        # The demo's own figure must respect the bound (fixed-point slack well below 1e-5).
+        assert float(worst_over_k) <= float(bound_over_k) + 1e-5, mode
