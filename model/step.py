@@ -38,8 +38,13 @@ class WidthError(AssertionError):
 @dataclass
 class EdgeResult:
     setup: EdgeSetup
-    writes: list[Write]
-    trace: list[StepState]
+    columns: list[tuple[Write, ...]]  # the writes of each column, primary first
+    trace: list[StepState]  # the loop registers at the start of each column
+
+    @property
+    def writes(self) -> list[Write]:
+        """All writes in order: column by column, the primary pixel before its neighbour."""
+        return [write for column in self.columns for write in column]
 
     def coverage(self, write: Write) -> float:
         """The inside coverage the model computed for a write, before output rounding."""
@@ -130,15 +135,17 @@ def run_edge(config: EdgeConfig, edge: Edge) -> EdgeResult:
         reg("seg_const", constant)
 
     x, y, jq, jr = reg("x", st.x), reg("y", st.y), reg("jq", st.jq), reg("jr", st.jr)
-    writes: list[Write] = []
+    columns: list[tuple[Write, ...]] = []
     trace: list[StepState] = []
     for column in range(st.columns):
         reg("remaining", st.columns - 1 - column)
         trace.append(StepState(column, x, y, jq, jr))
+        column_writes = []
         for row_offset, area in column_areas(config, st, jq, jr, reg):
             wx = reg("x", x + row_offset * st.row_dx)
             wy = reg("y", y + row_offset * st.row_dy)
-            writes.append(Write(wx, wy, output_value(config, st, area, reg), area))
+            column_writes.append(Write(wx, wy, output_value(config, st, area, reg), area))
+        columns.append(tuple(column_writes))
         # Advance one column: J += K with the remainder carried; step a row when J >= 1.
         rsum = jr + st.kr
         carry = int(rsum >= st.du)
@@ -148,4 +155,4 @@ def run_edge(config: EdgeConfig, edge: Edge) -> EdgeResult:
         jq = reg("jq", jsum - st.ifix if row_step else jsum)
         x = reg("x", x + st.col_dx + (st.row_dx if row_step else 0))
         y = reg("y", y + st.col_dy + (st.row_dy if row_step else 0))
-    return EdgeResult(st, writes, trace)
+    return EdgeResult(st, columns, trace)
