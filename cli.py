@@ -200,6 +200,23 @@ def _plot_demo(per_mode, path: str) -> None:
     plt.close(fig)
 
 
+# -- edgeaa verilog ------------------------------------------------------------------------
+
+
+def cmd_verilog(args: argparse.Namespace) -> int:
+    from .hdl import verilog
+
+    config = config_from_args(args)
+    source = verilog(config, name=args.name)
+    if args.output in (None, "-"):
+        sys.stdout.write(source)
+    else:
+        with open(args.output, "w") as file:
+            file.write(source)
+        print(f"wrote {args.output}: module {args.name}, {config}", file=sys.stderr)
+    return 0
+
+
 # -- entry point ---------------------------------------------------------------------------
 
 
@@ -246,6 +263,19 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("-o", "--output", help="also plot error against direction to this file")
     _add_config_options(demo)
     demo.set_defaults(func=cmd_demo)
+
+    verilog = sub.add_parser(
+        "verilog",
+        help="write the hardware core as Verilog",
+        description="Elaborate the Amaranth core for the configuration and write it as Verilog "
+        "with stable port names (docs/hardware.md lists them): clk, rst, the edge command "
+        "stream edges__valid/ready/payload__*, the pixel write stream "
+        "writes__valid/ready/payload__lane0__*, lane1__*, lane1_valid, last, and errors/error.",
+    )
+    verilog.add_argument("-o", "--output", help="output file (default: standard output)")
+    verilog.add_argument("--name", default="edgeaa_core", help="top module name")
+    _add_config_options(verilog)
+    verilog.set_defaults(func=cmd_verilog)
     return parser
 
 

@@ -97,3 +97,29 @@ def test_demo_reports_each_mode_within_its_bound(capsys, tmp_path):
         assert int(writes) > 0
         # The demo's own figure must respect the bound (fixed-point slack well below 1e-5).
         assert float(worst_over_k) <= float(bound_over_k) + 1e-5, mode
+
+
+def test_verilog_command_writes_the_core_with_stable_ports(capsys, tmp_path):
+    path = tmp_path / "core.v"
+    status, _, err = run_cli(capsys, "verilog", "--mode", "seg2", "-o", str(path))
+    assert status == 0 and "wrote" in err
+    source = path.read_text()
+    assert "module edgeaa_core(" in source
+    for port in (
+        "clk",
+        "rst",
+        "edges__valid",
+        "edges__ready",
+        "edges__payload__x0",
+        "edges__payload__inside",
+        "writes__payload__lane1__value",
+        "writes__payload__lane1_valid",
+        "writes__payload__last",
+        "errors",
+    ):
+        assert f" {port};" in source, port
+
+
+def test_verilog_command_rejects_bad_configuration(capsys):
+    status, _, err = run_cli(capsys, "verilog", "--intensity-bits", "0")
+    assert status == 2 and "intensity_bits must be in [1, 16]" in err
