@@ -112,7 +112,7 @@ class EdgeConfig:
 
     @property
     def max_columns(self) -> int:
-        """Most columns one edge can step: pixel centres 0 .. 2**coord_bits inclusive."""
+        """At most the columns one edge can step: pixel centres 0 .. 2**coord_bits inclusive."""
         return (1 << self.coord_bits) + 1
 
     @property
@@ -122,9 +122,11 @@ class EdgeConfig:
     def derived_frac_bits(self) -> int:
         """Fraction bits from the error budget of docs/model.md.
 
-        Budget: over the longest edge the fixed-point error of the coverage stays below half an
-        output LSB at the smallest intensity difference (1), even with the truncated slope,
-        which loses less than 2**-F LSB per column: max_columns * 2**-F <= 2**-(I + 1).
+        Budget: over the longest edge, the truncated slope (which loses less than one unit of
+        2**-F intensity LSB per column) moves the coverage by at most max_columns * 2**-F /
+        |I_d| <= 2**-(I + 1) even at the smallest intensity difference |I_d| = 1; the output
+        value moves by at most max_columns * 2**-F LSB. max_columns is an upper bound on the
+        columns of one edge.
         """
         columns_log2 = (self.max_columns - 1).bit_length()  # ceil(log2(max_columns))
         return max(columns_log2 + self.intensity_bits + 1, self.min_frac_bits)

@@ -1,0 +1,384 @@
+"""The vectorized model: the step model's writes for whole batches of edges at once, in numpy.
+
+`run_edges` gives bit-identical writes to `step.run_edge` (same pixels, values, areas and
+order) without a Python loop over columns. Only the per-edge setup (`edge.setup`, which also
+validates the edge and raises the same EdgeError) runs in a Python loop.
+
+Closed form of the stepping loop. Column i = 0 .. columns - 1 of an edge starts with
+
+    R_i    = jr0 + i kr                carries_i = R_i // du       jr_i = R_i % du
+    U_i    = jq0 + i kq + carries_i    rows_i    = U_i // ifix     jq_i = U_i - rows_i ifix
+    pixel  = (x0 + i col_dx + rows_i row_dx,  y0 + i col_dy + rows_i row_dy)
+
+which is what the loop's add / compare / subtract steps compute, provided each step carries at
+most once and steps at most one row: jr0 < du and kr < du (divmod remainders), jq0 < ifix
+(mf < 2 S du in setup), and kq + carry <= ifix (kq <= ifix since dv <= du; kq = ifix only
+when dv = du, and then kr = 0, so no carry). `_check_invariants` asserts these per edge. The
+exit tests, triangle estimate, segment choice and output rounding are the step model's
+formulas applied to arrays; in truncated mode setup already zeroes jr, kr and khr.
+
+Overflow bound (why int64 is enough, and when it is not). Let n = columns. The loop's last
+advance (after column n - 1) is width-checked in the step model, so states i = 0 .. n are
+computed here and every value is bounded by:
+
+* R_i <= (du - 1)(n + 1) < 2**(W + s) (2**W + 2) <= 2**24 (2**16 + 2) < 2**41: always fits.
+* 0 <= U_i <= U_n = jq0 + n kq + carries_n (U is nondecreasing in i); i kq <= U_n.
+* rows_i ifix <= U_i; jsum_i = U_(i+1) - rows_i ifix < 2 ifix.
+* exit depths |dq| <= ifix + khq + 1 <= 2 ifix + 1; the slope term (2j + 1) dq with
+  j <= 3 is at most 7 |dq| < 16 ifix; areas are in [-16 ifix, 16 ifix]; the rounding add
+  area + 2**(F - 1) < 32 ifix since 2**F <= ifix.
+
+So an edge is computed in int64 when U_n <= 2**62 and ifix <= 2**58 (everything then stays
+below 2**63). Neither holds for every allowed configuration: with intensity_bits = 16 and a
+frac_bits override of 48, ifix = |I_in - I_out| 2**48 reaches 2**64 - 2**48; with
+coord_bits = 16, intensity_bits = 16 (derived F = 34) a long steep edge has U_n near
+2**16 * 2**50 = 2**66. Such edges are computed with numpy object arrays of Python ints
+(same formulas, exact, slower): the check is per edge, in exact Python integers, so a result
+is never silently wrapped. The output arrays x, y, value always fit int64 (W + 2 and
+intensity_bits bits); `area` is int64 when its register (intensity_bits + F + 1 bits) fits
+int64, and an object array of Python ints otherwise.
+
+Register widths are checked on the arrays as in the step model (the same registers, the same
+values), raising WidthError; with a batch the first failing register reported may differ from
+the one the step model would report first, and every edge's setup (so any EdgeError) runs
+before any column.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import EdgeConfig, RegisterWidth
+from .edge import Edge, EdgeSetup, setup
+from .step import WidthError, Write
+
+INT64_U_LIMIT = 1 << 62  # largest U_n an edge may reach on the int64 path
+INT64_IFIX_LIMIT = 1 << 58  # largest ifix on the int64 path (intermediates < 32 ifix)
+_FLOAT_EXACT = 1 << 53  # integers up to this convert to float64 exactly
+CHUNK_STATES = 1 << 15  # column states per numpy pass
+
+
+class VectorInvariantError(AssertionError):
+    """A setup value breaks an assumption of the closed form (a bug in setup, not an input)."""
+
+
+@dataclass(frozen=True, eq=False)
+class WriteBatch:
+    """The writes of a batch of edges, one row per write, in the step model's order.
+
+    edge_index: index of the edge in the batch; x, y: pixel; value: output intensity;
+    area: scaled A-side area (units of 2**-F intensity LSB). All int64 except `area`, which is
+    an object array of Python ints when the config's area register is wider than int64.
+    """
+
+    edge_index: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    value: np.ndarray
+    area: np.ndarray
+    setups: tuple[EdgeSetup, ...]
+
+    def __len__(self) -> int:
+        return len(self.edge_index)
+
+    def edge_slice(self, k: int) -> slice:
+        """The rows of edge k (its writes are contiguous)."""
+        lo, hi = np.searchsorted(self.edge_index, [k, k + 1])
+        return slice(int(lo), int(hi))
+
+    def writes(self, k: int | None = None) -> list[Write]:
+        """The writes of edge k (all edges if None) as the step model's Write tuples."""
+        rows = slice(None) if k is None else self.edge_slice(k)
+        return [
+            Write(int(x), int(y), int(v), int(a))
+            for x, y, v, a in zip(
+                self.x[rows], self.y[rows], self.value[rows], self.area[rows], strict=True
+            )
+        ]
+
+    def coverage(self) -> np.ndarray:
+        """Inside coverage per write, float64, equal to EdgeResult.coverage of each write."""
+        return coverage(self)
+
+
+def coverage(batch: WriteBatch) -> np.ndarray:
+    """area / ifix, or 1 - that when the inside is the B side: EdgeResult.coverage per write.
+
+    Python's int / int is correctly rounded; so is float64 division of exactly converted
+    operands, which is used when area and ifix are below 2**53. Larger values divide as
+    Python ints (object arrays) to give the same float.
+    """
+    if len(batch) == 0:
+        return np.zeros(0, dtype=np.float64)
+    ifix_list = [st.ifix for st in batch.setups]
+    inside_a = np.array([st.inside_is_a for st in batch.setups], dtype=bool)[batch.edge_index]
+    area = batch.area
+    small = max(ifix_list) <= _FLOAT_EXACT and max(abs(int(area.min())), int(area.max())) <= (
+        _FLOAT_EXACT
+    )
+    if small:
+        ifix = np.array(ifix_list, dtype=np.int64)[batch.edge_index]
+        area_a = area.astype(np.int64) / ifix
+    else:
+        ifix = np.array(ifix_list, dtype=object)[batch.edge_index]
+        area_a = (area.astype(object) / ifix).astype(np.float64)
+    return np.where(inside_a, area_a, 1.0 - area_a)
+
+
+def run_edge_vector(config: EdgeConfig, edge: Edge) -> WriteBatch:
+    """One edge through the vectorized model (edge_index all 0)."""
+    return run_edges(config, [edge])
+
+
+def run_edges(
+    config: EdgeConfig, edges: Iterable[Edge], *, force_object: bool = False
+) -> WriteBatch:
+    """The writes of all edges, in order, bit-identical to `run_edge` on each edge.
+
+    force_object computes every edge with Python-int object arrays (the overflow fallback),
+    for testing that path against the int64 one.
+    """
+    setups = tuple(setup(config, edge) for edge in edges)  # validates: raises EdgeError
+    widths = config.register_widths()
+    for st in setups:
+        _check_constants(widths, st)
+        _check_invariants(st)
+    fits = [not force_object and _fits_int64(st) for st in setups]
+    fast = [k for k, ok in enumerate(fits) if ok]
+    slow = [k for k, ok in enumerate(fits) if not ok]
+    parts = [
+        _run_group(config, widths, setups, chunk, dtype)
+        for group, dtype in ((fast, np.int64), (slow, object))
+        for chunk in _chunks(setups, group)
+    ]
+    area_dtype = np.int64 if widths["area"].bits <= 63 else object
+    if not parts:
+        empty = np.zeros(0, dtype=np.int64)
+        return WriteBatch(empty, empty, empty, empty, empty.astype(area_dtype), setups)
+    columns = [np.concatenate([part[name] for part in parts]) for name in range(5)]
+    if fast and slow:  # each group is in order; a stable sort on the edge interleaves them
+        order = np.argsort(columns[0], kind="stable")
+        columns = [column[order] for column in columns]
+    edge_index, x, y, value, area = columns
+    return WriteBatch(
+        edge_index.astype(np.int64),
+        x.astype(np.int64),
+        y.astype(np.int64),
+        value.astype(np.int64),
+        area.astype(area_dtype),
+        setups,
+    )
+
+
+# -- per-edge checks ---------------------------------------------------------------------------
+
+
+def _width_error(name: str, value: int, width: RegisterWidth) -> WidthError:
+    return WidthError(
+        f"register {name} = {value} does not fit {width.bits} bits "
+        f"({'signed' if width.signed else 'unsigned'})"
+    )
+
+
+def _check_constants(widths: dict[str, RegisterWidth], st: EdgeSetup) -> None:
+    """The per-edge registers run_edge checks before its loop."""
+    values = [
+        ("du", st.du),
+        ("ifix", st.ifix),
+        ("kq", st.kq),
+        ("kr", st.kr),
+        ("khq", st.khq),
+        ("khr", st.khr),
+    ]
+    values += [("seg_const", c) for c in st.seg_thresholds + st.seg_intercepts]
+    values += [("x", st.x), ("y", st.y), ("jq", st.jq), ("jr", st.jr)]
+    values += [("remaining", st.columns - 1)]  # the largest value the loop assigns
+    for name, value in values:
+        if not widths[name].holds(value):
+            raise _width_error(name, value, widths[name])
+
+
+def _check_invariants(st: EdgeSetup) -> None:
+    """What the closed form assumes of setup (see the module docstring)."""
+    ok = (
+        st.columns >= 1
+        and st.du >= 1
+        and st.ifix >= 1
+        and 0 <= st.jr < st.du
+        and 0 <= st.kr < st.du
+        and 0 <= st.khr < st.du
+        and 0 <= st.jq < st.ifix
+        and st.kq >= 0
+        and st.kq + (1 if st.kr else 0) <= st.ifix
+    )
+    if not ok:
+        raise VectorInvariantError(f"setup breaks the closed form's assumptions: {st}")
+
+
+def _fits_int64(st: EdgeSetup) -> bool:
+    """Whether every intermediate of the edge stays below 2**63 (bound in the docstring)."""
+    n = st.columns
+    u_last = st.jq + n * st.kq + (st.jr + n * st.kr) // st.du
+    return u_last <= INT64_U_LIMIT and st.ifix <= INT64_IFIX_LIMIT
+
+
+def _chunks(setups: Sequence[EdgeSetup], group: list[int]) -> list[list[int]]:
+    """Split a group of edges into runs of about CHUNK_STATES column states (cache-sized
+    arrays: several times faster than one huge batch)."""
+    chunks, chunk, states = [], [], 0
+    for k in group:
+        chunk.append(k)
+        states += setups[k].columns + 1
+        if states >= CHUNK_STATES:
+            chunks.append(chunk)
+            chunk, states = [], 0
+    if chunk:
+        chunks.append(chunk)
+    return chunks
+
+
+def _divmod(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Floor quotient and remainder (np.divmod has no object-array loop)."""
+    if a.dtype == object:
+        q = a // b
+        return q, a - q * b
+    return np.divmod(a, b)
+
+
+def _check(widths: dict[str, RegisterWidth], name: str, values: np.ndarray) -> None:
+    if values.size == 0:
+        return
+    width = widths[name]
+    lo, hi = int(values.min()), int(values.max())
+    if lo < width.min:
+        raise _width_error(name, lo, width)
+    if hi > width.max:
+        raise _width_error(name, hi, width)
+
+
+# -- the vectorized loop -----------------------------------------------------------------------
+
+
+def _run_group(
+    config: EdgeConfig,
+    widths: dict[str, RegisterWidth],
+    setups: Sequence[EdgeSetup],
+    group: list[int],
+    dtype,
+) -> list[np.ndarray]:
+    """Writes of the edges `group` (ascending), computed in `dtype` (int64 or object)."""
+    sts = [setups[k] for k in group]
+
+    def per_edge(name: str) -> np.ndarray:
+        # An object array must hold Python ints (not numpy scalars) so nothing wraps.
+        return np.array([int(getattr(st, name)) for st in sts], dtype=dtype)
+
+    columns = np.array([st.columns for st in sts], dtype=np.int64)
+    # States i = 0 .. columns: the last one is the advance after the last column, which the
+    # step model also computes and width-checks.
+    states = columns + 1
+    e = np.repeat(np.arange(len(sts)), states)  # edge (within the group) of each state
+    starts = np.cumsum(states) - states
+    i = np.arange(int(states.sum()), dtype=np.int64) - np.repeat(starts, states)
+    if dtype is object:
+        i = i.astype(object)
+
+    du, ifix, kq, kr = (per_edge(n)[e] for n in ("du", "ifix", "kq", "kr"))
+    carries, jr = _divmod(per_edge("jr")[e] + i * kr, du)
+    unreduced = per_edge("jq")[e] + i * kq + carries
+    rows, jq = _divmod(unreduced, ifix)
+    x = per_edge("x")[e] + i * per_edge("col_dx")[e] + rows * per_edge("row_dx")[e]
+    y = per_edge("y")[e] + i * per_edge("col_dy")[e] + rows * per_edge("row_dy")[e]
+    for name, values in (("x", x), ("y", y), ("jq", jq), ("jr", jr)):
+        _check(widths, name, values)
+    # jsum of the advance out of state i (into i + 1): U_(i+1) - rows_i ifix.
+    is_col = i < columns[e]
+    nxt = np.flatnonzero(is_col) + 1
+    _check(widths, "jsum", unreduced[nxt] - rows[is_col] * ifix[is_col])
+
+    # From here on: the columns only (states 0 .. columns - 1).
+    e, jq, jr, x, y = e[is_col], jq[is_col], jr[is_col], x[is_col], y[is_col]
+    du, ifix = du[is_col], ifix[is_col]
+    zero = np.zeros(len(e), dtype=np.int64)
+    if config.segments == 0:  # pw: one pixel per column, area = J
+        area0, area1, offset, has = jq, zero, zero, np.zeros(len(e), dtype=bool)
+    else:
+        khq, khr = per_edge("khq")[e], per_edge("khr")[e]
+        # exit_depth_above: d = J + K/2 - ifix
+        rsum = jr + khr
+        carry = (rsum >= du).astype(dtype)
+        dq_above = jq + khq + carry - ifix
+        dr_above = rsum - carry * du
+        _check(widths, "dq", dq_above)
+        _check(widths, "dr", dr_above)
+        above = (dq_above > 0) | ((dq_above == 0) & (dr_above > 0))
+        # exit_depth_below: d = K/2 - J, evaluated (and width-checked) only when not above
+        borrow = (khr < jr).astype(dtype)
+        dq_below = khq - jq - borrow
+        dr_below = khr - jr + borrow * du
+        _check(widths, "dq", dq_below[~above])
+        _check(widths, "dr", dr_below[~above])
+        below = ~above & ((dq_below > 0) | ((dq_below == 0) & (dr_below > 0)))
+        has = above | below
+        t = _triangle_estimate(config, widths, sts, dtype, e, np.where(above, dq_above, dq_below))
+        _check(widths, "t", t[has])
+        t = np.where(t > 0, t, 0)
+        area0 = np.where(above, jq - t, np.where(below, jq + t, jq))
+        area1 = np.where(above, t, ifix - t)
+        offset = np.where(above, 1, -1)
+    _check(widths, "area", area0)
+    _check(widths, "area", area1[has])
+
+    # Interleave: each column's primary write, then its neighbour write if it has one.
+    count = 1 + has.astype(np.int64)
+    first = np.cumsum(count) - count
+    second = first[has] + 1
+    total = int(count.sum())
+    row_dx, row_dy = per_edge("row_dx")[e], per_edge("row_dy")[e]
+    out = []
+    for primary, neighbour in (
+        (e, e[has]),
+        (x, (x + offset * row_dx)[has]),
+        (y, (y + offset * row_dy)[has]),
+        (area0, area1[has]),
+    ):
+        column = np.empty(total, dtype=dtype)
+        column[first] = primary
+        column[second] = neighbour
+        out.append(column)
+    e_out, x_out, y_out, area_out = out
+    e_out = e_out.astype(np.int64)
+    _check(widths, "x", x_out)
+    _check(widths, "y", y_out)
+    F = config.F  # noqa: N806
+    base, sign = per_edge("value_base")[e_out], per_edge("value_sign")[e_out]
+    value = base + sign * ((area_out + (1 << (F - 1))) >> F)
+    _check(widths, "value", value)
+    edge_index = np.asarray(group, dtype=np.int64)[e_out]
+    return [edge_index, x_out, y_out, value, area_out]
+
+
+def _triangle_estimate(
+    config: EdgeConfig,
+    widths: dict[str, RegisterWidth],
+    sts: Sequence[EdgeSetup],
+    dtype,
+    e: np.ndarray,
+    dq: np.ndarray,
+) -> np.ndarray:
+    """step.triangle_estimate before its clamp: the slope term minus segment j's intercept."""
+    n = config.segments
+    log2n = n.bit_length() - 1
+    j = np.zeros(len(dq), dtype=np.int64)
+    if n > 1:
+        thresholds = np.array([[int(c) for c in st.seg_thresholds] for st in sts], dtype=dtype)
+        for m in range(n - 1):
+            j += (dq >= thresholds[e, m]).astype(np.int64)
+    intercepts = np.array([[int(c) for c in st.seg_intercepts] for st in sts], dtype=dtype)
+    slope = 2 * j + 1
+    if dtype is object:
+        slope = slope.astype(object)
+    return ((slope * dq) >> (2 + log2n)) - intercepts[e, j]
