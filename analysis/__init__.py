@@ -1,0 +1,1 @@
+"""Accuracy and cost: edgeaa against sample-based methods and real rasterizers."""
