@@ -81,8 +81,8 @@ class EdgeConfig:
                 f"accumulator must be one of {', '.join(ACCUMULATORS)}, not {self.accumulator!r}"
             )
         frac_bits = self.derived_frac_bits() if self.frac_bits is None else self.frac_bits
-        # The initial value is scaled by 2**(F - s - 1) and the correction constant is K/2**(6 +
-        # 2 log2 N); both must stay integer shifts, hence the lower limit.
+        # The initial value is scaled by 2**(F - s - 1), a left shift only for F >= s + 1. The
+        # correction constants are K/2**(6 + 2 log2 N): F below that leaves them no resolution.
         _check_int("frac_bits", frac_bits, self.min_frac_bits, 48)
         object.__setattr__(self, "_frac_bits", frac_bits)
 
