@@ -123,3 +123,18 @@ def test_verilog_command_writes_the_core_with_stable_ports(capsys, tmp_path):
 def test_verilog_command_rejects_bad_configuration(capsys):
     status, _, err = run_cli(capsys, "verilog", "--intensity-bits", "0")
     assert status == 2 and "intensity_bits must be in [1, 16]" in err
+
+
+def test_synth_rejects_an_unknown_target(capsys):
+    status, _, err = run_cli(capsys, "synth", "--target", "xc7")
+    assert status == 2 and "invalid choice: 'xc7'" in err
+
+
+@pytest.mark.slow
+def test_synth_prints_both_cores_and_their_ratio(capsys):
+    status, out, _ = run_cli(capsys, "synth", "--target", "ice40", "--coord-bits", "8")
+    assert status == 0
+    rows = {tuple(line.split()[:2]): line.split()[2:] for line in out.splitlines()[3:]}
+    edgeaa, baseline, ratio = (rows["ice40", n] for n in ("edgeaa", "bresenham", "ratio"))
+    assert all(float(v) > 0 for v in edgeaa + baseline)
+    assert float(ratio[0]) == pytest.approx(int(edgeaa[0]) / int(baseline[0]), abs=0.01)
