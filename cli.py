@@ -11,6 +11,7 @@ import json
 import math
 import sys
 
+from .analysis.cli import add_commands as add_analysis_commands
 from .model import ACCUMULATORS, MODES, ConfigError, Edge, EdgeConfig, EdgeError, run_edge
 from .model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
 from .model.reference import error_bound, exact_coverage_array
@@ -332,6 +333,8 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("--seed", type=int, default=1, help="nextpnr placement seed")
     _add_config_options(synth)
     synth.set_defaults(func=cmd_synth)
+
+    add_analysis_commands(sub, _add_config_options)  # plot, bench, stress
     return parser
 
 

@@ -1,1 +1,12 @@
-"""Accuracy and cost: edgeaa against sample-based methods and real rasterizers."""
+"""Accuracy and cost: edgeaa against sample-based methods and real rasterizers.
+
+- `sampling`: point sampling, ordered grids, rotated grid and 8-rooks coverage baselines.
+- `peers`: Skia, AGG (aggdraw) and scikit-image's line_aa on the same edges, and the
+  pixel-centre convention check.
+- `evaluate`: every method on one common pixel set, against the exact area.
+- `slope`: `edgeaa plot error-vs-slope`; `bench`: `edgeaa bench`; `stress`: `edgeaa stress`.
+- `hardware`: the hook for cycles per column, LUTs and Fmax in the bench.
+- `cli`: `add_commands(subparsers, add_config_options)` registers the commands.
+
+Results and the commands that produced them: docs/results.md.
+"""
