@@ -1,0 +1,21 @@
+"""Amaranth gateware of the edge antialiaser."""
+
+from .core import (
+    EdgeAntialiaser,
+    EdgeStepper,
+    edge_layout,
+    pixel_layout,
+    setup_layout,
+    verilog,
+    write_layout,
+)
+
+__all__ = [
+    "EdgeAntialiaser",
+    "EdgeStepper",
+    "edge_layout",
+    "pixel_layout",
+    "setup_layout",
+    "verilog",
+    "write_layout",
+]

@@ -7,18 +7,11 @@ run (`pytest -m slow`) checks 100 000.
 
 import pytest
 
-from edgeaa.hdl import verilog
 from edgeaa.model import EdgeConfig
-from edgeaa.sim.verilator import LINT_WAIVERS, CosimError, cosimulate, lint
+from edgeaa.sim.verilator import CosimError, cosimulate
 from edgeaa.sim.workloads import random_edges
 
 DEFAULT = EdgeConfig()
-
-
-def test_verilog_lints_clean_with_documented_waivers():
-    proc = lint(verilog(DEFAULT))
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    assert len(LINT_WAIVERS) <= 8
 
 
 def run(config, count, seed, **kwargs):

@@ -1,0 +1,141 @@
+"""Cycle timing model of the hardware core (`edgeaa.hdl.core.EdgeAntialiaser`).
+
+Clocks are numbered from 0, the first clock after reset. A stream transfer "happens in clock
+c" when valid and ready are both high in clock c (it completes at the clock edge ending c).
+
+Structure. The core has a setup state machine (IDLE -> FOLD -> RUN -> FINAL) and a stepper,
+joined by a one-edge register bank:
+
+* IDLE: ``edges.ready`` is high; an edge offered in clock ``a`` is accepted in clock ``a``.
+* FOLD (clock ``a + 1``): octant folding and the bad-command check. A bad command (zero
+  length, or I_in == I_out) is dropped here: ``error`` pulses in clock ``a + 2``, ``errors``
+  counts it from clock ``a + 2``, and the core is back in IDLE in clock ``a + 2``.
+* RUN (``R = intensity_bits + F + 1`` clocks, ``a + 2 .. a + R + 1``): two lanes of a
+  bit-serial multiply-divide unit. Lane A: ``s + 1`` clocks for the start row, one fix-up
+  clock, ``I + F - s - 1`` clocks for the initial accumulator. Lane B in parallel:
+  ``I + F - 1`` clocks for the slope. Fixed per configuration, independent of the edge.
+* FINAL (from clock ``a + R + 2``): writes the bank as soon as it is free, i.e. it is empty or
+  the stepper takes the old contents in the same clock; IDLE again the clock after.
+* The stepper loads the bank in the first clock ``t`` where the bank is valid and the
+  stepper is idle or stepping the previous edge's last column (the handover has no bubble).
+  Column ``c`` of the edge is stepped in clock ``t + 1 + c`` and its beat (registered) is
+  valid in clock ``t + 2 + c``.
+
+With ``L = setup_latency = R + 5``: an edge accepted in clock ``a`` by an idle core has its
+first beat in clock ``a + L``. For edge ``n`` (good edges only, always-ready sink, source
+offering edges back to back from clock 0)::
+
+    a[0] = 0, a[n + 1] = f[n] + 1     (after a bad command accepted in a: next at a + 2)
+    f[n] = max(a[n] + L - 3, t[n - 1])           clock FINAL writes the bank
+    t[n] = max(f[n] + 1, t[n - 1] + C[n - 1])    clock the stepper loads edge n
+    beat of column c of edge n: t[n] + 2 + c     (C[n] = columns of edge n)
+
+``L = I + F + 6``: 35 clocks for the default configuration (and its pw/seg2/seg4/truncated
+variants, F = 21), 20 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 10), 39 for
+coord_bits=15 subpixel_bits=8 (F = 25).
+
+Sustained rate. The setup accepts one edge every ``L - 2`` clocks at most; the stepper takes
+``C`` clocks per edge. A stream of edges of ``C`` columns therefore sustains
+``C / max(C, L - 2)`` columns per clock: exactly one column per clock (no gap between edges)
+when every edge has at least ``L - 2`` columns. From an idle core, a stream of such edges
+(total ``T`` columns) has its last beat in clock ``L + T - 1``: the mean over the whole run is
+``T / (L + T)`` (`stream_rate`), at least 0.95 once ``T >= 19 L``. Shorter edges are
+setup-bound: one edge per ``L - 2`` clocks. A stalled sink delays the stepper (and, once the
+bank is full, the setup) clock for clock; nothing else depends on the data.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .config import EdgeConfig
+from .edge import Edge, EdgeError, setup
+
+__all__ = [
+    "EdgeTiming",
+    "beat_cycles",
+    "run_cycles",
+    "setup_latency",
+    "stream_rate",
+    "sustained_rate",
+    "write_cycles",
+]
+
+BAD_COMMAND_CYCLES = 2  # accept + FOLD: a dropped command occupies the setup two clocks
+
+
+def run_cycles(config: EdgeConfig) -> int:
+    """Clocks of the RUN state: lane A's two bit-serial passes and its fix-up clock."""
+    return config.intensity_bits + config.F + 1
+
+
+def setup_latency(config: EdgeConfig) -> int:
+    """Clocks from accepting an edge (idle core) to its first beat: accept, FOLD, RUN, FINAL,
+    bank, stepper load, then the registered beat."""
+    return run_cycles(config) + 5
+
+
+@dataclass(frozen=True)
+class EdgeTiming:
+    """When one edge command went through the core (None fields: a dropped command)."""
+
+    edge: Edge
+    accepted: int  # clock the command was accepted
+    bank: int | None  # clock FINAL wrote the bank
+    load: int | None  # clock the stepper loaded the bank
+    beats: tuple[int, ...]  # clock of each column's beat (valid and ready)
+
+    @property
+    def dropped(self) -> bool:
+        return self.load is None
+
+
+def write_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -> list[EdgeTiming]:
+    """Predict the clock of every beat for an always-ready sink and a back-to-back source.
+
+    `edges` are `Edge` commands offered in order from clock 0, each as soon as the previous
+    one is accepted. Commands the model rejects (`EdgeError`) are dropped by the core and
+    get no beats. `setup_latency_` defaults to `setup_latency(config)`; pass the core's
+    ``setup_latency`` to check the two agree.
+    """
+    latency = setup_latency(config) if setup_latency_ is None else setup_latency_
+    out: list[EdgeTiming] = []
+    accept = 0
+    prev_load = None  # load clock of the previous good edge
+    prev_columns = 0
+    for edge in edges:
+        try:
+            columns = setup(config, edge).columns
+        except EdgeError:
+            out.append(EdgeTiming(edge, accept, None, None, ()))
+            accept += BAD_COMMAND_CYCLES
+            continue
+        bank = accept + latency - 3
+        load = bank + 1
+        if prev_load is not None:
+            bank = max(bank, prev_load)
+            load = max(bank + 1, prev_load + prev_columns)
+        beats = tuple(load + 2 + c for c in range(columns))
+        out.append(EdgeTiming(edge, accept, bank, load, beats))
+        accept = bank + 1
+        prev_load, prev_columns = load, columns
+    return out
+
+
+def beat_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -> list[int]:
+    """The clock of every beat of the stream, in order (`write_cycles` flattened)."""
+    return [beat for timing in write_cycles(config, edges, setup_latency_) for beat in timing.beats]
+
+
+def sustained_rate(config: EdgeConfig, columns: int, setup_latency_: int | None = None) -> float:
+    """Steady-state columns per clock of an endless stream of edges of `columns` columns."""
+    latency = setup_latency(config) if setup_latency_ is None else setup_latency_
+    return columns / max(columns, latency - 2)
+
+
+def stream_rate(timings: list[EdgeTiming]) -> float:
+    """Columns per clock of a whole stream: beats over clocks from clock 0 to the last beat."""
+    beats = [beat for timing in timings for beat in timing.beats]
+    if not beats:
+        return 0.0
+    return len(beats) / (max(beats) + 1)
