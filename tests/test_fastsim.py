@@ -50,3 +50,14 @@ def test_a_wrong_model_is_caught(monkeypatch):
 def test_bad_probabilities_are_rejected():
     with pytest.raises(ValueError, match=r"stall must be a probability in \[0, 1\)"):
         fastsim.run(DEFAULT, [], stall=1.0)
+
+
+def test_python_and_compiled_simulators_agree_clock_for_clock():
+    from edgeaa.sim import amaranth_run
+
+    seed = 14
+    edges = random_edges(DEFAULT, 20, seed, max_pixels=24, bad_fraction=0.1)
+    slow, fast = amaranth_run.run(DEFAULT, edges), fastsim.run(DEFAULT, edges)
+    assert slow.beats.tolist() == fast.beats.tolist(), f"seed {seed}"
+    assert slow.errors == fast.errors == expected_beats(DEFAULT, edges)[1], f"seed {seed}"
+    assert slow.as_beats() == expected_beats(DEFAULT, edges)[0], f"seed {seed}"
