@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 
@@ -117,6 +116,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
         repeats=repeats,
         lines=not args.no_lines,
         progress=not args.quiet,
+        hardware=not args.quick,
+        synthesis=not args.no_synth,
     )
     print(machine_line())
     print(bench.bench_tables(result))
@@ -227,7 +228,16 @@ def add_commands(subparsers, add_config_options) -> None:
         "Skia and AGG (and, on lines, scikit-image's line_aa). Prints the tables and writes a "
         "Pareto plot of error against time.",
     )
-    bench.add_argument("--quick", action="store_true", help="few edges and repeats (seconds)")
+    bench.add_argument(
+        "--quick",
+        action="store_true",
+        help="few edges and repeats, no hardware columns (seconds)",
+    )
+    bench.add_argument(
+        "--no-synth",
+        action="store_true",
+        help="skip synthesis for the LUT and Fmax columns (about a minute per mode, cached)",
+    )
     bench.add_argument(
         "--edges", type=int, default=None, help="random edges (default 1000, --quick 60)"
     )
@@ -290,27 +300,3 @@ def add_commands(subparsers, add_config_options) -> None:
     )
     stress.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     stress.set_defaults(func=cmd_stress)
-
-
-def main(argv: list[str] | None = None) -> int:
-    """`edgeaa` with these commands registered whether or not cli.py registers them (for
-    development and the tests): `python -m edgeaa.analysis.cli bench --quick`."""
-    from .. import cli
-
-    parser = cli.build_parser()
-    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    if "bench" not in sub.choices:
-        add_commands(sub, cli._add_config_options)
-    try:
-        args = parser.parse_args(argv)
-        return args.func(args)
-    except (cli.UsageError, cli.ConfigError, cli.EdgeError) as error:
-        message = str(error)
-        if not message.startswith("edgeaa"):
-            message = f"edgeaa: error: {message}"
-        print(message, file=sys.stderr)
-        return cli.EXIT_BAD_INPUT
-
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -1,26 +1,24 @@
-"""The hook for hardware figures in `edgeaa bench`: cycles per column, LUTs, Fmax.
+"""Hardware figures for `edgeaa bench`: cycles per column, LUTs and Fmax of edgeaa's core.
 
-`hardware_figures(config, method)` returns None until a hardware figures module exists;
-the bench prints "-" in those columns. To fill them, provide the module
-`edgeaa.sim.figures` with a function
-
-    core_figures(config: EdgeConfig) -> dict | None
-
-returning ``{"cycles_per_column": float, "luts": int, "fmax_mhz": float, "target": str}``
-for the core of that configuration (mode and accumulator included), or None. The stepping
-stage of `edgeaa.hdl.core` sustains one column per clock, so cycles per column is 1 for
-edges of at least `setup_latency - 2` columns (see `edgeaa.model.timing`). Only edgeaa's
-own methods have a hardware core; every other method returns None.
+Cycles per column are measured: the bench's own edges run through the compiled cycle-accurate
+simulation (`edgeaa.sim.fastsim`) with an always-ready sink, from an idle core, so setup
+latency and handovers count. LUTs and Fmax come from synthesis and place and route for
+iCE40 HX8K (`edgeaa.sim.synth`, the core inside the I/O harness, harness subtracted), cached
+on disk per Verilog text because a run takes about a minute per core.
 """
 
 from __future__ import annotations
 
-import importlib
+import hashlib
+import json
 from dataclasses import dataclass
 
-from ..model import MODES, EdgeConfig
+from ..hdl import EdgeAntialiaser, verilog
+from ..model import MODES, Edge, EdgeConfig
+from ..sim import fastsim
+from ..sim.verilator import cache_dir
 
-FIGURES_MODULE = "edgeaa.sim.figures"
+SYNTH_TARGET = "ice40"
 
 
 @dataclass(frozen=True)
@@ -31,22 +29,37 @@ class HardwareFigures:
     target: str = ""
 
 
-def hardware_figures(config: EdgeConfig, method: str) -> HardwareFigures | None:
+def cycles_per_column(config: EdgeConfig, edges: list[Edge]) -> float:
+    """Clocks from the first command to the last beat, per column, in the compiled core."""
+    run = fastsim.run(config, edges)  # one beat per column
+    return (int(run.beats[-1, 0]) + 1) / len(run.beats)
+
+
+def synth_figures(config: EdgeConfig, target: str = SYNTH_TARGET, seed: int = 1) -> dict:
+    """LUTs and Fmax of the core (harness subtracted), synthesised once per Verilog text."""
+    from ..sim.synth import synthesize
+
+    key = hashlib.sha256(f"{verilog(config)}{target}{seed}".encode()).hexdigest()[:16]
+    path = cache_dir().parent / "synth" / f"{key}.json"
+    if path.exists():
+        return json.loads(path.read_text())
+    result = synthesize(EdgeAntialiaser(config), target, wrap=True, seed=seed)
+    figures = {"luts": result.core_luts, "ffs": result.core_ffs, "fmax_mhz": result.fmax_mhz}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(figures))
+    return figures
+
+
+def hardware_figures(
+    config: EdgeConfig, method: str, edges: list[Edge], *, synthesis: bool = True
+) -> HardwareFigures | None:
+    """The figures of `method` (edgeaa-<mode>) on `edges`; None for methods with no core."""
     mode = method.removeprefix("edgeaa-")
     if not method.startswith("edgeaa-") or mode not in MODES:
         return None
-    try:
-        module = importlib.import_module(FIGURES_MODULE)
-    except ModuleNotFoundError as error:
-        if error.name in (FIGURES_MODULE, FIGURES_MODULE.rsplit(".", 1)[0]):
-            return None
-        raise
-    figures = module.core_figures(config.with_(mode=mode))
-    if figures is None:
-        return None
-    return HardwareFigures(
-        figures.get("cycles_per_column"),
-        figures.get("luts"),
-        figures.get("fmax_mhz"),
-        figures.get("target", ""),
-    )
+    config = config.with_(mode=mode)
+    cycles = cycles_per_column(config, edges)
+    if not synthesis:
+        return HardwareFigures(cycles, None, None)
+    figures = synth_figures(config)
+    return HardwareFigures(cycles, figures["luts"], figures["fmax_mhz"], SYNTH_TARGET)

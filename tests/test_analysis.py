@@ -12,16 +12,17 @@ import numpy as np
 import pytest
 
 from edgeaa.analysis import bench, evaluate, geometry, peers, sampling, slope, stress
-from edgeaa.analysis.cli import main as analysis_main
 from edgeaa.analysis.hardware import hardware_figures
+from edgeaa.cli import main as edgeaa_main
 from edgeaa.model import Edge, EdgeConfig, exact_coverage_array
 from edgeaa.model.vector import run_edges
+from edgeaa.sim import workloads
 
 SEED = 20240611
 
 
 def run_cli(capsys, *argv):
-    status = analysis_main(list(argv))
+    status = edgeaa_main(list(argv))
     captured = capsys.readouterr()
     return status, captured.out, captured.err
 
@@ -250,11 +251,21 @@ def test_bench_result_is_seeded():
     ]
 
 
-def test_pareto_front_and_hardware_hook():
+def test_pareto_front():
     points = [(1.0, 0.5), (2.0, 0.1), (3.0, 0.2), (0.5, 0.9), (2.5, 0.05)]
     assert bench.pareto_front(points) == [3, 0, 1, 4]
-    assert hardware_figures(EdgeConfig(), "edgeaa-paper") is None  # until the module exists
-    assert hardware_figures(EdgeConfig(), "skia") is None
+
+
+def test_hardware_cycles_per_column_are_the_timing_model_s():
+    from edgeaa.model.timing import write_cycles
+
+    config = EdgeConfig()
+    edges = workloads.random_edges(config, 40, seed=21)
+    figures = hardware_figures(config, "edgeaa-paper", edges, synthesis=False)
+    beats = [clock for timing in write_cycles(config, edges) for clock in timing.beats]
+    assert figures.cycles_per_column == pytest.approx((beats[-1] + 1) / len(beats))
+    assert 1 <= figures.cycles_per_column < 2
+    assert hardware_figures(config, "skia", edges) is None
 
 
 # -- stress ----------------------------------------------------------------------------------------
