@@ -74,16 +74,32 @@ def exact_coverage_array(config: EdgeConfig, edge: Edge, xs, ys) -> np.ndarray:
         p0, q0, dp, dq, p, q = y0, x0, y1 - y0, x1 - x0, ys, xs
     k = dq / dp
     a = q0 + k * (p - 0.5 - p0) - (q - 0.5)
-    if k == 0:
-        mean = np.clip(a, 0.0, 1.0)
-    else:
-        mean = (_ramp_integral_array(a + k) - _ramp_integral_array(a)) / k
-    below = 1.0 - mean
+    below = 1.0 - _clamped_mean_array(a, k)
     return below if inside_high else 1.0 - below
 
 
-def _ramp_integral_array(z: np.ndarray) -> np.ndarray:
-    return np.where(z <= 0, 0.0, np.where(z >= 1, z - 0.5, 0.5 * z * z))
+def _clamped_mean_array(a: np.ndarray, k: float) -> np.ndarray:
+    """Mean of clamp(a + k t, 0, 1) over t in [0, 1] for |k| <= 1, without cancellation.
+
+    (G(a + k) - G(a)) / k subtracts two numbers near 1/2 and divides by a small k when one end
+    is clamped; each case below is the same integral written so that nothing cancels.
+    """
+    if k == 0:
+        return np.clip(a, 0.0, 1.0)
+    if k < 0:  # run t backwards: the same mean from a + k rising with slope -k
+        a, k = a + k, -k
+    b = a + k
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.select(
+            [b <= 0, a >= 1, (a >= 0) & (b <= 1), a < 0, True],
+            [
+                0.0,
+                1.0,
+                a + 0.5 * k,  # no clamping
+                np.where(b <= 1, b * b / (2 * k), (b - 0.5) / k),  # the near end clamped at 0
+                1.0 - (1.0 - a) ** 2 / (2 * k),  # the far end clamped at 1
+            ],
+        )
 
 
 def error_bound(mode: str, k: float) -> float:
