@@ -102,6 +102,28 @@ def _clamped_mean_array(a: np.ndarray, k: float) -> np.ndarray:
         )
 
 
+# Fixed-point allowance of one write with the exact accumulator, in units of 2**-F intensity
+# LSB: the floors of the loop (docs/algorithm.md, section 9.2), U_N = 1 + the largest floor
+# error of the triangle estimate. Strict bounds.
+FIXED_POINT_UNITS = {
+    "pw": Fraction(1),
+    "paper": Fraction(2),
+    "seg2": Fraction(5, 2),
+    "seg4": Fraction(81, 32),
+}
+
+
+def fixed_point_term(mode: str, accumulator: str, ifix: int, column: int) -> Fraction:
+    """The fixed-point part of a write's error bound, as a coverage fraction.
+
+    U / ifix with U = FIXED_POINT_UNITS[mode]; the truncated accumulator adds its drift, less
+    than column + 1 units in column `column` (0 = first) of which one is already in U
+    (docs/algorithm.md, section 9.3), so U + column. ifix = |I_d| << F units make a pixel.
+    """
+    units = FIXED_POINT_UNITS[mode] + (column if accumulator == "truncated" else 0)
+    return units / ifix
+
+
 def error_bound(mode: str, k: float) -> float:
     """The estimate's own error bound as a coverage fraction: k/8, k/64, k/256, k/1024."""
     return {"pw": 1 / 8, "paper": 1 / 64, "seg2": 1 / 256, "seg4": 1 / 1024}[mode] * k

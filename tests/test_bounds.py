@@ -19,7 +19,6 @@ from fractions import Fraction
 import pytest
 from edges import (
     CONFIGS,
-    FIXED_POINT_UNITS,
     bound,
     column_pixels,
     edges,
@@ -42,6 +41,7 @@ from edgeaa.model import (
     exact_coverage,
     run_edge,
 )
+from edgeaa.model.reference import FIXED_POINT_UNITS
 
 HYPOTHESIS = settings(deadline=None, max_examples=80, suppress_health_check=[HealthCheck.too_slow])
 SLOW_HYPOTHESIS = settings(HYPOTHESIS, max_examples=200)
