@@ -15,6 +15,7 @@ from .analysis.cli import add_commands as add_analysis_commands
 from .model import ACCUMULATORS, MODES, ConfigError, Edge, EdgeConfig, EdgeError, run_edge
 from .model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
 from .model.reference import error_bound, exact_coverage_array
+from .render.cli import add_commands as add_render_commands
 
 EXIT_BAD_INPUT = 2
 
@@ -335,6 +336,7 @@ def build_parser() -> argparse.ArgumentParser:
     synth.set_defaults(func=cmd_synth)
 
     add_analysis_commands(sub, _add_config_options)  # plot, bench, stress
+    add_render_commands(sub, _add_config_options)  # render
     return parser
 
 

@@ -1,0 +1,170 @@
+"""Built-in scenes: a starburst (Siemens star) and a line of text in a scrolled text field.
+
+- ``starburst``: 32 black wedges from the image centre on white (a Siemens star): spokes at
+  64 angles 5.625 degrees apart (every octant; horizontal, vertical and diagonal ones), the
+  classic antialiasing test pattern. The wedges reach past the image on every side.
+- ``text``: a line of DejaVu Sans (the font matplotlib ships) in a grey-framed white text
+  field wider than the image, as in a text box scrolled to its start: the glyph outlines come
+  from the font's quadratic curves through fontTools' pen, flattened within the tolerance.
+
+Both include what a real scene has and the renderer can skip: polygons equal to the
+background, edges off the image, horizontal and vertical edges, edges on pixel boundaries.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+from ..model import EdgeConfig
+from .scene import DEFAULT_TOLERANCE, Contour, Polygon, Scene, flatten_quadratic
+
+BUILTINS = ("starburst", "text")
+TEXT = "edgeaa renders polygons and text: The quick brown fox jumps over the lazy dog 0123456789"
+
+
+def font_path() -> str:
+    import matplotlib
+
+    return matplotlib.get_data_path() + "/fonts/ttf/DejaVuSans.ttf"
+
+
+def builtin(name: str, config: EdgeConfig | None = None) -> Scene:
+    config = config or EdgeConfig()
+    if name == "starburst":
+        return starburst(config.full_scale)
+    if name == "text":
+        return text_scene(config.full_scale)
+    from .scene import SceneError
+
+    raise SceneError(f"unknown built-in scene {name!r} (built-ins: {', '.join(BUILTINS)})")
+
+
+def starburst(full: int = 255, size: int = 256, wedges: int = 32, radius: float = 200.0) -> Scene:
+    """`wedges` black triangles from the centre on full scale (a Siemens star: each wedge
+    and each gap spans 180 / wedges degrees)."""
+    cx = cy = (size - 1) / 2
+    polygons = []
+    for i in range(wedges):
+        a0, a1 = math.pi * 2 * i / wedges, math.pi * (2 * i + 1) / wedges
+        p0 = (cx + radius * math.cos(a0), cy + radius * math.sin(a0))
+        p1 = (cx + radius * math.cos(a1), cy + radius * math.sin(a1))
+        points = ((cx, cy), _snap(p0), _snap(p1))
+        polygons.append(Polygon((points,), 0, "nonzero", f"wedge {i}"))
+    return Scene(size, size, tuple(polygons), background=full, name="starburst")
+
+
+def _snap(p: tuple[float, float]) -> tuple[float, float]:
+    """Remove float noise (cos(pi/2) = 6e-17) so axis-aligned spokes are exactly so."""
+    return tuple(round(v * 2**20) / 2**20 for v in p)
+
+
+class _FlattenPen:
+    """A fontTools pen that maps font units to pixels (y down) and flattens quadratics."""
+
+    def __init__(self, glyph_set, scale: float, x: float, baseline: float, tolerance: float):
+        from fontTools.pens.basePen import BasePen
+
+        outer = self
+
+        class Pen(BasePen):
+            def _moveTo(self, pt):  # noqa: N802
+                outer._start(pt)
+
+            def _lineTo(self, pt):  # noqa: N802
+                outer._line(pt)
+
+            def _qCurveToOne(self, pt1, pt2):  # noqa: N802
+                outer._quad(pt1, pt2)
+
+            def _curveToOne(self, pt1, pt2, pt3):  # noqa: N802  (not in TrueType fonts)
+                outer._cubic(pt1, pt2, pt3)
+
+            def _closePath(self):  # noqa: N802
+                outer._close()
+
+            def _endPath(self):  # noqa: N802
+                outer._close()
+
+        self.pen = Pen(glyph_set)
+        self.scale, self.x, self.baseline, self.tolerance = scale, x, baseline, tolerance
+        self.contours: list[Contour] = []
+        self.points: list[tuple[float, float]] = []
+
+    def _map(self, pt):
+        return (self.x + pt[0] * self.scale, self.baseline - pt[1] * self.scale)
+
+    def _start(self, pt):
+        self._close()
+        self.points = [self._map(pt)]
+
+    def _line(self, pt):
+        self.points.append(self._map(pt))
+
+    def _quad(self, pt1, pt2):
+        self.points.extend(
+            flatten_quadratic(self.points[-1], self._map(pt1), self._map(pt2), self.tolerance)
+        )
+
+    def _cubic(self, pt1, pt2, pt3):
+        from .scene import flatten_cubic
+
+        self.points.extend(
+            flatten_cubic(
+                self.points[-1], self._map(pt1), self._map(pt2), self._map(pt3), self.tolerance
+            )
+        )
+
+    def _close(self):
+        pts = self.points
+        while len(pts) > 1 and pts[-1] == pts[0]:
+            pts.pop()
+        if len(set(pts)) >= 3:
+            self.contours.append(tuple(pts))
+        self.points = []
+
+
+@lru_cache(maxsize=8)
+def text_polygons(
+    text: str, size: float, x: float, baseline: float, intensity: int, tolerance: float
+) -> tuple[tuple[Polygon, ...], float]:
+    """One polygon per visible glyph (non-zero rule, as TrueType); returns them and the pen
+    position after the last glyph. Advance widths from hmtx, no kerning."""
+    from fontTools.ttLib import TTFont
+
+    font = TTFont(font_path())
+    glyph_set = font.getGlyphSet()
+    cmap = font.getBestCmap()
+    scale = size / font["head"].unitsPerEm
+    polygons = []
+    for ch in text:
+        name = cmap.get(ord(ch), ".notdef")
+        pen = _FlattenPen(glyph_set, scale, x, baseline, tolerance)
+        glyph_set[name].draw(pen.pen)
+        pen._close()
+        if pen.contours:
+            polygons.append(Polygon(tuple(pen.contours), intensity, "nonzero", f"glyph {ch!r}"))
+        x += font["hmtx"][name][0] * scale
+    return tuple(polygons), x
+
+
+def text_scene(
+    full: int = 255,
+    text: str = TEXT,
+    size: float = 28.0,
+    width: int = 384,
+    height: int = 64,
+    tolerance: float = DEFAULT_TOLERANCE,
+) -> Scene:
+    """A white text field framed in grey (2 px, on pixel boundaries) holding a line of black
+    text; field and text run past the image's right side."""
+    grey = round(full * 96 / 255)
+    glyphs, end = text_polygons(text, size, 14.0, 42.0, 0, tolerance)
+    right = math.ceil(end) + 10.5
+    outer = ((5.5, 5.5), (right + 2, 5.5), (right + 2, 58.5), (5.5, 58.5))
+    inner = ((7.5, 7.5), (7.5, 56.5), (right, 56.5), (right, 7.5))  # reversed: a hole
+    field = Polygon((inner[::-1],), full, "nonzero", "text field")
+    frame = Polygon((outer, inner), grey, "nonzero", "frame")
+    return Scene(
+        width, height, (field, frame, *glyphs), background=full, name="text", tolerance=tolerance
+    )

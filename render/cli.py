@@ -1,0 +1,198 @@
+"""`edgeaa render`: a scene in, an antialiased image out (docs/scenes.md).
+
+`add_commands(subparsers, add_config_options)` registers the command on the top-level
+subparsers of `edgeaa.cli.build_parser`. Bad input raises `edgeaa.cli.UsageError` (one line,
+exit status 2); a simulator that cannot run is reported in one line with exit status 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+from .builtin import BUILTINS
+
+COMMAND = "edgeaa render"
+
+
+def _usage(message: str):
+    from ..cli import UsageError
+
+    return UsageError(f"{COMMAND}: error: {message}")
+
+
+def _crop(text: str) -> tuple[int, int, int, int]:
+    try:
+        x0, y0, x1, y1 = (int(v) for v in text.split(","))
+    except ValueError:
+        raise _usage(f"--crop must be X0,Y0,X1,Y1 (integers), not {text!r}") from None
+    if x1 <= x0 or y1 <= y0 or min(x0, y0) < 0:
+        raise _usage(f"--crop {text}: need 0 <= X0 < X1 and 0 <= Y0 < Y1")
+    return x0, y0, x1, y1
+
+
+def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str) -> str:
+    """8-bit greyscale PNG (16-bit when intensity_bits > 8); other widths are scaled to the
+    PNG's full scale, rounding half up. Returns a description."""
+    from PIL import Image
+
+    bits = 8 if intensity_bits <= 8 else 16
+    top = (1 << bits) - 1
+    data = image.astype(np.int64)
+    if full_scale != top:
+        data = (2 * data * top + full_scale) // (2 * full_scale)
+    array = data.astype(np.uint8 if bits == 8 else np.uint16)
+    Image.fromarray(array).save(path, format="PNG")
+    scaled = "" if full_scale == top else f", scaled from {intensity_bits} bits"
+    return f"{bits}-bit greyscale{scaled}"
+
+
+def _load(args, config):
+    from .builtin import builtin
+    from .scene import load_scene
+
+    if (args.scene is None) == (args.builtin is None):
+        raise _usage(
+            f"give a scene file or --builtin NAME (one of them; built-ins: {', '.join(BUILTINS)})"
+        )
+    if args.builtin is not None:
+        return builtin(args.builtin, config)
+    return load_scene(args.scene)
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    from ..cli import config_from_args
+    from .progress import ProgressBar
+    from .render import plan_scene, render
+    from .scene import SceneError
+
+    config = config_from_args(args)
+    if args.output is not None:
+        if not args.output.lower().endswith(".png"):
+            raise _usage(f"-o {args.output}: the output must be a .png file")
+        directory = os.path.dirname(args.output)
+        if directory and not os.path.isdir(directory):
+            raise _usage(f"-o {args.output}: directory {directory} does not exist")
+    if args.compare and args.output is None:
+        raise _usage("--compare needs -o FIGURE.png")
+    crop = _crop(args.crop) if args.crop else None
+    try:
+        scene = _load(args, config)
+        plan = plan_scene(scene, config)
+    except SceneError as error:
+        raise _usage(str(error)) from None
+    if crop and (crop[2] > scene.width or crop[3] > scene.height):
+        raise _usage(f"--crop {args.crop} is outside the {scene.width} x {scene.height} image")
+
+    boundary = int(plan.boundary.sum())
+    print(
+        f"{COMMAND}: {scene.name}, {scene.width} x {scene.height} px, "
+        f"{len(scene.polygons)} polygons, {plan.edge_count} edges ({boundary} boundary); "
+        f"engine {args.engine}; {config}"
+    )
+    if args.compare:
+        from .compare import plot_compare
+
+        rows = plot_compare(scene, config, args.output, crop)
+        print(f"{'method':22} {'max |err| LSB':>14} {'RMS LSB':>8}")
+        for label, worst, rms in rows:
+            print(f"{label:22} {worst:14.3f} {rms:8.3f}")
+        print(f"wrote {args.output}")
+        return 0
+
+    bar = ProgressBar("render", enabled=not args.quiet)
+    try:
+        result = render(plan, engine=args.engine, skip=not args.no_skip, progress=bar)
+        baseline = None
+        if args.stats:
+            baseline = render(plan, engine=args.engine, skip=False, progress=bar)
+    except RuntimeError as error:  # a simulator failed to build or run
+        bar.close()
+        first = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
+        print(f"{COMMAND}: error: the {args.engine} engine failed: {first}", file=sys.stderr)
+        return 1
+    bar.close()
+    run = result.engine_run
+    measured = f", {run.clocks:,} clocks simulated" if run.clocks is not None else ""
+    print(
+        f"engine: {len(result.sent)} edges, {result.cycles:,} cycles (timing model){measured}, "
+        f"{result.engine_writes:,} writes; fill path: {len(result.fill_path)} edges, "
+        f"{result.fill_path_writes:,} writes; {result.seconds:.3f} s"
+    )
+    if args.output is not None:
+        kind = write_png(result.image, config.full_scale, config.intensity_bits, args.output)
+        print(f"wrote {args.output} ({kind})")
+    if baseline is not None:
+        from .stats import stats_report
+
+        print(stats_report(baseline, result))
+    if args.error:
+        from .exact import error_rows, error_table, exact_image
+
+        start = time.perf_counter()
+        exact = exact_image(plan, progress=bar)
+        bar.close()
+        print(
+            f"error against the exact area (shapely, {time.perf_counter() - start:.1f} s); "
+            "pixels by the edges that wrote them:"
+        )
+        print(error_table(error_rows(result, exact)))
+    return 0
+
+
+def add_commands(subparsers, add_config_options) -> None:
+    """Register `render` on edgeaa's subparsers."""
+    from .engines import ENGINES
+
+    parser = subparsers.add_parser(
+        "render",
+        help="render a scene (polygons, text) to an antialiased PNG with the model or the core",
+        description="Render a scene (a JSON file of polygons and SVG paths, or a built-in) "
+        "through the model or the cycle-accurate core: polygons are filled, their edges "
+        "antialiased by the engine, pixels touched by several edges combined, and polygons "
+        "composited in order. The model and the simulated hardware give the same image bit "
+        "for bit. Format and rules: docs/scenes.md.",
+    )
+    parser.add_argument("scene", nargs="?", help="scene file (JSON, see docs/scenes.md)")
+    parser.add_argument("--builtin", choices=BUILTINS, help="a built-in scene instead of a file")
+    parser.add_argument(
+        "--engine",
+        choices=ENGINES,
+        default="model",
+        help="model (default), verilator (the core compiled by Verilator, cycle-accurate; "
+        "first build about 40 s, cached) or amaranth (the core in Amaranth's Python "
+        "simulator: slow, small scenes only)",
+    )
+    parser.add_argument("-o", "--output", help="PNG file to write (the figure with --compare)")
+    parser.add_argument(
+        "--stats",
+        action="store_true",
+        help="also render without skipping and print cycles, writes and time with and "
+        "without, as ratios, and the saving of each rule",
+    )
+    parser.add_argument(
+        "--error",
+        action="store_true",
+        help="measure the image against the exact per-pixel polygon area (shapely): max and "
+        "RMS, split into pixels written by one edge, by several, and fill only",
+    )
+    parser.add_argument(
+        "--no-skip",
+        action="store_true",
+        help="send every boundary edge to the engine and composite over the whole image "
+        "(same image, more work)",
+    )
+    parser.add_argument(
+        "--compare",
+        action="store_true",
+        help="write a figure to -o instead: no antialiasing, edgeaa paper and seg4, 16x16 "
+        "supersampling, Skia and AGG side by side, with error heat maps",
+    )
+    parser.add_argument("--crop", help="with --compare: the pixels X0,Y0,X1,Y1 to show")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+    add_config_options(parser)
+    parser.set_defaults(func=cmd_render)

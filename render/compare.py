@@ -1,0 +1,205 @@
+"""Side-by-side renders of one scene and their error against the exact coverage.
+
+Methods, each drawing the whole scene polygon by polygon over the background:
+
+- ``no AA``: one sample at the pixel centre (the renderer's own span fill alone);
+- ``edgeaa paper``, ``edgeaa seg4``: `edgeaa.render.render` with the model;
+- ``16x16 SSAA``: 256 samples per pixel on an ordered grid (the ``grid16`` pattern of
+  `edgeaa.analysis.sampling`, here evaluated on whole polygons with the same exact scanline
+  test as the span fill, since that module samples single-edge half-planes);
+- ``Skia``: skia-python path fill, analytic antialiasing, on an 8-bit surface;
+- ``AGG``: aggdraw's path fill (AGG's exact-area scanline rasterizer), with the pen-width-0
+  setting of `edgeaa.analysis.peers` so that AGG does not widen the polygons by 1/4 px.
+  aggdraw fills non-zero only: even-odd polygons are drawn non-zero (noted in the panel).
+
+Skia's and AGG's pixel i covers [i, i + 1); edgeaa's is centred on i: the peers get every
+vertex shifted by +1/2 px (the convention of `edgeaa.analysis.peers`). The peers composite
+with their own 8-bit blending; the others with the renderer's integer arithmetic (no AA,
+edgeaa) or in floating point rounded at the end (SSAA).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model import EdgeConfig
+from .exact import exact_image
+from .geometry import sample_mask
+from .render import Plan, plan_scene, render
+from .scene import Scene
+
+SSAA = 16  # samples per axis
+
+
+def _polygon_points(plan: Plan, index: int) -> list[np.ndarray]:
+    """The polygon's contours (quantized) in image pixels."""
+    poly = plan.polygons[index]
+    S = plan.config.subpixel_scale  # noqa: N806
+    coords = plan.coords[poly.start : poly.stop]
+    contours, start = [], 0
+    for k in range(len(coords)):
+        e = poly.start + k
+        if e + 1 == poly.stop or plan.contour[e + 1] != plan.contour[e]:  # it closes here
+            pts = coords[start : k + 1, 0:2].astype(np.float64) / S
+            contours.append(pts - np.array(plan.offset, dtype=np.float64))
+            start = k + 1
+    return contours
+
+
+def centre_sampled(plan: Plan) -> np.ndarray:
+    """No antialiasing: each polygon covers the pixels whose centre it holds."""
+    scene, S = plan.scene, plan.config.subpixel_scale  # noqa: N806
+    image = np.full((scene.height, scene.width), scene.background, dtype=np.int64)
+    ox, oy = plan.offset
+    for poly in plan.polygons:
+        x0, y0, x1, y1 = poly.window
+        if poly.empty:
+            continue
+        edges = plan.coords[poly.start : poly.stop]
+        ys = (np.arange(y0, y1) + oy) * S
+        f = sample_mask(edges, poly.rule, ys, (x0 + ox) * S, S, x1 - x0)
+        image[y0:y1, x0:x1][f] = poly.intensity
+    return image
+
+
+def supersampled(plan: Plan, n: int = SSAA) -> np.ndarray:
+    """n x n ordered-grid samples per pixel at offsets (2i + 1 - n) / (2n), composited in
+    floating point and rounded (half up) at the end."""
+    scene, S = plan.scene, plan.config.subpixel_scale  # noqa: N806
+    image = np.full((scene.height, scene.width), float(scene.background))
+    ox, oy = plan.offset
+    m = 2 * n  # finer grid: 1 / (2 n S) px, where every sample lies on an integer
+    for poly in plan.polygons:
+        x0, y0, x1, y1 = poly.window
+        if poly.empty:
+            continue
+        edges = plan.coords[poly.start : poly.stop] * m
+        sub = np.arange((y1 - y0) * n)
+        ys = (y0 + oy) * S * m + (2 * (sub % n) + 1 - n) * S + (sub // n) * S * m
+        xs0 = (x0 + ox) * S * m + (1 - n) * S  # sample j of pixel i: xs0 + (n i + j) 2S
+        mask = sample_mask(edges, poly.rule, ys, xs0, 2 * S, (x1 - x0) * n)
+        cover = mask.reshape(y1 - y0, n, x1 - x0, n).mean(axis=(1, 3))
+        view = image[y0:y1, x0:x1]
+        view += cover * (poly.intensity - view)
+    return np.floor(image + 0.5).astype(np.int64)
+
+
+def skia_scene(plan: Plan) -> np.ndarray:
+    import skia
+
+    scene = plan.scene
+    full = plan.config.full_scale
+    to8 = [round(v * 255 / full) for v in range(full + 1)] if full != 255 else list(range(256))
+    surface = skia.Surface(scene.width, scene.height)
+    canvas = surface.getCanvas()
+    b = to8[scene.background]
+    canvas.clear(skia.ColorSetRGB(b, b, b))
+    for i, poly in enumerate(plan.polygons):
+        path = skia.Path()
+        for pts in _polygon_points(plan, i):
+            path.moveTo(*(pts[0] + 0.5))
+            for p in pts[1:]:
+                path.lineTo(*(p + 0.5))
+            path.close()
+        rule = skia.PathFillType.kEvenOdd if poly.rule == "evenodd" else skia.PathFillType.kWinding
+        path.setFillType(rule)
+        v = to8[poly.intensity]
+        canvas.drawPath(path, skia.Paint(AntiAlias=True, Color=skia.ColorSetRGB(v, v, v)))
+    pixels = np.asarray(surface.makeImageSnapshot().toarray())[:, :, 0].astype(np.int64)
+    return _from8(pixels, full)
+
+
+def agg_scene(plan: Plan) -> np.ndarray:
+    import aggdraw
+    from PIL import Image
+
+    scene = plan.scene
+    full = plan.config.full_scale
+    image = Image.new("L", (scene.width, scene.height), round(scene.background * 255 / full))
+    draw = aggdraw.Draw(image)
+    for i, poly in enumerate(plan.polygons):
+        path = aggdraw.Path()
+        for pts in _polygon_points(plan, i):
+            path.moveto(*(pts[0] + 0.5))
+            for p in pts[1:]:
+                path.lineto(*(p + 0.5))
+            path.close()
+        draw.path(path, aggdraw.Pen(0, 0, 0), aggdraw.Brush(round(poly.intensity * 255 / full)))
+    draw.flush()
+    return _from8(np.asarray(image).astype(np.int64), full)
+
+
+def _from8(pixels: np.ndarray, full: int) -> np.ndarray:
+    """8-bit peer output to the configured intensity scale, rounding half up."""
+    return pixels if full == 255 else (2 * pixels * full + 255) // 510
+
+
+def compare_images(scene: Scene, config: EdgeConfig) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Every method's image of the scene, and the exact reference (float)."""
+    plan = plan_scene(scene, config)
+    images = {"no AA (centre)": centre_sampled(plan)}
+    for mode in ("paper", "seg4"):
+        images[f"edgeaa {mode}"] = render(plan_scene(scene, config.with_(mode=mode))).image
+    images[f"{SSAA}x{SSAA} SSAA"] = supersampled(plan)
+    images["Skia"] = skia_scene(plan)
+    label = "AGG" if all(p.fill_rule == "nonzero" for p in scene.polygons) else "AGG (non-zero)"
+    images[label] = agg_scene(plan)
+    return images, exact_image(plan)
+
+
+def plot_compare(
+    scene: Scene, config: EdgeConfig, path: str, crop: tuple[int, int, int, int] | None = None
+) -> list[tuple[str, float, float]]:
+    """Write the figure; returns (method, max |err|, RMS err) in intensity LSB over the crop."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    images, exact = compare_images(scene, config)
+    x0, y0, x1, y1 = crop or (0, 0, scene.width, scene.height)
+    exact_crop = exact[y0:y1, x0:x1]
+    full = config.full_scale
+    n = len(images) + 1
+    w, h = x1 - x0, y1 - y0
+    vertical = w > 1.5 * h  # wide crops: one row per method, image beside its error
+    if vertical:
+        fig, grid = plt.subplots(n, 2, figsize=(2 * 4.2, n * (4.2 * h / w + 0.45) + 0.5))
+        axes = grid.T
+    else:
+        fig, axes = plt.subplots(2, n, figsize=(2.2 * n, 2 * 2.2 * h / w + 0.9))
+    errors = [np.abs(img[y0:y1, x0:x1] - exact_crop) for img in images.values()]
+    # One colour scale for the antialiased methods; the unantialiased panel saturates.
+    top = max(1.0, max(float(e.max()) for e in errors[1:]))
+    rows = []
+    panels = [*images.items(), ("exact (shapely)", exact)]
+    for k, (label, img) in enumerate(panels):
+        ax = axes[0, k]
+        ax.imshow(img[y0:y1, x0:x1], cmap="gray", vmin=0, vmax=full, interpolation="nearest")
+        ax.set_title(label, fontsize=9)
+        ax.set_xticks([])
+        ax.set_yticks([])
+        ax = axes[1, k]
+        ax.set_xticks([])
+        ax.set_yticks([])
+        if k < len(errors):
+            err = errors[k]
+            shown = ax.imshow(err, cmap="magma", vmin=0, vmax=top, interpolation="nearest")
+            rms = float(np.sqrt(np.mean(err**2)))
+            clipped = " (clipped)" if err.max() > top else ""
+            ax.set_title(f"|error|: max {err.max():.1f}, RMS {rms:.2f}{clipped}", fontsize=8)
+            rows.append((label, float(err.max()), rms))
+        else:
+            ax.axis("off")
+            bar = fig.colorbar(shown, ax=ax, fraction=0.5, orientation="horizontal")
+            bar.set_label("|error| (intensity LSB)", fontsize=8)
+    fig.suptitle(
+        f"{scene.name}, pixels {x0}..{x1 - 1} x {y0}..{y1 - 1}: each method and its |image - "
+        f"exact area composite|\n(one colour scale, intensity LSB of {full}; vertices on the "
+        f"1/{config.subpixel_scale} px grid)",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return rows

@@ -1,0 +1,141 @@
+"""The three engines a scene's edges can run through, all giving the same ordered writes.
+
+- ``model``: `edgeaa.model.vector.run_edges`, the vectorized bit-accurate model, in chunks
+  of edges (for the progress bar; the writes do not depend on the chunking).
+- ``verilator``: `edgeaa.sim.fastsim.run`, the core's Verilog compiled by Verilator with a C++
+  harness (cycle-accurate; the build is cached).
+- ``amaranth``: `edgeaa.sim.amaranth_run.run`, the core in Amaranth's Python simulator
+  (cycle-accurate, slow: small scenes only).
+
+The simulators return beats (one per column: lane 0, then lane 1 when the column has a
+second write; ``last`` on an edge's final column); `beats_to_writes` turns them into the
+model's write order. Cycles come from the timing model (`edgeaa.model.timing`) for every
+engine, and the simulators' measured clocks are kept beside them.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import Edge, EdgeConfig
+from ..model.timing import write_cycles
+
+ENGINES = ("model", "amaranth", "verilator")
+MODEL_CHUNK = 512  # edges per run_edges call
+AMARANTH_CLOCKS_PER_SECOND = 1000.0  # rough rate of the Python simulator, for the warning
+AMARANTH_WARN_SECONDS = 60.0
+
+
+@dataclass(frozen=True)
+class EngineRun:
+    """Writes of the edges sent, in order: edge (index into the list sent), x, y, value."""
+
+    engine: str
+    edge_index: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    value: np.ndarray
+    seconds: float  # engine wall time (the Verilator build excluded)
+    clocks: int | None = None  # simulated clocks, including the drain (simulators only)
+    beat_clocks: np.ndarray | None = None  # clock of every beat (simulators only)
+
+    def __len__(self) -> int:
+        return len(self.edge_index)
+
+
+def cycles(config: EdgeConfig, edges: list[Edge]) -> int:
+    """Clocks from the first command to the last write, inclusive, by the timing model
+    (back-to-back source, always-ready sink): the last beat's clock + 1; 0 for no edges."""
+    last = -1
+    for timing in write_cycles(config, edges):
+        if timing.beats:
+            last = max(last, timing.beats[-1])
+    return last + 1
+
+
+def beat_clocks(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:
+    return np.array(
+        [clock for timing in write_cycles(config, edges) for clock in timing.beats],
+        dtype=np.int64,
+    )
+
+
+def beats_to_writes(beats: np.ndarray, edges: int) -> tuple[np.ndarray, ...]:
+    """Beat rows [clock, x0, y0, v0, lane1_valid, x1, y1, v1, last] to the model's write order
+    (edge index, x, y, value): lane 0 then lane 1 of each beat; an edge ends at `last`."""
+    beats = np.asarray(beats, dtype=np.int64).reshape(-1, 9)
+    last = beats[:, 8].astype(bool)
+    if int(last.sum()) != edges:
+        raise RuntimeError(f"the core ended {int(last.sum())} edges, {edges} were sent")
+    edge_of_beat = np.concatenate([[0], np.cumsum(last)[:-1]]).astype(np.int64)
+    two = beats[:, 4].astype(bool)
+    count = 1 + two.astype(np.int64)
+    first = np.cumsum(count) - count
+    total = int(count.sum())
+    out = [np.empty(total, dtype=np.int64) for _ in range(4)]
+    for column, lane0, lane1 in zip(out, (edge_of_beat, beats[:, 1], beats[:, 2], beats[:, 3]),
+                                    (edge_of_beat, beats[:, 5], beats[:, 6], beats[:, 7]),
+                                    strict=True):  # fmt: skip
+        column[first] = lane0
+        column[first[two] + 1] = lane1[two]
+    return tuple(out)
+
+
+def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None) -> EngineRun:
+    """Run `edges` (all valid: the core would drop bad ones) through an engine.
+    progress(done, total) is called as edges complete."""
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    if engine == "model":
+        return _run_model(config, edges, progress)
+    if not edges:
+        empty = np.zeros(0, dtype=np.int64)
+        return EngineRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
+    if engine == "verilator":
+        from ..sim import fastsim
+
+        if progress is not None:
+            progress(0, len(edges))
+        run = fastsim.run(config, edges)  # builds once per core (cached), not timed
+        if progress is not None:
+            progress(len(edges), len(edges))
+    else:
+        from ..sim import amaranth_run
+
+        expected = cycles(config, edges)
+        if expected / AMARANTH_CLOCKS_PER_SECOND > AMARANTH_WARN_SECONDS:
+            minutes = expected / AMARANTH_CLOCKS_PER_SECOND / 60
+            print(
+                f"edgeaa render: warning: the amaranth engine simulates about "
+                f"{AMARANTH_CLOCKS_PER_SECOND:,.0f} clocks/s and this scene needs "
+                f"{expected:,} clocks (about {minutes:.0f} min); --engine verilator gives "
+                "the same image",
+                file=sys.stderr,
+                flush=True,
+            )
+        run = amaranth_run.run(config, edges, progress=progress)
+    if run.errors:
+        raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
+    edge_index, x, y, value = beats_to_writes(run.beats, len(edges))
+    return EngineRun(engine, edge_index, x, y, value, run.seconds, run.clocks, run.beats[:, 0])
+
+
+def _run_model(config: EdgeConfig, edges: list[Edge], progress) -> EngineRun:
+    from ..model.vector import run_edges
+
+    start = time.perf_counter()
+    parts = []
+    for lo in range(0, len(edges), MODEL_CHUNK):
+        batch = run_edges(config, edges[lo : lo + MODEL_CHUNK])
+        parts.append((batch.edge_index + lo, batch.x, batch.y, batch.value))
+        if progress is not None:
+            progress(min(lo + MODEL_CHUNK, len(edges)), len(edges))
+    if parts:
+        columns = [np.concatenate([part[i] for part in parts]) for i in range(4)]
+    else:
+        columns = [np.zeros(0, dtype=np.int64) for _ in range(4)]
+    return EngineRun("model", *columns, seconds=time.perf_counter() - start)
