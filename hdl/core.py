@@ -9,12 +9,22 @@
   restoring division, one bit per clock). Its latency is fixed per configuration.
 * **Stepping** (`EdgeStepper`): one column per clock with an always-ready sink, using only adds,
   subtracts, compares, fixed shifts and shift-add multiplies by the small odd constants of the
-  segment estimate. Its registers are named and sized as in `EdgeConfig.register_widths`.
+  segment estimate. Its loop registers are named and sized as in `EdgeConfig.register_widths`;
+  the column's writes are computed in a pipeline behind the loop (``EdgeStepper.latency`` = 2
+  or 3 registers from a column's step to its beat, `edgeaa.model.timing.pipeline_depth`).
 
 The setup result is held in a register bank (the `setup` stream of the stepper); the next
 edge's setup runs while the current edge steps, and the stepper loads the bank in the same
-clock as it steps its last column, so edges at least ``setup_latency - 2`` columns long leave
-back to back with no bubble.
+clock as it steps its last column, so edges at least ``setup_interval`` (``R + 3`` clocks,
+`edgeaa.model.timing`) columns long leave back to back with no bubble.
+
+Timing structure (for the clock rate; no path carries more than about one wide carry chain):
+the accept clock registers the command with its deltas ``x1 - x0``, ``x0 - x1`` (and for y),
+the "delta not positive" flags and the bad-command flag; FOLD picks the major axis with one
+compare of the magnitudes (every choice that depends on it is formed for both axes and
+selected after it); the rest of the fold (``c0``, ``c1``, ``v0`` and the column count) is
+finished in the first two RUN clocks; the lanes form their three candidate remainders and
+quotients in parallel; ``kq, kr`` are registered when lane B is done, before FINAL.
 
 Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
 
@@ -46,14 +56,17 @@ Setup arithmetic (all exact; proofs in the comments of `EdgeAntialiaser.elaborat
   computed as Horner over the bits of ``|I_d|`` with multiplicand ``r`` and the quotient digit
   ``m`` added per set bit (``mf = m du + r``).
 * lane B (``I + F - 1`` clocks, in parallel): ``khq, khr = divmod(|I_d| dv << (F - 1), du)``.
-* last clock: ``kq = 2 khq + (2 khr >= du)``, ``kr = 2 khr - du (2 khr >= du)`` (exactly the
-  model's ``divmod(|I_d| dv << F, du)``), the segment constants from ``kq`` (shift-adds) and,
-  for the truncated accumulator, ``jr = kr = khr = 0``.
+* when lane B is done (RUN, counter ``I + F - 1``): ``kq = 2 khq + (2 khr >= du)``,
+  ``kr = 2 khr - du (2 khr >= du)`` (exactly the model's ``divmod(|I_d| dv << F, du)``);
+  FINAL: the segment constants from ``kq`` (shift-adds) and, for the truncated accumulator,
+  ``jr = kr = khr = 0``.
 """
 
 from __future__ import annotations
 
-from amaranth.hdl import Const, Module, Mux, Signal, signed, unsigned
+import types
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, signed, unsigned
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -167,12 +180,40 @@ class EdgeStepper(wiring.Component):
 
     ``setup`` (in stream, `setup_layout`): the per-edge constants and start state; taken when
     the stepper is idle or in the clock it steps the current edge's last column.
-    ``writes`` (out stream, `write_layout`): one registered beat per column. When ``writes`` is
-    stalled the stepper holds its state and the beat (valid stays high, payload stable).
+    ``writes`` (out stream, `write_layout`): one registered beat per column.
 
-    ``step`` (an attribute, not a port) is high in the clocks where the column held in the
-    registers ``x, y, jq, jr`` is stepped: the model's `StepState` of that column; ``area0``
-    and ``area1`` are then its scaled areas (the model's `Write.area`, primary first).
+    Structure: the loop registers (``x, y, jq, jr, remaining``) step one column per clock;
+    the column's writes are computed by a pipeline behind them, ``latency`` clocks deep
+    (`pipeline_depth`): stages ``p1 .. p{latency - 1}`` and the ``writes`` output register.
+    One enable moves everything: the loop and every stage advance in a clock where the output
+    register is empty or taken (``~writes.valid | writes.ready``) and all hold otherwise, so a
+    column stepped in clock ``c`` has its beat valid in clock ``c + latency`` when nothing
+    stalls. Bubbles (invalid stages) move like columns; there is no combinational path from
+    ``writes.ready`` to ``writes.valid`` and a stalled beat keeps its payload.
+
+    Observation points (attributes, not ports):
+
+    * ``step`` is high in the clocks where the column held in the registers ``x, y, jq, jr``
+      is stepped: those registers are then the model's `StepState` of that column.
+    * ``area_step`` is high in the clocks where the column held in the last pipeline stage
+      moves into the output register; ``area0`` and ``area1`` are then its scaled areas (the
+      model's `Write.area`, primary first; ``area1`` don't-care for a one-pixel column). Its
+      beat is valid in the next clock. ``area_step`` pulses once per column, in step order.
+    * ``stage_valid[k]``, ``stage_last[k]``: stage ``p{k + 1}`` holds a column (of which the
+      edge's last), ``k = 0 .. latency - 2``.
+    * The loop also keeps per-edge constants derived from the bank at load (``derived``, a
+      dict name -> register; `derive` gives their defining expressions): while ``active``,
+      each equals `derive` applied to the stepper's own registers.
+
+    Arithmetic (exact given the loop invariants ``jq < ifix``, ``jr < du``, ``khr < du``,
+    ``ifix = I_d << F``): a mixed number ``q + r / du`` compares and adds as the
+    concatenation ``Cat(r, q)``, the carry out of the remainder part being the model's carry.
+    So the loop is one wide add per candidate (``jq + kq + carry`` and ``jq + kq + carry -
+    ifix``, the row step being the sign of the second); the exit tests above/below are single
+    compares of ``Cat(jr, jq)`` with per-edge constants (``J > ifix - K/2`` and ``J < K/2``);
+    the triangle estimate folds the intercept into the exit depth's constant (N <= 1); and
+    the output value ``I_B + sign * round(area / 2**F)`` is one add of ``sign * area`` to a
+    per-edge constant, bits ``F .. F + I - 1`` of the sum.
     """
 
     def __init__(self, config: EdgeConfig):
@@ -199,142 +240,268 @@ class EdgeStepper(wiring.Component):
         self.row_dy = Signal(signed(2))
         self.active = Signal()
         self.step = Signal()
-        # The column's scaled A-side areas (primary, neighbour): the model's `Write.area`.
+        self.latency = _pipeline_depth(config)
+        self.stage_valid = [Signal(name=f"p{k}_valid") for k in range(1, self.latency)]
+        self.stage_last = [Signal(name=f"p{k}_last") for k in range(1, self.latency)]
+        # The scaled A-side areas (primary, neighbour) of the column in the last stage.
+        self.area_step = Signal()
         self.area0 = Signal(_shape(widths["area"]), name="area0")
         self.area1 = Signal(_shape(widths["area"]), name="area1")
+        self.derived = {
+            name: Signal(shape, name=name) for name, shape in _derived_shapes(config).items()
+        }
 
     @property
     def config(self) -> EdgeConfig:
         return self._config
 
+    def derive(self, regs) -> dict:
+        """The derived per-edge constants as expressions of `regs` (the bank payload, or the
+        stepper itself): the fields ``du, ifix, kq, kr, khq, khr, col_dx, col_dy, row_dx,
+        row_dy, value_base, value_sign, seg_intercepts`` (``ifix``'s low F bits are zero)."""
+        return _derive(self._config, regs)
+
     def elaborate(self, platform):
         m = Module()
         config = self._config
         widths = config.register_widths()
-        F, n = config.F, config.segments  # noqa: N806
+        F, I, n = config.F, config.intensity_bits, config.segments  # noqa: N806, E741
+        w, acc = widths["du"].bits, widths["jq"].bits  # remainder and quotient widths
+        vw = F + I  # the output value sum: bits F .. F + I - 1 are the value
         x, y, jq, jr = self.x, self.y, self.jq, self.jr
-        du, ifix = self.du, self.ifix
+        k = types.SimpleNamespace(**self.derived)
+        writes, setup = self.writes, self.setup
+        depth = self.latency
 
         def wire(name, key=None):
             return Signal(_shape(widths[key or name]), name=name)
 
-        # -- the column's writes (the model's `column_areas`) --------------------------------
-        area0, area1 = self.area0, self.area1
-        lane1_valid = Signal()
-        lane1_below = Signal()  # the neighbour is row - 1 (else row + 1)
-        if n == 0:  # pw: one pixel per column
-            m.d.comb += area0.eq(jq)
-        else:
-            # d = J + K/2 - ifix (exit through the far boundary), exact with the remainder.
-            rsum_a = Signal(unsigned(widths["du"].bits + 1))
-            carry_a = Signal()
-            dq_above, dr_above = wire("dq_above", "dq"), wire("dr_above", "dr")
-            m.d.comb += [
-                rsum_a.eq(jr + self.khr),
-                carry_a.eq(rsum_a >= du),
-                dq_above.eq(jq + self.khq + carry_a - ifix),
-                dr_above.eq(rsum_a - Mux(carry_a, du, 0)),
-            ]
-            above = (dq_above > 0) | ((dq_above == 0) & (dr_above != 0))
-            # d = K/2 - J (entry through the near boundary).
-            borrow = Signal()
-            dq_below, dr_below = wire("dq_below", "dq"), wire("dr_below", "dr")
-            m.d.comb += [
-                borrow.eq(self.khr < jr),
-                dq_below.eq(self.khq - jq - borrow),
-                dr_below.eq(self.khr - jr + Mux(borrow, du, 0)),
-            ]
-            below = (dq_below > 0) | ((dq_below == 0) & (dr_below != 0))
-            dq = wire("dq")
-            m.d.comb += dq.eq(Mux(above, dq_above, dq_below))
-
-            # Triangle estimate: on segment j, ((2j + 1) d >> (2 + log2 N)) - intercept_j.
-            t = wire("t")
-            shift = 2 + _log2(n)
-            if n == 1:
-                m.d.comb += t.eq((dq >> shift) - self.seg_intercepts[0])
-            else:
-                seg = Signal(range(n))
-                m.d.comb += seg.eq(sum(dq >= threshold for threshold in self.seg_thresholds))
-                with m.Switch(seg):
-                    for j in range(n):
-                        with m.Case(j):
-                            slope = _const_mul(dq, 2 * j + 1) >> shift
-                            m.d.comb += t.eq(slope - self.seg_intercepts[j])
-            t_clamped = Signal(unsigned(widths["t"].bits - 1))
-            m.d.comb += t_clamped.eq(Mux(t < 0, 0, t))
-            with m.If(above):
-                m.d.comb += [area0.eq(jq - t_clamped), area1.eq(t_clamped), lane1_valid.eq(1)]
-            with m.Elif(below):
-                m.d.comb += [
-                    area0.eq(jq + t_clamped),
-                    area1.eq(ifix - t_clamped),
-                    lane1_valid.eq(1),
-                    lane1_below.eq(1),
-                ]
-            with m.Else():  # one pixel; area1 and lane 1 are don't-care
-                m.d.comb += [area0.eq(jq), area1.eq(t_clamped)]
-
-        def output_value(area, name):
-            value = wire(name, "value")
-            rounded = (area + (1 << (F - 1))) >> F
-            m.d.comb += value.eq(
-                Mux(self.value_sign < 0, self.value_base - rounded, self.value_base + rounded)
-            )
-            return value
-
-        value0, value1 = output_value(area0, "value0"), output_value(area1, "value1")
-        lane1_x, lane1_y = wire("lane1_x", "x"), wire("lane1_y", "y")
-        m.d.comb += [
-            lane1_x.eq(Mux(lane1_below, x - self.row_dx, x + self.row_dx)),
-            lane1_y.eq(Mux(lane1_below, y - self.row_dy, y + self.row_dy)),
-        ]
-
-        # -- advance one column: J += K with the remainder carried; step a row when J >= 1 ---
-        rsum = Signal(unsigned(widths["du"].bits + 1))
-        carry = Signal()
-        jsum = wire("jsum")
-        row_step = Signal()
-        m.d.comb += [
-            rsum.eq(jr + self.kr),
-            carry.eq(rsum >= du),
-            jsum.eq(jq + self.kq + carry),
-            row_step.eq(jsum >= ifix),
-        ]
-        zero = Const(0, signed(2))
-
-        # -- control: a registered output beat, stalled by back-pressure ---------------------
-        writes, setup = self.writes, self.setup
+        # -- control: one enable for the loop and the pipeline -------------------------------
+        en = Signal()  # the output register is empty or taken: everything advances
         last = Signal()
         load = Signal()
         m.d.comb += [
+            en.eq(~writes.valid | writes.ready),
             last.eq(self.remaining == 0),
-            self.step.eq(self.active & (~writes.valid | writes.ready)),
+            self.step.eq(self.active & en),
             setup.ready.eq(~self.active | (self.step & last)),
             load.eq(setup.valid & setup.ready),
         ]
-        with m.If(self.step):
+
+        # -- advance one column: J += K with the remainder carried; step a row when J >= 1 ---
+        # carry = jr + kr >= du is the carry out of jr + (kr - du mod 2**w). The quotient's
+        # candidates jq + kq (+ 1) and jq + kq - ifix (+ 1) are formed in parallel with it
+        # (carry select); the row step is the sign of jsum - ifix.
+        j_cat = Cat(jr, jq)
+        r_wrap = Signal(unsigned(w + 1))  # jr + kr - du (+ 2**w when no carry)
+        r_plain = Signal(unsigned(w))
+        carry = Signal()
+        jsum = wire("jsum")
+        sums = [Signal(unsigned(acc + 1), name=f"jsum_c{c}") for c in (0, 1)]
+        rows = [Signal(signed(acc + 2), name=f"jrow_c{c}") for c in (0, 1)]  # jsum - ifix
+        row_step = Signal()
+        m.d.comb += [
+            r_wrap.eq(jr + k.kr_du),
+            r_plain.eq(jr + self.kr),
+            carry.eq(r_wrap[w]),
+            sums[0].eq(jq + self.kq),
+            sums[1].eq(jq + self.kq + 1),
+            rows[0].eq(jq + k.kq_ifix),
+            rows[1].eq(jq + k.kq_ifix + 1),
+            jsum.eq(Mux(carry, sums[1], sums[0])),
+            row_step.eq(~Mux(carry, rows[1][-1], rows[0][-1])),
+        ]
+        j_next = Signal(unsigned(acc))
+        m.d.comb += j_next.eq(
+            Mux(carry, Mux(row_step, rows[1], sums[1]), Mux(row_step, rows[0], sums[0]))
+        )
+
+        # -- stage 0 (the stepping clock): from the loop registers -----------------------------
+        # The exit tests, exact: above iff J > ifix - K/2 = gq + gr/du, below iff J < K/2.
+        above, below = Signal(), Signal()  # (0 without segments: one pixel per column)
+        if n:
+            span = w + acc
+            m.d.comb += [
+                above.eq((j_cat + k.g_inv)[span]),  # carry out of J + ~G: J > G
+                below.eq(~(j_cat + k.kh_inv + 1)[span]),  # no carry out of J - K/2: J < K/2
+            ]
+        # The value sum's jq term: sign * jq + I_B 2**F + 2**(F-1) (minus 1 when sign < 0).
+        neg = self.value_sign[-1]
+        v0 = Signal(unsigned(vw))
+        m.d.comb += v0.eq((jq ^ neg.replicate(vw)) + Cat(Const(1 << (F - 1), F), self.value_base))
+
+        # The model's exit depth of the column (an observation point: see `dq` in the table).
+        if n:
+            # Cat(jr, jq) + Cat(khr - du mod 2**w, khq - ifix): jq + khq + carry - ifix, the
+            # exit depth above; Cat(jr, jq) + Cat(~khr, ~khq): jq - khq + borrow - 1, the
+            # complement of the exit depth below (N == 1: both minus intercept << 2).
+            dq = wire("dq")
+            dq_above = Signal(signed(acc + 3))
+            dq_below_inv = Signal(signed(acc + 3))
+            m.d.comb += [
+                dq_above.eq((j_cat + Cat(k.exit_lo, k.above_hi).as_signed())[w:]),
+                dq_below_inv.eq((j_cat + Cat(k.kh_inv[:w], k.below_hi).as_signed())[w:]),
+            ]
+            if n == 1:  # an observation point only: the model's exit depth
+                icpt = self.seg_intercepts[0] << 2
+                m.d.comb += dq.eq(Mux(above, dq_above + icpt, ~dq_below_inv + icpt))
+            else:
+                m.d.comb += dq.eq(Mux(above, dq_above, ~dq_below_inv))
+
+        # -- the pipeline registers ------------------------------------------------------------
+        def stage(name, shape, value):
+            """A register of the next stage loaded with `value` whenever the pipeline moves."""
+            reg = Signal(shape, name=name)
+            with m.If(en):
+                m.d.sync += reg.eq(value)
+            return reg
+
+        valid = self.active
+        is_last = last
+        stages = []
+        for index in range(depth - 1):
+            valid = stage(f"p{index + 1}_valid_d", unsigned(1), valid)
+            is_last = stage(f"p{index + 1}_last_d", unsigned(1), is_last)
+            m.d.comb += [self.stage_valid[index].eq(valid), self.stage_last[index].eq(is_last)]
+            stages.append(valid)
+
+        def carry_along(prefix, values: dict, stages_: int) -> dict:
+            """`values` delayed through `stages_` pipeline registers."""
+            out = dict(values)
+            for index in range(stages_):
+                out = {
+                    name: stage(f"p{index + 1}_{prefix}{name}", Value.cast(v).shape(), v)
+                    for name, v in out.items()
+                }
+            return out
+
+        # Per-edge constants that the later stages need (carried with the column).
+        lane_consts = carry_along(
+            "",
+            {
+                "x_": x,
+                "y_": y,
+                "neg": neg,
+                "base": self.value_base,
+                "ubase": k.ubase,
+                "row_dx_": self.row_dx,
+                "row_dy_": self.row_dy,
+                "v0": v0,
+                "above": above,
+                "below": below,
+                # observation only (areas): no load in the synthesised design
+                "obs_jq": jq,
+                "obs_ifix": self.ifix,
+            },
+            depth - 1,
+        )
+        c = types.SimpleNamespace(**lane_consts)
+
+        # -- the triangle estimate, clamped ---------------------------------------------------
+        t = wire("t") if n else None
+        t_clamped = Signal(unsigned(widths["t"].bits - 1), name="t_clamped")
+        if n == 1:
+            # t = (d >> 2) - intercept = (d - (intercept << 2)) >> 2, the intercept folded in
+            # the exit depth's constant; below, floor(-X / 4) = ~((X - 1) >> 2).
+            p1 = carry_along(
+                "",
+                {"t_above": dq_above >> 2, "t_below_inv": dq_below_inv >> 2},
+                1,
+            )
+            m.d.comb += t.eq(Mux(c.above, p1["t_above"], ~p1["t_below_inv"]))
+            m.d.comb += t_clamped.eq(Mux(t < 0, 0, t))
+        elif n > 1:
+            shift = 2 + _log2(n)
+            # stage 1: the exit depth of the column and the per-edge segment constants.
+            p1 = carry_along(
+                "",
+                {
+                    "dq_": dq,
+                    **{f"thr_inv{j}": getattr(k, f"thr_inv{j}") for j in range(1, n)},
+                    **{f"icpt_neg{j}": getattr(k, f"icpt_neg{j}") for j in range(n)},
+                },
+                1,
+            )
+            dq1 = p1["dq_"]
+            seg = Signal(range(n))
+            # dq >= threshold: carry out of dq + ~threshold + 1 (dq >= 0 when it is used).
+            ge = [(dq1[: acc + 1] + p1[f"thr_inv{j}"] + 1)[acc + 1] for j in range(1, n)]
+            m.d.comb += seg.eq(sum(ge))
+            with m.Switch(seg):
+                for j in range(n):
+                    with m.Case(j):
+                        slope = _const_mul(dq1, 2 * j + 1) + p1[f"icpt_neg{j}"]
+                        m.d.comb += t.eq(slope >> shift)
+            t_c = stage("p2_t_clamped", unsigned(widths["t"].bits - 1), Mux(t < 0, 0, t))
+            m.d.comb += t_clamped.eq(t_c)
+
+        # -- the last stage: areas (observation), values and lanes into the output register ----
+        area0, area1 = self.area0, self.area1
+        two = Signal()  # two writes: the neighbour is row + 1 (above) or row - 1 (below)
+        lane1_below = Signal()
+        m.d.comb += [
+            two.eq(c.above | c.below),
+            lane1_below.eq(~c.above & c.below),
+            self.area_step.eq(stages[-1] & en),
+        ]
+        value0, value1 = wire("value0", "value"), wire("value1", "value")
+        if n == 0:  # pw: one pixel per column, area jq
+            m.d.comb += [area0.eq(c.obs_jq), value0.eq(c.v0[F:]), value1.eq(c.base)]
+        else:
+            with m.If(c.above):
+                m.d.comb += [area0.eq(c.obs_jq - t_clamped), area1.eq(t_clamped)]
+            with m.Elif(c.below):
+                m.d.comb += [area0.eq(c.obs_jq + t_clamped), area1.eq(c.obs_ifix - t_clamped)]
+            with m.Else():
+                m.d.comb += [area0.eq(c.obs_jq), area1.eq(t_clamped)]
+            # value = (v + sign * (+-t)) >> F with sign * X = (X ^ m) + m for m = [sign < 0].
+            flip0 = Mux(c.above, ~c.neg, c.neg)  # lane 0: jq - t above, jq + t below
+            flip1 = Mux(c.above, c.neg, ~c.neg)  # lane 1: t above, ifix - t below
+            op0 = Signal(unsigned(vw))
+            op1 = Signal(unsigned(vw))
+            m.d.comb += [
+                op0.eq(Mux(two, t_clamped ^ flip0.replicate(vw), 0)),
+                op1.eq(t_clamped ^ flip1.replicate(vw)),
+            ]
+            # lane 1's constant: I_B 2**F + 2**(F-1) - [sign < 0], plus sign * ifix below.
+            u = Cat(c.neg.replicate(F - 1), ~c.neg, Mux(c.above, c.base, c.ubase))
+            sum0, sum1 = Signal(unsigned(vw)), Signal(unsigned(vw))
+            m.d.comb += [
+                sum0.eq(c.v0 + op0 + (two & flip0)),
+                sum1.eq(u + op1 + flip1),
+                value0.eq(sum0[F:]),
+                value1.eq(sum1[F:]),
+            ]
+        lane1_x, lane1_y = wire("lane1_x", "x"), wire("lane1_y", "y")
+        m.d.comb += [
+            lane1_x.eq(Mux(lane1_below, c.x_ - c.row_dx_, c.x_ + c.row_dx_)),
+            lane1_y.eq(Mux(lane1_below, c.y_ - c.row_dy_, c.y_ + c.row_dy_)),
+        ]
+        with m.If(en):
             beat = writes.payload
             m.d.sync += [
-                writes.valid.eq(1),
-                beat.lane0.x.eq(x),
-                beat.lane0.y.eq(y),
+                writes.valid.eq(stages[-1]),
+                beat.lane0.x.eq(c.x_),
+                beat.lane0.y.eq(c.y_),
                 beat.lane0.value.eq(value0),
                 beat.lane1.x.eq(lane1_x),
                 beat.lane1.y.eq(lane1_y),
                 beat.lane1.value.eq(value1),
-                beat.lane1_valid.eq(lane1_valid),
-                beat.last.eq(last),
-                jr.eq(rsum - Mux(carry, du, 0)),
-                jq.eq(Mux(row_step, jsum - ifix, jsum)),
-                x.eq(x + self.col_dx + Mux(row_step, self.row_dx, zero)),
-                y.eq(y + self.col_dy + Mux(row_step, self.row_dy, zero)),
+                beat.lane1_valid.eq(two),
+                beat.last.eq(self.stage_last[-1]),
+            ]
+
+        # -- the loop registers -----------------------------------------------------------------
+        with m.If(self.step):
+            m.d.sync += [
+                jr.eq(Mux(carry, r_wrap[:w], r_plain)),
+                jq.eq(j_next),
+                x.eq(Mux(row_step, x + k.diag_dx, x + self.col_dx)),
+                y.eq(Mux(row_step, y + k.diag_dy, y + self.col_dy)),
                 self.remaining.eq(self.remaining - 1),
             ]
             with m.If(last):
                 m.d.sync += self.active.eq(0)
-        with m.Elif(writes.ready):
-            m.d.sync += writes.valid.eq(0)
 
         with m.If(load):
             bank = setup.payload
@@ -345,7 +512,87 @@ class EdgeStepper(wiring.Component):
                 m.d.sync += reg.eq(bank.seg_thresholds[j])
             for j, reg in enumerate(self.seg_intercepts):
                 m.d.sync += reg.eq(bank.seg_intercepts[j])
+            for name, value in _derive(config, _BankFields(bank, n)).items():
+                m.d.sync += self.derived[name].eq(value)
         return m
+
+
+def _pipeline_depth(config: EdgeConfig) -> int:
+    """Clocks from a column's step to its beat: 2 (N <= 1 segments) or 3 (N >= 2)."""
+    return 2 if config.segments <= 1 else 3
+
+
+def _derived_shapes(config: EdgeConfig) -> dict:
+    widths = config.register_widths()
+    w, acc, n = widths["du"].bits, widths["jq"].bits, config.segments
+    shapes = {
+        "kr_du": unsigned(w),  # kr - du mod 2**w
+        "kq_ifix": signed(acc + 1),  # kq - ifix
+        "diag_dx": signed(2),  # col_dx + row_dx
+        "diag_dy": signed(2),
+        "ubase": unsigned(config.intensity_bits),  # I_B + sign * I_d = I_A
+    }
+    if n:
+        shapes["g_inv"] = unsigned(w + acc)  # ~Cat(gr, gq), G = ifix - K/2 = gq + gr / du
+        shapes["kh_inv"] = unsigned(w + acc)  # ~Cat(khr, khq)
+        shapes["exit_lo"] = unsigned(w)  # khr - du mod 2**w
+        shapes["above_hi"] = signed(acc + 3)  # khq - ifix (- intercept << 2 when N == 1)
+        shapes["below_hi"] = signed(acc + 3)  # ~khq (+ intercept << 2 when N == 1)
+    if n > 1:
+        for j in range(1, n):
+            shapes[f"thr_inv{j}"] = unsigned(acc + 1)  # ~threshold_j
+        for j in range(n):
+            shapes[f"icpt_neg{j}"] = signed(acc + 6)  # -(intercept_j << (2 + log2 N))
+    return shapes
+
+
+class _BankFields:
+    """The bank payload with the array fields as lists (like the stepper's registers)."""
+
+    def __init__(self, bank, n: int):
+        self._bank = bank
+        self.seg_thresholds = [bank.seg_thresholds[j] for j in range(n - 1)] if n > 1 else []
+        self.seg_intercepts = [bank.seg_intercepts[j] for j in range(n)] if n else []
+
+    def __getattr__(self, name):
+        return getattr(self._bank, name)
+
+
+def _derive(config: EdgeConfig, regs) -> dict:
+    """The derived per-edge constants of the stepper from the bank fields (`EdgeStepper`)."""
+    F, n = config.F, config.segments  # noqa: N806
+    widths = config.register_widths()
+    w, acc = widths["du"].bits, widths["jq"].bits
+    i_d = regs.ifix[F:]  # ifix = I_d << F
+    khr_nz = regs.khr != 0
+    values = {
+        "kr_du": (regs.kr - regs.du)[:w],
+        "kq_ifix": Cat(regs.kq[:F], regs.kq[F:] - i_d).as_signed(),
+        "diag_dx": regs.col_dx + regs.row_dx,
+        "diag_dy": regs.col_dy + regs.row_dy,
+        "ubase": Mux(regs.value_sign < 0, regs.value_base - i_d, regs.value_base + i_d),
+    }
+    if n:
+        # G = ifix - K/2 = gq + gr / du with 0 <= gr < du: J > G is Cat(jr, jq) > Cat(gr, gq).
+        gq = regs.ifix - regs.khq - khr_nz
+        gr = Mux(khr_nz, regs.du - regs.khr, 0)
+        values["g_inv"] = ~Cat(gr[:w], gq[:acc])
+        values["kh_inv"] = ~Cat(regs.khr, regs.khq)
+        values["exit_lo"] = (regs.khr - regs.du)[:w]
+        if n == 1:
+            folded = regs.khq - (regs.seg_intercepts[0] << 2)  # khq - (intercept << 2)
+        else:
+            folded = Cat(regs.khq, Const(0, 1)).as_signed()  # khq, signed: ~ is -khq - 1
+        # folded - ifix, computed on the bits above F only (ifix's low F bits are zero)
+        values["above_hi"] = Cat(folded[:F], folded[F:].as_signed() - i_d).as_signed()
+        values["below_hi"] = ~folded
+    if n > 1:
+        shift = 2 + _log2(n)
+        for j in range(1, n):
+            values[f"thr_inv{j}"] = ~Cat(regs.seg_thresholds[j - 1], Const(0, 1))
+        for j in range(n):
+            values[f"icpt_neg{j}"] = -(regs.seg_intercepts[j] << shift)
+    return values
 
 
 # -- the top level: setup state machine + stepper --------------------------------------------
@@ -356,10 +603,15 @@ class _MulDivLane:
 
     One clock of `step` performs ``V = 2 V + b X`` (b the next bit of the multiplier, MSB first)
     while keeping ``V = Q du + R`` with ``0 <= R < du``: with ``R < du`` and ``X <= du`` the new
-    remainder candidate ``2 R + b X`` is below ``3 du``, so the quotient digit is 0, 1 or 2 and
-    two comparisons find it. ``digit`` (when b is set) adds a known multiple of ``du`` to ``V``
+    remainder candidate ``2 R + b X`` is below ``3 du``, so the quotient digit is 0, 1 or 2.
+    ``digit`` (when b is set) adds a known multiple of ``du`` to ``V``
     (``V = 2 V + b (digit du + X)``). Trailing zero multiplier bits make it a plain restoring
     division, so ``n`` clocks give ``divmod(A X 2**k, du)`` for an ``n - k`` bit ``A``.
+
+    The three candidates ``2 R + b X - d du`` (d = 0, 1, 2) are formed in parallel from
+    per-pass constants (``x_du = X - du``, ``x_2du = X - 2 du``; ``-du``, ``-2 du`` when b is
+    clear): the digit is the largest d whose candidate is not negative. The quotient's three
+    candidates ``2 Q + b digit + d`` are formed in parallel too (``digit2 = digit + 2``).
     """
 
     def __init__(self, name: str, config: EdgeConfig, a_bits: int, digit_bits: int):
@@ -370,34 +622,56 @@ class _MulDivLane:
         self.a = Signal(unsigned(a_bits), name=f"{name}_a")
         self.x = Signal(_shape(widths["du"]), name=f"{name}_x")
         self.digit = Signal(unsigned(max(digit_bits, 1)), name=f"{name}_digit")
+        du_bits = widths["du"].bits
+        self.x_du = Signal(signed(du_bits + 1), name=f"{name}_x_du")  # X - du, in [-du, 0]
+        self.x_2du = Signal(signed(du_bits + 2), name=f"{name}_x_2du")  # X - 2 du
+        self.digit2 = Signal(unsigned(max(digit_bits, 1) + 1), name=f"{name}_digit2")
 
-    def load(self, a, a_bits: int, x, digit=0):
+    def load(self, a, a_bits: int, x, x_du, x_2du, digit=0, digit2=2):
         """Start on the `a_bits`-bit multiplier `a` followed by ``self.a_bits - a_bits`` zero
-        bits: after ``self.a_bits`` steps ``q, r = divmod(a (digit du + x) 2**k, du)``."""
+        bits: after ``self.a_bits`` steps ``q, r = divmod(a (digit du + x) 2**k, du)``.
+        `x_du`, `x_2du` and `digit2` must be ``x - du``, ``x - 2 du`` and ``digit + 2``."""
         return [
             self.q.eq(0),
             self.r.eq(0),
             self.a.eq(a << (self.a_bits - a_bits)),
             self.x.eq(x),
+            self.x_du.eq(x_du),
+            self.x_2du.eq(x_2du),
             self.digit.eq(digit),
+            self.digit2.eq(digit2),
         ]
 
-    def step(self, m: Module, du, name: str):
-        """Add the step's combinational logic to `m`; return its register updates."""
+    def step(self, m: Module, neg_du, name: str):
+        """Add the step's combinational logic to `m` (`neg_du` is ``-du``); return its
+        register updates."""
         bit = self.a[-1]
-        total = Signal(unsigned(len(self.r) + 2), name=f"{name}_total")
-        twice = Signal()
-        once = Signal()
+        width = len(self.r) + 3
+        total = Signal(unsigned(len(self.r) + 2), name=f"{name}_total")  # 2 R + b X
+        less_du = Signal(signed(width), name=f"{name}_less_du")  # 2 R + b X - du
+        less_2du = Signal(signed(width), name=f"{name}_less_2du")  # 2 R + b X - 2 du
         m.d.comb += [
             total.eq((self.r << 1) + Mux(bit, self.x, 0)),
-            twice.eq(total >= (du << 1)),
-            once.eq(total >= du),
+            less_du.eq((self.r << 1) + Mux(bit, self.x_du, neg_du)),
+            less_2du.eq((self.r << 1) + Mux(bit, self.x_2du, neg_du << 1)),
         ]
-        digit = Mux(twice, 2, Mux(once, 1, 0))
+        twice, once = ~less_2du[-1], ~less_du[-1]
+        # 2 Q + b digit + d: the low bits (where b digit + d lands) for each d, and the high
+        # bits of 2 Q plus the carry out of the low bits (Q's high part, or it plus one).
+        low_bits = len(self.digit2) + 1
+        q_low = self.q[: low_bits - 1] << 1
+        lows = [
+            q_low + Mux(bit, self.digit, 0),
+            q_low + Mux(bit, self.digit, 0) + 1,
+            q_low + Mux(bit, self.digit2, 2),
+        ]
+        low = Signal(unsigned(low_bits + 1), name=f"{name}_q_low")
+        m.d.comb += low.eq(Mux(twice, lows[2], Mux(once, lows[1], lows[0])))
+        q_high = self.q[low_bits - 1 :]
         return [
             self.a.eq(self.a << 1),
-            self.r.eq(total - Mux(twice, du << 1, Mux(once, du, 0))),
-            self.q.eq((self.q << 1) + Mux(bit, self.digit, 0) + digit),
+            self.r.eq(Mux(twice, less_2du, Mux(once, less_du, total))),
+            self.q.eq(Cat(low[:low_bits], Mux(low[low_bits], q_high + 1, q_high))),
         ]
 
 
@@ -443,10 +717,10 @@ class EdgeAntialiaser(wiring.Component):
         """Clocks from accepting an edge (clock a, idle core) to its first beat.
 
         FOLD in clock a + 1, RUN in a + 2 .. a + R + 1 (R = `run_cycles`), FINAL (bank write)
-        in a + R + 2, stepper load in a + R + 3, column 0 stepped in a + R + 4, its registered
-        beat valid in a + R + 5.
+        in a + R + 2, stepper load in a + R + 3, column 0 stepped in a + R + 4, its beat valid
+        ``D = stepper.latency`` clocks later (the output pipeline), in a + R + 4 + D.
         """
-        return self.run_cycles + 5
+        return self.run_cycles + 4 + self.stepper.latency
 
     def elaborate(self, platform):
         m = Module()
@@ -461,66 +735,129 @@ class EdgeAntialiaser(wiring.Component):
         bank = stepper.setup
 
         # -- the accepted command ------------------------------------------------------------
+        # The deltas and their negations are registered with the command when it is accepted,
+        # and so are the "not positive" flags of the deltas and the bad-command flag.
         cmd = Signal(edge_layout(config))
+        coord = W + s
+        incoming = self.edges.payload
+        dx_r, ndx_r = (
+            Signal(signed(coord + 1), name="dx_r"),
+            Signal(signed(coord + 1), name="ndx_r"),
+        )
+        dy_r, ndy_r = (
+            Signal(signed(coord + 1), name="dy_r"),
+            Signal(signed(coord + 1), name="ndy_r"),
+        )
+        dx_le0, dy_le0 = Signal(name="dx_le0"), Signal(name="dy_le0")  # x1 <= x0, y1 <= y0
+        bad = Signal()  # the accepted command is bad: zero length, or I_in == I_out
+        same = (incoming.x0 == incoming.x1) & (incoming.y0 == incoming.y1)
+        accept = [
+            bad.eq(same | (incoming.i_in == incoming.i_out)),
+            cmd.eq(incoming),
+            dx_r.eq(incoming.x1 - incoming.x0),
+            ndx_r.eq(incoming.x0 - incoming.x1),
+            dy_r.eq(incoming.y1 - incoming.y0),
+            ndy_r.eq(incoming.y0 - incoming.y1),
+            dx_le0.eq(incoming.x1 <= incoming.x0),
+            dy_le0.eq(incoming.y1 <= incoming.y0),
+        ]
 
         # -- fold (combinational from `cmd`, registered at the end of the FOLD clock) --------
-        coord = W + s
         dx, dy = Signal(signed(coord + 1)), Signal(signed(coord + 1))
         adx, ady = Signal(unsigned(coord)), Signal(unsigned(coord))
+        nadx, nady = Signal(signed(coord + 1)), Signal(signed(coord + 1))  # -|dx|, -|dy|
         f_x_major = Signal()
         dp, dq = Signal(signed(coord + 1)), Signal(signed(coord + 1))
-        p0, q0, p1 = Signal(unsigned(coord)), Signal(unsigned(coord)), Signal(unsigned(coord))
         f_major_neg, f_minor_neg = Signal(), Signal()
-        u0, v0, u1 = (Signal(signed(coord + 1), name=name) for name in ("u0", "v0", "u1"))
-        c0, c1 = Signal(signed(W + 2)), Signal(signed(W + 2))
-        f_columns = Signal(unsigned(W + 1))
         e = Signal(signed(s + 2))
         e_mag = Signal(unsigned(max(s, 1)))
         f_diff = Signal(signed(I + 1))
         f_id = Signal(unsigned(I))
-        bad = Signal()
         m.d.comb += [
-            dx.eq(cmd.x1 - cmd.x0),
-            dy.eq(cmd.y1 - cmd.y0),
-            adx.eq(Mux(dx < 0, -dx, dx)),
-            ady.eq(Mux(dy < 0, -dy, dy)),
-            f_x_major.eq(adx >= ady),
+            dx.eq(dx_r),
+            dy.eq(dy_r),
+            adx.eq(Mux(dx < 0, ndx_r, dx)),
+            ady.eq(Mux(dy < 0, ndy_r, dy)),
+            nadx.eq(Mux(dx < 0, dx, ndx_r)),
+            nady.eq(Mux(dy < 0, dy, ndy_r)),
+            f_x_major.eq((adx + nady) >= 0),  # |dx| >= |dy|
             dp.eq(Mux(f_x_major, dx, dy)),
             dq.eq(Mux(f_x_major, dy, dx)),
-            p0.eq(Mux(f_x_major, cmd.x0, cmd.y0)),
-            q0.eq(Mux(f_x_major, cmd.y0, cmd.x0)),
-            p1.eq(Mux(f_x_major, cmd.x1, cmd.y1)),
-            f_major_neg.eq(dp <= 0),  # the model: step_major = 1 if dp > 0 else -1
+            f_major_neg.eq(Mux(f_x_major, dx_le0, dy_le0)),  # the model: dp > 0 steps up
             f_minor_neg.eq(dq < 0),
-            u0.eq(Mux(f_major_neg, -p0, p0)),
-            v0.eq(Mux(f_minor_neg, -q0, q0)),
-            u1.eq(Mux(f_major_neg, -p1, p1)),
-            # c0 = floor(u0 / S + 1/2), c1 = ceil(u1 / S - 1/2): arithmetic shifts floor.
-            c0.eq(((u0 << 1) + S) >> (s + 1)),
-            c1.eq(-((S - (u1 << 1)) >> (s + 1))),
-            f_columns.eq(c1 - c0 + 1),
-            # e = c0 S - u0 lies in (-S/2, S/2]: the offset of column c0's centre from u0.
-            e.eq((c0 << s) - u0),
-            e_mag.eq(Mux(e < 0, -e, e)),
             f_diff.eq(cmd.i_in - cmd.i_out),
             f_id.eq(Mux(f_diff < 0, -f_diff, f_diff)),
-            bad.eq(((cmd.x0 == cmd.x1) & (cmd.y0 == cmd.y1)) | (cmd.i_in == cmd.i_out)),
+        ]
+
+        def start_column(u0):
+            """c0 = floor(u0 / S + 1/2) (arithmetic shifts floor) and e = c0 S - u0, which lies
+            in (-S/2, S/2]: the offset of column c0's centre from u0."""
+            c0 = ((u0 << 1) + S) >> (s + 1)
+            return c0, (c0 << s) - u0
+
+        # e depends on the low bits of u0 = +-p0 only: both candidates (x or y major, each
+        # with its own sign) are formed in parallel with the major-axis test, which picks one.
+        e_cands, e_mag_cands = [], []
+        for p0, le0 in ((cmd.y0, dy_le0), (cmd.x0, dx_le0)):
+            e_cand = Signal(signed(s + 2), name=f"e_cand{len(e_cands)}")
+            e_mag_cand = Signal(unsigned(max(s, 1)), name=f"e_mag_cand{len(e_cands)}")
+            m.d.comb += [
+                e_cand.eq(Mux(le0, start_column(-p0)[1], start_column(p0)[1])),
+                e_mag_cand.eq(Mux(e_cand < 0, -e_cand, e_cand)),
+            ]
+            e_cands.append(e_cand)
+            e_mag_cands.append(e_mag_cand)
+        m.d.comb += [
+            e.eq(Mux(f_x_major, e_cands[1], e_cands[0])),
+            e_mag.eq(Mux(f_x_major, e_mag_cands[1], e_mag_cands[0])),
         ]
         # Orientation: a swap or one mirror flips left and right (the model's det).
-        det_neg = ~f_x_major ^ f_major_neg ^ f_minor_neg
-        f_inside_is_a = (cmd.inside == 0) ^ det_neg
+        # Both candidates (x or y major) are formed in parallel with the major-axis test.
+        f_value_base, f_value_neg = Signal(unsigned(I)), Signal()
+        candidates = []
+        for major_x, major_le0, minor_neg_ in ((0, dy_le0, dx < 0), (1, dx_le0, dy < 0)):
+            det_neg = (not major_x) ^ major_le0 ^ minor_neg_
+            inside_is_a = (cmd.inside == 0) ^ det_neg
+            candidates.append(
+                (
+                    Mux(inside_is_a, cmd.i_out, cmd.i_in),
+                    # value_sign = +1 iff I_A >= I_B; I_A = I_in iff inside is A.
+                    Mux(inside_is_a, f_diff < 0, f_diff > 0),
+                )
+            )
+        m.d.comb += [
+            f_value_base.eq(Mux(f_x_major, candidates[1][0], candidates[0][0])),
+            f_value_neg.eq(Mux(f_x_major, candidates[1][1], candidates[0][1])),
+        ]
 
         # -- folded registers ----------------------------------------------------------------
         x_major, major_neg, minor_neg = Signal(), Signal(), Signal()
         du, dv = Signal(_shape(widths["du"]), name="du"), Signal(_shape(widths["du"]), name="dv")
+        neg_du = Signal(signed(widths["du"].bits + 1), name="neg_du")  # -du
         v0_r = Signal(signed(coord + 1), name="v0_r")
         c0_r = Signal(signed(W + 2), name="c0_r")
+        c1_far = Signal(signed(W + 2), name="c1_far")  # (S - 2 u1) >> (s + 1) = -c1
         columns = Signal(unsigned(W + 1))
         e_neg = Signal()
         i_d = Signal(unsigned(I))
         value_base = Signal(unsigned(I))
         value_neg = Signal()
         row0 = Signal(signed(W + 2))
+
+        # The rest of the fold, in the first RUN clocks from the folded flags: c0, c1 and v0
+        # in the first (counter 0), the column count in the second.
+        r_p0 = Mux(x_major, cmd.x0, cmd.y0)
+        r_q0 = Mux(x_major, cmd.y0, cmd.x0)
+        r_p1 = Mux(x_major, cmd.x1, cmd.y1)
+        r_c0 = Signal(signed(W + 2), name="c0")
+        r_c1_far = Signal(signed(W + 2), name="c1_far_next")
+        r_v0 = Signal(signed(coord + 1), name="v0")
+        m.d.comb += [
+            r_c0.eq(Mux(major_neg, (S - (r_p0 << 1)) >> (s + 1), ((r_p0 << 1) + S) >> (s + 1))),
+            # c1 = ceil(u1 / S - 1/2) = -((S - 2 u1) >> (s + 1))
+            r_c1_far.eq(Mux(major_neg, (S + (r_p1 << 1)) >> (s + 1), (S - (r_p1 << 1)) >> (s + 1))),
+            r_v0.eq(Mux(minor_neg, -r_q0, r_q0)),
+        ]
 
         # -- the multiply-divide lanes -------------------------------------------------------
         pass1_bits = s + 1  # 2 |e| <= S
@@ -530,31 +867,38 @@ class EdgeAntialiaser(wiring.Component):
         run_cycles = self.run_cycles  # pass 1, fix-up, pass 2 of lane A
         fixup_cycle = pass1_bits
         counter = Signal(range(run_cycles))
+        # Both lanes start with X = dv: dv - du and dv - 2 du from |dx| and |dy| directly.
+        f_dv = Mux(f_x_major, ady, adx)
+        f_dv_du = Mux(f_x_major, ady + nadx, adx + nady)
+        f_dv_2du = Mux(f_x_major, ady + (nadx << 1), adx + (nady << 1))
 
         # Fix-up (at `fixup_cycle`): lane A holds q', r' = divmod(2 |e| dv, du). With
         # 2 e dv = q du + r (floor division), 2 num + den = du (2 v0 + S + q) + r, 0 <= r < du,
         # so row0 = floor((2 v0 + S + q) / 2S) and mf = m du + r, m = (2 v0 + S + q) mod 2S.
         q_fix = Signal(signed(s + 3))
         r_fix = Signal(_shape(widths["du"]))
+        r_fix_du = Signal(signed(widths["du"].bits + 1))  # r_fix - du
+        r_fix_2du = Signal(signed(widths["du"].bits + 2))  # r_fix - 2 du
         big_m = Signal(signed(coord + 4))
-        with m.If(e_neg & (lane_a.r != 0)):
-            m.d.comb += [q_fix.eq(-lane_a.q - 1), r_fix.eq(du - lane_a.r)]
-        with m.Elif(e_neg):
-            m.d.comb += [q_fix.eq(-lane_a.q), r_fix.eq(0)]
-        with m.Else():
-            m.d.comb += [q_fix.eq(lane_a.q), r_fix.eq(lane_a.r)]
-        m.d.comb += big_m.eq((v0_r << 1) + S + q_fix)
+        flip = e_neg & (lane_a.r != 0)
+        m.d.comb += [
+            q_fix.eq(Mux(e_neg, Mux(flip, -lane_a.q - 1, -lane_a.q), lane_a.q)),
+            r_fix.eq(Mux(flip, du - lane_a.r, lane_a.r)),
+            r_fix_du.eq(r_fix + neg_du),
+            r_fix_2du.eq(r_fix + (neg_du << 1)),
+            big_m.eq((v0_r << 1) + S + q_fix),
+        ]
 
         # -- final: the bank contents --------------------------------------------------------
+        # kq, kr = divmod(|I_d| dv << F, du) from lane B's result, registered in the clock
+        # after lane B's last step (RUN, counter I + F - 1): FINAL reads the registers.
         k_bit = Signal()
         kq = Signal(_shape(widths["kq"]), name="kq")
         kr = Signal(_shape(widths["kr"]), name="kr")
-        khr_twice = Signal(unsigned(widths["khr"].bits + 1))
+        khr_less = Signal(signed(widths["khr"].bits + 2))  # 2 khr - du
         m.d.comb += [
-            khr_twice.eq(lane_b.r << 1),
-            k_bit.eq(khr_twice >= du),
-            kq.eq((lane_b.q << 1) + k_bit),
-            kr.eq(khr_twice - Mux(k_bit, du, 0)),
+            khr_less.eq((lane_b.r << 1) + neg_du),
+            k_bit.eq(~khr_less[-1]),  # 2 khr >= du
         ]
         truncated = config.accumulator == "truncated"
         major, minor = Signal(signed(W + 2)), Signal(signed(W + 2))
@@ -595,8 +939,8 @@ class EdgeAntialiaser(wiring.Component):
                 final.append(bank.payload.seg_intercepts[j].eq(constant))
 
         # -- the setup state machine ---------------------------------------------------------
-        lane_a_step = lane_a.step(m, du, "lane_a")
-        lane_b_step = lane_b.step(m, du, "lane_b")
+        lane_a_step = lane_a.step(m, neg_du, "lane_a")
+        lane_b_step = lane_b.step(m, neg_du, "lane_b")
         with m.If(bank.ready):
             m.d.sync += bank.valid.eq(0)
         m.d.sync += self.error.eq(0)
@@ -604,7 +948,7 @@ class EdgeAntialiaser(wiring.Component):
             with m.State("IDLE"):
                 m.d.comb += self.edges.ready.eq(1)
                 with m.If(self.edges.valid):
-                    m.d.sync += cmd.eq(self.edges.payload)
+                    m.d.sync += accept
                     m.next = "FOLD"
             with m.State("FOLD"):
                 with m.If(bad):
@@ -613,37 +957,51 @@ class EdgeAntialiaser(wiring.Component):
                         m.d.sync += self.errors.eq(self.errors + 1)
                     m.next = "IDLE"
                 with m.Else():
-                    inside_is_a = f_inside_is_a
                     m.d.sync += [
                         x_major.eq(f_x_major),
                         major_neg.eq(f_major_neg),
                         minor_neg.eq(f_minor_neg),
                         du.eq(Mux(f_x_major, adx, ady)),
-                        dv.eq(Mux(f_x_major, ady, adx)),
-                        v0_r.eq(v0),
-                        c0_r.eq(c0),
-                        columns.eq(f_columns),
+                        dv.eq(f_dv),
+                        neg_du.eq(Mux(f_x_major, nadx, nady)),
                         e_neg.eq(e < 0),
                         i_d.eq(f_id),
-                        value_base.eq(Mux(inside_is_a, cmd.i_out, cmd.i_in)),
-                        # value_sign = +1 iff I_A >= I_B; I_A = I_in iff inside is A.
-                        value_neg.eq(Mux(inside_is_a, f_diff < 0, f_diff > 0)),
+                        value_base.eq(f_value_base),
+                        value_neg.eq(f_value_neg),
                         counter.eq(0),
-                        *lane_a.load(e_mag << 1, pass1_bits, Mux(f_x_major, ady, adx)),
-                        *lane_b.load(f_id << (F - 1), I + F - 1, Mux(f_x_major, ady, adx)),
+                        *lane_a.load(e_mag << 1, pass1_bits, f_dv, f_dv_du, f_dv_2du),
+                        *lane_b.load(f_id << (F - 1), I + F - 1, f_dv, f_dv_du, f_dv_2du),
                     ]
                     m.next = "RUN"
             with m.State("RUN"):
                 m.d.sync += counter.eq(counter + 1)
+                with m.If(counter == 0):
+                    m.d.sync += [c0_r.eq(r_c0), c1_far.eq(r_c1_far), v0_r.eq(r_v0)]
+                with m.If(counter == 1):
+                    m.d.sync += columns.eq(1 - c1_far - c0_r)  # c1 - c0 + 1
                 with m.If(counter == fixup_cycle):
+                    digit = big_m[: s + 1]
                     m.d.sync += [
                         row0.eq(big_m >> (s + 1)),
-                        *lane_a.load(i_d << (F - s - 1), pass2_bits, r_fix, big_m[: s + 1]),
+                        *lane_a.load(
+                            i_d << (F - s - 1),
+                            pass2_bits,
+                            r_fix,
+                            r_fix_du,
+                            r_fix_2du,
+                            digit,
+                            digit + 2,
+                        ),
                     ]
                 with m.Else():
                     m.d.sync += lane_a_step
                 with m.If(counter < I + F - 1):
                     m.d.sync += lane_b_step
+                with m.If(counter == I + F - 1):  # lane B is done
+                    m.d.sync += [
+                        kq.eq((lane_b.q << 1) + k_bit),
+                        kr.eq(Mux(k_bit, khr_less, lane_b.r << 1)),
+                    ]
                 with m.If(counter == run_cycles - 1):
                     m.next = "FINAL"
             with m.State("FINAL"), m.If(~bank.valid | bank.ready):

@@ -18,30 +18,33 @@ joined by a one-edge register bank:
   the stepper takes the old contents in the same clock; IDLE again the clock after.
 * The stepper loads the bank in the first clock ``t`` where the bank is valid and the
   stepper is idle or stepping the previous edge's last column (the handover has no bubble).
-  Column ``c`` of the edge is stepped in clock ``t + 1 + c`` and its beat (registered) is
-  valid in clock ``t + 2 + c``.
+  Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
+  pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
+  register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4): the
+  beat is valid in clock ``t + 1 + D + c``.
 
-With ``L = setup_latency = R + 5``: an edge accepted in clock ``a`` by an idle core has its
-first beat in clock ``a + L``. For edge ``n`` (good edges only, always-ready sink, source
+With ``L = setup_latency = R + 4 + D``: an edge accepted in clock ``a`` by an idle core has
+its first beat in clock ``a + L``. For edge ``n`` (good edges only, always-ready sink, source
 offering edges back to back from clock 0)::
 
     a[0] = 0, a[n + 1] = f[n] + 1     (after a bad command accepted in a: next at a + 2)
-    f[n] = max(a[n] + L - 3, t[n - 1])           clock FINAL writes the bank
+    f[n] = max(a[n] + R + 2, t[n - 1])           clock FINAL writes the bank
     t[n] = max(f[n] + 1, t[n - 1] + C[n - 1])    clock the stepper loads edge n
-    beat of column c of edge n: t[n] + 2 + c     (C[n] = columns of edge n)
+    beat of column c of edge n: t[n] + 1 + D + c     (C[n] = columns of edge n)
 
-``L = I + F + 6``: 35 clocks for the default configuration (and its pw/seg2/seg4/truncated
-variants, F = 21), 20 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 10), 39 for
-coord_bits=15 subpixel_bits=8 (F = 25).
+``R + 2 = L - D - 2``. ``L = I + F + 5 + D``: 36 clocks for the default configuration (and
+its pw and truncated variants, F = 21), 37 for seg2 and seg4; 21 for coord_bits=4
+subpixel_bits=0 intensity_bits=4 (F = 10), 40 for coord_bits=15 subpixel_bits=8 (F = 25).
 
-Sustained rate. The setup accepts one edge every ``L - 2`` clocks at most; the stepper takes
-``C`` clocks per edge. A stream of edges of ``C`` columns therefore sustains
-``C / max(C, L - 2)`` columns per clock: exactly one column per clock (no gap between edges)
-when every edge has at least ``L - 2`` columns. From an idle core, a stream of such edges
-(total ``T`` columns) has its last beat in clock ``L + T - 1``: the mean over the whole run is
-``T / (L + T)`` (`stream_rate`), at least 0.95 once ``T >= 19 L``. Shorter edges are
-setup-bound: one edge per ``L - 2`` clocks. A stalled sink delays the stepper (and, once the
-bank is full, the setup) clock for clock; nothing else depends on the data.
+Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3`` clocks at
+most (``P = L - D - 1``: 33 for the default configuration); the stepper takes ``C`` clocks
+per edge. A stream of edges of ``C`` columns therefore sustains ``C / max(C, P)`` columns per
+clock: exactly one column per clock (no gap between edges) when every edge has at least
+``P`` columns. From an idle core, a stream of such edges (total ``T`` columns) has its last
+beat in clock ``L + T - 1``: the mean over the whole run is ``T / (L + T)`` (`stream_rate`),
+at least 0.95 once ``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks.
+A stalled sink delays the stepper and its pipeline (and, once the bank is full, the setup)
+clock for clock; nothing else depends on the data.
 """
 
 from __future__ import annotations
@@ -54,7 +57,9 @@ from .edge import Edge, EdgeError, setup
 __all__ = [
     "EdgeTiming",
     "beat_cycles",
+    "pipeline_depth",
     "run_cycles",
+    "setup_interval",
     "setup_latency",
     "stream_rate",
     "sustained_rate",
@@ -69,10 +74,22 @@ def run_cycles(config: EdgeConfig) -> int:
     return config.intensity_bits + config.F + 1
 
 
+def pipeline_depth(config: EdgeConfig) -> int:
+    """Clocks from a column's step to its beat: the stepper's output pipeline, counting the
+    output register (2 with at most one segment, 3 with two or more)."""
+    return 2 if config.segments <= 1 else 3
+
+
 def setup_latency(config: EdgeConfig) -> int:
     """Clocks from accepting an edge (idle core) to its first beat: accept, FOLD, RUN, FINAL,
-    bank, stepper load, then the registered beat."""
-    return run_cycles(config) + 5
+    bank, stepper load, the step of column 0, then the output pipeline."""
+    return run_cycles(config) + 4 + pipeline_depth(config)
+
+
+def setup_interval(config: EdgeConfig) -> int:
+    """The fewest clocks between two accepted edges: accept, FOLD, RUN and FINAL. Edges of at
+    least this many columns keep the stepper busy (one column per clock)."""
+    return run_cycles(config) + 3
 
 
 @dataclass(frozen=True)
@@ -99,6 +116,7 @@ def write_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -
     ``setup_latency`` to check the two agree.
     """
     latency = setup_latency(config) if setup_latency_ is None else setup_latency_
+    depth = pipeline_depth(config)
     out: list[EdgeTiming] = []
     accept = 0
     prev_load = None  # load clock of the previous good edge
@@ -110,12 +128,12 @@ def write_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -
             out.append(EdgeTiming(edge, accept, None, None, ()))
             accept += BAD_COMMAND_CYCLES
             continue
-        bank = accept + latency - 3
+        bank = accept + latency - depth - 2
         load = bank + 1
         if prev_load is not None:
             bank = max(bank, prev_load)
             load = max(bank + 1, prev_load + prev_columns)
-        beats = tuple(load + 2 + c for c in range(columns))
+        beats = tuple(load + 1 + depth + c for c in range(columns))
         out.append(EdgeTiming(edge, accept, bank, load, beats))
         accept = bank + 1
         prev_load, prev_columns = load, columns
@@ -128,9 +146,13 @@ def beat_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) ->
 
 
 def sustained_rate(config: EdgeConfig, columns: int, setup_latency_: int | None = None) -> float:
-    """Steady-state columns per clock of an endless stream of edges of `columns` columns."""
-    latency = setup_latency(config) if setup_latency_ is None else setup_latency_
-    return columns / max(columns, latency - 2)
+    """Steady-state columns per clock of an endless stream of edges of `columns` columns
+    (`setup_latency_`, if given, is the core's: the interval is ``L - D - 1``)."""
+    if setup_latency_ is None:
+        interval = setup_interval(config)
+    else:
+        interval = setup_latency_ - pipeline_depth(config) - 1
+    return columns / max(columns, interval)
 
 
 def stream_rate(timings: list[EdgeTiming]) -> float:

@@ -26,7 +26,7 @@ from ..hdl import verilog
 from ..model import Edge, EdgeConfig
 from ..model.timing import setup_latency
 from .scoreboard import Beat
-from .verilator import cache_dir, verilator_env
+from .verilator import cache_dir, private_build_dir, publish, verilator_env
 
 TOP = "edgeaa_core"
 BEAT_FIELDS = 9
@@ -156,11 +156,11 @@ def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
     """Compile core + harness once per (Verilog, harness, flags); returns the executable."""
     source, harness = verilog(config, name=TOP), _harness_source(config)
     key = hashlib.sha256((source + harness + optimize).encode()).hexdigest()[:16]
-    build_dir = cache_dir() / f"fast-{key}"
+    final = cache_dir() / f"fast-{key}"
+    if (final / "harness").exists():
+        return final / "harness"
+    build_dir = private_build_dir(final)
     exe = build_dir / "harness"
-    if exe.exists():
-        return exe
-    build_dir.mkdir(parents=True, exist_ok=True)
     (build_dir / f"{TOP}.v").write_text(source)
     (build_dir / "harness.cpp").write_text(harness)
     command = [
@@ -173,7 +173,7 @@ def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
     )
     if proc.returncode != 0 or not exe.exists():
         raise RuntimeError(f"Verilator build failed:\n{proc.stdout[-2000:]}{proc.stderr[-3000:]}")
-    return exe
+    return publish(build_dir, final) / "harness"
 
 
 def edge_commands(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:

@@ -73,6 +73,21 @@ def cache_dir() -> Path:
     return Path(base) / "edgeaa" / "verilator"
 
 
+def private_build_dir(final: Path) -> Path:
+    """A fresh directory to build `final` in: concurrent builds never share a directory."""
+    final.parent.mkdir(parents=True, exist_ok=True)
+    return Path(tempfile.mkdtemp(prefix=f"{final.name}.", dir=final.parent))
+
+
+def publish(build_dir: Path, final: Path) -> Path:
+    """Move a finished build into place atomically; if another process won, keep theirs."""
+    try:
+        build_dir.rename(final)
+    except OSError:
+        shutil.rmtree(build_dir, ignore_errors=True)
+    return final
+
+
 def lint(source: str, waivers: tuple[str, ...] = LINT_WAIVERS) -> subprocess.CompletedProcess:
     """``verilator --lint-only -Wall`` on Verilog text; returns the completed process."""
     with tempfile.TemporaryDirectory(prefix="edgeaa-lint-") as tmp:
@@ -101,12 +116,12 @@ def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
     """Compile the core for cocotb once; later calls with the same Verilog reuse the build."""
     source = verilog(config)
     key = hashlib.sha256((source + optimize).encode()).hexdigest()[:16]
-    build_dir = cache_dir() / key
-    if (build_dir / TOP).exists():
-        return build_dir
+    final = cache_dir() / key
+    if (final / TOP).exists():
+        return final
     from cocotb_tools.runner import get_runner
 
-    build_dir.mkdir(parents=True, exist_ok=True)
+    build_dir = private_build_dir(final)
     (build_dir / f"{TOP}.v").write_text(source)
     runner = get_runner("verilator")
     old_env = dict(os.environ)
@@ -123,7 +138,7 @@ def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
     finally:
         os.environ.clear()
         os.environ.update(old_env)
-    return build_dir
+    return publish(build_dir, final)
 
 
 def cosimulate(

@@ -120,7 +120,8 @@ class Run:
     setup_latency: int
     accepts: list = field(default_factory=list)  # clock of each accepted command
     beats: list = field(default_factory=list)  # (clock, decoded payload)
-    steps: list = field(default_factory=list)  # (clock, x, y, jq, jr, area0, area1) per column
+    steps: list = field(default_factory=list)  # (clock, x, y, jq, jr) per column stepped
+    areas: list = field(default_factory=list)  # (clock, area0, area1) per column, in order
     banks: list = field(default_factory=list)  # (clock, decoded bank) handed to the stepper
     error_pulses: list = field(default_factory=list)  # clocks with `error` high
     errors: int = 0  # final `errors` count
@@ -183,6 +184,7 @@ def simulate(
                 y,
                 jq,
                 jr,
+                area_step,
                 area0,
                 area1,
                 b_valid,
@@ -198,6 +200,7 @@ def simulate(
                 stepper.y,
                 stepper.jq,
                 stepper.jr,
+                stepper.area_step,
                 stepper.area0,
                 stepper.area1,
                 stepper.setup.valid,
@@ -218,7 +221,9 @@ def simulate(
             if w_valid and ready:
                 run.beats.append((clock, decode_beat(w_raw)))
             if step:
-                run.steps.append((clock, x, y, jq, jr, area0, area1))
+                run.steps.append((clock, x, y, jq, jr))
+            if area_step:
+                run.areas.append((clock, area0, area1))
             if b_valid and b_ready:
                 run.banks.append((clock, decode_bank(b_raw)))
             if error:
@@ -323,8 +328,10 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     # The sink is empty at the end and the core idle.
     assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
 
-    # Per-column trace of the stepper registers, and the scaled areas of the column's writes.
-    got_steps = [step[1:] for step in run.steps]
+    # Per-column trace of the stepper registers, and the scaled areas of the column's writes
+    # (observed in the pipeline's last stage, in the same order).
+    assert len(run.areas) == len(run.steps), f"{tag} {len(run.areas)} areas, {len(run.steps)}"
+    got_steps = [step[1:] + area[1:] for step, area in zip(run.steps, run.areas, strict=True)]
     want_steps = []
     for edge in good:
         result = run_edge(config, edge)
@@ -352,7 +359,9 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
         f"{tag} beat clocks differ from the timing model; first at beat "
         f"{first_difference(got_clocks, want_clocks)}"
     )
-    assert [clock for clock, *_ in run.steps] == [c - 1 for c in want_clocks], f"{tag} steps"
+    depth = timing_model.pipeline_depth(config)  # clocks from a column's step to its beat
+    assert [clock for clock, *_ in run.steps] == [c - depth for c in want_clocks], f"{tag} steps"
+    assert [clock for clock, *_ in run.areas] == [c - 1 for c in want_clocks], f"{tag} areas"
     assert [clock for clock, _ in run.banks] == [t.load for t in timings if not t.dropped]
     want_errors = [t.accepted + 2 for t in timings if t.dropped]
     assert run.error_pulses == want_errors, f"{tag} error pulse clocks"
@@ -620,8 +629,11 @@ def test_stepper_registers_use_the_width_table(name):
 def test_setup_latency_is_the_timing_model(name):
     config = CONFIGS[name]
     dut = EdgeAntialiaser(config)
+    depth = timing_model.pipeline_depth(config)
+    assert dut.stepper.latency == depth == (2 if config.segments <= 1 else 3)
     assert dut.setup_latency == timing_model.setup_latency(config)
-    assert dut.setup_latency == config.intensity_bits + config.F + 6
+    assert dut.setup_latency == config.intensity_bits + config.F + 5 + depth
+    assert timing_model.setup_interval(config) == dut.run_cycles + 3
 
 
 # -- (2) setup registers against setup() -----------------------------------------------------
@@ -763,12 +775,13 @@ def run_of(config: EdgeConfig, x: int, y: int, columns: int, **kwargs) -> Edge:
 
 @pytest.mark.parametrize("seed", [None, 12])
 def test_handover(seed):
-    """Mixed lengths around L - 2: the bank handover and the FINAL wait, clock for clock."""
+    """Mixed lengths around the setup interval P: the bank handover and the FINAL wait, clock
+    for clock."""
     config = CONFIGS["default"]
-    latency = timing_model.setup_latency(config)
+    interval = timing_model.setup_interval(config)
     # After an edge longer than two setups the next bank waits for the stepper and the
     # setup after it waits in FINAL: a one-column edge then shows a late bank write.
-    lengths = [100, 1, 2, 1, latency - 2, latency - 3, 1, latency - 1, 1, 1, 120, 1, 1, 3]
+    lengths = [100, 1, 2, 1, interval, interval - 1, 1, interval + 1, 1, 1, 120, 1, 1, 3]
     edges = [run_of(config, 10 + n, 20 + 3 * n, c, inside="right" if n % 3 else "left")
              for n, c in enumerate(lengths)]  # fmt: skip
     edges.insert(4, Edge(5, 5, 5, 5))  # a dropped command while the bank waits
@@ -823,21 +836,20 @@ def test_errors_counter_saturates():
 # -- (7) throughput --------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize(
-    ("name", "length"), [("default", "L-2"), ("wide", "L-2"), ("default", "20L")]
-)
+@pytest.mark.parametrize(("name", "length"), [("default", "P"), ("wide", "P"), ("default", "20L")])
 def test_throughput(name, length):
-    """Edges of at least L - 2 columns leave back to back: one column per clock.
+    """Edges of at least P (the setup interval) columns leave back to back: one column per
+    clock.
 
-    Two streams: many edges of exactly L - 2 columns (the shortest that hide the next setup)
-    and three edges of 20 L columns each. (The small configuration cannot get there: its
-    longest edge has 17 columns, L - 2 = 18.)
+    Two streams: many edges of exactly P columns (the shortest that hide the next setup) and
+    three edges of 20 L columns each. (The small configuration cannot get there: its longest
+    edge has 17 columns, P = 18.)
     """
     config = CONFIGS[name]
     latency = timing_model.setup_latency(config)
     S = config.subpixel_scale  # noqa: N806
     hi = config.max_vertex
-    columns = latency - 2 if length == "L-2" else 20 * latency
+    columns = timing_model.setup_interval(config) if length == "P" else 20 * latency
     count = max(3, 20 * latency // columns + 1)  # the whole stream >= 20 setup latencies
     rng = random.Random(3)
     edges = []
@@ -871,18 +883,20 @@ def test_timing_model_basics():
     shifted = timing_model.write_cycles(config, [bad, bad, edge])
     assert [t.accepted for t in shifted] == [0, 2, 4]
     assert shifted[-1].beats == tuple(range(latency + 4, latency + 9))
-    assert timing_model.sustained_rate(config, 10) == 10 / (latency - 2)
-    assert timing_model.sustained_rate(config, latency - 2) == 1
+    interval = timing_model.setup_interval(config)
+    assert timing_model.sustained_rate(config, 10) == 10 / interval
+    assert timing_model.sustained_rate(config, interval) == 1
+    assert timing_model.sustained_rate(config, 10, latency) == 10 / interval
 
 
 def test_short_edges_are_setup_bound():
     config = CONFIGS["default"]
-    latency = timing_model.setup_latency(config)
+    interval = timing_model.setup_interval(config)
     edges = [Edge(16 * n, 100, 16 * n + 16 * 9, 130 + n) for n in range(8)]  # 10 columns
     run = run_and_check(config, edges, label="short edges")
     starts = [clock for clock, beat in run.beats if beat["last"]]
-    assert all(b - a == latency - 2 for a, b in zip(starts, starts[1:], strict=False)), starts
-    assert timing_model.sustained_rate(config, 10) == 10 / (latency - 2)
+    assert all(b - a == interval for a, b in zip(starts, starts[1:], strict=False)), starts
+    assert timing_model.sustained_rate(config, 10) == 10 / interval
 
 
 # -- (8) no multiplier or divider in the stepping loop ---------------------------------------

