@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import NamedTuple
 
 from .config import EdgeConfig
 
@@ -20,12 +21,31 @@ class EdgeError(ValueError):
     """An edge command the configured antialiaser cannot draw."""
 
 
+class Clip(NamedTuple):
+    """A clip window in whole pixels, bounds included: the core steps only the columns whose
+    major-axis pixel lies inside it (x_min .. x_max for an x-major edge, y_min .. y_max for a
+    y-major one). The minor axis is not clipped: a write may still land outside the window.
+    Each bound is in [0, 2**coord_bits]; a window with min > max steps no column."""
+
+    x_min: int
+    y_min: int
+    x_max: int
+    y_max: int
+
+    @classmethod
+    def full(cls, config: EdgeConfig) -> Clip:
+        """The window that clips nothing: every pixel a vertex in range can reach."""
+        top = 1 << config.coord_bits
+        return cls(0, 0, top, top)
+
+
 @dataclass(frozen=True)
 class Edge:
     """One edge command: P0 -> P1 in sub-pixel units, the inside side and two intensities.
 
     inside is the side of the direction of travel P0 -> P1 (as seen on the image, y down) that
-    gets i_in; the other side gets i_out. i_in None means full scale.
+    gets i_in; the other side gets i_out. i_in None means full scale. clip None means
+    `Clip.full` (in the hardware, the ``clip`` port's value in the clock the edge is accepted).
     """
 
     x0: int
@@ -35,6 +55,7 @@ class Edge:
     inside: str = "left"
     i_in: int | None = None
     i_out: int = 0
+    clip: Clip | None = None
 
     @classmethod
     def from_pixels(cls, config: EdgeConfig, x0, y0, x1, y1, **kwargs) -> Edge:
@@ -58,6 +79,9 @@ class Edge:
         i_in = config.full_scale if self.i_in is None else self.i_in
         return i_in, self.i_out
 
+    def window(self, config: EdgeConfig) -> Clip:
+        return Clip.full(config) if self.clip is None else Clip(*self.clip)
+
 
 def validate(config: EdgeConfig, edge: Edge) -> None:
     """Raise EdgeError naming what is wrong with the edge and what is allowed."""
@@ -75,6 +99,8 @@ def validate(config: EdgeConfig, edge: Edge) -> None:
             )
     if edge.x0 == edge.x1 and edge.y0 == edge.y1:
         raise EdgeError("zero-length edge: P0 and P1 are the same point")
+    if edge.clip is not None:
+        validate_clip(config, edge.clip)
     if edge.inside not in INSIDE_SIDES:
         raise EdgeError(f"inside must be 'left' or 'right', not {edge.inside!r}")
     i_in, i_out = edge.intensities(config)
@@ -96,12 +122,26 @@ def validate(config: EdgeConfig, edge: Edge) -> None:
         )
 
 
+def validate_clip(config: EdgeConfig, clip) -> None:
+    """Raise EdgeError unless `clip` is four integer pixel bounds in [0, 2**coord_bits]."""
+    top = 1 << config.coord_bits
+    if not isinstance(clip, tuple) or len(clip) != 4:
+        raise EdgeError(f"clip must be (x_min, y_min, x_max, y_max) in pixels, not {clip!r}")
+    for name, value in zip(Clip._fields, clip, strict=True):
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= top:
+            raise EdgeError(
+                f"clip {name} must be an integer pixel in [0, {top}] "
+                f"(coord_bits = {config.coord_bits}), not {value!r}"
+            )
+
+
 @dataclass(frozen=True)
 class EdgeSetup:
     """Per-edge constants and the initial state of the stepping loop (see docs/model.md)."""
 
     x_major: bool
-    columns: int  # columns to step, >= 1
+    columns: int  # columns to step: those inside the clip window (0: nothing to step)
+    clipped_start: bool  # the window moved the first column: the setup's long pass (timing)
     x: int  # screen pixel of the first column's primary write
     y: int
     col_dx: int  # screen step of one column (along the major axis)
@@ -160,10 +200,19 @@ def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     # Normalised coordinates: u along the major axis, v along the minor, both increasing.
     u0, v0, u1 = step_major * p0, step_minor * q0, step_major * (p0 + dp)
 
-    # Columns whose interior the edge's projection overlaps: floor(u0 + 1/2) .. ceil(u1 - 1/2).
+    # Columns whose interior the edge's projection overlaps: floor(u0 + 1/2) .. ceil(u1 - 1/2),
+    # cut to the clip window's major-axis bounds (folded like u; an empty cut keeps c0).
     c0 = floor_div(2 * u0 + S, 2 * S)
     c1 = -floor_div(S - 2 * u1, 2 * S)
-    columns = c1 - c0 + 1
+    clip = edge.window(config)
+    lo, hi = (clip.x_min, clip.x_max) if x_major else (clip.y_min, clip.y_max)
+    if step_major < 0:
+        lo, hi = -hi, -lo
+    first, last = max(c0, lo), min(c1, hi)
+    columns = max(last - first + 1, 0)
+    clipped_start = columns > 0 and first > c0
+    if columns:
+        c0 = first
 
     # Line height at the centre of column c0: vc = num / den pixels.
     num = v0 * du + dv * (c0 * S - u0)
@@ -195,6 +244,7 @@ def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     return EdgeSetup(
         x_major=x_major,
         columns=columns,
+        clipped_start=clipped_start,
         x=x,
         y=y,
         col_dx=col_dx,

@@ -3,18 +3,25 @@
 Clocks are numbered from 0, the first clock after reset. A stream transfer "happens in clock
 c" when valid and ready are both high in clock c (it completes at the clock edge ending c).
 
-Structure. The core has a setup state machine (IDLE -> FOLD -> RUN -> FINAL) and a stepper,
-joined by a one-edge register bank:
+Structure. The core has a setup state machine (IDLE -> FOLD -> WINDOW -> RUN -> FINAL) and a
+stepper, joined by a one-edge register bank:
 
-* IDLE: ``edges.ready`` is high; an edge offered in clock ``a`` is accepted in clock ``a``.
+* IDLE: ``edges.ready`` is high; an edge offered in clock ``a`` is accepted in clock ``a``,
+  and the ``clip`` port is sampled with it.
 * FOLD (clock ``a + 1``): octant folding and the bad-command check. A bad command (zero
   length, or I_in == I_out) is dropped here: ``error`` pulses in clock ``a + 2``, ``errors``
   counts it from clock ``a + 2``, and the core is back in IDLE in clock ``a + 2``.
-* RUN (``R = intensity_bits + F + 1`` clocks, ``a + 2 .. a + R + 1``): two lanes of a
-  bit-serial multiply-divide unit. Lane A: ``s + 1`` clocks for the start row, one fix-up
-  clock, ``I + F - s - 1`` clocks for the initial accumulator. Lane B in parallel:
-  ``I + F - 1`` clocks for the slope. Fixed per configuration, independent of the edge.
-* FINAL (from clock ``a + R + 2``): writes the bank as soon as it is free, i.e. it is empty or
+* WINDOW (clock ``a + 2``): the first and last columns, cut to the clip window along the
+  major axis, and the multiplier of the start-row pass (the offset of the first column's
+  centre from P0).
+* RUN (``R`` clocks, ``a + 3 .. a + R + 2``): two lanes of a bit-serial multiply-divide unit.
+  Lane A: the start row (``s + 1`` clocks, or ``W + s + 2`` when the window moved the first
+  column, the offset then being up to the edge's length), one fix-up clock, then
+  ``I + F - s - 1`` clocks for the initial accumulator. Lane B in parallel: ``I + F - 1``
+  clocks for the slope. So ``R = I + F + 1``, plus ``W + 1`` for a start-clipped edge: fixed
+  per configuration otherwise. An edge with no column inside the window leaves RUN after its
+  second clock (``a + 4``) without writing the bank: back in IDLE in clock ``a + 5``.
+* FINAL (from clock ``a + R + 3``): writes the bank as soon as it is free, i.e. it is empty or
   the stepper takes the old contents in the same clock; IDLE again the clock after.
 * The stepper loads the bank in the first clock ``t`` where the bank is valid and the
   stepper is idle or stepping the previous edge's last column (the handover has no bubble).
@@ -23,21 +30,23 @@ joined by a one-edge register bank:
   register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4): the
   beat is valid in clock ``t + 1 + D + c``.
 
-With ``L = setup_latency = R + 4 + D``: an edge accepted in clock ``a`` by an idle core has
-its first beat in clock ``a + L``. For edge ``n`` (good edges only, always-ready sink, source
+With ``L = setup_latency = R + 5 + D`` (R of an edge not clipped at its start): an edge
+accepted in clock ``a`` by an idle core has its first beat in clock ``a + L`` (``a + L + W +
+1`` if clipped at its start). For edge ``n`` (good edges only, always-ready sink, source
 offering edges back to back from clock 0)::
 
-    a[0] = 0, a[n + 1] = f[n] + 1     (after a bad command accepted in a: next at a + 2)
-    f[n] = max(a[n] + R + 2, t[n - 1])           clock FINAL writes the bank
+    a[0] = 0, a[n + 1] = f[n] + 1     (after a bad command accepted in a: next at a + 2;
+                                       after an edge with no visible column: next at a + 5)
+    f[n] = max(a[n] + R[n] + 3, t[n - 1])        clock FINAL writes the bank
     t[n] = max(f[n] + 1, t[n - 1] + C[n - 1])    clock the stepper loads edge n
-    beat of column c of edge n: t[n] + 1 + D + c     (C[n] = columns of edge n)
+    beat of column c of edge n: t[n] + 1 + D + c     (C[n] = visible columns of edge n)
 
-``R + 2 = L - D - 2``. ``L = I + F + 5 + D``: 36 clocks for the default configuration (and
-its pw and truncated variants, F = 21), 37 for seg2 and seg4; 21 for coord_bits=4
-subpixel_bits=0 intensity_bits=4 (F = 10), 40 for coord_bits=15 subpixel_bits=8 (F = 25).
+``R + 3 = L - D - 2``. ``L = I + F + 6 + D``: 37 clocks for the default configuration (and
+its pw and truncated variants, F = 21), 38 for seg2 and seg4; 22 for coord_bits=4
+subpixel_bits=0 intensity_bits=4 (F = 10), 41 for coord_bits=15 subpixel_bits=8 (F = 25).
 
-Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3`` clocks at
-most (``P = L - D - 1``: 33 for the default configuration); the stepper takes ``C`` clocks
+Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 4`` clocks at
+most (``P = L - D - 1``: 34 for the default configuration); the stepper takes ``C`` clocks
 per edge. A stream of edges of ``C`` columns therefore sustains ``C / max(C, P)`` columns per
 clock: exactly one column per clock (no gap between edges) when every edge has at least
 ``P`` columns. From an idle core, a stream of such edges (total ``T`` columns) has its last
@@ -45,6 +54,11 @@ beat in clock ``L + T - 1``: the mean over the whole run is ``T / (L + T)`` (`st
 at least 0.95 once ``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks.
 A stalled sink delays the stepper and its pipeline (and, once the bank is full, the setup)
 clock for clock; nothing else depends on the data.
+
+Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
+One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
+stepping clock per column cut; the setup overlaps the previous edge's stepping, so the extra
+clocks show only when the setup is the bottleneck.
 """
 
 from __future__ import annotations
@@ -61,17 +75,25 @@ __all__ = [
     "run_cycles",
     "setup_interval",
     "setup_latency",
+    "start_clip_cycles",
     "stream_rate",
     "sustained_rate",
     "write_cycles",
 ]
 
 BAD_COMMAND_CYCLES = 2  # accept + FOLD: a dropped command occupies the setup two clocks
+EMPTY_EDGE_CYCLES = 5  # accept, FOLD, WINDOW, two RUN clocks: an edge with no visible column
 
 
-def run_cycles(config: EdgeConfig) -> int:
-    """Clocks of the RUN state: lane A's two bit-serial passes and its fix-up clock."""
-    return config.intensity_bits + config.F + 1
+def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:
+    """Clocks of the RUN state: lane A's two bit-serial passes and its fix-up clock (the
+    first pass ``W + 1`` clocks longer when the clip window moved the first column)."""
+    return config.intensity_bits + config.F + 1 + (start_clip_cycles(config) if clipped_start else 0)
+
+
+def start_clip_cycles(config: EdgeConfig) -> int:
+    """Extra setup clocks of an edge whose first column the clip window moved."""
+    return config.coord_bits + 1
 
 
 def pipeline_depth(config: EdgeConfig) -> int:
@@ -81,15 +103,16 @@ def pipeline_depth(config: EdgeConfig) -> int:
 
 
 def setup_latency(config: EdgeConfig) -> int:
-    """Clocks from accepting an edge (idle core) to its first beat: accept, FOLD, RUN, FINAL,
-    bank, stepper load, the step of column 0, then the output pipeline."""
-    return run_cycles(config) + 4 + pipeline_depth(config)
+    """Clocks from accepting an edge (idle core, not clipped at its start) to its first beat:
+    accept, FOLD, WINDOW, RUN, FINAL, bank, stepper load, the step of column 0, then the
+    output pipeline."""
+    return run_cycles(config) + 5 + pipeline_depth(config)
 
 
 def setup_interval(config: EdgeConfig) -> int:
-    """The fewest clocks between two accepted edges: accept, FOLD, RUN and FINAL. Edges of at
-    least this many columns keep the stepper busy (one column per clock)."""
-    return run_cycles(config) + 3
+    """The fewest clocks between two accepted edges: accept, FOLD, WINDOW, RUN and FINAL.
+    Edges of at least this many columns keep the stepper busy (one column per clock)."""
+    return run_cycles(config) + 4
 
 
 @dataclass(frozen=True)
@@ -112,23 +135,30 @@ def write_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -
 
     `edges` are `Edge` commands offered in order from clock 0, each as soon as the previous
     one is accepted. Commands the model rejects (`EdgeError`) are dropped by the core and
-    get no beats. `setup_latency_` defaults to `setup_latency(config)`; pass the core's
-    ``setup_latency`` to check the two agree.
+    get no beats; so are edges with no column in their clip window. `setup_latency_`
+    defaults to `setup_latency(config)`; pass the core's ``setup_latency`` to check the two
+    agree.
     """
     latency = setup_latency(config) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config)
+    extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     accept = 0
     prev_load = None  # load clock of the previous good edge
     prev_columns = 0
     for edge in edges:
         try:
-            columns = setup(config, edge).columns
+            st = setup(config, edge)
         except EdgeError:
             out.append(EdgeTiming(edge, accept, None, None, ()))
             accept += BAD_COMMAND_CYCLES
             continue
-        bank = accept + latency - depth - 2
+        columns = st.columns
+        if not columns:
+            out.append(EdgeTiming(edge, accept, None, None, ()))
+            accept += EMPTY_EDGE_CYCLES
+            continue
+        bank = accept + latency - depth - 2 + (extra if st.clipped_start else 0)
         load = bank + 1
         if prev_load is not None:
             bank = max(bank, prev_load)

@@ -195,7 +195,8 @@ def _check_constants(widths: dict[str, RegisterWidth], st: EdgeSetup) -> None:
     ]
     values += [("seg_const", c) for c in st.seg_thresholds + st.seg_intercepts]
     values += [("x", st.x), ("y", st.y), ("jq", st.jq), ("jr", st.jr)]
-    values += [("remaining", st.columns - 1)]  # the largest value the loop assigns
+    if st.columns:
+        values += [("remaining", st.columns - 1)]  # the largest value the loop assigns
     for name, value in values:
         if not widths[name].holds(value):
             raise _width_error(name, value, widths[name])
@@ -204,7 +205,7 @@ def _check_constants(widths: dict[str, RegisterWidth], st: EdgeSetup) -> None:
 def _check_invariants(st: EdgeSetup) -> None:
     """What the closed form assumes of setup (see the module docstring)."""
     ok = (
-        st.columns >= 1
+        st.columns >= 0
         and st.du >= 1
         and st.ifix >= 1
         and 0 <= st.jr < st.du
