@@ -12,7 +12,16 @@ import math
 import sys
 
 from .analysis.cli import add_commands as add_analysis_commands
-from .model import ACCUMULATORS, MODES, ConfigError, Edge, EdgeConfig, EdgeError, run_edge
+from .model import (
+    ACCUMULATORS,
+    MODES,
+    Clip,
+    ConfigError,
+    Edge,
+    EdgeConfig,
+    EdgeError,
+    run_edge,
+)
 from .model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
 from .model.reference import error_bound, exact_coverage_array
 from .render.cli import add_commands as add_render_commands
@@ -102,6 +111,7 @@ def cmd_edge(args: argparse.Namespace) -> int:
         inside=args.inside,
         i_in=args.i_in,
         i_out=args.i_out,
+        clip=None if args.clip is None else Clip(*args.clip),
     )
     result = run_edge(config, edge)
     if args.json:
@@ -286,6 +296,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     edge.add_argument("--i-in", type=int, default=None, help="inside intensity (default full)")
     edge.add_argument("--i-out", type=int, default=0, help="outside intensity (default 0)")
+    edge.add_argument(
+        "--clip",
+        type=int,
+        nargs=4,
+        metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
+        help="clip window in whole pixels, bounds included: only the columns whose major-axis "
+        "pixel is inside are stepped (default: no clipping)",
+    )
     edge.add_argument("--json", action="store_true", help="print a JSON list of writes")
     _add_config_options(edge)
     edge.set_defaults(func=cmd_edge)

@@ -1,4 +1,4 @@
-"""Built-in scenes: a starburst (Siemens star) and a line of text in a scrolled text field.
+"""Built-in scenes: a starburst (Siemens star) and a line of text in a framed text field.
 
 - ``starburst``: 32 black wedges from the image centre on white (a Siemens star): spokes at
   64 angles 5.625 degrees apart (every octant; horizontal, vertical and diagonal ones), the
@@ -20,7 +20,7 @@ from ..model import EdgeConfig
 from .scene import DEFAULT_TOLERANCE, Contour, Polygon, Scene, flatten_quadratic
 
 BUILTINS = ("starburst", "text")
-TEXT = "edgeaa renders polygons and text: The quick brown fox jumps over the lazy dog 0123456789"
+TEXT = "edgeaa renders polygons and text"
 
 
 def font_path() -> str:
@@ -152,12 +152,12 @@ def text_scene(
     full: int = 255,
     text: str = TEXT,
     size: float = 28.0,
-    width: int = 384,
+    width: int = 512,
     height: int = 64,
     tolerance: float = DEFAULT_TOLERANCE,
 ) -> Scene:
     """A white text field framed in grey (2 px, on pixel boundaries) holding a line of black
-    text; field and text run past the image's right side."""
+    text, all inside the image (512 px holds the default text: it ends near 496 px)."""
     grey = round(full * 96 / 255)
     glyphs, end = text_polygons(text, size, 14.0, 42.0, 0, tolerance)
     right = math.ceil(end) + 10.5

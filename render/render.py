@@ -12,15 +12,16 @@ Steps (docs/scenes.md has the reasoning):
    when it overlaps no earlier polygon (its edge writes are then final intensities straight
    from the engine), otherwise the intensity farthest from I_in (the finest coverage the
    engine can give, composited in integers).
-2. `render`: send the edges that need antialiasing to the engine; compute the writes of
+2. `render`: send the edges that need antialiasing to the engine, each with the image as
+   its clip window (the core steps only the columns inside it); compute the writes of
    horizontal and vertical edges on the fill path (`axis_writes`, bit-identical to the
    model); for each polygon in order, fill the pixels whose centre is inside (scanline,
    same fill rule), combine the writes of each pixel into one coverage (`combine`), and
    composite over what is below in integers.
 
-With ``skip=False`` every boundary edge goes to the engine, nothing is culled, every write is
-applied and each polygon is composited over the whole image: the image is the same, bit for
-bit (tested); the difference is the work, which `edgeaa render --stats` reports.
+With ``skip=False`` every boundary edge goes to the engine unclipped, nothing is culled, every
+write is applied and each polygon is composited over the whole image: the image is the same,
+bit for bit (tested); the difference is the work, which `edgeaa render --stats` reports.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..model import Edge, EdgeConfig, setup
+from ..model import Clip, Edge, EdgeConfig, setup
 from .engines import EngineRun, cycles, run_engine
 from .geometry import (
     halfplane_coverage,
@@ -98,10 +99,20 @@ class Plan:
     def edge_count(self) -> int:
         return len(self.coords)
 
-    def edge(self, e: int) -> Edge:
+    @property
+    def viewport(self) -> Clip:
+        """The image in engine pixels as the core's clip window (within its range)."""
+        top = 1 << self.config.coord_bits
+        ox, oy = self.offset
+        x_max, y_max = ox + self.scene.width - 1, oy + self.scene.height - 1
+        return Clip(min(ox, top), min(oy, top), min(x_max, top), min(y_max, top))
+
+    def edge(self, e: int, clip: bool = False) -> Edge:
+        """Edge e as a command; clip: with the viewport as its clip window."""
         p = self.polygons[self.polygon[e]]
         x0, y0, x1, y1 = (int(v) for v in self.coords[e])
-        return Edge(x0, y0, x1, y1, str(self.inside[e]), p.intensity, p.i_out)
+        window = self.viewport if clip else None
+        return Edge(x0, y0, x1, y1, str(self.inside[e]), p.intensity, p.i_out, window)
 
 
 def _alternative_out(intensity: int, background: int, full: int) -> int:
@@ -446,7 +457,7 @@ def render(
         return lambda done, total: progress(done, total, stage)
 
     t = time.perf_counter()
-    edges = [plan.edge(int(e)) for e in sent]
+    edges = [plan.edge(int(e), clip=skip) for e in sent]  # clipped to the image in setup
     run = run_engine(config, edges, engine, progress=report(engine))
     timings["engine"] = time.perf_counter() - t
     t = time.perf_counter()

@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from edgeaa.cli import main
-from edgeaa.model import Edge, EdgeConfig, run_edge
+from edgeaa.model import Clip, Edge, EdgeConfig, run_edge
 
 
 def run_cli(capsys, *argv):
@@ -49,6 +49,18 @@ def test_edge_options_reach_the_model(capsys):
     ]
 
 
+def test_edge_clip_reaches_the_model(capsys):
+    status, out, _ = run_cli(
+        capsys, "edge", "10", "10", "50", "20", "--clip", "20", "0", "22", "12"
+    )
+    assert status == 0
+    config = EdgeConfig()
+    edge = Edge.from_pixels(config, 10, 10, 50, 20, clip=Clip(20, 0, 22, 12))
+    rows = [tuple(int(v) for v in line.split()[:3]) for line in out.splitlines()[1:]]
+    assert rows == [(w.x, w.y, w.value) for w in run_edge(config, edge).writes]
+    assert sorted({x for x, _, _ in rows}) == [20, 21, 22]
+
+
 @pytest.mark.parametrize(
     "argv, fragment",
     [
@@ -63,6 +75,7 @@ def test_edge_options_reach_the_model(capsys):
         (["edge", "0", "0", "3", "1", "--i-in", "300"], "I_in must be an integer in [0, 255]"),
         (["edge", "0", "0", "3", "1", "--i-in", "0"], "I_in equals I_out"),
         (["edge", "0", "0", "x", "1"], "X1 must be a number"),
+        (["edge", "0", "0", "3", "1", "--clip", "0", "0", "3000", "9"], "clip x_max must be"),
         (["edge", "0", "0"], "required"),
         (["nonsense"], "invalid choice"),
     ],

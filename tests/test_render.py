@@ -363,15 +363,16 @@ def test_every_skipping_rule_saves_work_and_leaves_the_image_unchanged(plans, mo
     for rule, (edges, cycles, writes) in totals.items():
         assert edges > 0 and cycles > 0 and writes > 0, rule
     # each rule on its own leaves the image unchanged: turn them off one at a time
-    plan_text = plans["text"]
-    for attr in ("culled", "axis"):
-        saved = getattr(plan_text, attr).copy()
+    for name, attr in (("starburst", "culled"), ("text", "axis"), ("starburst", "axis")):
+        plan = plans[name]
+        saved = getattr(plan, attr).copy()
+        assert saved.any(), (name, attr)
         try:
-            getattr(plan_text, attr)[:] = False
-            alone = render(plan_text)
+            getattr(plan, attr)[:] = False
+            alone = render(plan)
         finally:
-            getattr(plan_text, attr)[:] = saved
-        assert np.array_equal(alone.image, model_renders["text"].image), attr
+            getattr(plan, attr)[:] = saved
+        assert np.array_equal(alone.image, model_renders[name].image), (name, attr)
 
 
 def test_the_fill_path_writes_what_the_model_writes(plans):
@@ -420,14 +421,29 @@ def _fit(edge: Edge, config: EdgeConfig) -> Edge:
 
 
 def test_culled_edges_write_nothing_inside_the_image(plans):
-    for name in BUILTINS:
-        p = plans[name]
-        culled = np.flatnonzero(p.culled & p.boundary)
-        assert len(culled) > 0, name
-        batch = run_edges(DEFAULT, [p.edge(int(e)) for e in culled])
+    p = plans["starburst"]  # the text is wholly inside its image
+    culled = np.flatnonzero(p.culled & p.boundary)
+    assert len(culled) > 0
+    batch = run_edges(DEFAULT, [p.edge(int(e)) for e in culled])
+    x, y = batch.x - p.offset[0], batch.y - p.offset[1]
+    inside = (x >= 0) & (x < p.scene.width) & (y >= 0) & (y < p.scene.height)
+    assert not inside.any()
+
+
+def test_clipping_to_the_viewport_keeps_every_write_inside_the_image(plans):
+    """The viewport clip drops only writes off the image, and it does drop some."""
+    p = plans["starburst"]
+    sent = np.flatnonzero(p.boundary & ~p.culled & ~p.axis)
+    whole = run_edges(DEFAULT, [p.edge(int(e)) for e in sent])
+    cut = run_edges(DEFAULT, [p.edge(int(e), clip=True) for e in sent])
+
+    def in_image(batch):
         x, y = batch.x - p.offset[0], batch.y - p.offset[1]
-        inside = (x >= 0) & (x < p.scene.width) & (y >= 0) & (y < p.scene.height)
-        assert not inside.any(), name
+        keep = (x >= 0) & (x < p.scene.width) & (y >= 0) & (y < p.scene.height)
+        return sorted(zip(batch.edge_index[keep], x[keep], y[keep], batch.value[keep], strict=True))
+
+    assert in_image(cut) == in_image(whole)
+    assert len(cut) < len(whole)
 
 
 # -- command line -------------------------------------------------------------------------------
@@ -439,7 +455,7 @@ def test_render_builtin_text_writes_the_png(tmp_path, capsys, model_renders):
     out = tmp_path / "text.png"
     assert main(["render", "--builtin", "text", "-o", str(out), "--quiet"]) == 0
     with Image.open(out) as image:
-        assert image.mode == "L" and image.size == (384, 64)
+        assert image.mode == "L" and image.size == (512, 64)
         assert np.array_equal(np.asarray(image), model_renders["text"].image)
     assert f"wrote {out}" in capsys.readouterr().out
 
@@ -486,7 +502,7 @@ BAD_COMMANDS = [
     (["--builtin", "text", "--compare"], "--compare needs -o FIGURE.png"),
     (["--builtin", "text", "--engine", "spice"], "invalid choice: 'spice'"),
     (["/nonexistent/scene.json"], "cannot read scene /nonexistent/scene.json"),
-    (["--builtin", "text", "--coord-bits", "9"], "does not fit the configured coordinate range"),
+    (["--builtin", "text", "--coord-bits", "8"], "larger than the coordinate range allows"),
 ]
 
 
