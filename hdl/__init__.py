@@ -3,6 +3,7 @@
 from .core import (
     EdgeAntialiaser,
     EdgeStepper,
+    clip_layout,
     edge_layout,
     pixel_layout,
     setup_layout,
@@ -13,6 +14,7 @@ from .core import (
 __all__ = [
     "EdgeAntialiaser",
     "EdgeStepper",
+    "clip_layout",
     "edge_layout",
     "pixel_layout",
     "setup_layout",

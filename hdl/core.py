@@ -6,7 +6,8 @@
 * **Setup** (in `EdgeAntialiaser` itself): a small state machine that folds the edge into the
   first octant and computes the `EdgeSetup` fields the loop needs, using two lanes of a
   sequential multiply-divide unit (Horner shift-add multiplication interleaved with radix-2
-  restoring division, one bit per clock). Its latency is fixed per configuration.
+  restoring division, one bit per clock). Its latency is fixed per configuration, and
+  ``W + 1`` clocks longer for an edge whose start the clip window cuts.
 * **Stepping** (`EdgeStepper`): one column per clock with an always-ready sink, using only adds,
   subtracts, compares, fixed shifts and shift-add multiplies by the small odd constants of the
   segment estimate. Its loop registers are named and sized as in `EdgeConfig.register_widths`;
@@ -15,21 +16,38 @@
 
 The setup result is held in a register bank (the `setup` stream of the stepper); the next
 edge's setup runs while the current edge steps, and the stepper loads the bank in the same
-clock as it steps its last column, so edges at least ``setup_interval`` (``R + 3`` clocks,
+clock as it steps its last column, so edges at least ``setup_interval`` (``R + 4`` clocks,
 `edgeaa.model.timing`) columns long leave back to back with no bubble.
+
+Setup states (``a``: the clock a command is accepted; `edgeaa.model.timing` is the exact
+cycle model): IDLE (``edges.ready``; accepts the command and samples ``clip`` with it), FOLD
+(``a + 1``: the fold; a bad command is dropped here, IDLE again in ``a + 2``), WINDOW
+(``a + 2``: the columns cut to the window, lane A loaded), RUN (``R = I + F + 1`` clocks from
+``a + 3``, ``W + 1`` more when the window cuts the start; an edge with no column inside the
+window leaves RUN after its second clock, IDLE again in ``a + 5``, no bank write), FINAL
+(writes the bank as soon as it is free; IDLE the clock after). So the first beat of an edge
+accepted by an idle core is valid ``setup_latency = I + F + 6 + D`` clocks after it is
+accepted (``D = EdgeStepper.latency``).
 
 Timing structure (for the clock rate; no path carries more than about one wide carry chain):
 the accept clock registers the command with its deltas ``x1 - x0``, ``x0 - x1`` (and for y),
-the "delta not positive" flags and the bad-command flag; FOLD picks the major axis with one
-compare of the magnitudes (every choice that depends on it is formed for both axes and
-selected after it); the rest of the fold (``c0``, ``c1``, ``v0`` and the column count) is
-finished in the first two RUN clocks; the lanes form their three candidate remainders and
-quotients in parallel; ``kq, kr`` are registered when lane B is done, before FINAL.
+the "delta not positive" flags, the bad-command flag and the clip window; FOLD picks the major
+axis with one compare of the magnitudes (every choice that depends on it is formed for both
+axes and selected after it: the folded flags, ``du``, ``dv``, ``c0``, ``c1`` and the folded
+window bounds ``lo``, ``hi``); WINDOW cuts ``[c0, c1]`` to ``[lo, hi]`` with one compare each
+and forms the clipped start offset ``lo S - u0`` (one add) and ``v0`` in parallel; the column
+count is formed in the first RUN clock and tested in the second; the lanes form their three
+candidate remainders and quotients in parallel; ``kq, kr`` are registered when lane B is done,
+before FINAL.
 
 Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
 
 * ``edges`` (in stream): ``x0, y0, x1, y1`` unsigned ``W + s`` (sub-pixel units, as
   `edgeaa.model.Edge`), ``i_in, i_out`` unsigned ``I``, ``inside`` (0: left, 1: right).
+* ``clip`` (in, `clip_layout`): ``x_min, y_min, x_max, y_max`` unsigned ``W + 1``, whole
+  pixels, bounds included (`edgeaa.model.Clip`); sampled in the clock an edge is accepted,
+  so it may change freely otherwise. Its init (an undriven port in simulation) is the full
+  window ``(0, 0, 2**W, 2**W)``, which clips nothing. In Verilog: ``clip__x_min`` etc.
 * ``writes`` (out stream, one beat per column): ``lane0`` and ``lane1``, each ``x, y`` signed
   ``W + 2`` and ``value`` unsigned ``I``; ``lane1_valid``; ``last`` (the edge's last column).
   Lane order is the model's write order: the primary pixel, then its neighbour. The fields of
@@ -44,12 +62,26 @@ The core accepts such a command, detects it in its first setup clock, drops it (
 written, the stepper is not disturbed), pulses ``error``, counts it in ``errors`` and is ready
 for the next command two clocks after accepting the bad one.
 
+Clipping (the model's `Edge.clip`): only the major axis is clipped. In the folded frame
+(``u = step_major * p``) the window's major-axis bounds are ``lo, hi = min, max``, or
+``-max, -min`` when the major axis steps down; the edge steps the columns
+``first = max(c0, lo) .. last = min(c1, hi)``. A window that cuts the end only makes the
+count smaller; one that cuts the start (``c0 < lo``) starts the edge at column ``lo``, whose
+start offset ``e = lo S - u0`` is up to the edge's length, so lane A's first pass takes
+``W + s + 2`` clocks instead of ``s + 1``. An edge with no column inside (``last < first``,
+including a window with min > max) produces no beat and is not an error (``errors`` and
+``error`` are unchanged). The minor axis is not clipped: a write may land outside the window.
+
 Setup arithmetic (all exact; proofs in the comments of `EdgeAntialiaser.elaborate`):
 
 * fold: ``du, dv = |major delta|, |minor delta|``; ``u0, v0, u1`` the folded coordinates;
-  ``c0 = (2 u0 + S) >> (s + 1)``, ``c1 = -((S - 2 u1) >> (s + 1))``, ``e = c0 S - u0``
-  (``|e| <= S / 2``).
-* lane A, pass 1 (``s + 1`` clocks): ``q', r' = divmod(2 |e| dv, du)``; fix the sign of ``e``
+  ``c0 = (2 u0 + S) >> (s + 1)``, ``c1 = (2 u1 + S - 1) >> (s + 1)`` (= the model's
+  ``-((S - 2 u1) >> (s + 1))``).
+* window: ``first = max(c0, lo)``, ``last = min(c1, hi)``, ``columns = last - first + 1``
+  (none visible when ``<= 0``); ``e = first S - u0``: ``|e| <= S / 2`` when ``first = c0``,
+  else ``S / 2 < e < du + S / 2``.
+* lane A, pass 1 (``s + 1`` clocks, or ``W + s + 2`` for ``first > c0``):
+  ``q', r' = divmod(2 |e| dv, du)`` (``q' <= 2 |e| < 2**(W + s + 2)``); fix the sign of ``e``
   to get ``q, r = divmod(2 e dv, du)``; then ``M = 2 v0 + S + q``, ``row0 = M >> (s + 1)``,
   ``m = M mod 2S`` and the model's ``mf = m du + r``.
 * lane A, pass 2 (``I + F - s - 1`` clocks): ``jq, jr = divmod(|I_d| mf << (F - s - 1), du)``
@@ -76,6 +108,7 @@ __all__ = [
     "ERRORS_BITS",
     "EdgeAntialiaser",
     "EdgeStepper",
+    "clip_layout",
     "edge_layout",
     "pixel_layout",
     "setup_layout",
@@ -129,6 +162,19 @@ def edge_layout(config: EdgeConfig) -> data.StructLayout:
             "inside": unsigned(1),
         }
     )
+
+
+def clip_layout(config: EdgeConfig) -> data.StructLayout:
+    """The clip window (`edgeaa.model.Clip`): whole pixels, bounds included, each bound in
+    ``[0, 2**coord_bits]``; ``x_max = y_max = 2**coord_bits`` and zero minima clip nothing."""
+    bound = unsigned(config.coord_bits + 1)
+    return data.StructLayout({"x_min": bound, "y_min": bound, "x_max": bound, "y_max": bound})
+
+
+def _full_clip(config: EdgeConfig) -> dict[str, int]:
+    """The ``clip`` value that clips nothing (`edgeaa.model.Clip.full`): the port's init."""
+    top = 1 << config.coord_bits
+    return {"x_min": 0, "y_min": 0, "x_max": top, "y_max": top}
 
 
 def pixel_layout(config: EdgeConfig) -> data.StructLayout:
@@ -614,10 +660,12 @@ class _MulDivLane:
     candidates ``2 Q + b digit + d`` are formed in parallel too (``digit2 = digit + 2``).
     """
 
-    def __init__(self, name: str, config: EdgeConfig, a_bits: int, digit_bits: int):
+    def __init__(
+        self, name: str, config: EdgeConfig, a_bits: int, digit_bits: int, q_bits: int = 0
+    ):
         widths = config.register_widths()
         self.a_bits = a_bits
-        self.q = Signal(_shape(widths["jq"]), name=f"{name}_q")
+        self.q = Signal(unsigned(max(widths["jq"].bits, q_bits)), name=f"{name}_q")
         self.r = Signal(_shape(widths["jr"]), name=f"{name}_r")
         self.a = Signal(unsigned(a_bits), name=f"{name}_a")
         self.x = Signal(_shape(widths["du"]), name=f"{name}_x")
@@ -678,9 +726,11 @@ class _MulDivLane:
 class EdgeAntialiaser(wiring.Component):
     """The edge antialiaser: edge commands in, one beat of pixel writes per column out.
 
-    See the module docstring for the ports, the bad-command rule and the setup arithmetic.
-    ``setup_latency`` is the fixed number of clocks from the clock an edge is accepted to the
-    clock its first beat is valid, with the stepper idle (`edgeaa.model.timing`).
+    See the module docstring for the ports, the bad-command rule, clipping and the setup
+    arithmetic. ``setup_latency`` is the fixed number of clocks from the clock an edge is
+    accepted to the clock its first beat is valid, with the stepper idle, for an edge whose
+    start the window does not cut (``start_clip_cycles`` more when it does;
+    `edgeaa.model.timing`).
     """
 
     def __init__(self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS):
@@ -691,6 +741,7 @@ class EdgeAntialiaser(wiring.Component):
         super().__init__(
             {
                 "edges": In(stream.Signature(edge_layout(config))),
+                "clip": In(clip_layout(config), init=_full_clip(config)),
                 "writes": Out(stream.Signature(write_layout(config))),
                 "errors": Out(unsigned(errors_bits)),
                 "error": Out(unsigned(1)),
@@ -708,19 +759,34 @@ class EdgeAntialiaser(wiring.Component):
 
     @property
     def run_cycles(self) -> int:
-        """Clocks of the multiply-divide phase: lane A's two passes and its fix-up clock."""
+        """Clocks of the multiply-divide phase (RUN) of an edge not clipped at its start:
+        lane A's two passes and its fix-up clock, ``I + F + 1``."""
         config = self._config
         return config.intensity_bits + config.F + 1
 
     @property
-    def setup_latency(self) -> int:
-        """Clocks from accepting an edge (clock a, idle core) to its first beat.
+    def start_clip_cycles(self) -> int:
+        """Extra RUN clocks of an edge whose first column the clip window moved: lane A's
+        first pass takes ``W + s + 2`` clocks instead of ``s + 1``, i.e. ``W + 1`` more."""
+        return self._config.coord_bits + 1
 
-        FOLD in clock a + 1, RUN in a + 2 .. a + R + 1 (R = `run_cycles`), FINAL (bank write)
-        in a + R + 2, stepper load in a + R + 3, column 0 stepped in a + R + 4, its beat valid
-        ``D = stepper.latency`` clocks later (the output pipeline), in a + R + 4 + D.
+    @property
+    def setup_latency(self) -> int:
+        """Clocks from accepting an edge (clock a, idle core) to its first beat, for an edge
+        not clipped at its start (``start_clip_cycles`` more when it is).
+
+        FOLD in clock a + 1, WINDOW in a + 2, RUN in a + 3 .. a + R + 2 (R = `run_cycles`),
+        FINAL (bank write) in a + R + 3, stepper load in a + R + 4, column 0 stepped in
+        a + R + 5, its beat valid ``D = stepper.latency`` clocks later (the output pipeline),
+        in a + R + 5 + D.
         """
-        return self.run_cycles + 4 + self.stepper.latency
+        return self.run_cycles + 5 + self.stepper.latency
+
+    @property
+    def setup_interval(self) -> int:
+        """The fewest clocks between two accepted edges (accept, FOLD, WINDOW, RUN, FINAL),
+        ``run_cycles + 4``, for edges not clipped at their start."""
+        return self.run_cycles + 4
 
     def elaborate(self, platform):
         m = Module()
@@ -736,8 +802,10 @@ class EdgeAntialiaser(wiring.Component):
 
         # -- the accepted command ------------------------------------------------------------
         # The deltas and their negations are registered with the command when it is accepted,
-        # and so are the "not positive" flags of the deltas and the bad-command flag.
+        # and so are the "not positive" flags of the deltas, the bad-command flag and the
+        # clip window.
         cmd = Signal(edge_layout(config))
+        clip = Signal(clip_layout(config), name="clip_r")
         coord = W + s
         incoming = self.edges.payload
         dx_r, ndx_r = (
@@ -754,6 +822,7 @@ class EdgeAntialiaser(wiring.Component):
         accept = [
             bad.eq(same | (incoming.i_in == incoming.i_out)),
             cmd.eq(incoming),
+            clip.eq(self.clip),
             dx_r.eq(incoming.x1 - incoming.x0),
             ndx_r.eq(incoming.x0 - incoming.x1),
             dy_r.eq(incoming.y1 - incoming.y0),
@@ -769,8 +838,6 @@ class EdgeAntialiaser(wiring.Component):
         f_x_major = Signal()
         dp, dq = Signal(signed(coord + 1)), Signal(signed(coord + 1))
         f_major_neg, f_minor_neg = Signal(), Signal()
-        e = Signal(signed(s + 2))
-        e_mag = Signal(unsigned(max(s, 1)))
         f_diff = Signal(signed(I + 1))
         f_id = Signal(unsigned(I))
         m.d.comb += [
@@ -789,28 +856,38 @@ class EdgeAntialiaser(wiring.Component):
             f_id.eq(Mux(f_diff < 0, -f_diff, f_diff)),
         ]
 
-        def start_column(u0):
-            """c0 = floor(u0 / S + 1/2) (arithmetic shifts floor) and e = c0 S - u0, which lies
-            in (-S/2, S/2]: the offset of column c0's centre from u0."""
-            c0 = ((u0 << 1) + S) >> (s + 1)
-            return c0, (c0 << s) - u0
+        # The columns and the window along the major axis: every candidate (x or y major, each
+        # with its own sign) is formed in parallel with the major-axis test, which picks one.
+        # c0 = floor(u0 / S + 1/2) and c1 = ceil(u1 / S - 1/2) = floor((2 u1 + S - 1) / 2S)
+        # (arithmetic shifts floor); the window's bounds fold like u: (lo, hi) = (min, max),
+        # or (-max, -min) when the major axis steps down.
+        def first_column(p0, le0):
+            return Mux(le0, (S - (p0 << 1)) >> (s + 1), ((p0 << 1) + S) >> (s + 1))
 
-        # e depends on the low bits of u0 = +-p0 only: both candidates (x or y major, each
-        # with its own sign) are formed in parallel with the major-axis test, which picks one.
-        e_cands, e_mag_cands = [], []
-        for p0, le0 in ((cmd.y0, dy_le0), (cmd.x0, dx_le0)):
-            e_cand = Signal(signed(s + 2), name=f"e_cand{len(e_cands)}")
-            e_mag_cand = Signal(unsigned(max(s, 1)), name=f"e_mag_cand{len(e_cands)}")
-            m.d.comb += [
-                e_cand.eq(Mux(le0, start_column(-p0)[1], start_column(p0)[1])),
-                e_mag_cand.eq(Mux(e_cand < 0, -e_cand, e_cand)),
-            ]
-            e_cands.append(e_cand)
-            e_mag_cands.append(e_mag_cand)
+        def last_column(p1, le0):
+            return Mux(le0, ((S - 1) - (p1 << 1)) >> (s + 1), ((p1 << 1) + (S - 1)) >> (s + 1))
+
+        f_c0, f_c1 = Signal(signed(W + 2)), Signal(signed(W + 2))
+        f_lo, f_hi = Signal(signed(W + 2)), Signal(signed(W + 2))
         m.d.comb += [
-            e.eq(Mux(f_x_major, e_cands[1], e_cands[0])),
-            e_mag.eq(Mux(f_x_major, e_mag_cands[1], e_mag_cands[0])),
+            f_c0.eq(Mux(f_x_major, first_column(cmd.x0, dx_le0), first_column(cmd.y0, dy_le0))),
+            f_c1.eq(Mux(f_x_major, last_column(cmd.x1, dx_le0), last_column(cmd.y1, dy_le0))),
+            f_lo.eq(
+                Mux(
+                    f_x_major,
+                    Mux(dx_le0, -clip.x_max, clip.x_min),
+                    Mux(dy_le0, -clip.y_max, clip.y_min),
+                )
+            ),
+            f_hi.eq(
+                Mux(
+                    f_x_major,
+                    Mux(dx_le0, -clip.x_min, clip.x_max),
+                    Mux(dy_le0, -clip.y_min, clip.y_max),
+                )
+            ),
         ]
+
         # Orientation: a swap or one mirror flips left and right (the model's det).
         # Both candidates (x or y major) are formed in parallel with the major-axis test.
         f_value_base, f_value_neg = Signal(unsigned(I)), Signal()
@@ -830,59 +907,106 @@ class EdgeAntialiaser(wiring.Component):
             f_value_neg.eq(Mux(f_x_major, candidates[1][1], candidates[0][1])),
         ]
 
-        # -- folded registers ----------------------------------------------------------------
+        # -- folded registers (FOLD), the window cut (WINDOW) --------------------------------
         x_major, major_neg, minor_neg = Signal(), Signal(), Signal()
         du, dv = Signal(_shape(widths["du"]), name="du"), Signal(_shape(widths["du"]), name="dv")
         neg_du = Signal(signed(widths["du"].bits + 1), name="neg_du")  # -du
+        # first, last: c0, c1 from FOLD, cut to the window [lo, hi] in WINDOW.
+        first = Signal(signed(W + 2), name="first")
+        last = Signal(signed(W + 2), name="last")
+        lo, hi = Signal(signed(W + 2), name="lo"), Signal(signed(W + 2), name="hi")
+        start_clip = Signal(name="start_clip")  # the window moved the first column: c0 < lo
         v0_r = Signal(signed(coord + 1), name="v0_r")
-        c0_r = Signal(signed(W + 2), name="c0_r")
-        c1_far = Signal(signed(W + 2), name="c1_far")  # (S - 2 u1) >> (s + 1) = -c1
-        columns = Signal(unsigned(W + 1))
+        columns = Signal(signed(W + 3), name="columns")  # last - first + 1, <= 0: none visible
         e_neg = Signal()
         i_d = Signal(unsigned(I))
         value_base = Signal(unsigned(I))
         value_neg = Signal()
         row0 = Signal(signed(W + 2))
 
-        # The rest of the fold, in the first RUN clocks from the folded flags: c0, c1 and v0
-        # in the first (counter 0), the column count in the second.
-        r_p0 = Mux(x_major, cmd.x0, cmd.y0)
+        # FOLD: e = c0 S - u0 (|e| <= S/2) depends on the low bits of u0 = +-p0 only: both
+        # candidates (x or y major, each with its own sign) are formed in parallel with the
+        # major-axis test, which picks one; |e| and the sign are registered.
+        def start_offset(u0):
+            """e = c0 S - u0 for c0 = floor(u0 / S + 1/2): in (-S/2, S/2]."""
+            return ((((u0 << 1) + S) >> (s + 1)) << s) - u0
+
+        e_cands, e_mag_cands = [], []
+        for p0, le0 in ((cmd.y0, dy_le0), (cmd.x0, dx_le0)):
+            e_cand = Signal(signed(s + 2), name=f"e_cand{len(e_cands)}")
+            e_mag_cand = Signal(unsigned(max(s, 1)), name=f"e_mag_cand{len(e_cands)}")
+            m.d.comb += [
+                e_cand.eq(Mux(le0, start_offset(-p0), start_offset(p0))),
+                e_mag_cand.eq(Mux(e_cand < 0, -e_cand, e_cand)),
+            ]
+            e_cands.append(e_cand)
+            e_mag_cands.append(e_mag_cand)
+        e = Signal(signed(s + 2))
+        e_mag = Signal(unsigned(max(s, 1)))
+        e_mag_r = Signal(unsigned(max(s, 1)), name="e_mag_r")
+        m.d.comb += [
+            e.eq(Mux(f_x_major, e_cands[1], e_cands[0])),
+            e_mag.eq(Mux(f_x_major, e_mag_cands[1], e_mag_cands[0])),
+        ]
+
+        # WINDOW: from the registers of FOLD.
+        w_start_clip = Signal()
+        w_cut_end = Signal()
+        # lo S - u0, the offset of column lo's centre from u0 (low W + s + 1 bits): the start
+        # row's offset when the window moved the first column (then in (S/2, du + S/2)).
+        w_p0 = Mux(x_major, cmd.x0, cmd.y0)
+        offset = Signal(unsigned(W + s + 1), name="clip_offset")
         r_q0 = Mux(x_major, cmd.y0, cmd.x0)
-        r_p1 = Mux(x_major, cmd.x1, cmd.y1)
-        r_c0 = Signal(signed(W + 2), name="c0")
-        r_c1_far = Signal(signed(W + 2), name="c1_far_next")
         r_v0 = Signal(signed(coord + 1), name="v0")
         m.d.comb += [
-            r_c0.eq(Mux(major_neg, (S - (r_p0 << 1)) >> (s + 1), ((r_p0 << 1) + S) >> (s + 1))),
-            # c1 = ceil(u1 / S - 1/2) = -((S - 2 u1) >> (s + 1))
-            r_c1_far.eq(Mux(major_neg, (S + (r_p1 << 1)) >> (s + 1), (S - (r_p1 << 1)) >> (s + 1))),
+            w_start_clip.eq(first < lo),
+            w_cut_end.eq(last > hi),
+            offset.eq(Mux(major_neg, (lo << s) + w_p0, (lo << s) - w_p0)),
             r_v0.eq(Mux(minor_neg, -r_q0, r_q0)),
         ]
 
         # -- the multiply-divide lanes -------------------------------------------------------
         pass1_bits = s + 1  # 2 |e| <= S
+        pass1_long = W + s + 2  # 2 e < 2 du + S when the window moved the first column
         pass2_bits = I + F - s - 1  # |I_d| << (F - s - 1)
-        lane_a = _MulDivLane("lane_a", config, max(pass1_bits, pass2_bits), s + 1)
+        # Lane A's quotient holds floor(2 e dv / du) <= 2 e < 2**(W + s + 2) after pass 1.
+        lane_a = _MulDivLane(
+            "lane_a", config, max(pass1_long, pass2_bits), s + 1, q_bits=pass1_long
+        )
         lane_b = _MulDivLane("lane_b", config, I + F - 1, 0)  # |I_d| << (F - 1)
         run_cycles = self.run_cycles  # pass 1, fix-up, pass 2 of lane A
-        fixup_cycle = pass1_bits
-        counter = Signal(range(run_cycles))
-        # Both lanes start with X = dv: dv - du and dv - 2 du from |dx| and |dy| directly.
+        long_run_cycles = run_cycles + self.start_clip_cycles
+        counter = Signal(range(long_run_cycles))
+        # The fix-up clock and the last RUN clock (constant compares, selected by start_clip).
+        fixup = Mux(start_clip, counter == pass1_long, counter == pass1_bits)
+        run_done = Mux(start_clip, counter == long_run_cycles - 1, counter == run_cycles - 1)
+        # Both lanes start with X = dv: dv - du and dv - 2 du from |dx| and |dy| directly
+        # (lane B in FOLD; lane A copies them from lane B in WINDOW).
         f_dv = Mux(f_x_major, ady, adx)
         f_dv_du = Mux(f_x_major, ady + nadx, adx + nady)
         f_dv_2du = Mux(f_x_major, ady + (nadx << 1), adx + (nady << 1))
+        # Lane A's pass-1 multiplier, W + s + 2 bits: 2 (lo S - u0), or 2 |e| followed by
+        # W + 1 zero bits (which the fix-up at counter s + 1 leaves unused).
+        multiplier = Mux(w_start_clip, offset << 1, e_mag_r << (W + 2))
 
-        # Fix-up (at `fixup_cycle`): lane A holds q', r' = divmod(2 |e| dv, du). With
-        # 2 e dv = q du + r (floor division), 2 num + den = du (2 v0 + S + q) + r, 0 <= r < du,
-        # so row0 = floor((2 v0 + S + q) / 2S) and mf = m du + r, m = (2 v0 + S + q) mod 2S.
-        q_fix = Signal(signed(s + 3))
+        # Fix-up (at counter s + 1, or W + s + 2 when start-clipped): lane A holds
+        # q', r' = divmod(2 |e| dv, du) for e = first S - u0 (e > S/2 when start-clipped,
+        # |e| <= S/2 otherwise). With 2 e dv = q du + r (floor division),
+        # 2 num + den = du (2 v0 + S + q) + r, 0 <= r < du, so row0 = floor((2 v0 + S + q) / 2S)
+        # and mf = m du + r, m = (2 v0 + S + q) mod 2S.
+        # A negative e has |e| <= S/2, so q' <= S: its negation is formed on s + 2 bits only
+        # (a short carry chain ahead of the add of big_m).
+        q_neg = Signal(signed(s + 3))
+        q_fix = Signal(signed(pass1_long + 1))
         r_fix = Signal(_shape(widths["du"]))
         r_fix_du = Signal(signed(widths["du"].bits + 1))  # r_fix - du
         r_fix_2du = Signal(signed(widths["du"].bits + 2))  # r_fix - 2 du
         big_m = Signal(signed(coord + 4))
         flip = e_neg & (lane_a.r != 0)
+        q_small = lane_a.q[: s + 2]
         m.d.comb += [
-            q_fix.eq(Mux(e_neg, Mux(flip, -lane_a.q - 1, -lane_a.q), lane_a.q)),
+            q_neg.eq(Mux(flip, -q_small - 1, -q_small)),
+            q_fix.eq(Mux(e_neg, q_neg, lane_a.q[:pass1_long])),
             r_fix.eq(Mux(flip, du - lane_a.r, lane_a.r)),
             r_fix_du.eq(r_fix + neg_du),
             r_fix_2du.eq(r_fix + (neg_du << 1)),
@@ -903,7 +1027,7 @@ class EdgeAntialiaser(wiring.Component):
         truncated = config.accumulator == "truncated"
         major, minor = Signal(signed(W + 2)), Signal(signed(W + 2))
         m.d.comb += [
-            major.eq(Mux(major_neg, -c0_r, c0_r)),
+            major.eq(Mux(major_neg, -first, first)),
             minor.eq(Mux(minor_neg, -row0, row0)),
         ]
         major_step = Mux(major_neg, Const(-1, signed(2)), Const(1, signed(2)))
@@ -964,22 +1088,35 @@ class EdgeAntialiaser(wiring.Component):
                         du.eq(Mux(f_x_major, adx, ady)),
                         dv.eq(f_dv),
                         neg_du.eq(Mux(f_x_major, nadx, nady)),
-                        e_neg.eq(e < 0),
+                        first.eq(f_c0),
+                        last.eq(f_c1),
+                        lo.eq(f_lo),
+                        hi.eq(f_hi),
                         i_d.eq(f_id),
                         value_base.eq(f_value_base),
                         value_neg.eq(f_value_neg),
+                        e_neg.eq(e < 0),
+                        e_mag_r.eq(e_mag),
                         counter.eq(0),
-                        *lane_a.load(e_mag << 1, pass1_bits, f_dv, f_dv_du, f_dv_2du),
                         *lane_b.load(f_id << (F - 1), I + F - 1, f_dv, f_dv_du, f_dv_2du),
                     ]
-                    m.next = "RUN"
+                    m.next = "WINDOW"
+            with m.State("WINDOW"):
+                # Cut [c0, c1] to the window; lane A's first pass starts at column `first`.
+                m.d.sync += [
+                    first.eq(Mux(w_start_clip, lo, first)),
+                    last.eq(Mux(w_cut_end, hi, last)),
+                    start_clip.eq(w_start_clip),
+                    e_neg.eq(e_neg & ~w_start_clip),  # e > S/2 when the start moved
+                    v0_r.eq(r_v0),
+                    *lane_a.load(multiplier, pass1_long, lane_b.x, lane_b.x_du, lane_b.x_2du),
+                ]
+                m.next = "RUN"
             with m.State("RUN"):
                 m.d.sync += counter.eq(counter + 1)
                 with m.If(counter == 0):
-                    m.d.sync += [c0_r.eq(r_c0), c1_far.eq(r_c1_far), v0_r.eq(r_v0)]
-                with m.If(counter == 1):
-                    m.d.sync += columns.eq(1 - c1_far - c0_r)  # c1 - c0 + 1
-                with m.If(counter == fixup_cycle):
+                    m.d.sync += columns.eq(last - first + 1)
+                with m.If(fixup):
                     digit = big_m[: s + 1]
                     m.d.sync += [
                         row0.eq(big_m >> (s + 1)),
@@ -1002,8 +1139,11 @@ class EdgeAntialiaser(wiring.Component):
                         kq.eq((lane_b.q << 1) + k_bit),
                         kr.eq(Mux(k_bit, khr_less, lane_b.r << 1)),
                     ]
-                with m.If(counter == run_cycles - 1):
+                with m.If(run_done):
                     m.next = "FINAL"
+                # No column inside the window: the edge ends here, nothing is written.
+                with m.If((counter == 1) & (columns[-1] | (columns == 0))):
+                    m.next = "IDLE"
             with m.State("FINAL"), m.If(~bank.valid | bank.ready):
                 m.d.sync += [bank.valid.eq(1), *final]
                 m.next = "IDLE"

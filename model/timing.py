@@ -88,7 +88,9 @@ EMPTY_EDGE_CYCLES = 5  # accept, FOLD, WINDOW, two RUN clocks: an edge with no v
 def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:
     """Clocks of the RUN state: lane A's two bit-serial passes and its fix-up clock (the
     first pass ``W + 1`` clocks longer when the clip window moved the first column)."""
-    return config.intensity_bits + config.F + 1 + (start_clip_cycles(config) if clipped_start else 0)
+    return (
+        config.intensity_bits + config.F + 1 + (start_clip_cycles(config) if clipped_start else 0)
+    )
 
 
 def start_clip_cycles(config: EdgeConfig) -> int:

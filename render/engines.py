@@ -8,9 +8,10 @@
   (cycle-accurate, slow: small scenes only).
 
 The simulators return beats (one per column: lane 0, then lane 1 when the column has a
-second write; ``last`` on an edge's final column); `beats_to_writes` turns them into the
-model's write order. Cycles come from the timing model (`edgeaa.model.timing`) for every
-engine, and the simulators' measured clocks are kept beside them.
+second write; ``last`` on an edge's final column; no beat at all for an edge whose clip
+window holds none of its columns); `beats_to_writes` turns them into the model's write
+order. Cycles come from the timing model (`edgeaa.model.timing`) for every engine, and the
+simulators' measured clocks are kept beside them.
 """
 
 from __future__ import annotations
@@ -64,14 +65,27 @@ def beat_clocks(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:
     )
 
 
-def beats_to_writes(beats: np.ndarray, edges: int) -> tuple[np.ndarray, ...]:
+def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
     """Beat rows [clock, x0, y0, v0, lane1_valid, x1, y1, v1, last] to the model's write order
-    (edge index, x, y, value): lane 0 then lane 1 of each beat; an edge ends at `last`."""
+    (edge index, x, y, value): lane 0 then lane 1 of each beat.
+
+    `columns` holds each sent edge's visible columns (`edgeaa.sim.scoreboard.edge_columns`):
+    the core emits that many beats per edge, the last one with `last`, and none for an edge
+    with 0 (no column in its clip window). Edge indices count every edge sent. Raises unless
+    the beats and their `last` flags fit the counts exactly."""
     beats = np.asarray(beats, dtype=np.int64).reshape(-1, 9)
+    columns = np.asarray(columns, dtype=np.int64).reshape(-1)
     last = beats[:, 8].astype(bool)
-    if int(last.sum()) != edges:
-        raise RuntimeError(f"the core ended {int(last.sum())} edges, {edges} were sent")
-    edge_of_beat = np.concatenate([[0], np.cumsum(last)[:-1]]).astype(np.int64)
+    visible = int(np.count_nonzero(columns))
+    if int(last.sum()) != visible or len(beats) != int(columns.sum()):
+        raise RuntimeError(
+            f"the core ended {int(last.sum())} edges in {len(beats)} beats; {len(columns)} were "
+            f"sent, {visible} with columns in their window ({int(columns.sum())} columns)"
+        )
+    ends = np.cumsum(columns[columns > 0]) - 1
+    if not np.array_equal(np.flatnonzero(last), ends):
+        raise RuntimeError("the core's `last` beats do not end the edges after their columns")
+    edge_of_beat = np.repeat(np.arange(len(columns), dtype=np.int64), columns)
     two = beats[:, 4].astype(bool)
     count = 1 + two.astype(np.int64)
     first = np.cumsum(count) - count
@@ -95,6 +109,8 @@ def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
     if not edges:
         empty = np.zeros(0, dtype=np.int64)
         return EngineRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
+    from ..sim.scoreboard import edge_columns
+
     if engine == "verilator":
         from ..sim import fastsim
 
@@ -120,7 +136,7 @@ def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
         run = amaranth_run.run(config, edges, progress=progress)
     if run.errors:
         raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
-    edge_index, x, y, value = beats_to_writes(run.beats, len(edges))
+    edge_index, x, y, value = beats_to_writes(run.beats, edge_columns(config, edges))
     return EngineRun(engine, edge_index, x, y, value, run.seconds, run.clocks, run.beats[:, 0])
 
 

@@ -15,15 +15,15 @@ from amaranth.sim import Simulator
 
 from ..hdl import EdgeAntialiaser
 from ..model import Edge, EdgeConfig
-from ..model.timing import setup_latency
-from .fastsim import BEAT_FIELDS, EDGE_FIELDS, FastRun, edge_commands
+from .commands import edge_command
+from .fastsim import BEAT_FIELDS, FastRun, drain_clocks
 
 
 def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:
     """Simulate the core on `edges`; `progress(done, total)` is called as commands go in."""
     dut = EdgeAntialiaser(config)
-    commands = [dict(zip(EDGE_FIELDS, row, strict=True)) for row in edge_commands(config, edges)]
-    drain = setup_latency(config) + 16  # clocks with no beat before the run may end
+    commands = [edge_command(config, edge) for edge in edges]
+    drain = drain_clocks(config)  # clocks with no beat before the run may end
     rows: list[list[int]] = []
     clocks = errors = 0
 
@@ -34,8 +34,9 @@ def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:
         while index < len(commands) or quiet < drain:
             offering = index < len(commands)
             ctx.set(dut.edges.valid, offering)
-            if offering:
-                ctx.set(dut.edges.payload, commands[index])
+            if offering:  # the clip window is sampled with the edge: present both
+                ctx.set(dut.edges.payload, commands[index].payload)
+                ctx.set(dut.clip, commands[index].clip)
             _, _, taken, valid, beat = await ctx.tick().sample(  # clk, rst first
                 dut.edges.ready, dut.writes.valid, dut.writes.payload
             )

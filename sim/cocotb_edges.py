@@ -2,11 +2,12 @@
 
 Run through `edgeaa.sim.verilator.cosimulate`, which writes a job file (configuration, edges,
 seed, idle and stall probabilities, and the model's expected beats computed in the calling
-process) and points ``EDGEAA_COSIM_JOB`` at it. Every clock, on the
-falling edge, the bench drives the source (random idle cycles) and the sink (random
-back-pressure); after the design settles it samples both handshakes. Every beat is checked
-against the scoreboard as it arrives, stalled beats must hold their payload, and after the
-last expected beat the sink must stay empty. The outcome goes to ``EDGEAA_COSIM_RESULT``.
+process) and points ``EDGEAA_COSIM_JOB`` at it. Every clock, on the falling edge, the bench
+drives the source (random idle cycles; each edge's window on ``clip`` while the edge is
+offered) and the sink (random back-pressure); after the design settles it samples both
+handshakes. Every beat is checked against the scoreboard as it arrives, stalled beats must
+hold their payload, and after the last expected beat the sink must stay empty. The outcome
+goes to ``EDGEAA_COSIM_RESULT``.
 """
 
 from __future__ import annotations
@@ -21,24 +22,25 @@ import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
 
-from ..model import Edge, EdgeConfig
+from ..model import Clip, Edge, EdgeConfig
+from .commands import edge_command
 from .scoreboard import Beat, Scoreboard, beats_from_array
 
-EDGE_FIELDS = ("x0", "y0", "x1", "y1", "i_in", "i_out", "inside")
 DRAIN_CLOCKS = 64  # clocks the sink must stay empty after the last expected beat
 
 
-def _edge_payload(config: EdgeConfig, edge: Edge) -> dict[str, int]:
-    i_in, i_out = edge.intensities(config)
-    return {
-        "x0": edge.x0,
-        "y0": edge.y0,
-        "x1": edge.x1,
-        "y1": edge.y1,
-        "i_in": i_in,
-        "i_out": i_out,
-        "inside": int(edge.inside == "right"),
-    }
+def _job_edge(fields: dict) -> Edge:
+    """An edge of the job file (JSON turned its clip tuple into a list)."""
+    clip = fields.get("clip")
+    return Edge(**{**fields, "clip": None if clip is None else Clip(*clip)})
+
+
+def _drive_command(dut, command) -> None:
+    """Present one command: its ``edges`` payload and its ``clip`` window (sampled with it)."""
+    for name, value in command.payload.items():
+        getattr(dut, f"edges__payload__{name}").value = value
+    for name, value in command.clip.items():
+        getattr(dut, f"clip__{name}").value = value
 
 
 def _read_beat(dut) -> Beat:
@@ -58,14 +60,14 @@ async def edges_match_model(dut):
     with open(os.environ["EDGEAA_COSIM_JOB"]) as file:
         job = json.load(file)
     config = EdgeConfig(**job["config"])
-    edges = [Edge(**fields) for fields in job["edges"]]
+    edges = [_job_edge(fields) for fields in job["edges"]]
     rng = random.Random(job["seed"])
     idle, stall = job["idle"], job["stall"]
     label = f"cosim seed={job['seed']} idle={idle} stall={stall}"
     expected = beats_from_array(np.load(job["expected_beats"]))
     dropped = job["dropped"]
     board = Scoreboard(expected, label)
-    payloads = [_edge_payload(config, edge) for edge in edges]
+    commands = [edge_command(config, edge) for edge in edges]
 
     result = {"beats": 0, "clocks": 0, "expected_beats": len(expected), "error": None}
     start = time.perf_counter()
@@ -88,9 +90,8 @@ async def edges_match_model(dut):
             clock += 1
             if clock > limit:
                 raise AssertionError(f"{label}: timed out after {clock} clocks, {board.seen} beats")
-            if not offering and index < len(payloads) and rng.random() >= idle:
-                for name in EDGE_FIELDS:
-                    getattr(dut, f"edges__payload__{name}").value = payloads[index][name]
+            if not offering and index < len(commands) and rng.random() >= idle:
+                _drive_command(dut, commands[index])
                 offering = True
             dut.edges__valid.value = int(offering)
             ready = int(rng.random() >= stall)
@@ -112,7 +113,7 @@ async def edges_match_model(dut):
                     held = beat
             elif held is not None:
                 raise AssertionError(f"{label} clock {clock}: stalled beat {held} was withdrawn")
-            if board.done and index == len(payloads):
+            if board.done and index == len(commands):
                 idle_after_done += 1
         board.finish()
         errors = int(dut.errors.value)

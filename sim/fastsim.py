@@ -6,7 +6,8 @@ the ``writes`` stream (optionally with seeded random back-pressure) and writes e
 with the clock it happened in, to a binary file. The build is cached per Verilog text.
 
 File formats (little-endian):
-- commands: int32 rows ``x0 y0 x1 y1 i_in i_out inside``;
+- commands: int32 rows ``x0 y0 x1 y1 i_in i_out inside x_min y_min x_max y_max`` (the
+  ``edges`` payload, then the ``clip`` window presented while the edge is offered);
 - beats: int64 rows ``clock lane0.x lane0.y lane0.value lane1_valid lane1.x lane1.y
   lane1.value last`` (x and y sign-extended).
 """
@@ -24,13 +25,13 @@ import numpy as np
 
 from ..hdl import verilog
 from ..model import Edge, EdgeConfig
-from ..model.timing import setup_latency
+from ..model.timing import setup_latency, start_clip_cycles
+from .commands import CLIP_FIELDS, COMMAND_FIELDS, EDGE_FIELDS, edge_command
 from .scoreboard import Beat
 from .verilator import cache_dir, private_build_dir, publish, verilator_env
 
 TOP = "edgeaa_core"
 BEAT_FIELDS = 9
-EDGE_FIELDS = ("x0", "y0", "x1", "y1", "i_in", "i_out", "inside")
 
 
 def _port(name: str) -> str:
@@ -40,9 +41,10 @@ def _port(name: str) -> str:
 
 def _harness_source(config: EdgeConfig) -> str:
     xy_bits = config.register_widths()["x"].bits
+    ports = [f"edges__payload__{name}" for name in EDGE_FIELDS]
+    ports += [f"clip__{name}" for name in CLIP_FIELDS]
     set_payload = "\n".join(
-        f"            {_port(f'edges__payload__{name}')} = cmd[{i}];"
-        for i, name in enumerate(EDGE_FIELDS)
+        f"            {_port(port)} = cmd[{i}];" for i, port in enumerate(ports)
     )
 
     def lane(n: int) -> str:
@@ -87,7 +89,7 @@ int main(int argc, char** argv) {{
     int32_t word;
     while (fread(&word, 4, 1, in) == 1) cmds.push_back(word);
     fclose(in);
-    const size_t n_cmds = cmds.size() / {len(EDGE_FIELDS)};
+    const size_t n_cmds = cmds.size() / {len(COMMAND_FIELDS)};
 
     VerilatedContext* ctx = new VerilatedContext;
     V{TOP}* top = new V{TOP}{{ctx}};
@@ -102,7 +104,7 @@ int main(int argc, char** argv) {{
     beats.reserve(1 << 16);
     while (next < n_cmds || offering || quiet < drain) {{
         if (!offering && next < n_cmds && (idle == 0 || rng_permille() >= idle)) {{
-            const int32_t* cmd = &cmds[next * {len(EDGE_FIELDS)}];
+            const int32_t* cmd = &cmds[next * {len(COMMAND_FIELDS)}];
 {set_payload}
             offering = true;
         }}
@@ -177,11 +179,17 @@ def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
 
 
 def edge_commands(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:
-    rows = np.empty((len(edges), len(EDGE_FIELDS)), dtype=np.int32)
+    """The command file: one int32 row per edge, `COMMAND_FIELDS` (payload, then clip)."""
+    rows = np.empty((len(edges), len(COMMAND_FIELDS)), dtype=np.int32)
     for i, edge in enumerate(edges):
-        i_in, i_out = edge.intensities(config)
-        rows[i] = (edge.x0, edge.y0, edge.x1, edge.y1, i_in, i_out, edge.inside == "right")
+        rows[i] = edge_command(config, edge).row()
     return rows
+
+
+def drain_clocks(config: EdgeConfig) -> int:
+    """Clocks with no beat, after the last command is accepted, before a run may end: more
+    than the longest wait for the first beat of an edge (one clipped at its start)."""
+    return setup_latency(config) + start_clip_cycles(config) + 16
 
 
 def run(
@@ -200,7 +208,7 @@ def run(
     with tempfile.TemporaryDirectory(prefix="edgeaa-fast-") as tmp:
         commands, beats = Path(tmp) / "commands.bin", Path(tmp) / "beats.bin"
         edge_commands(config, edges).tofile(commands)
-        drain = setup_latency(config) + 16  # clocks with no beat before the run may end
+        drain = drain_clocks(config)
         argv = [exe, commands, beats, seed, round(idle * 1000), round(stall * 1000), drain]
         start = time.perf_counter()
         proc = subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=False)

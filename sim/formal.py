@@ -2,10 +2,14 @@
 """Formal checks of `edgeaa.hdl.core.EdgeAntialiaser` with SymbiYosys (YoWASP builds).
 
 `FormalHarness` wraps the core for one configuration. Every input is free in every clock
-(``AnySeq``): the ``edges`` payload and valid, ``writes.ready`` and, by default, the reset.
-There are no input assumptions at all: ports of exactly the model's widths can only carry
-commands the model accepts or bad commands the core must drop (zero length, I_in == I_out),
-so "any input" is "any legal or bad command, any back-pressure, any reset". The harness
+(``AnySeq``): the ``edges`` payload and valid, the ``clip`` window, ``writes.ready`` and, by
+default, the reset. There are no input assumptions at all: ports of exactly the model's
+widths can only carry commands the model accepts or bad commands the core must drop (zero
+length, I_in == I_out), and any window (each bound in [0, 2**W] by its width, min > max
+allowed), so "any input" is "any legal or bad command with any window, any back-pressure,
+any reset". The window is not held stable: it may change in every clock, and the harness
+takes the core's registered copy (``clip_r``, sampled with the command) as the command's
+window, like the registered command ``cmd``. The harness
 reads internal signals of the core (the setup state machine, its registers and the two
 multiply-divide lanes, the stepper's registers), found by name in the elaborated fragment;
 `CoreView` raises if a name it needs is gone, so a rename in ``hdl/core.py`` shows up as a
@@ -18,8 +22,10 @@ Check groups (``checks``):
     payload in the next clock (unless the reset is asserted in between).
 ``count``
     No accepted command is lost. The harness counts good commands accepted minus edges
-    finished (beats with ``last & valid & ready``), and bad commands accepted minus ``error``
-    pulses. Each count equals the occupancy derived from the core's state (the setup state
+    finished (beats with ``last & valid & ready``) minus edges with no column in their window
+    (which end in their second RUN clock when the core's column count is not positive; the
+    ``bounds`` group proves that count is the model's), and bad commands accepted minus
+    ``error`` pulses. Each count equals the occupancy derived from the core's state (the setup state
     machine, the bank, the stepper, an edge's last column in a stage of the stepper's output
     pipeline or in the output register, a pending ``error``), is within [0, `capacity`] and
     is 0 when the core is idle; the columns of an edge are contiguous in the pipeline. A tag
@@ -28,11 +34,18 @@ Check groups (``checks``):
     equals the saturating count of ``error`` pulses.
 ``bounds``
     No register overflows for any command: the invariants of the setup registers (fold of
-    the latched command), of both multiply-divide lanes (remainder below du, quotient bounded
-    by the multiplier bits consumed so far, each step's sums within their registers), of
+    the latched command, its columns cut to the latched window, the column count), of both
+    multiply-divide lanes (remainder below du, quotient bounded by the multiplier bits
+    consumed so far, each step's sums within their registers; lane A's first pass over
+    ``2 (first S - u0)``, ``W + s + 2`` bits when the window moved the first column), of
     the bank the setup is about to write, of the bank and of the stepper (jq < ifix,
     jr < du, kq <= ifix, the half increment, segment constants, derived constants, value
-    range, the major axis within [0, 2**W] from the first to the last column). Every
+    range, the major axis within [0, 2**W] from the first to the last column). The start
+    row (the minor axis of the first column) is within [0, 2**W] for edges whose start the
+    window did not move; for the others its bound needs the product (first - c0) * slope,
+    which SAT-based induction cannot handle: the harness follows those edges with a ghost
+    flag and leaves their start row to simulation (`tests/test_core.py` compares every bank
+    with the model's `setup`). Every
     intermediate sum of the column being stepped (the exit depths dq/dr, t, the areas, the
     output values, jsum and the next jq, jr) is computed in full width by the harness and
     must fit the `EdgeConfig.register_widths` entry that `run_edge` checks; the core's
@@ -52,7 +65,7 @@ Check groups (``checks``):
     at most one row per column (the harness follows it in a wider ghost register); the exact
     bound for later columns depends on (columns left) * (slope), a product of two per-edge
     values that SAT-based induction cannot handle, and a bounded check from reset reaches
-    only the first columns of an edge (the first is stepped 34 clocks after reset).
+    only the first columns of an edge (the first is stepped 35 clocks after reset).
 
 Covers (``covers``, run with ``mode cover``): ``drop`` a dropped command; ``stepper`` a
 two-lane beat, a neighbour in the row below, a beat that is not the last, a last beat, a
@@ -73,12 +86,13 @@ pipe        prove    1                       see the final report / tests
 beat        prove    1                       about 1 min (stepper without pipeline)
 cover_drop  cover    4                       a few s
 cover       cover    latency+2   latency-1   1 to 4 min: every cover reached
-minor       bmc      36          33          4 to 5 min: columns 0 and 1 of every edge
+minor       bmc      37          34          4 to 5 min: columns 0 and 1 of every edge
 ==========  =======  ==========  ==========  ==========================================
 
 White-box helpers. k-induction needs invariants of every register, so the harness states
 some in terms of the core's internals (found by name; `CoreView`): the registers loaded with
-the command, the fold registers, the lanes (including precomputed ``x - du`` forms when the
+the command, the fold and window registers (``first``, ``last``, ``lo``, ``hi``,
+``start_clip``, ``columns``), the lanes (including precomputed ``x - du`` forms when the
 core has them), ``kq``/``kr`` when registered, the stepper's derived constants and, for the
 two-stage output pipeline, what stage ``p1`` holds. A change of the core's internals can
 make an induction fail (status UNKNOWN, `FormalResult.failed` names the helper); then the
@@ -127,7 +141,7 @@ from amaranth.hdl._ast import Assign, Operator, Slice, Switch
 from amaranth.hdl._xfrm import ValueTransformer
 from amaranth.lib import data
 
-from ..hdl.core import EdgeAntialiaser, edge_layout, setup_layout, write_layout
+from ..hdl.core import EdgeAntialiaser, clip_layout, edge_layout, setup_layout, write_layout
 from ..model.config import EdgeConfig, RegisterWidth
 
 __all__ = [
@@ -225,7 +239,7 @@ class CoreView:
     """
 
     FSM_NAME = "setup"
-    STATES = ("IDLE", "FOLD", "RUN", "FINAL")
+    STATES = ("IDLE", "FOLD", "WINDOW", "RUN", "FINAL")
 
     def __init__(self, core: EdgeAntialiaser, platform=None):
         self.core = core
@@ -402,6 +416,7 @@ def _fold(config: EdgeConfig, cmd) -> types.SimpleNamespace:
         x_major=x_major,
         major_neg=major_neg,
         minor_neg=minor_neg,
+        u0=u0,
         du=Mux(x_major, adx, ady),
         dv=Mux(x_major, ady, adx),
         q0=q0,
@@ -415,6 +430,42 @@ def _fold(config: EdgeConfig, cmd) -> types.SimpleNamespace:
         value_base=i_b,
         value_neg=i_a < i_b,
         bad=bad,
+    )
+
+
+def _window(config: EdgeConfig, fold, clip) -> types.SimpleNamespace:
+    """The model's cut of a folded command's columns to its clip window (`setup`): the folded
+    bounds ``lo, hi``, the columns ``first .. last`` (``columns`` of them, none when <= 0),
+    whether the start moved, and lane A's first-pass multiplier ``2 (first S - u0)`` as the
+    core loads it (``W + s + 2`` bits; ``2 |e|`` followed by ``W + 1`` zero bits when the
+    start did not move)."""
+    W, s = config.coord_bits, config.subpixel_bits  # noqa: N806
+    neg = fold.major_neg
+    lo = Mux(
+        fold.x_major,
+        Mux(neg, -clip.x_max, clip.x_min),
+        Mux(neg, -clip.y_max, clip.y_min),
+    )
+    hi = Mux(
+        fold.x_major,
+        Mux(neg, -clip.x_min, clip.x_max),
+        Mux(neg, -clip.y_min, clip.y_max),
+    )
+    start_clip = fold.c0 < lo
+    first = Mux(start_clip, lo, fold.c0)
+    last = Mux(fold.c1 > hi, hi, fold.c1)
+    bits = W + s + 2
+    offset = ((first << s) - fold.u0) << 1
+    multiplier = Mux(start_clip, offset[:bits], (fold.e_mag << (W + 2))[:bits])
+    return types.SimpleNamespace(
+        lo=lo,
+        hi=hi,
+        start_clip=start_clip,
+        first=first,
+        last=last,
+        columns=last - first + 1,
+        multiplier=multiplier,
+        bits=bits,
     )
 
 
@@ -632,6 +683,8 @@ class FormalHarness(Elaboratable):
         m.d.comb += [
             edges.valid.eq(AnySeq(1)),
             edges.payload.eq(AnySeq(len(Value.cast(edges.payload)))),
+            # The window is free in every clock: the core must sample it with the command.
+            Value.cast(core.clip).eq(AnySeq(len(Value.cast(core.clip)))),
             writes.ready.eq(AnySeq(1)),
         ]
         ctx = types.SimpleNamespace(m=m, view=view, config=config)
@@ -690,14 +743,20 @@ class FormalHarness(Elaboratable):
         accepted = edges.valid & edges.ready
         finished = writes.valid & writes.ready & beat.last
         error = ctx.error
+        fold, window = view.in_state("FOLD"), view.in_state("WINDOW")
+        run, final = view.in_state("RUN"), view.in_state("FINAL")
+        # An edge with no column inside its window ends in its second RUN clock, when the
+        # column count the core formed is not positive (that the count is right, i.e. that
+        # exactly the edges the model gives no column end here, is a `bounds` check).
+        columns = view.signal("columns")
+        abandoned = run & (view.signal("counter") == 1) & (columns <= 0)
 
         pending_good = Signal(signed(6))
         pending_bad = Signal(signed(4))
         m.d.sync += [
-            pending_good.eq(pending_good + (accepted & ~incoming_bad) - finished),
+            pending_good.eq(pending_good + (accepted & ~incoming_bad) - finished - abandoned),
             pending_bad.eq(pending_bad + (accepted & incoming_bad) - error),
         ]
-        fold, run, final = view.in_state("FOLD"), view.in_state("RUN"), view.in_state("FINAL")
         # The stepper's output pipeline, youngest first: the stages p1 .. p{latency - 1}
         # (`EdgeStepper.stage_valid` / `stage_last`) and the output register. An edge whose
         # last column has left the stepper is counted where that column is.
@@ -706,7 +765,9 @@ class FormalHarness(Elaboratable):
             (writes.valid, beat.last),
         ]
         last_waiting = sum(valid & is_last for valid, is_last in positions)
-        held_good = (fold & ~cmd_bad) + run + final + bank.valid + stepper.active + last_waiting
+        held_good = (
+            (fold & ~cmd_bad) + window + run + final + bank.valid + stepper.active + last_waiting
+        )
         held_bad = (fold & cmd_bad) + error
         idle = _all(
             [
@@ -751,7 +812,7 @@ class FormalHarness(Elaboratable):
             (_implies(idle, (pending_good == 0) & (pending_bad == 0)), "count: idle"),
             (_implies(error, view.in_state("IDLE")), "count: error only in IDLE"),
             (_all(contiguous), "count: columns of an edge are contiguous"),
-            (_implies(run | final, ~cmd_bad), "count: bad command in the setup"),
+            (_implies(window | run | final, ~cmd_bad), "count: bad command in the setup"),
             (_implies(bank.valid, ~tag_bank), "count: bad command in the bank"),
             (_implies(stepper.active, ~tag_stepper), "count: bad command stepped"),
             (_all(tagged), "count: column or beat of a bad command"),
@@ -791,11 +852,16 @@ class FormalHarness(Elaboratable):
         # -- the setup: fold registers and the multiply-divide lanes ------------------------
         cmd = data.View(edge_layout(config), view.signal("cmd"))
         fold = _fold(config, cmd)
-        run, final = view.in_state("RUN"), view.in_state("FINAL")
-        busy = run | final
+        # The window is the one the core sampled with the command (the harness drives the
+        # port freely in every clock).
+        win = _window(config, fold, data.View(clip_layout(config), view.signal("clip_r")))
+        window, run, final = view.in_state("WINDOW"), view.in_state("RUN"), view.in_state("FINAL")
+        busy = window | run | final
+        cut = run | final  # the columns are cut to the window, lane A is loaded
         counter = view.signal("counter")
         du, dv = view.signal("du"), view.signal("dv")
         i_d = view.signal("i_d")
+        start_clip = view.signal("start_clip")
         next_bank = Signal(setup_layout(config))
         for start, stop, value in view.bank_writes:
             m.d.comb += Value.cast(next_bank)[start:stop].eq(value)
@@ -806,22 +872,24 @@ class FormalHarness(Elaboratable):
         not_idle = ~view.in_state("IDLE")
         for target, value in view.accept_writes():
             check(_implies(not_idle, target == value), f"accepted {target.name}")
-        # Newer cores finish the fold in the first RUN clocks (c0, v0 in counter 0, the
-        # column count in counter 1); older ones in FOLD.
-        late_fold = view.has("c1_far")
-        c0_ready = busy & ~(run & (counter < 1)) if late_fold else busy
-        columns_ready = busy & ~(run & (counter < 2)) if late_fold else busy
+        # FOLD registers c0, c1 (as first, last) and the folded window; WINDOW cuts the
+        # columns to it and registers v0; the first RUN clock forms the column count, the
+        # second ends an edge with no column (so from counter 2 on there is one at least).
+        first, last = view.signal("first"), view.signal("last")
+        counted = final | (run & (counter >= 1))
+        visible = final | (run & (counter >= 2))
         late = [
-            _implies(c0_ready, view.signal("v0_r") == fold.v0),
-            _implies(c0_ready, view.signal("c0_r") == fold.c0),
-            _implies(columns_ready, view.signal("columns") == fold.columns),
-            _implies(columns_ready, nb.remaining == fold.columns - 1),
-            _implies(c0_ready, nb_axes.major == Mux(fold.major_neg, -fold.c0, fold.c0)),
-            _implies(columns_ready, _major_ok(config, nb_axes)),
+            _implies(busy, (view.signal("lo") == win.lo) & (view.signal("hi") == win.hi)),
+            _implies(window, (first == fold.c0) & (last == fold.c1) & (counter == 0)),
+            _implies(cut, (first == win.first) & (last == win.last)),
+            _implies(cut, start_clip == win.start_clip),
+            _implies(cut, view.signal("v0_r") == fold.v0),
+            _implies(counted, view.signal("columns") == win.columns),
+            _implies(visible, (win.columns >= 1) & (nb.remaining == win.columns - 1)),
+            _implies(cut, nb_axes.major == Mux(fold.major_neg, -win.first, win.first)),
+            _implies(visible, _major_ok(config, nb_axes)),
         ]
-        if late_fold:
-            late.append(_implies(c0_ready, view.signal("c1_far") == -fold.c1))
-        check(_all(late), "fold registers set in RUN")
+        check(_all(late), "fold and window registers")
         optional = []
         if view.has("neg_du"):
             optional.append(view.signal("neg_du") == -du)
@@ -832,7 +900,6 @@ class FormalHarness(Elaboratable):
                     du == fold.du,
                     dv == fold.dv,
                     *optional,
-                    view.signal("e_neg") == (fold.e < 0),
                     i_d == fold.i_d,
                     view.signal("minor_neg") == fold.minor_neg,
                     view.signal("value_base") == fold.value_base,
@@ -859,13 +926,27 @@ class FormalHarness(Elaboratable):
                     nb.ifix == fold.i_d << F,
                 ]
             ),
-            "counter": _implies(run, counter < config.intensity_bits + F + 1),
         }
         for name, condition in registers.items():
             check(_implies(busy, condition), name)
+        # |e| and its sign from FOLD; e is positive when the window moved the first column
+        # (WINDOW clears the sign: no sign fix-up then).
+        e_neg = view.signal("e_neg")
+        e_ok = [
+            _implies(busy, view.signal("e_mag_r") == fold.e_mag),
+            _implies(window, e_neg == (fold.e < 0)),
+            _implies(cut, e_neg == ((fold.e < 0) & ~win.start_clip)),
+        ]
+        check(_all(e_ok), "e registers")
+        run_cycles = I + F + 1
+        long_run = run_cycles + W + 1
+        check(
+            _implies(run, counter < Mux(start_clip, long_run, run_cycles)),
+            "counter",
+        )
 
         pass1_bits, pass2_bits = s + 1, I + F - s - 1
-        fixup = pass1_bits
+        fixup = Mux(start_clip, win.bits, pass1_bits)
 
         def lane(name, a_bits, multiplier, bits, steps, *, x_at_most, digit=None):
             """Invariants of a lane after `steps` of its `bits`-bit multiplier."""
@@ -898,6 +979,7 @@ class FormalHarness(Elaboratable):
                 q_next = q_next + Mux(bit, digit, 0)
             return _all(conds), (total < (1 << (len(r) + 2))) & (q_next < (1 << len(q)))
 
+        # Lane B is loaded in FOLD and steps from the first RUN clock (counter 0).
         steps_b = Mux(final | (counter >= I + F - 1), I + F - 1, counter)
         lane_b = lane(
             "lane_b", I + F - 1, i_d << (F - 1), I + F - 1, steps_b, x_at_most=lambda x: x == dv
@@ -905,12 +987,14 @@ class FormalHarness(Elaboratable):
         lane_b, lane_b_step = lane_b
         check(_implies(busy, lane_b), "lane_b")
         check(_implies(run & (counter < I + F - 1), lane_b_step), "lane_b step fits")
-        a_bits_a = max(pass1_bits, pass2_bits)
+        # Lane A is loaded in WINDOW: pass 1 over the W + s + 2 bit multiplier (stopped after
+        # s + 1 bits when the start did not move), the fix-up at `fixup`, then pass 2.
+        a_bits_a = max(win.bits, pass2_bits)
         pass1 = lane(
             "lane_a",
             a_bits_a,
-            fold.e_mag << 1,
-            pass1_bits,
+            win.multiplier,
+            win.bits,
             counter,
             x_at_most=lambda x: x == dv,
         )
@@ -931,7 +1015,13 @@ class FormalHarness(Elaboratable):
         pass2, pass2_step = pass2
         check(_implies(in_pass2, pass2), "lane_a pass 2")
         check(_implies(run & (counter > fixup), pass2_step), "lane_a pass 2 step fits")
-        check(_implies(in_pass2, (nb_axes.minor >= 0) & (nb_axes.minor <= top)), "bank start row")
+        # The start row is in the image. Not checked for an edge whose start the window moved:
+        # there it follows from q' = floor(2 e dv / du) <= 2 dv + S - 1 with e up to du + S/2,
+        # a product of two per-edge values that SAT-based induction cannot handle (with
+        # |e| <= S/2 the linear q' <= 2 |e| <= S suffices). Such an edge's start row is
+        # followed as a ghost (`start_moved` below) and its bound left to simulation.
+        bank_row = (nb_axes.minor >= 0) & (nb_axes.minor <= top)
+        check(_implies(in_pass2 & ~win.start_clip, bank_row), "bank start row")
 
         # What FINAL writes: once both lanes are done, all bank invariants.
         for name, condition in _constants_ok(config, nb).items():
@@ -957,7 +1047,15 @@ class FormalHarness(Elaboratable):
         for name, condition in _constants_ok(config, bk).items():
             check(_implies(bank.valid, condition), f"bank {name}")
         check(_implies(bank.valid, _major_ok(config, bk_axes)), "bank major axis")
-        check(_implies(bank.valid, (bk_axes.minor >= 0) & (bk_axes.minor <= top)), "bank start row")
+        # Ghost flags: the edge in the bank / the stepper had its start moved by the window
+        # (its start row is not bounded here; see "bank start row" above).
+        moved_bank, moved_stepper = Signal(name="start_moved_bank"), Signal(name="start_moved")
+        with m.If(final & (~bank.valid | bank.ready)):
+            m.d.sync += moved_bank.eq(start_clip)
+        with m.If(bank.valid & bank.ready):
+            m.d.sync += moved_stepper.eq(moved_bank)
+        bank_row = (bk_axes.minor >= 0) & (bk_axes.minor <= top)
+        check(_implies(bank.valid & ~moved_bank, bank_row), "bank start row")
 
         # -- the stepper --------------------------------------------------------------------
         st = types.SimpleNamespace(
@@ -1013,8 +1111,7 @@ class FormalHarness(Elaboratable):
                 _all(
                     [
                         row[: W + 2] == st_axes.minor[: W + 2],
-                        start_row >= 0,
-                        start_row <= top,
+                        _implies(~moved_stepper, (start_row >= 0) & (start_row <= top)),
                         start_remaining <= top,
                         st.remaining <= start_remaining,
                         rows >= 0,
@@ -1246,9 +1343,9 @@ PROOFS: dict[str, Proof] = {
             "minor",
             ("minor",),
             "bmc",
-            36,
+            37,
             assumes=("count", "bounds"),
-            skip=33,
+            skip=34,
             description="minor-axis rows within the image (bounded, from reset)",
         ),
         Proof(

@@ -13,7 +13,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..model import Edge, EdgeConfig, EdgeError, run_edge
+from ..model import Edge, EdgeConfig, EdgeError, run_edge, setup
 from ..model.step import EdgeResult
 
 Pixel = tuple[int, int, int]  # x, y, value
@@ -37,7 +37,10 @@ def edge_beats(result: EdgeResult) -> list[Beat]:
 
 
 def expected_beats(config: EdgeConfig, edges: Iterable[Edge]) -> tuple[list[Beat], int]:
-    """All beats of a command stream, and how many commands the core must drop as bad."""
+    """All beats of a command stream, and how many commands the core must drop as bad.
+
+    An edge with no column in its clip window has no beat (not even a `last` one) and is not
+    dropped: it is not counted."""
     beats: list[Beat] = []
     dropped = 0
     for edge in edges:
@@ -46,6 +49,18 @@ def expected_beats(config: EdgeConfig, edges: Iterable[Edge]) -> tuple[list[Beat
         except EdgeError:
             dropped += 1
     return beats, dropped
+
+
+def edge_columns(config: EdgeConfig, edges: Iterable[Edge]) -> np.ndarray:
+    """Beats (visible columns) of each edge: 0 for a bad command and for an edge whose clip
+    window holds none of its columns (neither ends with a `last` beat)."""
+    counts = []
+    for edge in edges:
+        try:
+            counts.append(setup(config, edge).columns)
+        except EdgeError:
+            counts.append(0)
+    return np.array(counts, dtype=np.int64)
 
 
 def beats_to_array(beats: list[Beat]) -> np.ndarray:

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import random
+from dataclasses import replace
 
-from ..model import Edge, EdgeConfig
+from ..model import Clip, Edge, EdgeConfig, EdgeError, setup
+
+CLIP_KINDS = ("empty", "start", "end", "both", "loose")
 
 
 def random_edges(
@@ -14,12 +17,16 @@ def random_edges(
     *,
     max_pixels: int = 48,
     bad_fraction: float = 0.0,
+    clip_fraction: float = 0.0,
 ) -> list[Edge]:
     """`count` edges in all octants with sub-pixel endpoints, random sides and intensities.
 
     Major deltas are up to `max_pixels` pixels (the simulators' time goes into columns);
     about `bad_fraction` of the commands are bad (zero length or I_in == I_out), which the core
-    must drop and count.
+    must drop and count. About `clip_fraction` of the edges get a random clip window
+    (`random_clip`: some hold none of the edge's columns, some cut its start, its end or
+    both); the others keep clip None. The windows come from their own generator, so the
+    geometry is the same whatever `clip_fraction` is.
     """
     rng = random.Random(seed)
     hi = config.max_vertex
@@ -42,4 +49,76 @@ def random_edges(
             i_out = full - i_in if 2 * i_in != full else 0
         inside = rng.choice(("left", "right"))
         edges.append(Edge(x0, y0, x1, y1, inside=inside, i_in=i_in, i_out=i_out))
+    if clip_fraction:
+        clip_rng = random.Random(f"clip/{seed}")
+        edges = [
+            replace(edge, clip=random_clip(config, edge, clip_rng))
+            if clip_rng.random() < clip_fraction
+            else edge
+            for edge in edges
+        ]
     return edges
+
+
+def major_columns(config: EdgeConfig, edge: Edge) -> tuple[int, int, int]:
+    """(first, last, step): the major-axis pixels of the edge's first and last unclipped
+    columns and the direction from first to last (+1 or -1). For a bad command, a guess
+    from its endpoints (the core drops it whatever the window)."""
+    unclipped = replace(edge, clip=None)
+    try:
+        st = setup(config, unclipped)
+    except EdgeError:
+        scale = config.subpixel_scale
+        x_major = abs(edge.x1 - edge.x0) >= abs(edge.y1 - edge.y0)
+        a, b = (edge.x0, edge.x1) if x_major else (edge.y0, edge.y1)
+        first, last = (a + scale // 2) // scale, (b + scale // 2) // scale
+        return first, last, 1 if last >= first else -1
+    first, step = (st.x, st.col_dx) if st.x_major else (st.y, st.col_dy)
+    return first, first + (st.columns - 1) * step, step
+
+
+def random_clip(config: EdgeConfig, edge: Edge, rng: random.Random) -> Clip:
+    """A random window for `edge`, of a kind drawn from `CLIP_KINDS`: ``empty`` holds none of
+    its columns (min > max, or all before or after them), ``start``/``end``/``both`` cut at
+    least one column at that end when the edge has two or more (so the rest is not empty),
+    ``loose`` holds all of them with room to spare. The minor-axis bounds, which the core
+    ignores, are random and in either order."""
+    top = 1 << config.coord_bits
+    first, last, step = major_columns(config, edge)
+    lo, hi = min(first, last), max(first, last)
+    n = hi - lo + 1
+    kind = rng.choice(CLIP_KINDS)
+    if kind == "empty":
+        choices = ["inverted"] + (["below"] if lo > 0 else []) + (["above"] if hi < top else [])
+        where = rng.choice(choices)
+        if where == "below":
+            a = rng.randint(0, lo - 1)
+            a_min, a_max = a, rng.randint(a, lo - 1)
+        elif where == "above":
+            a = rng.randint(hi + 1, top)
+            a_min, a_max = rng.randint(hi + 1, a), a
+        else:
+            a_max = rng.randint(0, top - 1)
+            a_min = rng.randint(a_max + 1, top)
+    elif kind == "loose":
+        a_min, a_max = rng.randint(0, lo), rng.randint(hi, top)
+    else:
+        cut_start = kind in ("start", "both") and n > 1
+        cut_end = kind in ("end", "both") and n > 1
+        # Columns kept: [keep_lo, keep_hi] within [0, n - 1] counted from the lo side.
+        keep_lo, keep_hi = 0, n - 1
+        start_is_lo = step > 0
+        if cut_start and cut_end and n > 2:
+            a, b = sorted(rng.sample(range(1, n - 1), 2)) if n > 3 else (1, 1)
+            keep_lo, keep_hi = a, b
+        elif cut_start or cut_end:
+            k = rng.randint(1, n - 1)  # columns cut
+            if cut_start == start_is_lo:  # cutting the lo side
+                keep_lo = k
+            else:
+                keep_hi = n - 1 - k
+        a_min, a_max = lo + keep_lo, lo + keep_hi
+    b_min, b_max = rng.randint(0, top), rng.randint(0, top)
+    if abs(edge.x1 - edge.x0) >= abs(edge.y1 - edge.y0):
+        return Clip(a_min, b_min, a_max, b_max)
+    return Clip(b_min, a_min, b_max, a_max)

@@ -3,11 +3,13 @@
 
 Amaranth simulator, async testbenches only. Every simulation run is checked the same way
 (`check_run`): the ordered beats equal `run_edge` (lanes, values, last flags), the setup bank
-handed to the stepper equals `setup()`, bad commands are dropped and counted, and the sink is
-empty at the end. Runs with an always-ready sink and a back-to-back source additionally
-match the stepper's registers to the model's per-column trace and every beat's clock to
-`edgeaa.model.timing`. The stepper's scaled areas are compared with the model's `Write.area`
-too, so a tie decided differently inside the loop shows even when the rounded value hides it.
+handed to the stepper equals `setup()`, bad commands are dropped and counted, edges with no
+column in their clip window leave nothing (no bank, no error), and the sink is empty at the
+end. Each command is offered with its window on the ``clip`` port (`edgeaa.sim.commands`).
+Runs with an always-ready sink and a back-to-back source additionally match the stepper's
+registers to the model's per-column trace and every beat's clock to `edgeaa.model.timing`.
+The stepper's scaled areas are compared with the model's `Write.area` too, so a tie decided
+differently inside the loop shows even when the rounded value hides it.
 
 The runner (`simulate`) is one per-clock testbench that drives the source, the sink and
 samples the internal observation points together (cheaper than three testbenches here);
@@ -20,7 +22,7 @@ from __future__ import annotations
 
 import random
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import pytest
 from amaranth.back import rtlil
@@ -31,10 +33,18 @@ from amaranth.sim import Simulator
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from edgeaa.hdl import EdgeAntialiaser, EdgeStepper, setup_layout, verilog, write_layout
+from edgeaa.hdl import (
+    EdgeAntialiaser,
+    EdgeStepper,
+    clip_layout,
+    setup_layout,
+    verilog,
+    write_layout,
+)
 from edgeaa.hdl.core import ERRORS_BITS
-from edgeaa.model import Edge, EdgeConfig, EdgeError, run_edge, setup
+from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
+from edgeaa.sim.commands import edge_clip, edge_payload
 from edgeaa.sim.scoreboard import Beat, edge_beats
 from edgeaa.sim.streams import stream_put
 from edgeaa.sim.synth import muldiv_cells
@@ -86,25 +96,18 @@ def decoder(layout):
     return decode
 
 
-def edge_payload(config: EdgeConfig, edge: Edge) -> dict:
-    i_in, i_out = edge.intensities(config)
-    return {
-        "x0": edge.x0,
-        "y0": edge.y0,
-        "x1": edge.x1,
-        "y1": edge.y1,
-        "i_in": i_in,
-        "i_out": i_out,
-        "inside": int(edge.inside == "right"),
-    }
-
-
 def is_good(config: EdgeConfig, edge: Edge) -> bool:
+    """The model accepts the command (the core does not drop it as bad)."""
     try:
         setup(config, edge)
     except EdgeError:
         return False
     return True
+
+
+def is_visible(config: EdgeConfig, edge: Edge) -> bool:
+    """A good command with at least one column inside its clip window (it gets a bank)."""
+    return is_good(config, edge) and setup(config, edge).columns > 0
 
 
 # -- the simulation runner -------------------------------------------------------------------
@@ -138,20 +141,23 @@ def simulate(
     stall: float = 0.0,
     label: str = "",
 ) -> Run:
-    """Offer `edges` in order and drain the writes; with `seed`, random idle source clocks
-    (probability `idle` per clock before each offer) and random sink stalls (`stall`)."""
+    """Offer `edges` in order (each with its window on ``clip``) and drain the writes; with
+    `seed`, random idle source clocks (probability `idle` per clock before each offer), random
+    sink stalls (`stall`) and a random window on ``clip`` whenever no edge is offered."""
     dut = EdgeAntialiaser(config)
     stepper = dut.stepper
     rng = random.Random(seed) if seed is not None else None
     tag = f"[{label} seed={seed} idle={idle} stall={stall} config={config}]"
     run = Run(config, list(edges), tag, dut.setup_latency)
     payloads = [edge_payload(config, edge) for edge in edges]
+    clips = [edge_clip(config, edge) for edge in edges]
     expected_beats = sum(setup(config, edge).columns for edge in edges if is_good(config, edge))
-    max_clocks = 50 + (len(edges) + 2) * (dut.setup_latency + 4) * 4 + expected_beats
+    per_edge = dut.setup_latency + dut.start_clip_cycles + 4
+    max_clocks = 50 + (len(edges) + 2) * per_edge * 4 + expected_beats
     if stall:
         max_clocks += int(expected_beats * 4 / (1 - stall))
     if idle:
-        max_clocks += int(len(edges) * 4 * (dut.setup_latency + 4) / (1 - idle))
+        max_clocks += int(len(edges) * 4 * per_edge / (1 - idle))
     decode_beat = decoder(write_layout(config))
     decode_bank = decoder(setup_layout(config))
     beat_bits = Value.cast(dut.writes.payload)
@@ -168,8 +174,12 @@ def simulate(
             eager = rng is None or not rng.random() < idle
             if index < len(payloads) and not offering and eager:
                 ctx.set(dut.edges.payload, payloads[index])
+                ctx.set(dut.clip, clips[index])
                 ctx.set(dut.edges.valid, 1)
                 offering = True
+            elif rng is not None and not offering:
+                # The window is sampled with the edge only: anything in the other clocks.
+                ctx.set(dut.clip, random_clip(config, rng))
             ready = rng is None or not rng.random() < stall
             ctx.set(dut.writes.ready, ready)
             (
@@ -296,6 +306,7 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     """All checks of one run; `exact_timing` for an always-ready sink and eager source."""
     config, tag = run.config, run.label
     good = [edge for edge in run.edges if is_good(config, edge)]
+    visible = [edge for edge in good if setup(config, edge).columns]  # the others: no bank
     bad = len(run.edges) - len(good)
 
     # Beats: the model's writes, in order, lane by lane, with the last flags.
@@ -312,16 +323,17 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
         position += len(edge_want)
     assert len(got) == len(want), f"{tag} {len(got)} beats, model has {len(want)}"
 
-    # The bank handed to the stepper: the model's setup() of each good edge.
-    assert len(run.banks) == len(good), f"{tag} {len(run.banks)} banks for {len(good)} edges"
-    for n, (edge, (_, bank)) in enumerate(zip(good, run.banks, strict=True)):
+    # The bank handed to the stepper: the model's setup() of each edge with a visible column.
+    assert len(run.banks) == len(visible), f"{tag} {len(run.banks)} banks, {len(visible)} edges"
+    for n, (edge, (_, bank)) in enumerate(zip(visible, run.banks, strict=True)):
         want_bank = expected_bank(config, edge)
         assert bank == want_bank, (
-            f"{tag} good edge {n} {edge}: bank differs from setup(): "
+            f"{tag} visible edge {n} {edge}: bank differs from setup(): "
             f"{ {k: (bank[k], want_bank[k]) for k in bank if bank[k] != want_bank[k]} }"
         )
 
-    # Bad commands: dropped and counted, one error pulse each.
+    # Bad commands: dropped and counted, one error pulse each (an edge with no column in its
+    # window is not an error).
     assert run.errors == min(bad, (1 << ERRORS_BITS) - 1), f"{tag} errors={run.errors}"
     assert len(run.error_pulses) == bad, f"{tag} error pulses {run.error_pulses}"
     assert len(run.accepts) == len(run.edges), f"{tag} accepted {len(run.accepts)} commands"
@@ -363,7 +375,7 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     assert [clock for clock, *_ in run.steps] == [c - depth for c in want_clocks], f"{tag} steps"
     assert [clock for clock, *_ in run.areas] == [c - 1 for c in want_clocks], f"{tag} areas"
     assert [clock for clock, _ in run.banks] == [t.load for t in timings if not t.dropped]
-    want_errors = [t.accepted + 2 for t in timings if t.dropped]
+    want_errors = [t.accepted + 2 for t in timings if not is_good(config, t.edge)]
     assert run.error_pulses == want_errors, f"{tag} error pulse clocks"
 
 
@@ -456,24 +468,71 @@ def snap(config: EdgeConfig, value: int, grid: str) -> int:
 
 
 @st.composite
-def edge_commands(draw, config: EdgeConfig, max_pixels: int):
+def edge_commands(draw, config: EdgeConfig, max_pixels: int, clip: bool = False):
     """Edge commands (good or bad) at most `max_pixels` long on each axis, often with their
-    vertices on pixel centres or corners."""
+    vertices on pixel centres or corners; with `clip`, each with a window (`window_near`)."""
     hi, full = config.max_vertex, config.full_scale
     reach = max_pixels * config.subpixel_scale
     x0, y0 = draw(st.integers(0, hi)), draw(st.integers(0, hi))
     x1 = draw(st.integers(max(0, x0 - reach), min(hi, x0 + reach)))
     y1 = draw(st.integers(max(0, y0 - reach), min(hi, y0 + reach)))
     grid = draw(st.sampled_from(("any", "any", "centre", "corner")))
-    return Edge(
+    edge = Edge(
         *(snap(config, value, grid) for value in (x0, y0, x1, y1)),
         inside=draw(st.sampled_from(("left", "right"))),
         i_in=draw(st.integers(0, full)),
         i_out=draw(st.integers(0, full)),
     )
+    if clip:
+        window = window_near(config, edge, lambda lo, hi: draw(st.integers(lo, hi)))
+        edge = replace(edge, clip=window)
+    return edge
 
 
-def random_edges(config: EdgeConfig, rng: random.Random, count: int, max_pixels: int):
+def random_clip(config: EdgeConfig, rng: random.Random) -> dict[str, int]:
+    """Any value of the ``clip`` port (four bounds in [0, 2**W], possibly empty)."""
+    top = 1 << config.coord_bits
+    return {name: rng.randint(0, top) for name in Clip._fields}
+
+
+def window_near(config: EdgeConfig, edge: Edge, pick) -> Clip | None:
+    """A clip window for `edge`, drawn with ``pick(lo, hi)`` (an integer in [lo, hi]): none,
+    a random one, or bounds within two pixels of the edge's span on both axes, ordered (the
+    window cuts the edge's start, its end, both or nothing) or not (often empty)."""
+    top, S = 1 << config.coord_bits, config.subpixel_scale  # noqa: N806
+    kind = pick(0, 4)
+    if kind == 0:
+        return None
+    if kind == 1:
+        return Clip(*(pick(0, top) for _ in Clip._fields))
+    bounds = []
+    for a, b in ((edge.x0, edge.x1), (edge.y0, edge.y1)):
+        near = (max(0, min(a, b) // S - 2), min(top, -(-max(a, b) // S) + 2))
+        low, high = pick(*near), pick(*near)
+        bounds.append((min(low, high), max(low, high)) if kind < 4 else (low, high))
+    (x_min, x_max), (y_min, y_max) = bounds
+    return Clip(x_min, y_min, x_max, y_max)
+
+
+def with_window(config: EdgeConfig, edge: Edge, start: int, end: int, *, minor=None) -> Edge:
+    """`edge` with a window that keeps its (unclipped) columns ``start .. end`` along the major
+    axis (clamped to the image; outside ``0 .. columns - 1`` the window reaches beyond the
+    edge); the minor axis gets the whole image, or `minor` = (min, max)."""
+    st_ = setup(config, replace(edge, clip=None))
+    top = 1 << config.coord_bits
+    major, step = (st_.x, st_.col_dx) if st_.x_major else (st_.y, st_.col_dy)
+    a, b = (min(max(major + step * c, 0), top) for c in (start, end))
+    lo, hi = (a, b) if start > end else (min(a, b), max(a, b))  # start > end: min > max
+    other = (0, top) if minor is None else minor
+    if st_.x_major:
+        return replace(edge, clip=Clip(lo, other[0], hi, other[1]))
+    return replace(edge, clip=Clip(other[0], lo, other[1], hi))
+
+
+def random_edges(
+    config: EdgeConfig, rng: random.Random, count: int, max_pixels: int, *, clip: bool = False
+):
+    """Random edge commands (good or bad); with `clip`, each with a window (`window_near`)."""
     hi, full = config.max_vertex, config.full_scale
     reach = max_pixels * config.subpixel_scale
     edges = []
@@ -484,7 +543,10 @@ def random_edges(config: EdgeConfig, rng: random.Random, count: int, max_pixels:
         grid = rng.choice(("any", "any", "centre", "corner"))
         x0, y0, x1, y1 = (snap(config, value, grid) for value in (x0, y0, x1, y1))
         inside = rng.choice(("left", "right"))
-        edges.append(Edge(x0, y0, x1, y1, inside, rng.randint(0, full), rng.randint(0, full)))
+        edge = Edge(x0, y0, x1, y1, inside, rng.randint(0, full), rng.randint(0, full))
+        if clip:
+            edge = replace(edge, clip=window_near(config, edge, rng.randint))
+        edges.append(edge)
     return edges
 
 
@@ -577,10 +639,16 @@ def test_interface(name):
     I = config.intensity_bits  # noqa: N806, E741
     dut = EdgeAntialiaser(config)
     members = dut.signature.members
-    assert set(members) == {"edges", "writes", "errors", "error"}
+    assert set(members) == {"edges", "clip", "writes", "errors", "error"}
     assert members["edges"].flow == In and members["writes"].flow == Out
     assert members["errors"].flow == Out and members["errors"].shape == unsigned(16)
     assert members["error"].flow == Out and members["error"].shape == unsigned(1)
+    # The clip window: four pixel bounds in [0, 2**W]; undriven, it clips nothing.
+    assert members["clip"].flow == In and members["clip"].shape == clip_layout(config)
+    bounds = {key: Shape.cast(fld.shape) for key, fld in clip_layout(config)}
+    assert bounds == {key: unsigned(W + 1) for key in ("x_min", "y_min", "x_max", "y_max")}
+    clip = clip_layout(config).from_bits(Value.cast(dut.clip).init)
+    assert [clip[key] for key, _ in clip_layout(config)] == list(Clip.full(config))
     edges = members["edges"].signature.members
     assert set(edges) == {"payload", "valid", "ready"}
     layout = edges["payload"].shape
@@ -632,16 +700,19 @@ def test_setup_latency_is_the_timing_model(name):
     depth = timing_model.pipeline_depth(config)
     assert dut.stepper.latency == depth == (2 if config.segments <= 1 else 3)
     assert dut.setup_latency == timing_model.setup_latency(config)
-    assert dut.setup_latency == config.intensity_bits + config.F + 5 + depth
-    assert timing_model.setup_interval(config) == dut.run_cycles + 3
+    assert dut.setup_latency == config.intensity_bits + config.F + 6 + depth
+    assert dut.run_cycles == timing_model.run_cycles(config) == config.intensity_bits + config.F + 1
+    assert timing_model.setup_interval(config) == dut.setup_interval == dut.run_cycles + 4
+    assert dut.start_clip_cycles == timing_model.start_clip_cycles(config) == config.coord_bits + 1
+    assert timing_model.run_cycles(config, True) == dut.run_cycles + dut.start_clip_cycles
 
 
 # -- (2) setup registers against setup() -----------------------------------------------------
 
 
 def simulate_setup(config: EdgeConfig, edges: list[Edge]) -> list[dict | None]:
-    """The bank each edge's setup produces (None: dropped), resetting the core between edges
-    so that long edges cost only their setup time."""
+    """The bank each edge's setup produces (None: dropped, or no column in the window),
+    resetting the core between edges so that long edges cost only their setup time."""
     dut = EdgeAntialiaser(config)
     flush = Signal()
     top = Module()
@@ -653,10 +724,11 @@ def simulate_setup(config: EdgeConfig, edges: list[Edge]) -> list[dict | None]:
     async def bench(ctx):
         for edge in edges:
             ctx.set(dut.edges.payload, edge_payload(config, edge))
+            ctx.set(dut.clip, edge_clip(config, edge))
             ctx.set(dut.edges.valid, 1)
             await ctx.tick().until(dut.edges.ready)
             ctx.set(dut.edges.valid, 0)
-            for _ in range(dut.setup_latency + 2):
+            for _ in range(dut.setup_latency + dut.start_clip_cycles + 2):
                 _, _, valid, error, raw = await ctx.tick().sample(
                     bank.valid, dut.error, Value.cast(bank.payload)
                 )
@@ -676,8 +748,8 @@ def simulate_setup(config: EdgeConfig, edges: list[Edge]) -> list[dict | None]:
 
 def check_setup(config: EdgeConfig, edges: list[Edge]):
     for edge, bank in zip(edges, simulate_setup(config, edges), strict=True):
-        if not is_good(config, edge):
-            assert bank is None, f"bad command {edge} produced a bank"
+        if not is_visible(config, edge):
+            assert bank is None, f"{edge} (bad, or nothing in its window) produced a bank"
             continue
         want = expected_bank(config, edge)
         assert bank == want, (
@@ -787,6 +859,164 @@ def test_handover(seed):
     edges.insert(4, Edge(5, 5, 5, 5))  # a dropped command while the bank waits
     assert [setup(config, edge).columns for edge in edges if is_good(config, edge)] == lengths
     run_and_check(config, edges, seed=seed, idle=0.2, stall=0.3, label="handover")
+
+
+# -- (5b) the clip window ---------------------------------------------------------------------
+
+
+def clipped_corpus(config: EdgeConfig) -> list[Edge]:
+    """Corner-case edges of at least three columns under directed windows: the start cut, the
+    end cut, both, one column, wider than the edge, beyond either end, min > max, the minor
+    axis only (which clips nothing); and one-column windows at both image borders."""
+    top, S, hi = 1 << config.coord_bits, config.subpixel_scale, config.max_vertex  # noqa: N806
+    names = ("octant", "vertical", "45deg", "225deg", "subpixel")
+    edges = []
+    for name, edge in corpus(config, longest=False):
+        if not name.startswith(names) or not is_good(config, edge):
+            continue
+        columns = setup(config, edge).columns
+        if columns < 3:
+            continue
+        mid = columns // 2
+        for start, end in (
+            (1, columns - 1),
+            (0, columns - 2),
+            (1, columns - 2),
+            (columns - 1, columns - 1),
+            (mid, mid),
+            (-3, columns + 2),
+            (columns, columns + 2),
+            (-3, -1),
+            (mid + 1, mid),
+        ):
+            edges.append(with_window(config, edge, start, end))
+        edges.append(with_window(config, edge, -1, columns, minor=(1, 0)))
+    reach = min(5 * S, hi)
+    edges += [
+        Edge(0, 0, reach, S // 2, clip=Clip(0, 0, 0, top)),  # column 0 only
+        Edge(hi, hi, hi - reach, hi - S // 2, clip=Clip(top, 0, top, top)),  # column 2**W only
+        Edge(hi, 0, hi - reach, 0, clip=Clip(top, 0, 0, top)),  # min > max at the extremes
+        Edge(0, hi, S // 2, hi - reach, inside="right", clip=Clip(0, top, top, top)),
+    ]
+    return edges
+
+
+def clip_classes(config: EdgeConfig, edges: list[Edge]) -> dict[str, int]:
+    """How many good edges are start-clipped, end-clipped only, empty or not clipped."""
+    out = {"start": 0, "end": 0, "empty": 0, "none": 0}
+    for edge in edges:
+        if not is_good(config, edge):
+            continue
+        clipped = setup(config, edge)
+        full = setup(config, replace(edge, clip=None))
+        if not clipped.columns:
+            out["empty"] += 1
+        elif clipped.clipped_start:
+            out["start"] += 1
+        elif clipped.columns < full.columns:
+            out["end"] += 1
+        else:
+            out["none"] += 1
+    return out
+
+
+@pytest.mark.parametrize("name", ["default", "small", "lowfrac", "seg4", "wide"])
+def test_clip_corpus(name):
+    """Directed windows, back to back (each edge's window differs from the last): writes, bank,
+    trace and beat clocks against the model and the timing model."""
+    config = CONFIGS[name]
+    edges = clipped_corpus(config)
+    assert min(clip_classes(config, edges).values()) >= 4, clip_classes(config, edges)
+    run_and_check(config, edges, label=f"clip corpus {name}")
+
+
+# Lane A's first pass of a start-clipped edge needs a quotient of W + s + 2 bits: wider
+# than the accumulator (I + F = 10 bits) in this configuration.
+NARROW = EdgeConfig(coord_bits=4, subpixel_bits=8, intensity_bits=1)
+
+
+@pytest.mark.parametrize("name", [*CONFIGS, "narrow"])
+def test_clip_hypothesis(name):
+    config = NARROW if name == "narrow" else CONFIGS[name]
+
+    @sim_settings(5)
+    @given(st.lists(edge_commands(config, 8, clip=True), min_size=5, max_size=12))
+    def check(edges):
+        run_and_check(config, edges, label=f"clip hypothesis {name}")
+
+    check()
+
+
+@pytest.mark.parametrize(("name", "seed"), [("default", 31), ("small", 32), ("seg2", 33)])
+def test_clip_backpressure(name, seed):
+    """Random windows, random source idle clocks and sink stalls, and a random value on the
+    ``clip`` port whenever no edge is offered (the window is sampled with the edge only)."""
+    config = CONFIGS[name]
+    rng = random.Random(seed)
+    edges = random_edges(config, rng, 16, 12, clip=True) + clipped_corpus(config)[::7]
+    edges.insert(3, Edge(4, 4, 4, 4, clip=Clip(0, 0, 0, 0)))  # bad: an error, not "empty"
+    classes = clip_classes(config, edges)
+    assert min(classes.values()) >= 2, classes
+    run_and_check(config, edges, seed=seed, idle=0.4, stall=0.5, label=f"clip stalls {name}")
+
+
+def start_quotient(config: EdgeConfig, edge: Edge) -> int:
+    """Lane A's first-pass quotient ``floor(2 |e| dv / du)`` for a visible edge, with
+    ``e = first S - u0`` the offset of its first column's centre from P0 (folded)."""
+    st_ = setup(config, edge)
+    major, p0 = (st_.x, edge.x0) if st_.x_major else (st_.y, edge.y0)
+    step = st_.col_dx or st_.col_dy
+    e = step * major * config.subpixel_scale - step * p0
+    return 2 * abs(e) * st_.dv // st_.du
+
+
+@pytest.mark.parametrize("name", ["default", "narrow", "small", "wide"])
+def test_clip_longest_start_offset(name):
+    """Windows that keep only the last columns of the longest edges (diagonals, a row, a
+    column; both directions): the start offset is almost the edge's length, so lane A's
+    first-pass quotient is near its largest, about 2 dv < 2**(W + s + 2) (beyond the
+    accumulator's width in the narrow configuration)."""
+    config = NARROW if name == "narrow" else CONFIGS[name]
+    W, s = config.coord_bits, config.subpixel_bits  # noqa: N806
+    edges = []
+    for edge in longest_edges(config):
+        edges += [edge, replace(edge, x0=edge.x1, y0=edge.y1, x1=edge.x0, y1=edge.y0)]
+    clipped = []
+    for edge in edges:
+        columns = setup(config, edge).columns
+        for first, last in ((columns - 1, columns - 1), (columns - 3, columns - 1), (2, 4)):
+            clipped.append(with_window(config, edge, first, last))
+    quotients = [start_quotient(config, edge) for edge in clipped]
+    assert max(quotients) >= 1 << (W + s), quotients
+    if name == "narrow":
+        assert max(quotients) >= 1 << (config.intensity_bits + config.F)
+    run_and_check(config, clipped, label=f"longest start offset {name}")
+
+
+def test_clip_latency():
+    """Exact clocks: a start-clipped edge on an idle core has its first beat W + 1 clocks later
+    than L; an end-clipped one at L; an edge with no column in its window occupies the setup
+    for 5 clocks (the next command is accepted 5 clocks after it) and pulses no error."""
+    config = CONFIGS["default"]
+    W = config.coord_bits  # noqa: N806
+    latency = timing_model.setup_latency(config)
+    edge = run_of(config, 10, 20, 6)
+    start_cut, end_cut = with_window(config, edge, 2, 5), with_window(config, edge, 0, 3)
+    empty = with_window(config, edge, 7, 9)
+    assert [setup(config, e).columns for e in (start_cut, end_cut, empty)] == [4, 4, 0]
+    assert setup(config, start_cut).clipped_start and not setup(config, end_cut).clipped_start
+
+    run = run_and_check(config, [start_cut], label="start-clipped latency")
+    assert [clock for clock, _ in run.beats] == list(range(latency + W + 1, latency + W + 5))
+    assert run.banks[0][1]["x"] == 12 and run.banks[0][1]["remaining"] == 3
+    run = run_and_check(config, [end_cut], label="end-clipped latency")
+    assert [clock for clock, _ in run.beats] == list(range(latency, latency + 4))
+
+    bad = Edge(7, 7, 7, 7)
+    run = run_and_check(config, [empty, bad, empty, edge], label="empty edge occupancy")
+    assert run.accepts == [0, 5, 7, 12] and run.error_pulses == [7], run.accepts
+    assert [clock for clock, _ in run.beats] == list(range(12 + latency, 12 + latency + 6))
+    assert len(run.banks) == 1
 
 
 # -- (6) bad commands ------------------------------------------------------------------------
@@ -933,10 +1163,12 @@ def test_verilog_ports():
         "writes__payload__lane1__value",
         "writes__payload__lane1_valid",
         "writes__payload__last",
+        *(f"clip__{name}" for name in ("x_min", "y_min", "x_max", "y_max")),
         "errors",
         "error",
     }
     assert "input [14:0] edges__payload__x0;" in text
+    assert "input [11:0] clip__x_max;" in text
     assert "output [12:0] writes__payload__lane1__y;" in text
 
 

@@ -1,8 +1,9 @@
 """The emitted Verilog, Verilated and driven by cocotb, against the model beat for beat.
 
 Every beat of every edge is compared (sim/cocotb_edges.py), under random source idles and
-sink back-pressure, with bad commands mixed in. The default run checks 1000 edges; the soak
-run (`pytest -m slow`) checks 100 000.
+sink back-pressure, with bad commands mixed in; some runs give edges random clip windows
+(empty ones among them). The default run checks 1000 edges; the soak run (`pytest -m slow`)
+checks 100 000.
 """
 
 import pytest
@@ -14,8 +15,8 @@ from edgeaa.sim.workloads import random_edges
 DEFAULT = EdgeConfig()
 
 
-def run(config, count, seed, **kwargs):
-    edges = random_edges(config, count, seed, bad_fraction=0.02)
+def run(config, count, seed, clip_fraction=0.0, **kwargs):
+    edges = random_edges(config, count, seed, bad_fraction=0.02, clip_fraction=clip_fraction)
     result = cosimulate(config, edges, seed=seed, idle=0.2, stall=0.3, **kwargs)
     assert result.beats == result.expected_beats > count  # every column of every edge
     assert result.dropped > 0  # bad commands were sent, dropped and counted
@@ -38,6 +39,27 @@ def test_thousand_edges_with_back_pressure():
 )
 def test_other_configurations(config):
     run(config, 200, seed=7)
+
+
+@pytest.mark.parametrize(
+    "config",
+    [DEFAULT, EdgeConfig(mode="seg2", accumulator="truncated", coord_bits=4, subpixel_bits=0)],
+    ids=["default", "seg2-truncated-tiny"],
+)
+def test_clipped_edges_with_back_pressure(config):
+    """Random clip windows: empty ones (no beat at all), start and end cuts, loose ones."""
+    from edgeaa.model import EdgeError, setup
+
+    edges = random_edges(config, 400, 2027, bad_fraction=0.02, clip_fraction=0.7)
+    kinds = set()
+    for edge in edges:
+        try:
+            st = setup(config, edge)
+        except EdgeError:
+            continue
+        kinds.add("empty" if st.columns == 0 else "start" if st.clipped_start else "other")
+    assert kinds == {"empty", "start", "other"}
+    run(config, 400, seed=2027, clip_fraction=0.7)
 
 
 def test_a_wrong_model_is_caught(monkeypatch):

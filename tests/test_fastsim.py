@@ -3,7 +3,7 @@
 import pytest
 
 from edgeaa.model import EdgeConfig
-from edgeaa.model.timing import write_cycles
+from edgeaa.model.timing import beat_cycles, write_cycles
 from edgeaa.sim import fastsim
 from edgeaa.sim.scoreboard import expected_beats
 from edgeaa.sim.workloads import random_edges
@@ -61,3 +61,164 @@ def test_python_and_compiled_simulators_agree_clock_for_clock():
     assert slow.beats.tolist() == fast.beats.tolist(), f"seed {seed}"
     assert slow.errors == fast.errors == expected_beats(DEFAULT, edges)[1], f"seed {seed}"
     assert slow.as_beats() == expected_beats(DEFAULT, edges)[0], f"seed {seed}"
+
+
+# -- the clip window --------------------------------------------------------------------------
+
+WIDE = EdgeConfig(mode="seg4", accumulator="truncated", coord_bits=15, subpixel_bits=8)
+
+
+def clip_mix(config, edges):
+    """How many edges are bad, hold no column in their window, or have their start clipped."""
+    from edgeaa.model import EdgeError, setup
+
+    counts = {"bad": 0, "empty": 0, "start": 0}
+    for edge in edges:
+        try:
+            st = setup(config, edge)
+        except EdgeError:
+            counts["bad"] += 1
+            continue
+        counts["empty"] += st.columns == 0
+        counts["start"] += st.clipped_start
+    return counts
+
+
+def test_clipped_beats_equal_the_model_under_stalls_and_idles():
+    seed = 21
+    edges = random_edges(DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01, clip_fraction=0.7)
+    assert min(clip_mix(DEFAULT, edges).values()) > 10, f"seed {seed}: a weak mix"
+    expected, dropped = expected_beats(DEFAULT, edges)
+    run = fastsim.run(DEFAULT, edges, seed=seed, idle=0.1, stall=0.3)
+    assert run.errors == dropped > 0, f"seed {seed}: empty windows are not errors"
+    beats = run.as_beats()
+    assert len(beats) == len(expected), f"seed {seed}: lost or duplicated beats"
+    for i, (got, want) in enumerate(zip(beats, expected, strict=True)):
+        assert got == want, f"seed {seed}: beat {i} is {got}, the model says {want}"
+
+
+@pytest.mark.parametrize("max_pixels", [120, 16], ids=["stepper-bound", "setup-bound"])
+@pytest.mark.parametrize("config", [DEFAULT, WIDE], ids=["default", "seg4-truncated-wide"])
+def test_clipped_beats_leave_in_the_clock_the_timing_model_predicts(config, max_pixels):
+    """Start-clipped edges take the long setup pass; empty ones leave the setup early: with
+    short edges (setup-bound) both show in the beat clocks."""
+    seed = 22
+    edges = random_edges(
+        config, 300, seed, max_pixels=max_pixels, bad_fraction=0.02, clip_fraction=0.6
+    )
+    assert min(clip_mix(config, edges).values()) > 3, f"seed {seed}: a weak mix"
+    run = fastsim.run(config, edges)
+    predicted = [clock for timing in write_cycles(config, edges) for clock in timing.beats]
+    assert run.beats[:, 0].tolist() == predicted, f"seed {seed}"
+    assert run.as_beats() == expected_beats(config, edges)[0], f"seed {seed}"
+
+
+@pytest.mark.parametrize("config", [DEFAULT, WIDE], ids=["default", "seg4-truncated-wide"])
+def test_a_start_clipped_last_edge_is_waited_for(config):
+    """The run ends after a quiet spell: it must outlast the long setup of a start-clipped
+    edge (W + 1 clocks over the latency), also after empty edges and with nothing before."""
+    from edgeaa.model import Clip, Edge
+    from edgeaa.model.timing import EMPTY_EDGE_CYCLES, setup_latency, start_clip_cycles
+
+    s = config.subpixel_scale
+    top = 1 << config.coord_bits
+    edge = Edge(2 * s, 3 * s, 30 * s, 9 * s, clip=Clip(20, 0, top, top))  # columns 20 .. 30
+    empty = Edge(2 * s, 3 * s, 30 * s, 9 * s, clip=Clip(31, 0, top, top))
+    for edges in ([edge], [edge, empty, empty], [empty, edge], [empty]):
+        run = fastsim.run(config, edges)
+        expected = expected_beats(config, edges)[0]
+        assert run.as_beats() == expected
+        assert run.beats[:, 0].tolist() == beat_cycles(config, edges)
+    # After an empty edge (accepted in clock 0, gone from the setup in 5 clocks):
+    first = EMPTY_EDGE_CYCLES + setup_latency(config) + start_clip_cycles(config)
+    assert fastsim.run(config, [empty, edge]).beats[0, 0] == first
+
+
+def test_python_and_compiled_simulators_agree_on_clipped_edges():
+    from edgeaa.sim import amaranth_run
+
+    seed = 23
+    edges = random_edges(DEFAULT, 30, seed, max_pixels=24, bad_fraction=0.1, clip_fraction=0.8)
+    assert all(clip_mix(DEFAULT, edges).values()), f"seed {seed}: a weak mix"
+    slow, fast = amaranth_run.run(DEFAULT, edges), fastsim.run(DEFAULT, edges)
+    assert slow.beats.tolist() == fast.beats.tolist(), f"seed {seed}"
+    assert slow.errors == fast.errors == expected_beats(DEFAULT, edges)[1], f"seed {seed}"
+    assert slow.beats[:, 0].tolist() == beat_cycles(DEFAULT, edges), f"seed {seed}"
+    assert slow.as_beats() == expected_beats(DEFAULT, edges)[0], f"seed {seed}"
+
+
+def test_clip_windows_reach_the_command_file():
+    """Each row carries the edge's window after its payload; None is the full window."""
+    from edgeaa.model import Clip, Edge
+    from edgeaa.sim.commands import COMMAND_FIELDS
+
+    top = 1 << DEFAULT.coord_bits
+    edges = [Edge(0, 0, 64, 16), Edge(0, 0, 64, 16, inside="right", clip=Clip(1, 2, 3, 4))]
+    rows = fastsim.edge_commands(DEFAULT, edges)
+    assert rows.shape == (2, len(COMMAND_FIELDS)) == (2, 11)
+    assert rows[0].tolist() == [0, 0, 64, 16, DEFAULT.full_scale, 0, 0, 0, 0, top, top]
+    assert rows[1, -5:].tolist() == [1, 1, 2, 3, 4]
+
+
+def test_a_window_the_port_cannot_carry_is_refused():
+    from edgeaa.model import Clip, Edge, EdgeError
+
+    top = 1 << DEFAULT.coord_bits
+    with pytest.raises(EdgeError, match="clip x_max"):
+        fastsim.edge_commands(DEFAULT, [Edge(0, 0, 64, 16, clip=Clip(0, 0, top + 1, top))])
+
+
+# -- the renderer's engine glue ---------------------------------------------------------------
+
+
+def test_beats_to_writes_skips_edges_without_columns():
+    """Edges with no column in their window end no beat; writes keep the sent edge's index."""
+    import dataclasses
+
+    import numpy as np
+
+    from edgeaa.model import Clip
+    from edgeaa.model.vector import run_edges
+    from edgeaa.render.engines import beats_to_writes
+    from edgeaa.sim.scoreboard import beats_to_array, edge_columns
+
+    seed = 24
+    top = 1 << DEFAULT.coord_bits
+    edges = random_edges(DEFAULT, 200, seed, clip_fraction=0.8)
+    edges[-1] = dataclasses.replace(edges[-1], clip=Clip(top, top, 0, 0))  # the last is empty
+    columns = edge_columns(DEFAULT, edges)
+    assert (columns == 0).sum() > 10 and columns[0] == 0 and columns[-1] == 0, "a weak mix"
+    expected = beats_to_array(expected_beats(DEFAULT, edges)[0])
+    beats = np.hstack([np.zeros((len(expected), 1), dtype=np.int64), expected])  # clock 0
+    edge_index, x, y, value = beats_to_writes(beats, columns)
+    model = run_edges(DEFAULT, edges)
+    for got, want in zip((edge_index, x, y, value), (model.edge_index, model.x, model.y,
+                                                     model.value), strict=True):  # fmt: skip
+        assert np.array_equal(got, want), f"seed {seed}"
+    with pytest.raises(RuntimeError, match="ended"):
+        beats_to_writes(beats, np.append(columns, 3))
+    moved = beats.copy()
+    first_end = int(np.flatnonzero(moved[:, 8])[0])
+    moved[[first_end, first_end + 1], 8] = moved[[first_end + 1, first_end], 8]
+    with pytest.raises(RuntimeError, match="do not end the edges"):
+        beats_to_writes(moved, columns)
+
+
+@pytest.mark.parametrize("engine", ["verilator", "amaranth"])
+def test_engines_give_the_model_writes_for_clipped_edges(engine):
+    """run_engine's edge_index counts every edge sent, also those that end no beat."""
+    import dataclasses
+
+    import numpy as np
+
+    from edgeaa.model import Clip
+    from edgeaa.render.engines import beat_clocks, run_engine
+
+    seed = 25
+    top = 1 << DEFAULT.coord_bits
+    edges = random_edges(DEFAULT, 200 if engine == "verilator" else 12, seed, clip_fraction=0.7)
+    edges[-1] = dataclasses.replace(edges[-1], clip=Clip(top, top, 0, 0))  # the last is empty
+    model, sim = run_engine(DEFAULT, edges, "model"), run_engine(DEFAULT, edges, engine)
+    for field in ("edge_index", "x", "y", "value"):
+        assert np.array_equal(getattr(sim, field), getattr(model, field)), f"seed {seed} {field}"
+    assert np.array_equal(sim.beat_clocks, beat_clocks(DEFAULT, edges)), f"seed {seed}"

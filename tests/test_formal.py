@@ -105,9 +105,10 @@ def test_changed_stalled_payload_is_caught(tools):
 
 def test_core_view_finds_the_internals():
     view = CoreView(EdgeAntialiaser(EdgeConfig()))
-    for name in ("cmd", "du", "dv", "counter", "lane_a_q", "lane_b_r", "row0", "i_d"):
+    names = ("cmd", "clip_r", "du", "dv", "counter", "lane_a_q", "lane_b_r", "row0", "i_d")
+    for name in (*names, "first", "last", "lo", "hi", "start_clip", "columns"):
         assert view.signal(name).name == name
-    assert set(view.encoding) >= {"IDLE", "FOLD", "RUN", "FINAL"}
+    assert set(view.encoding) >= {"IDLE", "FOLD", "WINDOW", "RUN", "FINAL"}
     width = sum(stop - start for start, stop, _ in view.bank_writes)
     assert width == setup_layout(EdgeConfig()).size
 
