@@ -50,7 +50,7 @@ def main() -> int:
     for name in args.scenes.split(","):
         plan = plan_scene(builtin(name, config), config)
         sent = render(plan, engine="model").sent
-        edges = [plan.edge(int(e)) for e in sent]
+        edges = [plan.edge(int(e), clip=True) for e in sent]
         print(f"{name}: {len(edges)} edges sent", file=sys.stderr)
         fastsim.build(config)  # cached
         fast = best_run(config, edges, args.tries)

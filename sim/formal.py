@@ -81,12 +81,12 @@ name        mode     depth       skip        time
 ==========  =======  ==========  ==========  ==========================================
 stream      prove    1                       a few s (1-inductive)
 count       prove    1                       a few s (1-inductive)
-bounds      prove    1                       1.5 min (stepper without pipeline) to 7 min
-pipe        prove    1                       see the final report / tests
-beat        prove    1                       about 1 min (stepper without pipeline)
+bounds      prove    1                       14 to 20 min (10 min without the clip window)
+pipe        prove    1                       9 to 10 min
+beat        prove    1                       2.5 to 3.5 min
 cover_drop  cover    4                       a few s
-cover       cover    latency+2   latency-1   1 to 4 min: every cover reached
-minor       bmc      37          34          4 to 5 min: columns 0 and 1 of every edge
+cover       cover    latency+2   latency-1   1 min: every cover reached
+minor       bmc      37          34          16 min (10 min without the clip window, depth 36)
 ==========  =======  ==========  ==========  ==========================================
 
 White-box helpers. k-induction needs invariants of every register, so the harness states
