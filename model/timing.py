@@ -119,7 +119,8 @@ def setup_interval(config: EdgeConfig) -> int:
 
 @dataclass(frozen=True)
 class EdgeTiming:
-    """When one edge command went through the core (None fields: a dropped command)."""
+    """When one edge command went through the core (None fields and no beats: a bad command
+    the core dropped, or an edge with no column in its clip window)."""
 
     edge: Edge
     accepted: int  # clock the command was accepted
@@ -129,6 +130,7 @@ class EdgeTiming:
 
     @property
     def dropped(self) -> bool:
+        """No bank write: a bad command, or nothing visible in the clip window."""
         return self.load is None
 
 
