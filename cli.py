@@ -325,7 +325,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="write the hardware core as Verilog",
         description="Elaborate the Amaranth core for the configuration and write it as Verilog "
         "with stable port names (docs/hardware.md lists them): clk, rst, the edge command "
-        "stream edges__valid/ready/payload__*, the pixel write stream "
+        "stream edges__valid/ready/payload__*, the clip window clip__x_min/y_min/x_max/y_max "
+        "(sampled with each edge), the pixel write stream "
         "writes__valid/ready/payload__lane0__*, lane1__*, lane1_valid, last, and errors/error.",
     )
     verilog.add_argument("-o", "--output", help="output file (default: standard output)")

@@ -183,8 +183,8 @@ def add_commands(subparsers, add_config_options) -> None:
     parser.add_argument(
         "--no-skip",
         action="store_true",
-        help="send every boundary edge to the engine and composite over the whole image "
-        "(same image, more work)",
+        help="send every boundary edge to the engine, unclipped, and composite over the "
+        "whole image (same image, more work)",
     )
     parser.add_argument(
         "--compare",

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..model import Edge, EdgeConfig
 from ..model.timing import write_cycles
+from ..sim.scoreboard import edge_columns
 
 ENGINES = ("model", "amaranth", "verilator")
 MODEL_CHUNK = 512  # edges per run_edges call
@@ -109,8 +110,6 @@ def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
     if not edges:
         empty = np.zeros(0, dtype=np.int64)
         return EngineRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
-    from ..sim.scoreboard import edge_columns
-
     if engine == "verilator":
         from ..sim import fastsim
 

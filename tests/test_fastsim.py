@@ -1,19 +1,32 @@
 """The compiled Verilator harness: bit-exact beats, and beat clocks equal to the timing model."""
 
+import dataclasses
+
+import numpy as np
 import pytest
 
-from edgeaa.model import EdgeConfig
-from edgeaa.model.timing import beat_cycles, write_cycles
-from edgeaa.sim import fastsim
-from edgeaa.sim.scoreboard import expected_beats
+from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, setup
+from edgeaa.model.timing import (
+    EMPTY_EDGE_CYCLES,
+    beat_cycles,
+    setup_latency,
+    start_clip_cycles,
+    write_cycles,
+)
+from edgeaa.model.vector import run_edges
+from edgeaa.render.engines import beat_clocks, beats_to_writes, run_engine
+from edgeaa.sim import amaranth_run, fastsim
+from edgeaa.sim.commands import COMMAND_FIELDS
+from edgeaa.sim.scoreboard import beats_to_array, edge_columns, expected_beats
 from edgeaa.sim.workloads import random_edges
 
 DEFAULT = EdgeConfig()
+WIDE = EdgeConfig(mode="seg4", accumulator="truncated", coord_bits=15, subpixel_bits=8)
 
 
-def test_beats_equal_the_model_under_stalls_and_idles():
-    seed = 11
-    edges = random_edges(DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01)
+def assert_beats_match_under_stalls(edges, seed: int) -> None:
+    """The compiled core under random idles and stalls gives the model's beats, in order, and
+    counts exactly the bad commands (an empty clip window is not one)."""
     expected, dropped = expected_beats(DEFAULT, edges)
     run = fastsim.run(DEFAULT, edges, seed=seed, idle=0.1, stall=0.3)
     assert run.errors == dropped > 0, f"seed {seed}"
@@ -23,11 +36,13 @@ def test_beats_equal_the_model_under_stalls_and_idles():
         assert got == want, f"seed {seed}: beat {i} is {got}, the model says {want}"
 
 
-@pytest.mark.parametrize(
-    "config",
-    [DEFAULT, EdgeConfig(mode="seg4", accumulator="truncated", coord_bits=15, subpixel_bits=8)],
-    ids=["default", "seg4-truncated-wide"],
-)
+def test_beats_equal_the_model_under_stalls_and_idles():
+    seed = 11
+    edges = random_edges(DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01)
+    assert_beats_match_under_stalls(edges, seed)
+
+
+@pytest.mark.parametrize("config", [DEFAULT, WIDE], ids=["default", "seg4-truncated-wide"])
 def test_every_beat_leaves_in_the_clock_the_timing_model_predicts(config):
     seed = 12
     edges = random_edges(config, 300, seed, max_pixels=120, bad_fraction=0.02)
@@ -53,8 +68,6 @@ def test_bad_probabilities_are_rejected():
 
 
 def test_python_and_compiled_simulators_agree_clock_for_clock():
-    from edgeaa.sim import amaranth_run
-
     seed = 14
     edges = random_edges(DEFAULT, 20, seed, max_pixels=24, bad_fraction=0.1)
     slow, fast = amaranth_run.run(DEFAULT, edges), fastsim.run(DEFAULT, edges)
@@ -65,13 +78,9 @@ def test_python_and_compiled_simulators_agree_clock_for_clock():
 
 # -- the clip window --------------------------------------------------------------------------
 
-WIDE = EdgeConfig(mode="seg4", accumulator="truncated", coord_bits=15, subpixel_bits=8)
-
 
 def clip_mix(config, edges):
     """How many edges are bad, hold no column in their window, or have their start clipped."""
-    from edgeaa.model import EdgeError, setup
-
     counts = {"bad": 0, "empty": 0, "start": 0}
     for edge in edges:
         try:
@@ -88,13 +97,7 @@ def test_clipped_beats_equal_the_model_under_stalls_and_idles():
     seed = 21
     edges = random_edges(DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01, clip_fraction=0.7)
     assert min(clip_mix(DEFAULT, edges).values()) > 10, f"seed {seed}: a weak mix"
-    expected, dropped = expected_beats(DEFAULT, edges)
-    run = fastsim.run(DEFAULT, edges, seed=seed, idle=0.1, stall=0.3)
-    assert run.errors == dropped > 0, f"seed {seed}: empty windows are not errors"
-    beats = run.as_beats()
-    assert len(beats) == len(expected), f"seed {seed}: lost or duplicated beats"
-    for i, (got, want) in enumerate(zip(beats, expected, strict=True)):
-        assert got == want, f"seed {seed}: beat {i} is {got}, the model says {want}"
+    assert_beats_match_under_stalls(edges, seed)
 
 
 @pytest.mark.parametrize("max_pixels", [120, 16], ids=["stepper-bound", "setup-bound"])
@@ -117,9 +120,6 @@ def test_clipped_beats_leave_in_the_clock_the_timing_model_predicts(config, max_
 def test_a_start_clipped_last_edge_is_waited_for(config):
     """The run ends after a quiet spell: it must outlast the long setup of a start-clipped
     edge (W + 1 clocks over the latency), also after empty edges and with nothing before."""
-    from edgeaa.model import Clip, Edge
-    from edgeaa.model.timing import EMPTY_EDGE_CYCLES, setup_latency, start_clip_cycles
-
     s = config.subpixel_scale
     top = 1 << config.coord_bits
     edge = Edge(2 * s, 3 * s, 30 * s, 9 * s, clip=Clip(20, 0, top, top))  # columns 20 .. 30
@@ -135,8 +135,6 @@ def test_a_start_clipped_last_edge_is_waited_for(config):
 
 
 def test_python_and_compiled_simulators_agree_on_clipped_edges():
-    from edgeaa.sim import amaranth_run
-
     seed = 23
     edges = random_edges(DEFAULT, 30, seed, max_pixels=24, bad_fraction=0.1, clip_fraction=0.8)
     assert all(clip_mix(DEFAULT, edges).values()), f"seed {seed}: a weak mix"
@@ -149,9 +147,6 @@ def test_python_and_compiled_simulators_agree_on_clipped_edges():
 
 def test_clip_windows_reach_the_command_file():
     """Each row carries the edge's window after its payload; None is the full window."""
-    from edgeaa.model import Clip, Edge
-    from edgeaa.sim.commands import COMMAND_FIELDS
-
     top = 1 << DEFAULT.coord_bits
     edges = [Edge(0, 0, 64, 16), Edge(0, 0, 64, 16, inside="right", clip=Clip(1, 2, 3, 4))]
     rows = fastsim.edge_commands(DEFAULT, edges)
@@ -161,8 +156,6 @@ def test_clip_windows_reach_the_command_file():
 
 
 def test_a_window_the_port_cannot_carry_is_refused():
-    from edgeaa.model import Clip, Edge, EdgeError
-
     top = 1 << DEFAULT.coord_bits
     with pytest.raises(EdgeError, match="clip x_max"):
         fastsim.edge_commands(DEFAULT, [Edge(0, 0, 64, 16, clip=Clip(0, 0, top + 1, top))])
@@ -173,15 +166,6 @@ def test_a_window_the_port_cannot_carry_is_refused():
 
 def test_beats_to_writes_skips_edges_without_columns():
     """Edges with no column in their window end no beat; writes keep the sent edge's index."""
-    import dataclasses
-
-    import numpy as np
-
-    from edgeaa.model import Clip
-    from edgeaa.model.vector import run_edges
-    from edgeaa.render.engines import beats_to_writes
-    from edgeaa.sim.scoreboard import beats_to_array, edge_columns
-
     seed = 24
     top = 1 << DEFAULT.coord_bits
     edges = random_edges(DEFAULT, 200, seed, clip_fraction=0.8)
@@ -207,13 +191,6 @@ def test_beats_to_writes_skips_edges_without_columns():
 @pytest.mark.parametrize("engine", ["verilator", "amaranth"])
 def test_engines_give_the_model_writes_for_clipped_edges(engine):
     """run_engine's edge_index counts every edge sent, also those that end no beat."""
-    import dataclasses
-
-    import numpy as np
-
-    from edgeaa.model import Clip
-    from edgeaa.render.engines import beat_clocks, run_engine
-
     seed = 25
     top = 1 << DEFAULT.coord_bits
     edges = random_edges(DEFAULT, 200 if engine == "verilator" else 12, seed, clip_fraction=0.7)
