@@ -236,7 +236,7 @@ def cmd_synth(args: argparse.Namespace) -> int:
     """Synthesise, place and route the core and the aliased Bresenham baseline side by side."""
     from .hdl import EdgeAntialiaser
     from .hdl.bresenham import BresenhamLine
-    from .sim.synth import synthesize
+    from .sim.synthesis import synthesize
 
     config = config_from_args(args)
     designs = {

@@ -1,9 +1,10 @@
 """Hardware figures for `edgeaa bench`: cycles per column, LUTs and Fmax of edgeaa's core.
 
 Cycles per column are measured: the bench's own edges run through the compiled cycle-accurate
-simulation (`edgeaa.sim.fastsim`) with an always-ready sink, from an idle core, so setup
-latency and handovers count. LUTs and Fmax come from synthesis and place and route for
-iCE40 HX8K (`edgeaa.sim.synth`, the core inside the I/O harness, harness subtracted), cached
+simulation (`edgeaa.sim.simulators.verilator_harness`) with an always-ready sink, from an
+idle core, so setup latency and handovers count. LUTs and Fmax come from synthesis and place
+and route for
+iCE40 HX8K (`edgeaa.sim.synthesis`, the core inside the I/O harness, harness subtracted), cached
 on disk per Verilog text because a run takes about a minute per core.
 """
 
@@ -15,8 +16,8 @@ from dataclasses import dataclass
 
 from ..hdl import EdgeAntialiaser, verilog
 from ..model import MODES, Edge, EdgeConfig
-from ..sim import fastsim
-from ..sim.verilator import cache_dir
+from ..sim.simulators import verilator_harness
+from ..sim.simulators.verilator import cache_dir
 
 SYNTH_TARGET = "ice40"
 
@@ -31,13 +32,13 @@ class HardwareFigures:
 
 def cycles_per_column(config: EdgeConfig, edges: list[Edge]) -> float:
     """Clocks from the first command to the last beat, per column, in the compiled core."""
-    run = fastsim.run(config, edges)  # one beat per column
+    run = verilator_harness.run(config, edges)  # one beat per column
     return (int(run.beats[-1, 0]) + 1) / len(run.beats)
 
 
 def synth_figures(config: EdgeConfig, target: str = SYNTH_TARGET, seed: int = 1) -> dict:
     """LUTs and Fmax of the core (harness subtracted), synthesised once per Verilog text."""
-    from ..sim.synth import synthesize
+    from ..sim.synthesis import synthesize
 
     key = hashlib.sha256(f"{verilog(config)}{target}{seed}".encode()).hexdigest()[:16]
     path = cache_dir().parent / "synth" / f"{key}.json"

@@ -1,8 +1,9 @@
 """Simulated clocks per second rendering the built-in scenes: compiled Verilator vs Amaranth.
 
 For each scene, the edges the renderer sends to the engine (with skipping) run through the
-compiled Verilator harness (`edgeaa.sim.fastsim.run`, the `verilator` engine) and through
-Amaranth's Python simulator (`edgeaa.sim.amaranth_run.run`, the `amaranth` engine); both must
+compiled Verilator harness (`edgeaa.sim.simulators.verilator_harness.run`, the `verilator`
+engine) and through Amaranth's Python simulator (`edgeaa.sim.simulators.amaranth_sim.run`,
+the `amaranth` engine); both must
 give the same beats, in the clocks the timing model predicts. A scene alone is a short run,
 so process start-up weighs on the compiled rate; the scene repeated (`--repeat` frames as one
 stream) shows the steady rate. The build is cached and excluded from the timings (`seconds`
@@ -27,13 +28,13 @@ from edgeaa.model import EdgeConfig
 from edgeaa.render import builtin, plan_scene, render
 from edgeaa.render.engines import beat_clocks
 from edgeaa.render.progress import ProgressBar
-from edgeaa.sim import amaranth_run, fastsim
+from edgeaa.sim.simulators import amaranth_sim, verilator_harness
 
 TARGET = 2_000_000
 
 
 def best_run(config, edges, tries):
-    runs = [fastsim.run(config, edges) for _ in range(tries)]
+    runs = [verilator_harness.run(config, edges) for _ in range(tries)]
     return min(runs, key=lambda run: run.seconds)
 
 
@@ -52,7 +53,7 @@ def main() -> int:
         sent = render(plan, engine="model").sent
         edges = [plan.edge(int(e), clip=True) for e in sent]
         print(f"{name}: {len(edges)} edges sent", file=sys.stderr)
-        fastsim.build(config)  # cached
+        verilator_harness.build(config)  # cached
         fast = best_run(config, edges, args.tries)
         if not np.array_equal(fast.beats[:, 0], beat_clocks(config, edges)):
             print(f"{name}: beat clocks differ from the timing model", file=sys.stderr)
@@ -62,7 +63,7 @@ def main() -> int:
         rows.append((name, f"verilator x{args.repeat}", len(edges) * args.repeat, long))
         if name in args.amaranth.split(","):
             bar = ProgressBar(f"amaranth {name}")
-            slow = amaranth_run.run(config, edges, progress=bar)
+            slow = amaranth_sim.run(config, edges, progress=bar)
             bar.close()
             if not np.array_equal(slow.beats, fast.beats):
                 print(f"{name}: the two simulators disagree", file=sys.stderr)

@@ -14,8 +14,8 @@ import platform
 import sys
 
 from edgeaa.model import EdgeConfig
-from edgeaa.sim import amaranth_run, fastsim
-from edgeaa.sim.workloads import random_edges
+from edgeaa.sim.simulators import amaranth_sim, verilator_harness
+from edgeaa.sim.verification.workloads import random_edges
 
 
 def main() -> int:
@@ -28,18 +28,20 @@ def main() -> int:
     edges = random_edges(config, args.edges, args.seed, max_pixels=64)
     print(f"core: {config}; machine: {platform.machine()}, {platform.python_version()}")
     print("building the Verilated harness (cached) ...", file=sys.stderr)
-    fastsim.build(config)
+    verilator_harness.build(config)
 
     def progress(done, total):
         print(f"\ramaranth: {done}/{total} edges", end="", file=sys.stderr, flush=True)
 
-    slow = amaranth_run.run(config, edges, progress=progress)
+    slow = amaranth_sim.run(config, edges, progress=progress)
     print(file=sys.stderr)
-    fast = fastsim.run(config, edges)
+    fast = verilator_harness.run(config, edges)
     if not (slow.beats == fast.beats).all():
         print("the two simulators disagree", file=sys.stderr)
         return 1
-    long = fastsim.run(config, random_edges(config, args.long_edges, args.seed, max_pixels=64))
+    long = verilator_harness.run(
+        config, random_edges(config, args.long_edges, args.seed, max_pixels=64)
+    )
     print(f"{'simulator':26} {'edges':>7} {'clocks':>10} {'seconds':>8} {'clocks/s':>12}")
     for name, count, run in (
         ("amaranth (pysim)", args.edges, slow),

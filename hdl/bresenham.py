@@ -2,7 +2,7 @@
 
 It takes the same line commands as edgeaa (endpoints in sub-pixel units, `coord_bits +
 subpixel_bits` bits each) and writes one pixel per clock, without coverage or intensity.
-Its synthesis figures (see `edgeaa.sim.synth`) are the price of "just drawing the line".
+Its synthesis figures (see `edgeaa.sim.synthesis`) are the price of "just drawing the line".
 
 Endpoints. Pixel (x, y) is centred on the integer point (x, y), as in `edgeaa.model`, so a
 vertex X (in pixels) lies in pixel floor(X + 1/2). With ``rounding="nearest"`` (the default)

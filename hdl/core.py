@@ -1174,7 +1174,8 @@ def verilog(config: EdgeConfig, *, name: str = "edgeaa_core", flat: bool = True)
     appear only as internal wires.
 
     Lint: ``verilator --lint-only -Wall`` is clean with six waivers, all about the style of
-    generated code; `edgeaa.sim.verilator.LINT_WAIVER_REASONS` lists them with their reasons.
+    generated code; `edgeaa.sim.simulators.verilator.LINT_WAIVER_REASONS` lists them with
+    their reasons.
     """
     from amaranth.back import verilog as back_verilog
 

@@ -2,9 +2,9 @@
 
 - ``model``: `edgeaa.model.vector.run_edges`, the vectorized bit-accurate model, in chunks
   of edges (for the progress bar; the writes do not depend on the chunking).
-- ``verilator``: `edgeaa.sim.fastsim.run`, the core's Verilog compiled by Verilator with a C++
-  harness (cycle-accurate; the build is cached).
-- ``amaranth``: `edgeaa.sim.amaranth_run.run`, the core in Amaranth's Python simulator
+- ``verilator``: `edgeaa.sim.simulators.verilator_harness.run`, the core's Verilog compiled by
+  Verilator with a C++ harness (cycle-accurate; the build is cached).
+- ``amaranth``: `edgeaa.sim.simulators.amaranth_sim.run`, the core in Amaranth's Python simulator
   (cycle-accurate, slow: small scenes only).
 
 The simulators return beats (one per column: lane 0, then lane 1 when the column has a
@@ -24,7 +24,7 @@ import numpy as np
 
 from ..model import Edge, EdgeConfig
 from ..model.timing import write_cycles
-from ..sim.scoreboard import edge_columns
+from ..sim.verification.scoreboard import edge_columns
 
 ENGINES = ("model", "amaranth", "verilator")
 MODEL_CHUNK = 512  # edges per run_edges call
@@ -70,7 +70,8 @@ def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
     """Beat rows [clock, x0, y0, v0, lane1_valid, x1, y1, v1, last] to the model's write order
     (edge index, x, y, value): lane 0 then lane 1 of each beat.
 
-    `columns` holds each sent edge's visible columns (`edgeaa.sim.scoreboard.edge_columns`):
+    `columns` holds each sent edge's visible columns
+    (`edgeaa.sim.verification.scoreboard.edge_columns`):
     the core emits that many beats per edge, the last one with `last`, and none for an edge
     with 0 (no column in its clip window). Edge indices count every edge sent. Raises unless
     the beats and their `last` flags fit the counts exactly."""
@@ -111,15 +112,15 @@ def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
         empty = np.zeros(0, dtype=np.int64)
         return EngineRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
     if engine == "verilator":
-        from ..sim import fastsim
+        from ..sim.simulators import verilator_harness
 
         if progress is not None:
             progress(0, len(edges))
-        run = fastsim.run(config, edges)  # builds once per core (cached), not timed
+        run = verilator_harness.run(config, edges)  # builds once per core (cached), not timed
         if progress is not None:
             progress(len(edges), len(edges))
     else:
-        from ..sim import amaranth_run
+        from ..sim.simulators import amaranth_sim
 
         expected = cycles(config, edges)
         if expected / AMARANTH_CLOCKS_PER_SECOND > AMARANTH_WARN_SECONDS:
@@ -132,7 +133,7 @@ def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
                 file=sys.stderr,
                 flush=True,
             )
-        run = amaranth_run.run(config, edges, progress=progress)
+        run = amaranth_sim.run(config, edges, progress=progress)
     if run.errors:
         raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
     edge_index, x, y, value = beats_to_writes(run.beats, edge_columns(config, edges))

@@ -16,7 +16,7 @@ from edgeaa.analysis.hardware import hardware_figures
 from edgeaa.cli import main as edgeaa_main
 from edgeaa.model import Edge, EdgeConfig, exact_coverage_array
 from edgeaa.model.vector import run_edges
-from edgeaa.sim import workloads
+from edgeaa.sim.verification import workloads
 
 SEED = 20240611
 

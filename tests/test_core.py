@@ -5,7 +5,8 @@ Amaranth simulator, async testbenches only. Every simulation run is checked the 
 (`check_run`): the ordered beats equal `run_edge` (lanes, values, last flags), the setup bank
 handed to the stepper equals `setup()`, bad commands are dropped and counted, edges with no
 column in their clip window leave nothing (no bank, no error), and the sink is empty at the
-end. Each command is offered with its window on the ``clip`` port (`edgeaa.sim.commands`).
+end. Each command is offered with its window on the ``clip`` port
+(`edgeaa.sim.verification.commands`).
 Runs with an always-ready sink and a back-to-back source additionally match the stepper's
 registers to the model's per-column trace and every beat's clock to `edgeaa.model.timing`.
 The stepper's scaled areas are compared with the model's `Write.area` too, so a tie decided
@@ -13,7 +14,8 @@ differently inside the loop shows even when the rounded value hides it.
 
 The runner (`simulate`) is one per-clock testbench that drives the source, the sink and
 samples the internal observation points together (cheaper than three testbenches here);
-`edgeaa.sim.streams` serves the small directed tests. The core simulates at 2-4k clocks/s, so
+`edgeaa.sim.verification.streams` serves the small directed
+tests. The core simulates at 2-4k clocks/s, so
 edges are short and many of them share one run; long sweeps are marked slow
 (``pytest -m slow``).
 """
@@ -44,11 +46,11 @@ from edgeaa.hdl import (
 from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.sim.commands import edge_clip, edge_payload
-from edgeaa.sim.scoreboard import Beat, edge_beats
-from edgeaa.sim.streams import stream_put
-from edgeaa.sim.synth import muldiv_cells
-from edgeaa.sim.verilator import lint
+from edgeaa.sim.simulators.verilator import lint
+from edgeaa.sim.synthesis import muldiv_cells
+from edgeaa.sim.verification.commands import edge_clip, edge_payload
+from edgeaa.sim.verification.scoreboard import Beat, edge_beats
+from edgeaa.sim.verification.streams import stream_put
 
 CONFIGS = {
     "default": EdgeConfig(),

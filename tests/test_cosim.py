@@ -9,8 +9,8 @@ checks 100 000.
 import pytest
 
 from edgeaa.model import EdgeConfig
-from edgeaa.sim.verilator import CosimError, cosimulate
-from edgeaa.sim.workloads import random_edges
+from edgeaa.sim.simulators.verilator import CosimError, cosimulate
+from edgeaa.sim.verification.workloads import random_edges
 
 DEFAULT = EdgeConfig()
 

@@ -15,10 +15,10 @@ from edgeaa.model.timing import (
 )
 from edgeaa.model.vector import run_edges
 from edgeaa.render.engines import beat_clocks, beats_to_writes, run_engine
-from edgeaa.sim import amaranth_run, fastsim
-from edgeaa.sim.commands import COMMAND_FIELDS
-from edgeaa.sim.scoreboard import beats_to_array, edge_columns, expected_beats
-from edgeaa.sim.workloads import random_edges
+from edgeaa.sim.simulators import amaranth_sim, verilator_harness
+from edgeaa.sim.verification.commands import COMMAND_FIELDS
+from edgeaa.sim.verification.scoreboard import beats_to_array, edge_columns, expected_beats
+from edgeaa.sim.verification.workloads import random_edges
 
 DEFAULT = EdgeConfig()
 WIDE = EdgeConfig(mode="seg4", accumulator="truncated", coord_bits=15, subpixel_bits=8)
@@ -28,7 +28,7 @@ def assert_beats_match_under_stalls(edges, seed: int) -> None:
     """The compiled core under random idles and stalls gives the model's beats, in order, and
     counts exactly the bad commands (an empty clip window is not one)."""
     expected, dropped = expected_beats(DEFAULT, edges)
-    run = fastsim.run(DEFAULT, edges, seed=seed, idle=0.1, stall=0.3)
+    run = verilator_harness.run(DEFAULT, edges, seed=seed, idle=0.1, stall=0.3)
     assert run.errors == dropped > 0, f"seed {seed}"
     beats = run.as_beats()
     assert len(beats) == len(expected), f"seed {seed}: lost or duplicated beats"
@@ -46,7 +46,7 @@ def test_beats_equal_the_model_under_stalls_and_idles():
 def test_every_beat_leaves_in_the_clock_the_timing_model_predicts(config):
     seed = 12
     edges = random_edges(config, 300, seed, max_pixels=120, bad_fraction=0.02)
-    run = fastsim.run(config, edges)
+    run = verilator_harness.run(config, edges)
     predicted = [clock for timing in write_cycles(config, edges) for clock in timing.beats]
     assert run.beats[:, 0].tolist() == predicted, f"seed {seed}"
     assert run.as_beats() == expected_beats(config, edges)[0], f"seed {seed}"
@@ -57,20 +57,20 @@ def test_a_wrong_model_is_caught(monkeypatch):
     import edgeaa.model.step as step
 
     edges = random_edges(DEFAULT, 50, seed=13)
-    run = fastsim.run(DEFAULT, edges)
+    run = verilator_harness.run(DEFAULT, edges)
     monkeypatch.setattr(step, "exit_depth_below", lambda st, jq, jr, reg: (0, False))
     assert run.as_beats() != expected_beats(DEFAULT, edges)[0]
 
 
 def test_bad_probabilities_are_rejected():
     with pytest.raises(ValueError, match=r"stall must be a probability in \[0, 1\)"):
-        fastsim.run(DEFAULT, [], stall=1.0)
+        verilator_harness.run(DEFAULT, [], stall=1.0)
 
 
 def test_python_and_compiled_simulators_agree_clock_for_clock():
     seed = 14
     edges = random_edges(DEFAULT, 20, seed, max_pixels=24, bad_fraction=0.1)
-    slow, fast = amaranth_run.run(DEFAULT, edges), fastsim.run(DEFAULT, edges)
+    slow, fast = amaranth_sim.run(DEFAULT, edges), verilator_harness.run(DEFAULT, edges)
     assert slow.beats.tolist() == fast.beats.tolist(), f"seed {seed}"
     assert slow.errors == fast.errors == expected_beats(DEFAULT, edges)[1], f"seed {seed}"
     assert slow.as_beats() == expected_beats(DEFAULT, edges)[0], f"seed {seed}"
@@ -110,7 +110,7 @@ def test_clipped_beats_leave_in_the_clock_the_timing_model_predicts(config, max_
         config, 300, seed, max_pixels=max_pixels, bad_fraction=0.02, clip_fraction=0.6
     )
     assert min(clip_mix(config, edges).values()) > 3, f"seed {seed}: a weak mix"
-    run = fastsim.run(config, edges)
+    run = verilator_harness.run(config, edges)
     predicted = [clock for timing in write_cycles(config, edges) for clock in timing.beats]
     assert run.beats[:, 0].tolist() == predicted, f"seed {seed}"
     assert run.as_beats() == expected_beats(config, edges)[0], f"seed {seed}"
@@ -125,20 +125,20 @@ def test_a_start_clipped_last_edge_is_waited_for(config):
     edge = Edge(2 * s, 3 * s, 30 * s, 9 * s, clip=Clip(20, 0, top, top))  # columns 20 .. 30
     empty = Edge(2 * s, 3 * s, 30 * s, 9 * s, clip=Clip(31, 0, top, top))
     for edges in ([edge], [edge, empty, empty], [empty, edge], [empty]):
-        run = fastsim.run(config, edges)
+        run = verilator_harness.run(config, edges)
         expected = expected_beats(config, edges)[0]
         assert run.as_beats() == expected
         assert run.beats[:, 0].tolist() == beat_cycles(config, edges)
     # After an empty edge (accepted in clock 0, gone from the setup in 5 clocks):
     first = EMPTY_EDGE_CYCLES + setup_latency(config) + start_clip_cycles(config)
-    assert fastsim.run(config, [empty, edge]).beats[0, 0] == first
+    assert verilator_harness.run(config, [empty, edge]).beats[0, 0] == first
 
 
 def test_python_and_compiled_simulators_agree_on_clipped_edges():
     seed = 23
     edges = random_edges(DEFAULT, 30, seed, max_pixels=24, bad_fraction=0.1, clip_fraction=0.8)
     assert all(clip_mix(DEFAULT, edges).values()), f"seed {seed}: a weak mix"
-    slow, fast = amaranth_run.run(DEFAULT, edges), fastsim.run(DEFAULT, edges)
+    slow, fast = amaranth_sim.run(DEFAULT, edges), verilator_harness.run(DEFAULT, edges)
     assert slow.beats.tolist() == fast.beats.tolist(), f"seed {seed}"
     assert slow.errors == fast.errors == expected_beats(DEFAULT, edges)[1], f"seed {seed}"
     assert slow.beats[:, 0].tolist() == beat_cycles(DEFAULT, edges), f"seed {seed}"
@@ -149,7 +149,7 @@ def test_clip_windows_reach_the_command_file():
     """Each row carries the edge's window after its payload; None is the full window."""
     top = 1 << DEFAULT.coord_bits
     edges = [Edge(0, 0, 64, 16), Edge(0, 0, 64, 16, inside="right", clip=Clip(1, 2, 3, 4))]
-    rows = fastsim.edge_commands(DEFAULT, edges)
+    rows = verilator_harness.edge_commands(DEFAULT, edges)
     assert rows.shape == (2, len(COMMAND_FIELDS)) == (2, 11)
     assert rows[0].tolist() == [0, 0, 64, 16, DEFAULT.full_scale, 0, 0, 0, 0, top, top]
     assert rows[1, -5:].tolist() == [1, 1, 2, 3, 4]
@@ -158,7 +158,9 @@ def test_clip_windows_reach_the_command_file():
 def test_a_window_the_port_cannot_carry_is_refused():
     top = 1 << DEFAULT.coord_bits
     with pytest.raises(EdgeError, match="clip x_max"):
-        fastsim.edge_commands(DEFAULT, [Edge(0, 0, 64, 16, clip=Clip(0, 0, top + 1, top))])
+        verilator_harness.edge_commands(
+            DEFAULT, [Edge(0, 0, 64, 16, clip=Clip(0, 0, top + 1, top))]
+        )
 
 
 # -- the renderer's engine glue ---------------------------------------------------------------

@@ -1,5 +1,6 @@
 # amaranth: UnusedElaboratable=no
-"""Formal checks of the core with SymbiYosys (`edgeaa.sim.formal`), default configuration.
+"""Formal checks of the core with SymbiYosys (`edgeaa.sim.verification.formal`),
+default configuration.
 
 By default: the k-induction proofs of the stream hold rule and of the command count and the
 drop cover (seconds each), the checks that the harness can fail (faults injected into what
@@ -16,7 +17,7 @@ from amaranth.sim import Simulator
 
 from edgeaa.hdl import EdgeAntialiaser, setup_layout
 from edgeaa.model import Edge, EdgeConfig, setup
-from edgeaa.sim.formal import (
+from edgeaa.sim.verification.formal import (
     PROOFS,
     CoreView,
     FormalError,

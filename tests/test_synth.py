@@ -1,4 +1,4 @@
-"""Synthesis estimates and the multiplier detector (edgeaa.sim.synth).
+"""Synthesis estimates and the multiplier detector (edgeaa.sim.synthesis).
 
 The default run synthesises once (Yosys only, no place-and-route: the first YoWASP call
 compiles WebAssembly, about 40 s, later ones take seconds); place-and-route runs are marked
@@ -16,7 +16,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 
 from edgeaa.hdl.bresenham import BresenhamLine
-from edgeaa.sim.synth import (
+from edgeaa.sim.synthesis import (
     IOHarness,
     ToolNotFoundError,
     assert_no_muldiv,

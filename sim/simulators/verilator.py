@@ -2,7 +2,8 @@
 
 `lint` runs ``verilator --lint-only -Wall`` on the core's Verilog. `cosimulate` builds the
 core once per (configuration, Verilog text) with cocotb 2's runner, caches the build, and runs
-the cocotb bench `edgeaa.sim.cocotb_edges` on a list of edges with random source idles and
+the cocotb bench `edgeaa.sim.simulators.cocotb_bench` on a
+list of edges with random source idles and
 sink stalls; it returns the bench's summary and raises `CosimError` with the bench's message
 if any beat differs from the model.
 """
@@ -21,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..hdl import verilog
-from ..model import Edge, EdgeConfig
-from .scoreboard import beats_to_array, expected_beats
+from ...hdl import verilog
+from ...model import Edge, EdgeConfig
+from ..verification.scoreboard import beats_to_array, expected_beats
 
 # Warnings of -Wall waived for the emitted core, each for a reason (also in docs/hardware.md).
 # All six come from the shape of the Verilog Amaranth's Yosys back end writes, not from the
@@ -177,7 +178,7 @@ def cosimulate(
         os.environ.update(env)
         try:
             runner.test(
-                test_module="edgeaa.sim.cocotb_edges",
+                test_module="edgeaa.sim.simulators.cocotb_bench",
                 hdl_toplevel=TOP,
                 hdl_toplevel_lang="verilog",
                 build_dir=build_dir,

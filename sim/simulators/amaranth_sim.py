@@ -3,7 +3,8 @@
 Slow (about 10k clocks per second) but needs no compiler: for small scenes, benchmarks
 against the compiled path, and for checking that both simulators agree. The source offers
 the commands back to back and the sink is always ready, so beat clocks follow
-`edgeaa.model.timing`. Returns the same `FastRun` record as `edgeaa.sim.fastsim.run`.
+`edgeaa.model.timing`. Returns the same `FastRun` record as
+`edgeaa.sim.simulators.verilator_harness.run`.
 """
 
 from __future__ import annotations
@@ -13,10 +14,10 @@ import time
 import numpy as np
 from amaranth.sim import Simulator
 
-from ..hdl import EdgeAntialiaser
-from ..model import Edge, EdgeConfig
-from .commands import edge_command
-from .fastsim import BEAT_FIELDS, FastRun, drain_clocks
+from ...hdl import EdgeAntialiaser
+from ...model import Edge, EdgeConfig
+from ..verification.commands import edge_command
+from .verilator_harness import BEAT_FIELDS, FastRun, drain_clocks
 
 
 def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import random
 from dataclasses import replace
 
-from ..model import Clip, Edge, EdgeConfig, EdgeError, setup
+from ...model import Clip, Edge, EdgeConfig, EdgeError, setup
 
 CLIP_KINDS = ("empty", "start", "end", "both", "loose")
 

@@ -13,8 +13,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..model import Edge, EdgeConfig, EdgeError, run_edge, setup
-from ..model.step import EdgeResult
+from ...model import Edge, EdgeConfig, EdgeError, run_edge, setup
+from ...model.step import EdgeResult
 
 Pixel = tuple[int, int, int]  # x, y, value
 

@@ -1,6 +1,7 @@
 """cocotb testbench: the emitted Verilog core against the model, with random stalls.
 
-Run through `edgeaa.sim.verilator.cosimulate`, which writes a job file (configuration, edges,
+Run through `edgeaa.sim.simulators.verilator.cosimulate`, which
+writes a job file (configuration, edges,
 seed, idle and stall probabilities, and the model's expected beats computed in the calling
 process) and points ``EDGEAA_COSIM_JOB`` at it. Every clock, on the falling edge, the bench
 drives the source (random idle cycles; each edge's window on ``clip`` while the edge is
@@ -22,9 +23,9 @@ import numpy as np
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
 
-from ..model import Clip, Edge, EdgeConfig
-from .commands import edge_command
-from .scoreboard import Beat, Scoreboard, beats_from_array
+from ...model import Clip, Edge, EdgeConfig
+from ..verification.commands import edge_command
+from ..verification.scoreboard import Beat, Scoreboard, beats_from_array
 
 DRAIN_CLOCKS = 64  # clocks the sink must stay empty after the last expected beat
 

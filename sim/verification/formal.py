@@ -98,7 +98,7 @@ two-stage output pipeline, what stage ``p1`` holds. A change of the core's inter
 make an induction fail (status UNKNOWN, `FormalResult.failed` names the helper); then the
 helper needs the same change, not the property.
 
-`python -m edgeaa.sim.formal [proof ...]` runs proofs from the command line.
+`python -m edgeaa.sim.verification.formal [proof ...]` runs proofs from the command line.
 
 Faults (``fault``, to show the checks can fail): ``stall_payload`` flips a payload bit the
 harness observes while a beat is held (a core that changes a stalled beat), ``silent_drop``
@@ -141,8 +141,8 @@ from amaranth.hdl._ast import Assign, Operator, Slice, Switch
 from amaranth.hdl._xfrm import ValueTransformer
 from amaranth.lib import data
 
-from ..hdl.core import EdgeAntialiaser, clip_layout, edge_layout, setup_layout, write_layout
-from ..model.config import EdgeConfig, RegisterWidth
+from ...hdl.core import EdgeAntialiaser, clip_layout, edge_layout, setup_layout, write_layout
+from ...model.config import EdgeConfig, RegisterWidth
 
 __all__ = [
     "CHECKS",
@@ -1581,10 +1581,13 @@ def run_proof(
 
 
 def main(argv=None) -> int:
-    """``python -m edgeaa.sim.formal [proof ...]``: run proofs, print status and time."""
+    """``python -m edgeaa.sim.verification.formal [proof ...]``: run proofs, print status and
+    time."""
     import argparse
 
-    parser = argparse.ArgumentParser(prog="python -m edgeaa.sim.formal", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="python -m edgeaa.sim.verification.formal", description=__doc__
+    )
     parser.add_argument("proofs", nargs="*", default=["stream", "count", "bounds"])
     parser.add_argument("--fault", choices=FAULTS)
     parser.add_argument("--depth", type=int)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ..model import Clip, Edge, EdgeConfig
-from ..model.edge import validate_clip
+from ...model import Clip, Edge, EdgeConfig
+from ...model.edge import validate_clip
 
 EDGE_FIELDS = ("x0", "y0", "x1", "y1", "i_in", "i_out", "inside")  # edges.payload
 CLIP_FIELDS = Clip._fields  # clip: x_min, y_min, x_max, y_max
