@@ -474,7 +474,7 @@ def drift_budget() -> None:
         f" {'max|err| exact':>14} {'max|err| trunc':>14} {'k/64':>9}"
     )
     for df in (0, -3, -6):
-        F = base.F + df  # noqa: N806
+        F = base.F + df
         dv = (-pow(2, -F, hi)) % hi  # K = k 2^F has fraction 1 - 1/du: the worst truncation
         edge = Edge(0, 0, hi, dv, "left", 1, 0)  # the longest edge: 2^W + 1 columns
         runs = {}

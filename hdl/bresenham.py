@@ -75,7 +75,7 @@ class BresenhamLine(wiring.Component):
             raise ValueError(f"rounding must be one of {', '.join(ROUNDINGS)}, not {rounding!r}")
         self._config = config
         self._rounding = rounding
-        W, s = config.coord_bits, config.subpixel_bits  # noqa: N806
+        W, s = config.coord_bits, config.subpixel_bits
         self._pixel_bits = W + 1 if rounding == "nearest" and s > 0 else W
         self._command_layout = data.StructLayout(
             {name: unsigned(W + s) for name in ("x0", "y0", "x1", "y1")}
@@ -112,8 +112,8 @@ class BresenhamLine(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        W, s = self._config.coord_bits, self._config.subpixel_bits  # noqa: N806
-        P = self._pixel_bits  # noqa: N806
+        W, s = self._config.coord_bits, self._config.subpixel_bits
+        P = self._pixel_bits
 
         def to_pixel(value):
             if s == 0:

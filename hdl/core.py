@@ -311,7 +311,7 @@ class EdgeStepper(wiring.Component):
         m = Module()
         config = self._config
         widths = config.register_widths()
-        F, I, n = config.F, config.intensity_bits, config.segments  # noqa: N806, E741
+        F, I, n = config.F, config.intensity_bits, config.segments  # noqa: E741
         w, acc = widths["du"].bits, widths["jq"].bits  # remainder and quotient widths
         vw = F + I  # the output value sum: bits F .. F + I - 1 are the value
         x, y, jq, jr = self.x, self.y, self.jq, self.jr
@@ -606,7 +606,7 @@ class _BankFields:
 
 def _derive(config: EdgeConfig, regs) -> dict:
     """The derived per-edge constants of the stepper from the bank fields (`EdgeStepper`)."""
-    F, n = config.F, config.segments  # noqa: N806
+    F, n = config.F, config.segments
     widths = config.register_widths()
     w, acc = widths["du"].bits, widths["jq"].bits
     i_d = regs.ifix[F:]  # ifix = I_d << F
@@ -792,9 +792,9 @@ class EdgeAntialiaser(wiring.Component):
         m = Module()
         config = self._config
         widths = config.register_widths()
-        W, s, F = config.coord_bits, config.subpixel_bits, config.F  # noqa: N806
-        I = config.intensity_bits  # noqa: N806, E741
-        S = 1 << s  # noqa: N806
+        W, s, F = config.coord_bits, config.subpixel_bits, config.F
+        I = config.intensity_bits  # noqa: E741
+        S = 1 << s
         n = config.segments
         m.submodules.stepper = stepper = self.stepper
         wiring.connect(m, stepper.writes, wiring.flipped(self.writes))

@@ -89,7 +89,7 @@ class EdgeConfig:
     # -- derived sizes ---------------------------------------------------------------------
 
     @property
-    def F(self) -> int:  # noqa: N802 - the name used throughout the docs
+    def F(self) -> int:
         """Fraction bits of the accumulator in use (derived or overridden)."""
         return self._frac_bits
 
@@ -133,7 +133,7 @@ class EdgeConfig:
 
     def register_widths(self) -> dict[str, RegisterWidth]:
         """The width table of the stepping loop, shared with the hardware."""
-        W, s = self.coord_bits, self.subpixel_bits  # noqa: N806
+        W, s = self.coord_bits, self.subpixel_bits
         acc = self.intensity_bits + self.F  # holds [0, |I_d| * 2**F] with |I_d| < 2**I
         return {
             # pixel coordinates of writes: columns 0 .. 2**W, rows one beyond on either side

@@ -186,8 +186,8 @@ def segment_constants(config: EdgeConfig, kq: int) -> tuple[tuple[int, ...], tup
 def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     """Fold the edge into the first octant and compute the loop's constants and start state."""
     validate(config, edge)
-    s, F = config.subpixel_bits, config.F  # noqa: N806
-    S = config.subpixel_scale  # noqa: N806
+    s, F = config.subpixel_bits, config.F
+    S = config.subpixel_scale
     dx, dy = edge.x1 - edge.x0, edge.y1 - edge.y0
     x_major = abs(dx) >= abs(dy)
     if x_major:

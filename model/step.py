@@ -120,7 +120,7 @@ def column_areas(
 
 def output_value(config: EdgeConfig, st: EdgeSetup, area: int, reg: _Checked) -> int:
     """Intensity I_B + sign * round(area / 2**F): the scaled area is the intensity offset."""
-    F = config.F  # noqa: N806
+    F = config.F
     return reg("value", st.value_base + st.value_sign * ((area + (1 << (F - 1))) >> F))
 
 

@@ -354,7 +354,7 @@ def _run_group(
     e_out = e_out.astype(np.int64)
     _check(widths, "x", x_out)
     _check(widths, "y", y_out)
-    F = config.F  # noqa: N806
+    F = config.F
     base, sign = per_edge("value_base")[e_out], per_edge("value_sign")[e_out]
     value = base + sign * ((area_out + (1 << (F - 1))) >> F)
     _check(widths, "value", value)

@@ -68,22 +68,22 @@ class _FlattenPen:
         outer = self
 
         class Pen(BasePen):
-            def _moveTo(self, pt):  # noqa: N802
+            def _moveTo(self, pt):
                 outer._start(pt)
 
-            def _lineTo(self, pt):  # noqa: N802
+            def _lineTo(self, pt):
                 outer._line(pt)
 
-            def _qCurveToOne(self, pt1, pt2):  # noqa: N802
+            def _qCurveToOne(self, pt1, pt2):
                 outer._quad(pt1, pt2)
 
-            def _curveToOne(self, pt1, pt2, pt3):  # noqa: N802  (not in TrueType fonts)
+            def _curveToOne(self, pt1, pt2, pt3):
                 outer._cubic(pt1, pt2, pt3)
 
-            def _closePath(self):  # noqa: N802
+            def _closePath(self):
                 outer._close()
 
-            def _endPath(self):  # noqa: N802
+            def _endPath(self):
                 outer._close()
 
         self.pen = Pen(glyph_set)

@@ -34,7 +34,7 @@ SSAA = 16  # samples per axis
 def _polygon_points(plan: Plan, index: int) -> list[np.ndarray]:
     """The polygon's contours (quantized) in image pixels."""
     poly = plan.polygons[index]
-    S = plan.config.subpixel_scale  # noqa: N806
+    S = plan.config.subpixel_scale
     coords = plan.coords[poly.start : poly.stop]
     contours, start = [], 0
     for k in range(len(coords)):
@@ -48,7 +48,7 @@ def _polygon_points(plan: Plan, index: int) -> list[np.ndarray]:
 
 def centre_sampled(plan: Plan) -> np.ndarray:
     """No antialiasing: each polygon covers the pixels whose centre it holds."""
-    scene, S = plan.scene, plan.config.subpixel_scale  # noqa: N806
+    scene, S = plan.scene, plan.config.subpixel_scale
     image = np.full((scene.height, scene.width), scene.background, dtype=np.int64)
     ox, oy = plan.offset
     for poly in plan.polygons:
@@ -65,7 +65,7 @@ def centre_sampled(plan: Plan) -> np.ndarray:
 def supersampled(plan: Plan, n: int = SSAA) -> np.ndarray:
     """n x n ordered-grid samples per pixel at offsets (2i + 1 - n) / (2n), composited in
     floating point and rounded (half up) at the end."""
-    scene, S = plan.scene, plan.config.subpixel_scale  # noqa: N806
+    scene, S = plan.scene, plan.config.subpixel_scale
     image = np.full((scene.height, scene.width), float(scene.background))
     ox, oy = plan.offset
     m = 2 * n  # finer grid: 1 / (2 n S) px, where every sample lies on an integer

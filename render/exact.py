@@ -36,7 +36,7 @@ def polygon_region(plan: Plan, index: int):
     import shapely
 
     poly = plan.polygons[index]
-    S = plan.config.subpixel_scale  # noqa: N806
+    S = plan.config.subpixel_scale
     coords = plan.coords[poly.start : poly.stop].astype(np.float64) / S
     coords = coords - np.array(plan.offset * 2, dtype=np.float64)
     if not len(coords):

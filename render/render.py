@@ -124,7 +124,7 @@ def _alternative_out(intensity: int, background: int, full: int) -> int:
 def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
     """Quantize, shift and classify a scene for `config` (raises SceneError if it does not
     fit: image larger than 2**coord_bits, an intensity or a vertex out of range)."""
-    S = config.subpixel_scale  # noqa: N806
+    S = config.subpixel_scale
     full = config.full_scale
     limit = 1 << config.coord_bits
     for name, value in (("width", scene.width), ("height", scene.height)):
@@ -263,7 +263,7 @@ def _meets(a, b) -> bool:
 
 
 def _check_range(config, scene, contours, owners, offset) -> None:
-    S = config.subpixel_scale  # noqa: N806
+    S = config.subpixel_scale
     hi = config.max_vertex
     allpts = np.concatenate(contours)
     for axis, name in ((0, "x"), (1, "y")):
@@ -352,7 +352,7 @@ def _vertex_ops(coords: np.ndarray, inside: np.ndarray, nxt: np.ndarray) -> np.n
     return ops
 
 
-def _column_ranges(coords: np.ndarray, S: int) -> tuple[np.ndarray, ...]:  # noqa: N803
+def _column_ranges(coords: np.ndarray, S: int) -> tuple[np.ndarray, ...]:
     """Per edge: x-major, and its stepped columns' first and last major coordinate (screen):
     the columns c whose interior (c - 1/2, c + 1/2) meets the edge's projection."""
     x_major = np.abs(coords[:, 2] - coords[:, 0]) >= np.abs(coords[:, 3] - coords[:, 1])
@@ -375,7 +375,7 @@ def axis_writes(config: EdgeConfig, edge: Edge) -> tuple[np.ndarray, np.ndarray,
     st = setup(config, edge)
     if st.dv != 0:
         raise ValueError(f"not a horizontal or vertical edge: {edge}")
-    F = config.F  # noqa: N806
+    F = config.F
     value = st.value_base + st.value_sign * ((st.jq + (1 << (F - 1))) >> F)
     i = np.arange(st.columns, dtype=np.int64)
     return st.x + i * st.col_dx, st.y + i * st.col_dy, np.full(st.columns, value, np.int64)
@@ -516,7 +516,7 @@ def render(
 
 def _draw_polygon(plan: Plan, poly: PolygonPlan, w: Writes, image, skip: bool, stats) -> None:
     config, scene = plan.config, plan.scene
-    S = config.subpixel_scale  # noqa: N806
+    S = config.subpixel_scale
     d = abs(poly.intensity - poly.i_out)
     sigma = 1 if poly.intensity > poly.i_out else -1
     if skip:
@@ -579,7 +579,7 @@ def combine(plan: Plan, w: Writes, q, d: int, key, f):
 
     Returns the pixel keys, their coverage, the writes per pixel and how many were combined.
     """
-    S = plan.config.subpixel_scale  # noqa: N806
+    S = plan.config.subpixel_scale
     ox, oy = plan.offset
     reach = NEAR_NUM * S // NEAR_DEN  # a vertex this close (each axis) is near, sub-pixel units
     n = len(key)

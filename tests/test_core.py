@@ -392,7 +392,7 @@ def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label=""):
 
 def corpus(config: EdgeConfig, *, longest: bool = True) -> list[tuple[str, Edge]]:
     """Named corner cases, scaled to the configuration; all inside the coordinate range."""
-    S, hi, full = config.subpixel_scale, config.max_vertex, config.full_scale  # noqa: N806
+    S, hi, full = config.subpixel_scale, config.max_vertex, config.full_scale
     span = 1 << config.coord_bits
     step = max(1, min(5, span // 4))  # pixels
     c = (span // 2) * S  # a pixel centre near the middle
@@ -461,7 +461,7 @@ def longest_edges(config: EdgeConfig) -> list[Edge]:
 
 def snap(config: EdgeConfig, value: int, grid: str) -> int:
     """`value` moved onto a pixel centre or corner (exact geometric coincidences)."""
-    S = config.subpixel_scale  # noqa: N806
+    S = config.subpixel_scale
     if grid == "centre":
         return value - value % S
     if grid == "corner":
@@ -501,7 +501,7 @@ def window_near(config: EdgeConfig, edge: Edge, pick) -> Clip | None:
     """A clip window for `edge`, drawn with ``pick(lo, hi)`` (an integer in [lo, hi]): none,
     a random one, or bounds within two pixels of the edge's span on both axes, ordered (the
     window cuts the edge's start, its end, both or nothing) or not (often empty)."""
-    top, S = 1 << config.coord_bits, config.subpixel_scale  # noqa: N806
+    top, S = 1 << config.coord_bits, config.subpixel_scale
     kind = pick(0, 4)
     if kind == 0:
         return None
@@ -637,8 +637,8 @@ def _members(signature):
 @pytest.mark.parametrize("name", ["default", "small"])
 def test_interface(name):
     config = CONFIGS[name]
-    W, s = config.coord_bits, config.subpixel_bits  # noqa: N806
-    I = config.intensity_bits  # noqa: N806, E741
+    W, s = config.coord_bits, config.subpixel_bits
+    I = config.intensity_bits  # noqa: E741
     dut = EdgeAntialiaser(config)
     members = dut.signature.members
     assert set(members) == {"edges", "clip", "writes", "errors", "error"}
@@ -841,7 +841,7 @@ def test_boundary_states(name):
 
 def run_of(config: EdgeConfig, x: int, y: int, columns: int, **kwargs) -> Edge:
     """An x-major edge of exactly `columns` columns starting at pixel centre (x, y)."""
-    S = config.subpixel_scale  # noqa: N806
+    S = config.subpixel_scale
     x0, y0 = x * S, y * S
     x1 = x0 + max(1, (columns - 1) * S)  # one sub-pixel for a single column
     return Edge(x0, y0, x1, y0 + columns * S // 3, **kwargs)
@@ -870,7 +870,7 @@ def clipped_corpus(config: EdgeConfig) -> list[Edge]:
     """Corner-case edges of at least three columns under directed windows: the start cut, the
     end cut, both, one column, wider than the edge, beyond either end, min > max, the minor
     axis only (which clips nothing); and one-column windows at both image borders."""
-    top, S, hi = 1 << config.coord_bits, config.subpixel_scale, config.max_vertex  # noqa: N806
+    top, S, hi = 1 << config.coord_bits, config.subpixel_scale, config.max_vertex
     names = ("octant", "vertical", "45deg", "225deg", "subpixel")
     edges = []
     for name, edge in corpus(config, longest=False):
@@ -979,7 +979,7 @@ def test_clip_longest_start_offset(name):
     first-pass quotient is near its largest, about 2 dv < 2**(W + s + 2) (beyond the
     accumulator's width in the narrow configuration)."""
     config = NARROW if name == "narrow" else CONFIGS[name]
-    W, s = config.coord_bits, config.subpixel_bits  # noqa: N806
+    W, s = config.coord_bits, config.subpixel_bits
     edges = []
     for edge in longest_edges(config):
         edges += [edge, replace(edge, x0=edge.x1, y0=edge.y1, x1=edge.x0, y1=edge.y0)]
@@ -1000,7 +1000,7 @@ def test_clip_latency():
     than L; an end-clipped one at L; an edge with no column in its window occupies the setup
     for 5 clocks (the next command is accepted 5 clocks after it) and pulses no error."""
     config = CONFIGS["default"]
-    W = config.coord_bits  # noqa: N806
+    W = config.coord_bits
     latency = timing_model.setup_latency(config)
     edge = run_of(config, 10, 20, 6)
     start_cut, end_cut = with_window(config, edge, 2, 5), with_window(config, edge, 0, 3)
@@ -1079,7 +1079,7 @@ def test_throughput(name, length):
     """
     config = CONFIGS[name]
     latency = timing_model.setup_latency(config)
-    S = config.subpixel_scale  # noqa: N806
+    S = config.subpixel_scale
     hi = config.max_vertex
     columns = timing_model.setup_interval(config) if length == "P" else 20 * latency
     count = max(3, 20 * latency // columns + 1)  # the whole stream >= 20 setup latencies

@@ -439,7 +439,7 @@ def _window(config: EdgeConfig, fold, clip) -> types.SimpleNamespace:
     whether the start moved, and lane A's first-pass multiplier ``2 (first S - u0)`` as the
     core loads it (``W + s + 2`` bits; ``2 |e|`` followed by ``W + 1`` zero bits when the
     start did not move)."""
-    W, s = config.coord_bits, config.subpixel_bits  # noqa: N806
+    W, s = config.coord_bits, config.subpixel_bits
     neg = fold.major_neg
     lo = Mux(
         fold.x_major,
@@ -501,7 +501,7 @@ def _axes(b) -> types.SimpleNamespace:
 
 def _constants_ok(config: EdgeConfig, b) -> dict[str, Value]:
     """Invariants of the per-edge constants and the accumulator of a bank-like record."""
-    F, n = config.F, config.segments  # noqa: N806
+    F, n = config.F, config.segments
     i_d = b.ifix >> F
     k_bit = (b.khr << 1) >= b.du
     out = {
@@ -542,7 +542,7 @@ def _major_ok(config: EdgeConfig, axes) -> Value:
 def _column(config: EdgeConfig, b, axes) -> types.SimpleNamespace:
     """The model's `column_areas`, `output_value` and loop step in full width."""
     widths = config.register_widths()
-    F, n = config.F, config.segments  # noqa: N806
+    F, n = config.F, config.segments
     fits = {}
     out = {}
     if n == 0:
@@ -837,7 +837,7 @@ class FormalHarness(Elaboratable):
     def _bounds(self, ctx):
         m, view, config = ctx.m, ctx.view, ctx.config
         stepper, writes = view.stepper, self.core.writes
-        W, s, F, I = (  # noqa: N806, E741
+        W, s, F, I = (  # noqa: E741
             config.coord_bits,
             config.subpixel_bits,
             config.F,
@@ -1183,7 +1183,7 @@ class FormalHarness(Elaboratable):
         """
         m, view, config = ctx.m, ctx.view, ctx.config
         stepper, writes = view.stepper, self.core.writes
-        F, I = config.F, config.intensity_bits  # noqa: N806, E741
+        F, I = config.F, config.intensity_bits  # noqa: E741
         en = ~writes.valid | writes.ready
         names = [name for name in vars(st) if name not in ("seg_thresholds", "seg_intercepts")]
         snaps = []
