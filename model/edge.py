@@ -167,6 +167,11 @@ class EdgeSetup:
     def k(self) -> Fraction:
         return Fraction(self.dv, self.du)
 
+    @property
+    def remaining(self) -> int:
+        """Columns still to step after the first (the bank's count; -1: none to step)."""
+        return self.columns - 1
+
 
 def floor_div(a: int, b: int) -> int:
     return a // b  # Python floors toward -inf for negative numerators too

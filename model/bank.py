@@ -1,0 +1,70 @@
+"""The values the per-edge setup hands to the stepper: declared once, here.
+
+The model's `EdgeSetup` computes them, the hardware's register bank (`edgeaa.hdl.setup_layout`)
+declares one field per entry with the width of its register, the stepper loads them, and
+every harness that compares the core's bank with the model (`bank_values`) walks the same
+list, so a field added here reaches all of them.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from .config import EdgeConfig, RegisterWidth
+
+
+class BankField(NamedTuple):
+    """One field of the bank: its name (an `EdgeSetup` attribute), the entry of
+    `EdgeConfig.register_widths` that sizes it, and whether it is a per-segment array."""
+
+    name: str
+    register: str
+    array: str | None = None  # None: a scalar; "thresholds" (N - 1) or "intercepts" (N)
+
+    def length(self, config: EdgeConfig) -> int | None:
+        """Elements of an array field (None for a scalar)."""
+        n = config.segments
+        if self.array is None:
+            return None
+        return max(n - 1, 0) if self.array == "thresholds" else n
+
+    def width(self, config: EdgeConfig) -> RegisterWidth:
+        return config.register_widths()[self.register]
+
+
+BANK_FIELDS = (
+    BankField("x", "x"),  # screen pixel of the first column's primary write
+    BankField("y", "y"),
+    BankField("remaining", "remaining"),  # columns - 1
+    BankField("col_dx", "step"),  # screen step of one column and of one row
+    BankField("col_dy", "step"),
+    BankField("row_dx", "step"),
+    BankField("row_dy", "step"),
+    BankField("du", "du"),
+    BankField("ifix", "ifix"),
+    BankField("jq", "jq"),
+    BankField("jr", "jr"),
+    BankField("kq", "kq"),
+    BankField("kr", "kr"),
+    BankField("khq", "khq"),
+    BankField("khr", "khr"),
+    BankField("seg_thresholds", "seg_const", "thresholds"),
+    BankField("seg_intercepts", "seg_const", "intercepts"),
+    BankField("value_base", "value"),
+    BankField("value_sign", "step"),
+)
+
+
+def bank_fields(config: EdgeConfig) -> tuple[BankField, ...]:
+    """The fields present in `config`'s bank (array fields of length 0 left out)."""
+    return tuple(f for f in BANK_FIELDS if f.length(config) != 0)
+
+
+def bank_values(config: EdgeConfig, setup) -> dict[str, int | tuple[int, ...]]:
+    """The bank contents of an `EdgeSetup` (or any object with the fields): name -> value,
+    arrays as tuples."""
+    out = {}
+    for f in bank_fields(config):
+        value = getattr(setup, f.name)
+        out[f.name] = tuple(value) if f.array else value
+    return out
