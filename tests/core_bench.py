@@ -1,0 +1,565 @@
+# amaranth: UnusedElaboratable=no
+"""The test bench of the hardware core (tests/test_core_*.py): the simulation runner, the
+checks of a run against the model, and the edge corpora.
+
+The tests check the core against the model: interface, setup, per-column trace, timing,
+streams.
+
+Amaranth simulator, async testbenches only. Every simulation run is checked the same way
+(`check_run`): the ordered beats equal `run_edge` (lanes, values, last flags), the setup bank
+handed to the stepper equals `setup()`, bad commands are dropped and counted, edges with no
+column in their clip window leave nothing (no bank, no error), and the sink is empty at the
+end. Each command is offered with its window on the ``clip`` port
+(`edgeaa.sim.verification.commands`).
+Runs with an always-ready sink and a back-to-back source additionally match the stepper's
+registers to the model's per-column trace and every beat's clock to `edgeaa.model.timing`.
+The stepper's scaled areas are compared with the model's `Write.area` too, so a tie decided
+differently inside the loop shows even when the rounded value hides it.
+
+The runner (`simulate`) is one per-clock testbench that drives the source, the sink and
+samples the internal observation points together (cheaper than three testbenches here);
+`edgeaa.sim.verification.streams` serves the small directed
+tests. The core simulates at 2-4k clocks/s, so
+edges are short and many of them share one run; long sweeps are marked slow
+(``pytest -m slow``).
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, field, replace
+
+from amaranth.hdl import Shape, Value
+from amaranth.lib import data
+from amaranth.sim import Simulator
+from hypothesis import HealthCheck, Phase, settings
+from hypothesis import strategies as st
+
+from edgeaa.hdl import (
+    EdgeAntialiaser,
+    setup_layout,
+    write_layout,
+)
+from edgeaa.hdl.core import ERRORS_BITS
+from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
+from edgeaa.model import timing as timing_model
+from edgeaa.sim.verification.commands import edge_clip, edge_payload
+from edgeaa.sim.verification.scoreboard import Beat, edge_beats
+
+CONFIGS = {
+    "default": EdgeConfig(),
+    "pw": EdgeConfig(mode="pw"),
+    "seg2": EdgeConfig(mode="seg2"),
+    "seg4": EdgeConfig(mode="seg4"),
+    "truncated": EdgeConfig(accumulator="truncated"),
+    "small": EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4),
+    "wide": EdgeConfig(coord_bits=15, subpixel_bits=8),
+    # The fewest fraction bits allowed: ties of the exact-remainder tests become reachable.
+    "lowfrac": EdgeConfig(
+        coord_bits=5, subpixel_bits=6, intensity_bits=2, frac_bits=8, mode="seg2"
+    ),
+}
+
+
+# -- payload decoding (raw integers are much faster to sample than data.Const) ---------------
+
+
+def _fields(layout, prefix=""):
+    """(dotted name, offset, width, signed) of each leaf field of a layout."""
+    for name, fld in layout:
+        shape = fld.shape
+        key = f"{prefix}{name}"
+        if isinstance(shape, data.Layout):
+            for sub, offset, width, is_signed in _fields(shape, f"{key}."):
+                yield sub, fld.offset + offset, width, is_signed
+        else:
+            shape = Shape.cast(shape)
+            yield key, fld.offset, shape.width, shape.signed
+
+
+def decoder(layout):
+    fields = list(_fields(layout))
+
+    def decode(raw: int) -> dict[str, int]:
+        out = {}
+        for key, offset, width, is_signed in fields:
+            value = (raw >> offset) & ((1 << width) - 1)
+            if is_signed and value >> (width - 1):
+                value -= 1 << width
+            out[key] = value
+        return out
+
+    return decode
+
+
+def is_good(config: EdgeConfig, edge: Edge) -> bool:
+    """The model accepts the command (the core does not drop it as bad)."""
+    try:
+        setup(config, edge)
+    except EdgeError:
+        return False
+    return True
+
+
+def is_visible(config: EdgeConfig, edge: Edge) -> bool:
+    """A good command with at least one column inside its clip window (it gets a bank)."""
+    return is_good(config, edge) and setup(config, edge).columns > 0
+
+
+# -- the simulation runner -------------------------------------------------------------------
+
+
+@dataclass
+class Run:
+    """What one simulation observed, clock by clock."""
+
+    config: EdgeConfig
+    edges: list
+    label: str
+    setup_latency: int
+    accepts: list = field(default_factory=list)  # clock of each accepted command
+    beats: list = field(default_factory=list)  # (clock, decoded payload)
+    steps: list = field(default_factory=list)  # (clock, x, y, jq, jr) per column stepped
+    areas: list = field(default_factory=list)  # (clock, area0, area1) per column, in order
+    banks: list = field(default_factory=list)  # (clock, decoded bank) handed to the stepper
+    error_pulses: list = field(default_factory=list)  # clocks with `error` high
+    errors: int = 0  # final `errors` count
+    final_idle: tuple = ()  # writes.valid, bank valid, stepper active, edges.ready
+    clocks: int = 0
+
+
+def simulate(
+    config: EdgeConfig,
+    edges: list,
+    *,
+    seed: int | None = None,
+    idle: float = 0.0,
+    stall: float = 0.0,
+    label: str = "",
+) -> Run:
+    """Offer `edges` in order (each with its window on ``clip``) and drain the writes; with
+    `seed`, random idle source clocks (probability `idle` per clock before each offer), random
+    sink stalls (`stall`) and a random window on ``clip`` whenever no edge is offered."""
+    dut = EdgeAntialiaser(config)
+    stepper = dut.stepper
+    rng = random.Random(seed) if seed is not None else None
+    tag = f"[{label} seed={seed} idle={idle} stall={stall} config={config}]"
+    run = Run(config, list(edges), tag, dut.setup_latency)
+    payloads = [edge_payload(config, edge) for edge in edges]
+    clips = [edge_clip(config, edge) for edge in edges]
+    expected_beats = sum(setup(config, edge).columns for edge in edges if is_good(config, edge))
+    per_edge = dut.setup_latency + dut.start_clip_cycles + 4
+    max_clocks = 50 + (len(edges) + 2) * per_edge * 4 + expected_beats
+    if stall:
+        max_clocks += int(expected_beats * 4 / (1 - stall))
+    if idle:
+        max_clocks += int(len(edges) * 4 * per_edge / (1 - idle))
+    decode_beat = decoder(write_layout(config))
+    decode_bank = decoder(setup_layout(config))
+    beat_bits = Value.cast(dut.writes.payload)
+    bank_bits = Value.cast(stepper.setup.payload)
+    drain_clocks = dut.setup_latency + 8
+
+    async def bench(ctx):
+        index = 0
+        offering = False
+        held = None  # raw beat valid but not taken in the previous clock
+        quiet = 0
+        clock = 0
+        while True:
+            eager = rng is None or not rng.random() < idle
+            if index < len(payloads) and not offering and eager:
+                ctx.set(dut.edges.payload, payloads[index])
+                ctx.set(dut.clip, clips[index])
+                ctx.set(dut.edges.valid, 1)
+                offering = True
+            elif rng is not None and not offering:
+                # The window is sampled with the edge only: anything in the other clocks.
+                ctx.set(dut.clip, random_clip(config, rng))
+            ready = rng is None or not rng.random() < stall
+            ctx.set(dut.writes.ready, ready)
+            (
+                _,
+                _,
+                e_ready,
+                w_valid,
+                w_raw,
+                error,
+                step,
+                x,
+                y,
+                jq,
+                jr,
+                area_step,
+                area0,
+                area1,
+                b_valid,
+                b_ready,
+                b_raw,
+            ) = await ctx.tick().sample(
+                dut.edges.ready,
+                dut.writes.valid,
+                beat_bits,
+                dut.error,
+                stepper.step,
+                stepper.x,
+                stepper.y,
+                stepper.jq,
+                stepper.jr,
+                stepper.area_step,
+                stepper.area0,
+                stepper.area1,
+                stepper.setup.valid,
+                stepper.setup.ready,
+                bank_bits,
+            )
+            if offering and e_ready:
+                run.accepts.append(clock)
+                index += 1
+                offering = False
+                ctx.set(dut.edges.valid, 0)
+            if held is not None:
+                assert w_valid and w_raw == held, (
+                    f"{tag} clock {clock}: a stalled beat changed or vanished "
+                    f"(valid={w_valid}, payload {w_raw:#x}, was {held:#x})"
+                )
+            held = w_raw if w_valid and not ready else None
+            if w_valid and ready:
+                run.beats.append((clock, decode_beat(w_raw)))
+            if step:
+                run.steps.append((clock, x, y, jq, jr))
+            if area_step:
+                run.areas.append((clock, area0, area1))
+            if b_valid and b_ready:
+                run.banks.append((clock, decode_bank(b_raw)))
+            if error:
+                run.error_pulses.append(clock)
+            clock += 1
+            done = index == len(payloads) and len(run.beats) >= expected_beats
+            quiet = quiet + 1 if done else 0
+            if quiet > drain_clocks or clock > max_clocks:
+                break
+        run.clocks = clock
+        run.errors = ctx.get(dut.errors)
+        # The core is idle: nothing in the output register, the bank, the stepper or setup.
+        run.final_idle = (
+            ctx.get(dut.writes.valid),
+            ctx.get(stepper.setup.valid),
+            ctx.get(stepper.active),
+            ctx.get(dut.edges.ready),
+        )
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    return run
+
+
+# -- checks ----------------------------------------------------------------------------------
+
+
+def expected_beats(config: EdgeConfig, edge: Edge) -> list[Beat]:
+    """The model's writes of one edge as two-lane beats (the shared scoreboard's form)."""
+    return edge_beats(run_edge(config, edge))
+
+
+def observed_beat(beat: dict) -> Beat:
+    lane1 = (beat["lane1.x"], beat["lane1.y"], beat["lane1.value"]) if beat["lane1_valid"] else None
+    return Beat((beat["lane0.x"], beat["lane0.y"], beat["lane0.value"]), lane1, bool(beat["last"]))
+
+
+def expected_bank(config: EdgeConfig, edge: Edge) -> dict[str, int]:
+    st_ = setup(config, edge)
+    bank = {
+        "x": st_.x,
+        "y": st_.y,
+        "remaining": st_.columns - 1,
+        "col_dx": st_.col_dx,
+        "col_dy": st_.col_dy,
+        "row_dx": st_.row_dx,
+        "row_dy": st_.row_dy,
+        "value_base": st_.value_base,
+        "value_sign": st_.value_sign,
+    }
+    for name in ("du", "ifix", "jq", "jr", "kq", "kr", "khq", "khr"):
+        bank[name] = getattr(st_, name)
+    for j, value in enumerate(st_.seg_thresholds):
+        bank[f"seg_thresholds.{j}"] = value
+    for j, value in enumerate(st_.seg_intercepts):
+        bank[f"seg_intercepts.{j}"] = value
+    return bank
+
+
+def first_difference(got: list, want: list) -> int | None:
+    for index, (a, b) in enumerate(zip(got, want, strict=False)):
+        if a != b:
+            return index
+    return None if len(got) == len(want) else min(len(got), len(want))
+
+
+def check_run(run: Run, *, exact_timing: bool) -> None:
+    """All checks of one run; `exact_timing` for an always-ready sink and eager source."""
+    config, tag = run.config, run.label
+    good = [edge for edge in run.edges if is_good(config, edge)]
+    visible = [edge for edge in good if setup(config, edge).columns]  # the others: no bank
+    bad = len(run.edges) - len(good)
+
+    # Beats: the model's writes, in order, lane by lane, with the last flags.
+    got = [observed_beat(beat) for _, beat in run.beats]
+    want = [beat for edge in good for beat in expected_beats(config, edge)]
+    position = 0
+    for n, edge in enumerate(good):
+        edge_want = expected_beats(config, edge)
+        edge_got = got[position : position + len(edge_want)]
+        assert edge_got == edge_want, (
+            f"{tag} good edge {n} {edge}: beats differ from run_edge "
+            f"(first difference at column {first_difference(edge_got, edge_want)})"
+        )
+        position += len(edge_want)
+    assert len(got) == len(want), f"{tag} {len(got)} beats, model has {len(want)}"
+
+    # The bank handed to the stepper: the model's setup() of each edge with a visible column.
+    assert len(run.banks) == len(visible), f"{tag} {len(run.banks)} banks, {len(visible)} edges"
+    for n, (edge, (_, bank)) in enumerate(zip(visible, run.banks, strict=True)):
+        want_bank = expected_bank(config, edge)
+        assert bank == want_bank, (
+            f"{tag} visible edge {n} {edge}: bank differs from setup(): "
+            f"{ {k: (bank[k], want_bank[k]) for k in bank if bank[k] != want_bank[k]} }"
+        )
+
+    # Bad commands: dropped and counted, one error pulse each (an edge with no column in its
+    # window is not an error).
+    assert run.errors == min(bad, (1 << ERRORS_BITS) - 1), f"{tag} errors={run.errors}"
+    assert len(run.error_pulses) == bad, f"{tag} error pulses {run.error_pulses}"
+    assert len(run.accepts) == len(run.edges), f"{tag} accepted {len(run.accepts)} commands"
+    # The sink is empty at the end and the core idle.
+    assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
+
+    # Per-column trace of the stepper registers, and the scaled areas of the column's writes
+    # (observed in the pipeline's last stage, in the same order).
+    assert len(run.areas) == len(run.steps), f"{tag} {len(run.areas)} areas, {len(run.steps)}"
+    got_steps = [step[1:] + area[1:] for step, area in zip(run.steps, run.areas, strict=True)]
+    want_steps = []
+    for edge in good:
+        result = run_edge(config, edge)
+        for state, column in zip(result.trace, result.columns, strict=True):
+            area1 = column[1].area if len(column) > 1 else None
+            want_steps.append((state.x, state.y, state.jq, state.jr, column[0].area, area1))
+    got_steps = [
+        (*step[:5], step[5] if want[5] is not None else None)
+        for step, want in zip(got_steps, want_steps, strict=False)
+    ]
+    assert len(run.steps) == len(want_steps), f"{tag} {len(run.steps)} columns stepped"
+    assert got_steps == want_steps, (
+        f"{tag} stepper registers or areas differ from the model's trace at column "
+        f"{first_difference(got_steps, want_steps)} (x, y, jq, jr, area0, area1)"
+    )
+
+    if not exact_timing:
+        return
+    # The clock of each accept, bank load, stepped column, beat and error pulse.
+    timings = timing_model.write_cycles(config, run.edges, run.setup_latency)
+    assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
+    want_clocks = [clock for t in timings for clock in t.beats]
+    got_clocks = [clock for clock, _ in run.beats]
+    assert got_clocks == want_clocks, (
+        f"{tag} beat clocks differ from the timing model; first at beat "
+        f"{first_difference(got_clocks, want_clocks)}"
+    )
+    depth = timing_model.pipeline_depth(config)  # clocks from a column's step to its beat
+    assert [clock for clock, *_ in run.steps] == [c - depth for c in want_clocks], f"{tag} steps"
+    assert [clock for clock, *_ in run.areas] == [c - 1 for c in want_clocks], f"{tag} areas"
+    assert [clock for clock, _ in run.banks] == [t.load for t in timings if not t.dropped]
+    want_errors = [t.accepted + 2 for t in timings if not is_good(config, t.edge)]
+    assert run.error_pulses == want_errors, f"{tag} error pulse clocks"
+
+
+def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label=""):
+    run = simulate(config, edges, seed=seed, idle=idle, stall=stall, label=label)
+    check_run(run, exact_timing=seed is None)
+    return run
+
+
+# -- edge corpora ----------------------------------------------------------------------------
+
+
+def corpus(config: EdgeConfig, *, longest: bool = True) -> list[tuple[str, Edge]]:
+    """Named corner cases, scaled to the configuration; all inside the coordinate range."""
+    S, hi, full = config.subpixel_scale, config.max_vertex, config.full_scale
+    span = 1 << config.coord_bits
+    step = max(1, min(5, span // 4))  # pixels
+    c = (span // 2) * S  # a pixel centre near the middle
+    long_ = step * S + S // 3
+    short = long_ // 2 + 1
+    half = S // 2
+    cases = []
+
+    def add(name, x0, y0, x1, y1, **kwargs):
+        assert all(0 <= v <= hi for v in (x0, y0, x1, y1)), (name, x0, y0, x1, y1)
+        cases.append((name, Edge(x0, y0, x1, y1, **kwargs)))
+
+    octants = [(1, 0), (0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1), (1, 0)]
+    directions = [
+        (long_, short),
+        (short, long_),
+        (-short, long_),
+        (-long_, short),
+        (-long_, -short),
+        (-short, -long_),
+        (short, -long_),
+        (long_, -short),
+    ]
+    for n, ((dx, dy), _) in enumerate(zip(directions, octants, strict=True)):
+        inside = ("left", "right")[n % 2]
+        i_in, i_out = ((full, 0), (0, full), (full // 3, full), (1, 0))[n % 4]
+        add(f"octant{n}", c + 1, c + half, c + 1 + dx, c + half + dy, inside=inside, i_in=i_in,
+            i_out=i_out)  # fmt: skip
+    for name, dx, dy in (
+        ("0deg", long_, 0),
+        ("180deg", -long_, 0),
+        ("45deg", long_, long_),
+        ("135deg", -long_, long_),
+        ("225deg", -long_, -long_),
+        ("315deg", long_, -long_),
+        ("vertical_down", 0, long_),
+        ("vertical_up", 0, -long_),
+    ):
+        add(name, c, c, c + dx, c + dy, inside="right", i_in=0, i_out=full)
+        add(f"{name}_left", c + half, c + S - 1, c + half + dx, c + S - 1 + dy, i_out=full - 1)
+    add("shortest_x", c, c, c + 1, c)
+    add("shortest_y", c, c, c, c + 1, inside="right")
+    if S >= 2:
+        add("single_column_x", c, c, c + 1, c + 1 if S > 2 else c, i_in=1, i_out=full)
+        add("single_column_y", c + 1, c - half + 1, c, c + half - 1, inside="right")
+    for offset in sorted({0, 1, half - 1, half, half + 1, S - 1} & set(range(S))):
+        add(f"subpixel{offset}_start", c + offset, c + offset, c + long_, c + short)
+        add(f"subpixel{offset}_end", c, c, c + long_ - S + 1 + offset, c - short + offset)
+    add("corner_origin", 0, 0, long_, short, inside="right")
+    add("corner_max", hi, hi, hi - short, hi - long_)
+    add("edge_top", hi, 0, hi - long_, 0, i_in=full, i_out=full - 1)
+    add("edge_left", 0, hi, 0, hi - long_, i_in=0, i_out=1)
+    if longest:
+        add("longest_diagonal", 0, 0, hi, hi, i_in=full, i_out=0)
+        add("longest_antidiagonal", hi, 0, 0, hi, inside="right", i_in=0, i_out=full)
+        add("longest_bottom_row", hi, hi, 0, hi - 1, i_in=1, i_out=0)
+    return cases
+
+
+def longest_edges(config: EdgeConfig) -> list[Edge]:
+    hi = config.max_vertex
+    return [edge for name, edge in corpus(config) if name.startswith("longest")] + [
+        Edge(hi, hi, hi, 0, inside="right"),  # the longest vertical, at the right border
+    ]
+
+
+def snap(config: EdgeConfig, value: int, grid: str) -> int:
+    """`value` moved onto a pixel centre or corner (exact geometric coincidences)."""
+    S = config.subpixel_scale
+    if grid == "centre":
+        return value - value % S
+    if grid == "corner":
+        return min(value - value % S + S // 2, config.max_vertex)
+    return value
+
+
+@st.composite
+def edge_commands(draw, config: EdgeConfig, max_pixels: int, clip: bool = False):
+    """Edge commands (good or bad) at most `max_pixels` long on each axis, often with their
+    vertices on pixel centres or corners; with `clip`, each with a window (`window_near`)."""
+    hi, full = config.max_vertex, config.full_scale
+    reach = max_pixels * config.subpixel_scale
+    x0, y0 = draw(st.integers(0, hi)), draw(st.integers(0, hi))
+    x1 = draw(st.integers(max(0, x0 - reach), min(hi, x0 + reach)))
+    y1 = draw(st.integers(max(0, y0 - reach), min(hi, y0 + reach)))
+    grid = draw(st.sampled_from(("any", "any", "centre", "corner")))
+    edge = Edge(
+        *(snap(config, value, grid) for value in (x0, y0, x1, y1)),
+        inside=draw(st.sampled_from(("left", "right"))),
+        i_in=draw(st.integers(0, full)),
+        i_out=draw(st.integers(0, full)),
+    )
+    if clip:
+        window = window_near(config, edge, lambda lo, hi: draw(st.integers(lo, hi)))
+        edge = replace(edge, clip=window)
+    return edge
+
+
+def random_clip(config: EdgeConfig, rng: random.Random) -> dict[str, int]:
+    """Any value of the ``clip`` port (four bounds in [0, 2**W], possibly empty)."""
+    top = 1 << config.coord_bits
+    return {name: rng.randint(0, top) for name in Clip._fields}
+
+
+def window_near(config: EdgeConfig, edge: Edge, pick) -> Clip | None:
+    """A clip window for `edge`, drawn with ``pick(lo, hi)`` (an integer in [lo, hi]): none,
+    a random one, or bounds within two pixels of the edge's span on both axes, ordered (the
+    window cuts the edge's start, its end, both or nothing) or not (often empty)."""
+    top, S = 1 << config.coord_bits, config.subpixel_scale
+    kind = pick(0, 4)
+    if kind == 0:
+        return None
+    if kind == 1:
+        return Clip(*(pick(0, top) for _ in Clip._fields))
+    bounds = []
+    for a, b in ((edge.x0, edge.x1), (edge.y0, edge.y1)):
+        near = (max(0, min(a, b) // S - 2), min(top, -(-max(a, b) // S) + 2))
+        low, high = pick(*near), pick(*near)
+        bounds.append((min(low, high), max(low, high)) if kind < 4 else (low, high))
+    (x_min, x_max), (y_min, y_max) = bounds
+    return Clip(x_min, y_min, x_max, y_max)
+
+
+def with_window(config: EdgeConfig, edge: Edge, start: int, end: int, *, minor=None) -> Edge:
+    """`edge` with a window that keeps its (unclipped) columns ``start .. end`` along the major
+    axis (clamped to the image; outside ``0 .. columns - 1`` the window reaches beyond the
+    edge); the minor axis gets the whole image, or `minor` = (min, max)."""
+    st_ = setup(config, replace(edge, clip=None))
+    top = 1 << config.coord_bits
+    major, step = (st_.x, st_.col_dx) if st_.x_major else (st_.y, st_.col_dy)
+    a, b = (min(max(major + step * c, 0), top) for c in (start, end))
+    lo, hi = (a, b) if start > end else (min(a, b), max(a, b))  # start > end: min > max
+    other = (0, top) if minor is None else minor
+    if st_.x_major:
+        return replace(edge, clip=Clip(lo, other[0], hi, other[1]))
+    return replace(edge, clip=Clip(other[0], lo, other[1], hi))
+
+
+def random_edges(
+    config: EdgeConfig, rng: random.Random, count: int, max_pixels: int, *, clip: bool = False
+):
+    """Random edge commands (good or bad); with `clip`, each with a window (`window_near`)."""
+    hi, full = config.max_vertex, config.full_scale
+    reach = max_pixels * config.subpixel_scale
+    edges = []
+    for _ in range(count):
+        x0, y0 = rng.randint(0, hi), rng.randint(0, hi)
+        x1 = rng.randint(max(0, x0 - reach), min(hi, x0 + reach))
+        y1 = rng.randint(max(0, y0 - reach), min(hi, y0 + reach))
+        grid = rng.choice(("any", "any", "centre", "corner"))
+        x0, y0, x1, y1 = (snap(config, value, grid) for value in (x0, y0, x1, y1))
+        inside = rng.choice(("left", "right"))
+        edge = Edge(x0, y0, x1, y1, inside, rng.randint(0, full), rng.randint(0, full))
+        if clip:
+            edge = replace(edge, clip=window_near(config, edge, rng.randint))
+        edges.append(edge)
+    return edges
+
+
+def sim_settings(max_examples: int) -> settings:
+    """Few examples (each one is a simulation), no deadline, no example database."""
+    return settings(
+        max_examples=max_examples,
+        deadline=None,
+        database=None,
+        phases=(Phase.explicit, Phase.generate),  # no shrinking: it re-runs simulations
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+    )
+
+
+def run_of(config: EdgeConfig, x: int, y: int, columns: int, **kwargs) -> Edge:
+    """An x-major edge of exactly `columns` columns starting at pixel centre (x, y)."""
+    S = config.subpixel_scale
+    x0, y0 = x * S, y * S
+    x1 = x0 + max(1, (columns - 1) * S)  # one sub-pixel for a single column
+    return Edge(x0, y0, x1, y0 + columns * S // 3, **kwargs)

@@ -1,0 +1,110 @@
+# amaranth: UnusedElaboratable=no
+"""The setup's bank handed to the stepper against the model's `setup()` (each edge's
+setup simulated alone, the core reset between edges).
+"""
+
+from __future__ import annotations
+
+import pytest
+from amaranth.hdl import Module, ResetInserter, Signal, Value
+from amaranth.sim import Simulator
+from core_bench import (
+    CONFIGS,
+    corpus,
+    decoder,
+    edge_commands,
+    expected_bank,
+    is_visible,
+    longest_edges,
+    sim_settings,
+)
+from hypothesis import given
+from hypothesis import strategies as st
+
+from edgeaa.hdl import (
+    EdgeAntialiaser,
+    setup_layout,
+)
+from edgeaa.model import Edge, EdgeConfig
+from edgeaa.sim.verification.commands import edge_clip, edge_payload
+
+# -- (2) setup registers against setup() -----------------------------------------------------
+
+
+def simulate_setup(config: EdgeConfig, edges: list[Edge]) -> list[dict | None]:
+    """The bank each edge's setup produces (None: dropped, or no column in the window),
+    resetting the core between edges so that long edges cost only their setup time."""
+    dut = EdgeAntialiaser(config)
+    flush = Signal()
+    top = Module()
+    top.submodules.dut = ResetInserter(flush)(dut)
+    decode_bank = decoder(setup_layout(config))
+    bank = dut.stepper.setup
+    results = []
+
+    async def bench(ctx):
+        for edge in edges:
+            ctx.set(dut.edges.payload, edge_payload(config, edge))
+            ctx.set(dut.clip, edge_clip(config, edge))
+            ctx.set(dut.edges.valid, 1)
+            await ctx.tick().until(dut.edges.ready)
+            ctx.set(dut.edges.valid, 0)
+            for _ in range(dut.setup_latency + dut.start_clip_cycles + 2):
+                _, _, valid, error, raw = await ctx.tick().sample(
+                    bank.valid, dut.error, Value.cast(bank.payload)
+                )
+                if valid or error:
+                    break
+            results.append(decode_bank(raw) if valid else None)
+            ctx.set(flush, 1)
+            await ctx.tick()
+            ctx.set(flush, 0)
+
+    sim = Simulator(top)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    return results
+
+
+def check_setup(config: EdgeConfig, edges: list[Edge]):
+    for edge, bank in zip(edges, simulate_setup(config, edges), strict=True):
+        if not is_visible(config, edge):
+            assert bank is None, f"{edge} (bad, or nothing in its window) produced a bank"
+            continue
+        want = expected_bank(config, edge)
+        assert bank == want, (
+            f"{config} {edge}: bank differs from setup(): "
+            f"{ {k: (bank[k], want[k]) for k in want if bank[k] != want[k]} }"
+        )
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_setup_matches_model(name):
+    config = CONFIGS[name]
+    max_pixels = 1 << config.coord_bits  # full-range edges: only the setup is simulated
+
+    @sim_settings(5)
+    @given(st.lists(edge_commands(config, max_pixels), min_size=8, max_size=12))
+    def check(edges):
+        check_setup(config, edges)
+
+    check()
+
+
+def test_setup_corner_cases():
+    for config in CONFIGS.values():
+        check_setup(config, [edge for _, edge in corpus(config)] + longest_edges(config))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_setup_matches_model_slow(name):
+    config = CONFIGS[name]
+
+    @sim_settings(40)
+    @given(st.lists(edge_commands(config, 1 << config.coord_bits), min_size=10, max_size=20))
+    def check(edges):
+        check_setup(config, edges)
+
+    check()

@@ -1,0 +1,148 @@
+# amaranth: UnusedElaboratable=no
+"""The core's clocks: the setup latency against the timing model, throughput, short
+edges; bad commands dropped and counted, and the error counter.
+"""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+from amaranth.sim import Simulator
+from core_bench import (
+    CONFIGS,
+    run_and_check,
+    run_of,
+)
+
+from edgeaa.hdl import (
+    EdgeAntialiaser,
+)
+from edgeaa.model import Edge, setup
+from edgeaa.model import timing as timing_model
+from edgeaa.sim.verification.commands import edge_payload
+from edgeaa.sim.verification.streams import stream_put
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_setup_latency_is_the_timing_model(name):
+    config = CONFIGS[name]
+    dut = EdgeAntialiaser(config)
+    depth = timing_model.pipeline_depth(config)
+    assert dut.stepper.latency == depth == (2 if config.segments <= 1 else 3)
+    assert dut.setup_latency == timing_model.setup_latency(config)
+    assert dut.setup_latency == config.intensity_bits + config.F + 6 + depth
+    assert dut.run_cycles == timing_model.run_cycles(config) == config.intensity_bits + config.F + 1
+    assert timing_model.setup_interval(config) == dut.setup_interval == dut.run_cycles + 4
+    assert dut.start_clip_cycles == timing_model.start_clip_cycles(config) == config.coord_bits + 1
+    assert timing_model.run_cycles(config, True) == dut.run_cycles + dut.start_clip_cycles
+
+
+# -- (6) bad commands ------------------------------------------------------------------------
+
+
+def test_bad_commands_are_dropped_and_counted():
+    config = CONFIGS["default"]
+    good = Edge(100, 200, 260, 250, i_in=200, i_out=30)
+    edges = [
+        Edge(50, 50, 50, 50),  # zero length first, on an idle core
+        good,
+        Edge(7, 9, 7, 9, i_in=0, i_out=255),  # zero length
+        Edge(10, 10, 90, 40, i_in=77, i_out=77),  # I_in == I_out
+        Edge(10, 10, 90, 40, i_in=0, i_out=0),
+        Edge(30, 40, 100, 10, inside="right"),
+        Edge(config.max_vertex, 0, config.max_vertex, 0),
+        good,
+    ]
+    run = run_and_check(config, edges, label="bad commands")
+    assert run.errors == 5
+    # Under back-pressure and source idling too.
+    run_and_check(config, edges, seed=11, idle=0.5, stall=0.5, label="bad commands")
+
+
+def test_errors_counter_saturates():
+    config = CONFIGS["small"]
+    dut = EdgeAntialiaser(config, errors_bits=2)
+    bad = edge_payload(config, Edge(3, 3, 3, 3))
+    seen = []
+
+    async def bench(ctx):
+        for _ in range(5):
+            await stream_put(ctx, dut.edges, bad)
+            seen.append(ctx.get(dut.errors))
+        await ctx.tick().repeat(3)
+        seen.append(ctx.get(dut.errors))
+        assert ctx.get(dut.writes.valid) == 0
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    assert seen[-1] == 3, seen
+    assert seen == sorted(seen)
+
+
+# -- (7) throughput --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(("name", "length"), [("default", "P"), ("wide", "P"), ("default", "20L")])
+def test_throughput(name, length):
+    """Edges of at least P (the setup interval) columns leave back to back: one column per
+    clock.
+
+    Two streams: many edges of exactly P columns (the shortest that hide the next setup) and
+    three edges of 20 L columns each. (The small configuration cannot get there: its longest
+    edge has 17 columns, P = 18.)
+    """
+    config = CONFIGS[name]
+    latency = timing_model.setup_latency(config)
+    S = config.subpixel_scale
+    hi = config.max_vertex
+    columns = timing_model.setup_interval(config) if length == "P" else 20 * latency
+    count = max(3, 20 * latency // columns + 1)  # the whole stream >= 20 setup latencies
+    rng = random.Random(3)
+    edges = []
+    for n in range(count):
+        dy = rng.randint(-(columns - 1) * S, (columns - 1) * S)
+        x0 = rng.randint(0, max(0, S // 2 - 1))  # keeps the column count exactly `columns`
+        y0 = rng.randint(max(0, -dy), min(hi, hi - dy))
+        edge = Edge(x0, y0, x0 + (columns - 1) * S, y0 + dy, i_in=n % 2 * config.full_scale)
+        edges.append(edge if n % 2 else Edge(edge.x1, edge.y1, edge.x0, edge.y0, "right"))
+    assert {setup(config, edge).columns for edge in edges} == {columns}
+    run = run_and_check(config, edges, label=f"throughput {name}")
+    clocks = [clock for clock, _ in run.beats]
+    assert clocks == timing_model.beat_cycles(config, edges)  # (also checked in run_and_check)
+    total = len(clocks)
+    assert total >= 19 * latency
+    # Steady state: no gap between edges, exactly as predicted.
+    assert clocks == list(range(latency, latency + total))
+    assert timing_model.sustained_rate(config, columns) == 1
+    # The whole stream from clock 0, latency included.
+    rate = total / (clocks[-1] + 1)
+    timings = timing_model.write_cycles(config, edges)
+    assert rate == timing_model.stream_rate(timings) == total / (latency + total) >= 0.95, rate
+
+
+def test_timing_model_basics():
+    config = CONFIGS["default"]
+    latency = timing_model.setup_latency(config)
+    edge = run_of(config, 3, 4, 5)
+    bad = Edge(1, 1, 1, 1)
+    assert timing_model.beat_cycles(config, [edge]) == list(range(latency, latency + 5))
+    shifted = timing_model.write_cycles(config, [bad, bad, edge])
+    assert [t.accepted for t in shifted] == [0, 2, 4]
+    assert shifted[-1].beats == tuple(range(latency + 4, latency + 9))
+    interval = timing_model.setup_interval(config)
+    assert timing_model.sustained_rate(config, 10) == 10 / interval
+    assert timing_model.sustained_rate(config, interval) == 1
+    assert timing_model.sustained_rate(config, 10, latency) == 10 / interval
+
+
+def test_short_edges_are_setup_bound():
+    config = CONFIGS["default"]
+    interval = timing_model.setup_interval(config)
+    edges = [Edge(16 * n, 100, 16 * n + 16 * 9, 130 + n) for n in range(8)]  # 10 columns
+    run = run_and_check(config, edges, label="short edges")
+    starts = [clock for clock, beat in run.beats if beat["last"]]
+    assert all(b - a == interval for a, b in zip(starts, starts[1:], strict=False)), starts
+    assert timing_model.sustained_rate(config, 10) == 10 / interval
