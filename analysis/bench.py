@@ -1,6 +1,6 @@
 """Accuracy and run time of every method on one seeded set of random edges: `edgeaa bench`.
 
-Edges: `geometry.random_edges` (P0 uniform in a 512 px square, direction uniform, length
+Edges: `geometry.random_image_edges` (P0 uniform in a 512 px square, direction uniform, length
 uniform in [8, 200] px, vertices on the configuration's sub-pixel grid, inside side random,
 full-scale inside on a 0 background). Pixels: the common set of `evaluate` (the pixels
 each edge crosses, columns strictly between its endpoints). Errors are against the exact
@@ -43,7 +43,7 @@ from .evaluate import (
     run_method,
     timed,
 )
-from .geometry import random_edges
+from .geometry import random_image_edges
 from .hardware import hardware_figures
 from .report import Progress, fmt_float, pyplot, save, table
 
@@ -108,7 +108,7 @@ def run_bench(
     baseline = f"edgeaa-{config.mode}"
     if baseline not in methods:
         methods = (baseline, *methods)
-    edges = random_edges(config, count, seed)
+    edges = random_image_edges(config, count, seed)
     pixels, batch = pixel_set(config, edges)
     jobs = peers.fill_jobs(config, edges, batch)
     result = BenchResult(config, seed, len(edges), len(pixels), repeats, baseline)

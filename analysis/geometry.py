@@ -125,7 +125,7 @@ def _ramp(z):
     return np.where(z <= 0, 0.0, np.where(z >= 1, z - 0.5, 0.5 * z * z))
 
 
-def random_edges(
+def random_image_edges(
     config: EdgeConfig,
     count: int,
     seed: int,

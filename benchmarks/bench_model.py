@@ -17,7 +17,7 @@ from edgeaa.model.step import run_edge
 from edgeaa.model.vector import run_edges
 
 
-def random_edges(config: EdgeConfig, count: int, seed: int) -> list[Edge]:
+def random_full_range_edges(config: EdgeConfig, count: int, seed: int) -> list[Edge]:
     """Vertices uniform over the whole coordinate range; intensities and side random."""
     rng = random.Random(seed)
     hi, fs = config.max_vertex, config.full_scale
@@ -39,7 +39,7 @@ def main() -> None:
     parser.add_argument("--accumulator", choices=ACCUMULATORS, default="exact")
     args = parser.parse_args()
     config = EdgeConfig(mode=args.mode, accumulator=args.accumulator)
-    edges = random_edges(config, args.edges, args.seed)
+    edges = random_full_range_edges(config, args.edges, args.seed)
 
     # The vector model runs first: timed after the step model, the garbage collector would
     # walk the step model's millions of Write tuples during it.

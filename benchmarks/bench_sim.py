@@ -15,7 +15,7 @@ import sys
 
 from edgeaa.model import EdgeConfig
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
-from edgeaa.sim.verification.workloads import random_edges
+from edgeaa.sim.verification.workloads import random_sim_edges
 
 
 def main() -> int:
@@ -25,7 +25,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
     config = EdgeConfig()
-    edges = random_edges(config, args.edges, args.seed, max_pixels=64)
+    edges = random_sim_edges(config, args.edges, args.seed, max_pixels=64)
     print(f"core: {config}; machine: {platform.machine()}, {platform.python_version()}")
     print("building the Verilated harness (cached) ...", file=sys.stderr)
     verilator_harness.build(config)
@@ -40,7 +40,7 @@ def main() -> int:
         print("the two simulators disagree", file=sys.stderr)
         return 1
     long = verilator_harness.run(
-        config, random_edges(config, args.long_edges, args.seed, max_pixels=64)
+        config, random_sim_edges(config, args.long_edges, args.seed, max_pixels=64)
     )
     print(f"{'simulator':26} {'edges':>7} {'clocks':>10} {'seconds':>8} {'clocks/s':>12}")
     for name, count, run in (

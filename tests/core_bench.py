@@ -33,7 +33,6 @@ from amaranth.hdl import Shape, Value
 from amaranth.lib import data
 from amaranth.sim import Simulator
 from hypothesis import HealthCheck, Phase, settings
-from hypothesis import strategies as st
 
 from edgeaa.hdl import (
     EdgeAntialiaser,
@@ -45,21 +44,6 @@ from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
 from edgeaa.sim.verification.commands import edge_clip, edge_payload
 from edgeaa.sim.verification.scoreboard import Beat, edge_beats
-
-CONFIGS = {
-    "default": EdgeConfig(),
-    "pw": EdgeConfig(mode="pw"),
-    "seg2": EdgeConfig(mode="seg2"),
-    "seg4": EdgeConfig(mode="seg4"),
-    "truncated": EdgeConfig(accumulator="truncated"),
-    "small": EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4),
-    "wide": EdgeConfig(coord_bits=15, subpixel_bits=8),
-    # The fewest fraction bits allowed: ties of the exact-remainder tests become reachable.
-    "lowfrac": EdgeConfig(
-        coord_bits=5, subpixel_bits=6, intensity_bits=2, frac_bits=8, mode="seg2"
-    ),
-}
-
 
 # -- payload decoding (raw integers are much faster to sample than data.Const) ---------------
 
@@ -175,7 +159,7 @@ def simulate(
                 offering = True
             elif rng is not None and not offering:
                 # The window is sampled with the edge only: anything in the other clocks.
-                ctx.set(dut.clip, random_clip(config, rng))
+                ctx.set(dut.clip, random_clip_port(config, rng))
             ready = rng is None or not rng.random() < stall
             ctx.set(dut.writes.ready, ready)
             (
@@ -453,61 +437,10 @@ def longest_edges(config: EdgeConfig) -> list[Edge]:
     ]
 
 
-def snap(config: EdgeConfig, value: int, grid: str) -> int:
-    """`value` moved onto a pixel centre or corner (exact geometric coincidences)."""
-    S = config.subpixel_scale
-    if grid == "centre":
-        return value - value % S
-    if grid == "corner":
-        return min(value - value % S + S // 2, config.max_vertex)
-    return value
-
-
-@st.composite
-def edge_commands(draw, config: EdgeConfig, max_pixels: int, clip: bool = False):
-    """Edge commands (good or bad) at most `max_pixels` long on each axis, often with their
-    vertices on pixel centres or corners; with `clip`, each with a window (`window_near`)."""
-    hi, full = config.max_vertex, config.full_scale
-    reach = max_pixels * config.subpixel_scale
-    x0, y0 = draw(st.integers(0, hi)), draw(st.integers(0, hi))
-    x1 = draw(st.integers(max(0, x0 - reach), min(hi, x0 + reach)))
-    y1 = draw(st.integers(max(0, y0 - reach), min(hi, y0 + reach)))
-    grid = draw(st.sampled_from(("any", "any", "centre", "corner")))
-    edge = Edge(
-        *(snap(config, value, grid) for value in (x0, y0, x1, y1)),
-        inside=draw(st.sampled_from(("left", "right"))),
-        i_in=draw(st.integers(0, full)),
-        i_out=draw(st.integers(0, full)),
-    )
-    if clip:
-        window = window_near(config, edge, lambda lo, hi: draw(st.integers(lo, hi)))
-        edge = replace(edge, clip=window)
-    return edge
-
-
-def random_clip(config: EdgeConfig, rng: random.Random) -> dict[str, int]:
+def random_clip_port(config: EdgeConfig, rng: random.Random) -> dict[str, int]:
     """Any value of the ``clip`` port (four bounds in [0, 2**W], possibly empty)."""
     top = 1 << config.coord_bits
     return {name: rng.randint(0, top) for name in Clip._fields}
-
-
-def window_near(config: EdgeConfig, edge: Edge, pick) -> Clip | None:
-    """A clip window for `edge`, drawn with ``pick(lo, hi)`` (an integer in [lo, hi]): none,
-    a random one, or bounds within two pixels of the edge's span on both axes, ordered (the
-    window cuts the edge's start, its end, both or nothing) or not (often empty)."""
-    top, S = 1 << config.coord_bits, config.subpixel_scale
-    kind = pick(0, 4)
-    if kind == 0:
-        return None
-    if kind == 1:
-        return Clip(*(pick(0, top) for _ in Clip._fields))
-    bounds = []
-    for a, b in ((edge.x0, edge.x1), (edge.y0, edge.y1)):
-        near = (max(0, min(a, b) // S - 2), min(top, -(-max(a, b) // S) + 2))
-        low, high = pick(*near), pick(*near)
-        bounds.append((min(low, high), max(low, high)) if kind < 4 else (low, high))
-    (x_min, x_max), (y_min, y_max) = bounds
-    return Clip(x_min, y_min, x_max, y_max)
 
 
 def with_window(config: EdgeConfig, edge: Edge, start: int, end: int, *, minor=None) -> Edge:
@@ -523,27 +456,6 @@ def with_window(config: EdgeConfig, edge: Edge, start: int, end: int, *, minor=N
     if st_.x_major:
         return replace(edge, clip=Clip(lo, other[0], hi, other[1]))
     return replace(edge, clip=Clip(other[0], lo, other[1], hi))
-
-
-def random_edges(
-    config: EdgeConfig, rng: random.Random, count: int, max_pixels: int, *, clip: bool = False
-):
-    """Random edge commands (good or bad); with `clip`, each with a window (`window_near`)."""
-    hi, full = config.max_vertex, config.full_scale
-    reach = max_pixels * config.subpixel_scale
-    edges = []
-    for _ in range(count):
-        x0, y0 = rng.randint(0, hi), rng.randint(0, hi)
-        x1 = rng.randint(max(0, x0 - reach), min(hi, x0 + reach))
-        y1 = rng.randint(max(0, y0 - reach), min(hi, y0 + reach))
-        grid = rng.choice(("any", "any", "centre", "corner"))
-        x0, y0, x1, y1 = (snap(config, value, grid) for value in (x0, y0, x1, y1))
-        inside = rng.choice(("left", "right"))
-        edge = Edge(x0, y0, x1, y1, inside, rng.randint(0, full), rng.randint(0, full))
-        if clip:
-            edge = replace(edge, clip=window_near(config, edge, rng.randint))
-        edges.append(edge)
-    return edges
 
 
 def sim_settings(max_examples: int) -> settings:

@@ -28,7 +28,7 @@ def run_cli(capsys, *argv):
 
 
 def random_half_planes(config: EdgeConfig, count: int, seed: int):
-    edges = geometry.random_edges(config, count, seed, region=128, max_length=60)
+    edges = geometry.random_image_edges(config, count, seed, region=128, max_length=60)
     pixels, _ = evaluate.pixel_set(config, edges)
     return edges, pixels
 
@@ -261,7 +261,7 @@ def test_hardware_cycles_per_column_are_the_timing_model_s():
     from edgeaa.model.timing import write_cycles
 
     config = EdgeConfig()
-    edges = workloads.random_edges(config, 40, seed=21)
+    edges = workloads.random_sim_edges(config, 40, seed=21)
     figures = hardware_figures(config, "edgeaa-paper", edges, synthesis=False)
     beats = [clock for timing in write_cycles(config, edges) for clock in timing.beats]
     assert figures.cycles_per_column == pytest.approx((beats[-1] + 1) / len(beats))

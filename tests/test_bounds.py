@@ -5,7 +5,7 @@ the edge's supporting line (the endpoint rule: columns are whole, whatever the e
 
     |coverage - exact| <= error_bound(mode, k) + fixed_point_term(config, setup, column)
 
-and after output rounding, with half an output LSB more. See tests/edges.py for the
+and after output rounding, with half an output LSB more. See tests/error_budget.py for the
 derivation of the fixed-point term.
 """
 
@@ -17,17 +17,16 @@ import random
 from fractions import Fraction
 
 import pytest
-from edges import (
-    CONFIGS,
+from error_budget import (
     bound,
     column_pixels,
-    edges,
     fixed_point_term,
     model_coverage,
     output_coverage,
     slope,
     write_column,
 )
+from fixtures import GEOMETRY_CONFIGS, random_any_length_edge, slope_edges
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -254,7 +253,7 @@ def drift_violations(edge: Edge, config: EdgeConfig, result: EdgeResult, columns
 def check_bounds(config_name: str, accumulator: str, edge: Edge) -> None:
     """All modes on one edge: the bound, and the exact estimate (exact) or the drift premise
     of fixed_point_term (truncated)."""
-    base = CONFIGS[config_name].with_(accumulator=accumulator)
+    base = GEOMETRY_CONFIGS[config_name].with_(accumulator=accumulator)
     cov = ExactCache(base, edge)
     for mode in MODES:
         config = base.with_(mode=mode)
@@ -269,7 +268,7 @@ def check_bounds(config_name: str, accumulator: str, edge: Edge) -> None:
 
 
 def check_completeness(config_name: str, edge: Edge) -> None:
-    base = CONFIGS[config_name]
+    base = GEOMETRY_CONFIGS[config_name]
     cov = ExactCache(base, edge)
     for mode in MODES:
         config = base.with_(mode=mode)
@@ -282,19 +281,23 @@ def check_completeness(config_name: str, edge: Edge) -> None:
 
 
 @pytest.mark.parametrize("accumulator", ACCUMULATORS)
-@pytest.mark.parametrize("config_name", sorted(CONFIGS))
+@pytest.mark.parametrize("config_name", sorted(GEOMETRY_CONFIGS))
 @HYPOTHESIS
 @given(data=st.data())
 def test_error_bound(config_name, accumulator, data):
-    edge = data.draw(edges(CONFIGS[config_name], max_pixels=MAX_PIXELS), label="edge")
+    edge = data.draw(
+        slope_edges(GEOMETRY_CONFIGS[config_name], max_pixels=MAX_PIXELS), label="edge"
+    )
     check_bounds(config_name, accumulator, edge)
 
 
-@pytest.mark.parametrize("config_name", sorted(CONFIGS))
+@pytest.mark.parametrize("config_name", sorted(GEOMETRY_CONFIGS))
 @HYPOTHESIS
 @given(data=st.data())
 def test_completeness(config_name, data):
-    edge = data.draw(edges(CONFIGS[config_name], max_pixels=MAX_PIXELS), label="edge")
+    edge = data.draw(
+        slope_edges(GEOMETRY_CONFIGS[config_name], max_pixels=MAX_PIXELS), label="edge"
+    )
     check_completeness(config_name, edge)
 
 
@@ -305,7 +308,7 @@ def test_completeness(config_name, data):
 @given(data=st.data())
 def test_error_bound_and_completeness_slow(config_name, accumulator, data):
     """More examples and edges of any length (up to 2049 columns)."""
-    edge = data.draw(edges(CONFIGS[config_name]), label="edge")
+    edge = data.draw(slope_edges(GEOMETRY_CONFIGS[config_name]), label="edge")
     check_bounds(config_name, accumulator, edge)
     if accumulator == "exact":
         check_completeness(config_name, edge)
@@ -323,14 +326,14 @@ def columns_overlapped(config: EdgeConfig, edge: Edge) -> list[int]:
     return columns if p1 > p0 else columns[::-1]
 
 
-@pytest.mark.parametrize("config_name", sorted(CONFIGS))
+@pytest.mark.parametrize("config_name", sorted(GEOMETRY_CONFIGS))
 @HYPOTHESIS
 @given(data=st.data())
 def test_inside_left_and_right_are_complementary(config_name, data):
     """Same pixels, same areas: coverage_left + coverage_right == 1 and the two values add up
     to I_in + I_out, per pixel, in every mode and accumulator."""
-    base = CONFIGS[config_name]
-    edge = data.draw(edges(base, max_pixels=32), label="edge")
+    base = GEOMETRY_CONFIGS[config_name]
+    edge = data.draw(slope_edges(base, max_pixels=32), label="edge")
     left = dataclasses.replace(edge, inside="left")
     right = dataclasses.replace(edge, inside="right")
     i_in, i_out = edge.intensities(base)
@@ -346,7 +349,7 @@ def test_inside_left_and_right_are_complementary(config_name, data):
                 assert wl.value + wr.value == i_in + i_out
 
 
-@pytest.mark.parametrize("config_name", sorted(CONFIGS))
+@pytest.mark.parametrize("config_name", sorted(GEOMETRY_CONFIGS))
 @HYPOTHESIS
 @given(data=st.data())
 def test_reversed_edge_is_the_same_half_plane(config_name, data):
@@ -358,8 +361,8 @@ def test_reversed_edge_is_the_same_half_plane(config_name, data):
     boundary (f = 0): rows are [y - 1/2, y + 1/2) in each folded frame, so the primary pixel
     is the row on the near side in each. Two-pixel modes write both rows anyway (for k > 0);
     pw writes the other one, and a k = 0 line writes an area-0 (coverage 0 or 1) pixel."""
-    base = CONFIGS[config_name]
-    edge = data.draw(edges(base, max_pixels=32), label="edge")
+    base = GEOMETRY_CONFIGS[config_name]
+    edge = data.draw(slope_edges(base, max_pixels=32), label="edge")
     other = "right" if edge.inside == "left" else "left"
     reverse = Edge(edge.x1, edge.y1, edge.x0, edge.y0, other, edge.i_in, edge.i_out)
     for mode in MODES:
@@ -388,19 +391,6 @@ def test_reversed_edge_is_the_same_half_plane(config_name, data):
 # -- seeded random edges of any length ----------------------------------------------------
 
 
-def random_edge(rng: random.Random, config: EdgeConfig) -> Edge:
-    """Any edge of the configuration: endpoints uniform over the whole coordinate range."""
-    hi = config.max_vertex
-    while True:
-        x0, y0, x1, y1 = (rng.randint(0, hi) for _ in range(4))
-        if (x0, y0) != (x1, y1):
-            break
-    full = config.full_scale
-    i_in = rng.randint(0, full)
-    i_out = (i_in + rng.randint(1, full)) % (full + 1)
-    return Edge(x0, y0, x1, y1, inside=rng.choice(("left", "right")), i_in=i_in, i_out=i_out)
-
-
 RANDOM_SEEDS = [
     *(pytest.param(seed, ("tiny", "default"), id=f"seed{seed}") for seed in range(4)),
     *(
@@ -417,8 +407,8 @@ def test_random_edges_of_any_length(seed, names):
     (slow run only)."""
     rng = random.Random(seed)
     for name in names:
-        base = CONFIGS[name]
-        edge = random_edge(rng, base)
+        base = GEOMETRY_CONFIGS[name]
+        edge = random_any_length_edge(rng, base)
         cov = ExactCache(base, edge)
         for mode in MODES:
             for accumulator in ACCUMULATORS:
@@ -728,7 +718,7 @@ def check_every_way(base: EdgeConfig, edge: Edge) -> dict[tuple[str, str], EdgeR
     return results
 
 
-DEFAULT = CONFIGS["default"]
+DEFAULT = GEOMETRY_CONFIGS["default"]
 
 
 def px(config: EdgeConfig, *coords, **kwargs) -> Edge:
@@ -833,9 +823,9 @@ def border_edges(config: EdgeConfig):
 @pytest.mark.parametrize(
     "config, coords",
     [
-        pytest.param(CONFIGS[name], c, id=f"{name}-{'-'.join(map(str, c))}")
+        pytest.param(GEOMETRY_CONFIGS[name], c, id=f"{name}-{'-'.join(map(str, c))}")
         for name in ("tiny", "default")
-        for c in border_edges(CONFIGS[name])
+        for c in border_edges(GEOMETRY_CONFIGS[name])
     ],
 )
 def test_edges_at_the_coordinate_limits(config, coords):

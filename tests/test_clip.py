@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
-from edges import CONFIGS, edges
+from fixtures import GEOMETRY_CONFIGS, slope_edges
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -43,12 +43,12 @@ def windows(draw, config: EdgeConfig) -> Clip:
 
 
 @pytest.mark.parametrize("mode", MODES)
-@pytest.mark.parametrize("config_name", sorted(CONFIGS))
+@pytest.mark.parametrize("config_name", sorted(GEOMETRY_CONFIGS))
 @settings(max_examples=150, deadline=None)
 @given(data=st.data())
 def test_clipped_edge_is_the_visible_part_of_the_edge(config_name, mode, data):
-    config = dataclasses.replace(CONFIGS[config_name], mode=mode)
-    edge = data.draw(edges(config, max_pixels=40))
+    config = dataclasses.replace(GEOMETRY_CONFIGS[config_name], mode=mode)
+    edge = data.draw(slope_edges(config, max_pixels=40))
     clip = data.draw(windows(config))
     clipped = dataclasses.replace(edge, clip=clip)
     result = run_edge(config, clipped)
@@ -61,7 +61,7 @@ def test_clipped_edge_is_the_visible_part_of_the_edge(config_name, mode, data):
 @given(data=st.data())
 def test_clipped_start_flag_and_timing(data):
     config = EdgeConfig()
-    edge = data.draw(edges(config, max_pixels=40))
+    edge = data.draw(slope_edges(config, max_pixels=40))
     clip = data.draw(windows(config))
     clipped = dataclasses.replace(edge, clip=clip)
     full, cut = setup(config, edge), setup(config, clipped)

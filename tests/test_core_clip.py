@@ -10,17 +10,15 @@ from dataclasses import replace
 
 import pytest
 from core_bench import (
-    CONFIGS,
     corpus,
-    edge_commands,
     is_good,
     longest_edges,
-    random_edges,
     run_and_check,
     run_of,
     sim_settings,
     with_window,
 )
+from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -90,7 +88,7 @@ def clip_classes(config: EdgeConfig, edges: list[Edge]) -> dict[str, int]:
 def test_clip_corpus(name):
     """Directed windows, back to back (each edge's window differs from the last): writes, bank,
     trace and beat clocks against the model and the timing model."""
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     edges = clipped_corpus(config)
     assert min(clip_classes(config, edges).values()) >= 4, clip_classes(config, edges)
     run_and_check(config, edges, label=f"clip corpus {name}")
@@ -101,9 +99,9 @@ def test_clip_corpus(name):
 NARROW = EdgeConfig(coord_bits=4, subpixel_bits=8, intensity_bits=1)
 
 
-@pytest.mark.parametrize("name", [*CONFIGS, "narrow"])
+@pytest.mark.parametrize("name", [*CORE_CONFIGS, "narrow"])
 def test_clip_hypothesis(name):
-    config = NARROW if name == "narrow" else CONFIGS[name]
+    config = NARROW if name == "narrow" else CORE_CONFIGS[name]
 
     @sim_settings(5)
     @given(st.lists(edge_commands(config, 8, clip=True), min_size=5, max_size=12))
@@ -117,9 +115,9 @@ def test_clip_hypothesis(name):
 def test_clip_backpressure(name, seed):
     """Random windows, random source idle clocks and sink stalls, and a random value on the
     ``clip`` port whenever no edge is offered (the window is sampled with the edge only)."""
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     rng = random.Random(seed)
-    edges = random_edges(config, rng, 16, 12, clip=True) + clipped_corpus(config)[::7]
+    edges = random_edge_commands(config, rng, 16, 12, clip=True) + clipped_corpus(config)[::7]
     edges.insert(3, Edge(4, 4, 4, 4, clip=Clip(0, 0, 0, 0)))  # bad: an error, not "empty"
     classes = clip_classes(config, edges)
     assert min(classes.values()) >= 2, classes
@@ -142,7 +140,7 @@ def test_clip_longest_start_offset(name):
     column; both directions): the start offset is almost the edge's length, so lane A's
     first-pass quotient is near its largest, about 2 dv < 2**(W + s + 2) (beyond the
     accumulator's width in the narrow configuration)."""
-    config = NARROW if name == "narrow" else CONFIGS[name]
+    config = NARROW if name == "narrow" else CORE_CONFIGS[name]
     W, s = config.coord_bits, config.subpixel_bits
     edges = []
     for edge in longest_edges(config):
@@ -163,7 +161,7 @@ def test_clip_latency():
     """Exact clocks: a start-clipped edge on an idle core has its first beat W + 1 clocks later
     than L; an end-clipped one at L; an edge with no column in its window occupies the setup
     for 5 clocks (the next command is accepted 5 clocks after it) and pulses no error."""
-    config = CONFIGS["default"]
+    config = CORE_CONFIGS["default"]
     W = config.coord_bits
     latency = timing_model.setup_latency(config)
     edge = run_of(config, 10, 20, 6)

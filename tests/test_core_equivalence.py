@@ -9,16 +9,14 @@ import random
 
 import pytest
 from core_bench import (
-    CONFIGS,
     corpus,
-    edge_commands,
     is_good,
     longest_edges,
-    random_edges,
     run_and_check,
     run_of,
     sim_settings,
 )
+from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -79,7 +77,7 @@ def boundary_edges(config: EdgeConfig, seed: int, tries: int, per_class: int = 2
     rng = random.Random(seed)
     found: dict[str, int] = {}
     chosen = []
-    for edge in random_edges(config, rng, tries, 6):
+    for edge in random_edge_commands(config, rng, tries, 6):
         if not is_good(config, edge):
             continue
         new = [hit for hit in boundary_states(config, edge) if found.get(hit, 0) < per_class]
@@ -93,17 +91,17 @@ def boundary_edges(config: EdgeConfig, seed: int, tries: int, per_class: int = 2
 # -- (3)-(5) equivalence with run_edge, trace and timing --------------------------------------
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_corpus(name):
     """Every corner case in one run: writes, bank, trace and beat clocks against the model."""
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     cases = corpus(config, longest=name != "wide")
     run_and_check(config, [edge for _, edge in cases], label=f"corpus {name}")
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_hypothesis_edges(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
 
     @sim_settings(6)
     @given(st.lists(edge_commands(config, 8), min_size=5, max_size=15))
@@ -128,18 +126,22 @@ BACKPRESSURE = [
 @pytest.mark.parametrize(("name", "seed", "idle", "stall"), BACKPRESSURE)
 def test_backpressure(name, seed, idle, stall):
     """Random source idle clocks and sink stalls: the same writes, none lost or duplicated."""
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     rng = random.Random(seed)
     edges = [edge for _, edge in corpus(config, longest=False)]
-    edges = random_edges(config, rng, 10, 24) + edges[::3] + random_edges(config, rng, 10, 3)
+    edges = (
+        random_edge_commands(config, rng, 10, 24)
+        + edges[::3]
+        + random_edge_commands(config, rng, 10, 3)
+    )
     edges.insert(5, Edge(4, 4, 4, 4))  # a bad command in the middle of the stream
     run_and_check(config, edges, seed=seed, idle=idle, stall=stall, label=f"backpressure {name}")
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_boundary_states(name):
     """Edges the model shows to hit the ties of every compare (and the t < 0 clamp)."""
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     edges = boundary_edges(config, seed=1, tries=1500)
     hits = set().union(*(boundary_states(config, edge) for edge in edges))
     assert {"carry tie", "row step tie", "rounding tie"} <= hits or name == "truncated", hits
@@ -155,7 +157,7 @@ def test_boundary_states(name):
 def test_handover(seed):
     """Mixed lengths around the setup interval P: the bank handover and the FINAL wait, clock
     for clock."""
-    config = CONFIGS["default"]
+    config = CORE_CONFIGS["default"]
     interval = timing_model.setup_interval(config)
     # After an edge longer than two setups the next bank waits for the stepper and the
     # setup after it waits in FINAL: a one-column edge then shows a late bank write.
@@ -171,26 +173,26 @@ def test_handover(seed):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_longest_edges_slow(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     run_and_check(config, longest_edges(config), label=f"longest {name}")
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [name for name in CONFIGS if name != "wide"])
+@pytest.mark.parametrize("name", [name for name in CORE_CONFIGS if name != "wide"])
 def test_random_long_edges_slow(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     rng = random.Random(20)
-    edges = random_edges(config, rng, 12, 1 << config.coord_bits)
+    edges = random_edge_commands(config, rng, 12, 1 << config.coord_bits)
     run_and_check(config, edges, label=f"random long {name}")
     run_and_check(config, edges, seed=21, idle=0.3, stall=0.4, label=f"random long {name}")
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_hypothesis_edges_slow(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
 
     @sim_settings(25)
     @given(st.lists(edge_commands(config, 40), min_size=10, max_size=30), st.integers(0, 2**32))

@@ -11,16 +11,9 @@ import pytest
 from amaranth.back import rtlil
 from amaranth.hdl import Shape, Value, signed, unsigned
 from amaranth.lib.wiring import In, Out
-from core_bench import (
-    CONFIGS,
-)
+from fixtures import CORE_CONFIGS
 
-from edgeaa.hdl import (
-    EdgeAntialiaser,
-    EdgeStepper,
-    clip_layout,
-    verilog,
-)
+from edgeaa.hdl import EdgeAntialiaser, EdgeStepper, clip_layout, verilog
 from edgeaa.model import Clip
 from edgeaa.sim.simulators.verilator import lint
 from edgeaa.sim.synthesis import muldiv_cells
@@ -28,13 +21,9 @@ from edgeaa.sim.synthesis import muldiv_cells
 # -- (1) interface ---------------------------------------------------------------------------
 
 
-def _members(signature):
-    return {name: (member.flow, member) for name, member in signature.members.items()}
-
-
 @pytest.mark.parametrize("name", ["default", "small"])
 def test_interface(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     W, s = config.coord_bits, config.subpixel_bits
     I = config.intensity_bits  # noqa: E741
     dut = EdgeAntialiaser(config)
@@ -74,9 +63,9 @@ def test_interface(name):
         EdgeAntialiaser(config, errors_bits=0)
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_stepper_registers_use_the_width_table(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     stepper = EdgeAntialiaser(config).stepper
     for reg_name, width in config.register_widths().items():
         sig = getattr(stepper, reg_name, None)
@@ -96,21 +85,21 @@ def test_stepper_registers_use_the_width_table(name):
 # -- (8) no multiplier or divider in the stepping loop ---------------------------------------
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_stepper_has_no_multiplier_or_divider(name):
-    assert muldiv_cells(EdgeStepper(CONFIGS[name])) == {}
+    assert muldiv_cells(EdgeStepper(CORE_CONFIGS[name])) == {}
 
 
 def test_setup_uses_bit_serial_units():
     # Not a requirement (the setup may multiply), but the design has no $mul/$div at all.
-    assert muldiv_cells(EdgeAntialiaser(CONFIGS["seg4"])) == {}
+    assert muldiv_cells(EdgeAntialiaser(CORE_CONFIGS["seg4"])) == {}
 
 
 # -- Verilog ---------------------------------------------------------------------------------
 
 
 def test_verilog_ports():
-    text = verilog(CONFIGS["default"])
+    text = verilog(CORE_CONFIGS["default"])
     header = re.search(r"module edgeaa_core\((.*?)\);", text, re.S).group(1)
     ports = {port.strip() for port in header.split(",")}
     assert ports == {
@@ -139,5 +128,5 @@ def test_verilog_ports():
 @pytest.mark.parametrize("name", ["default", "seg4", "small"])
 def test_verilog_lints(name):
     """verilator --lint-only -Wall, with only the documented waivers of sim/verilator.py."""
-    proc = lint(verilog(CONFIGS[name]))
+    proc = lint(verilog(CORE_CONFIGS[name]))
     assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -9,15 +9,14 @@ import pytest
 from amaranth.hdl import Module, ResetInserter, Signal, Value
 from amaranth.sim import Simulator
 from core_bench import (
-    CONFIGS,
     corpus,
     decoder,
-    edge_commands,
     expected_bank,
     is_visible,
     longest_edges,
     sim_settings,
 )
+from fixtures import CORE_CONFIGS, edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -79,9 +78,9 @@ def check_setup(config: EdgeConfig, edges: list[Edge]):
         )
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_setup_matches_model(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     max_pixels = 1 << config.coord_bits  # full-range edges: only the setup is simulated
 
     @sim_settings(5)
@@ -93,14 +92,14 @@ def test_setup_matches_model(name):
 
 
 def test_setup_corner_cases():
-    for config in CONFIGS.values():
+    for config in CORE_CONFIGS.values():
         check_setup(config, [edge for _, edge in corpus(config)] + longest_edges(config))
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_setup_matches_model_slow(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
 
     @sim_settings(40)
     @given(st.lists(edge_commands(config, 1 << config.coord_bits), min_size=10, max_size=20))

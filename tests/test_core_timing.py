@@ -10,10 +10,10 @@ import random
 import pytest
 from amaranth.sim import Simulator
 from core_bench import (
-    CONFIGS,
     run_and_check,
     run_of,
 )
+from fixtures import CORE_CONFIGS
 
 from edgeaa.hdl import (
     EdgeAntialiaser,
@@ -24,9 +24,9 @@ from edgeaa.sim.verification.commands import edge_payload
 from edgeaa.sim.verification.streams import stream_put
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_setup_latency_is_the_timing_model(name):
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     dut = EdgeAntialiaser(config)
     depth = timing_model.pipeline_depth(config)
     assert dut.stepper.latency == depth == (2 if config.segments <= 1 else 3)
@@ -42,7 +42,7 @@ def test_setup_latency_is_the_timing_model(name):
 
 
 def test_bad_commands_are_dropped_and_counted():
-    config = CONFIGS["default"]
+    config = CORE_CONFIGS["default"]
     good = Edge(100, 200, 260, 250, i_in=200, i_out=30)
     edges = [
         Edge(50, 50, 50, 50),  # zero length first, on an idle core
@@ -61,7 +61,7 @@ def test_bad_commands_are_dropped_and_counted():
 
 
 def test_errors_counter_saturates():
-    config = CONFIGS["small"]
+    config = CORE_CONFIGS["small"]
     dut = EdgeAntialiaser(config, errors_bits=2)
     bad = edge_payload(config, Edge(3, 3, 3, 3))
     seen = []
@@ -94,7 +94,7 @@ def test_throughput(name, length):
     three edges of 20 L columns each. (The small configuration cannot get there: its longest
     edge has 17 columns, P = 18.)
     """
-    config = CONFIGS[name]
+    config = CORE_CONFIGS[name]
     latency = timing_model.setup_latency(config)
     S = config.subpixel_scale
     hi = config.max_vertex
@@ -124,7 +124,7 @@ def test_throughput(name, length):
 
 
 def test_timing_model_basics():
-    config = CONFIGS["default"]
+    config = CORE_CONFIGS["default"]
     latency = timing_model.setup_latency(config)
     edge = run_of(config, 3, 4, 5)
     bad = Edge(1, 1, 1, 1)
@@ -139,7 +139,7 @@ def test_timing_model_basics():
 
 
 def test_short_edges_are_setup_bound():
-    config = CONFIGS["default"]
+    config = CORE_CONFIGS["default"]
     interval = timing_model.setup_interval(config)
     edges = [Edge(16 * n, 100, 16 * n + 16 * 9, 130 + n) for n in range(8)]  # 10 columns
     run = run_and_check(config, edges, label="short edges")

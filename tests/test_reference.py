@@ -11,7 +11,7 @@ import math
 from fractions import Fraction
 
 import pytest
-from edges import CONFIGS, edges
+from fixtures import GEOMETRY_CONFIGS, slope_edges
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -72,14 +72,14 @@ def line_point(config: EdgeConfig, edge: Edge, t: Fraction):
     return x0 + t * (x1 - x0), y0 + t * (y1 - y0)
 
 
-config_names = st.sampled_from(sorted(CONFIGS))
+config_names = st.sampled_from(sorted(GEOMETRY_CONFIGS))
 
 
 @st.composite
 def edge_and_pixel(draw, max_pixels=None):
     """An edge and a pixel within two pixels of a point of its supporting line."""
-    config = CONFIGS[draw(config_names)]
-    edge = draw(edges(config, max_pixels=max_pixels))
+    config = GEOMETRY_CONFIGS[draw(config_names)]
+    edge = draw(slope_edges(config, max_pixels=max_pixels))
     # A point of the supporting line, also beyond the endpoints.
     t = Fraction(draw(st.integers(-64, 64 + 64)), 64)
     px, py = line_point(config, edge, t)
@@ -130,10 +130,10 @@ def test_float_matches_fraction(case):
 
 
 @SETTINGS
-@given(edges(CONFIGS["default"]), st.integers(0, 64))
+@given(slope_edges(GEOMETRY_CONFIGS["default"]), st.integers(0, 64))
 def test_float_matches_fraction_to_1e_12(edge, t64):
     """At coordinates below 2**11, at every slope: agreement to 1e-12."""
-    config = CONFIGS["default"]
+    config = GEOMETRY_CONFIGS["default"]
     px, py = line_point(config, edge, Fraction(t64, 64))
     pixels = [
         (math.floor(px + HALF) + dx, math.floor(py + HALF) + dy)
@@ -202,7 +202,7 @@ def test_column_sums_to_trapezoid(case, data):
     ],
 )
 def test_named_values(coords, inside, x, y, expected):
-    config = CONFIGS["default"]
+    config = GEOMETRY_CONFIGS["default"]
     edge = Edge.from_pixels(config, *coords, inside=inside)
     assert exact_coverage(config, edge, x, y) == expected
     assert clipped_area(config, edge, x, y) == expected

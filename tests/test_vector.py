@@ -6,6 +6,7 @@ import random
 
 import numpy as np
 import pytest
+from fixtures import VECTOR_CONFIG_FIELDS, random_span_edge, span_edges, vector_config
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -16,33 +17,12 @@ from edgeaa.model.vector import WriteBatch, _fits_int64, run_edge_vector, run_ed
 
 COMBOS = [(mode, acc) for mode in MODES for acc in ACCUMULATORS]
 
-# name -> EdgeConfig fields (frac_bits of small_frac is raised to the mode's minimum if needed)
-CONFIGS = {
-    "default": {},
-    "wide": dict(coord_bits=15, subpixel_bits=8),
-    "tiny": dict(coord_bits=4, subpixel_bits=0, intensity_bits=4),
-    "small_frac": dict(frac_bits=9),
-    # ifix up to 2**64 - 2**48: beyond int64, exercises the Python-int fallback and object areas
-    "bigint": dict(intensity_bits=16, frac_bits=48),
-}
-
-# Hypothesis edges stay within this many pixels of P0 so the step model runs fast; the corner
-# corpus and the seeded batches cover full-length edges.
-SPAN_PX = 96
 
 HYPOTHESIS = settings(
     max_examples=150,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
-
-
-def make_config(name: str, mode: str = "paper", accumulator: str = "exact") -> EdgeConfig:
-    fields = dict(CONFIGS[name], mode=mode, accumulator=accumulator)
-    config = EdgeConfig(**{k: v for k, v in fields.items() if k != "frac_bits"})
-    if "frac_bits" in fields:
-        config = config.with_(frac_bits=max(fields["frac_bits"], config.min_frac_bits))
-    return config
 
 
 def step_batch(config: EdgeConfig, edges: list[Edge]):
@@ -95,68 +75,19 @@ def assert_identical(config: EdgeConfig, edges: list[Edge], context: str = ""):
 # -- edge generation ---------------------------------------------------------------------------
 
 
-def _intensities(config: EdgeConfig, i_in, i_out: int):
-    """Make I_in differ from I_out (I_in None means full scale)."""
-    resolved = config.full_scale if i_in is None else i_in
-    if resolved == i_out:
-        i_out = (i_out + 1) % (config.full_scale + 1)
-    return i_in, i_out
-
-
-@st.composite
-def edges(draw, config: EdgeConfig, span_px: int = SPAN_PX) -> Edge:
-    hi, scale = config.max_vertex, config.subpixel_scale
-    span = min(hi, draw(st.sampled_from([1, 4, span_px])) * scale + scale - 1)
-    x0, y0 = draw(st.integers(0, hi)), draw(st.integers(0, hi))
-    shape = draw(st.sampled_from(["any", "any", "horizontal", "vertical", "diagonal"]))
-    x1 = draw(st.integers(max(0, x0 - span), min(hi, x0 + span)))
-    y1 = draw(st.integers(max(0, y0 - span), min(hi, y0 + span)))
-    if shape == "horizontal":
-        y1 = y0
-    elif shape == "vertical":
-        x1 = x0
-    elif shape == "diagonal":
-        d = min(abs(x1 - x0), y0 if y1 < y0 else hi - y0)
-        y1 = y0 + (d if y1 >= y0 else -d)
-        x1 = x0 + (d if x1 >= x0 else -d)
-    if (x0, y0) == (x1, y1):
-        x1 = x0 + 1 if x0 < hi else x0 - 1
-    inside = draw(st.sampled_from(["left", "right"]))
-    i_in = draw(st.none() | st.integers(0, config.full_scale))
-    i_out = draw(st.integers(0, config.full_scale))
-    i_in, i_out = _intensities(config, i_in, i_out)
-    return Edge(x0, y0, x1, y1, inside, i_in, i_out)
-
-
-def random_edge(rng: random.Random, config: EdgeConfig, span_px: int | None = None) -> Edge:
-    hi = config.max_vertex
-    span = hi if span_px is None else min(hi, span_px * config.subpixel_scale)
-    while True:
-        x0, y0 = rng.randint(0, hi), rng.randint(0, hi)
-        x1 = rng.randint(max(0, x0 - span), min(hi, x0 + span))
-        y1 = rng.randint(max(0, y0 - span), min(hi, y0 + span))
-        if (x0, y0) != (x1, y1):
-            break
-    fs = config.full_scale
-    i_in, i_out = _intensities(
-        config, rng.choice([None, rng.randint(0, fs)]), rng.choice([0, rng.randint(0, fs)])
-    )
-    return Edge(x0, y0, x1, y1, rng.choice(["left", "right"]), i_in, i_out)
-
-
 # -- hypothesis: single edges and batches, every config x mode x accumulator ------------------
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(VECTOR_CONFIG_FIELDS))
 @HYPOTHESIS
 @given(data=st.data())
 def test_batches_identical(name, data):
     """Every mode and both accumulators on the same drawn batch (1 to 4 edges)."""
     mode = data.draw(st.sampled_from(MODES), label="mode")
-    base = make_config(name, mode)
-    batch = data.draw(st.lists(edges(base), min_size=1, max_size=4), label="edges")
+    base = vector_config(name, mode)
+    batch = data.draw(st.lists(span_edges(base), min_size=1, max_size=4), label="edges")
     for accumulator in ACCUMULATORS:
-        config = make_config(name, mode, accumulator)
+        config = vector_config(name, mode, accumulator)
         assert_identical(config, batch, "batch")
 
 
@@ -165,10 +96,10 @@ def test_batches_identical(name, data):
 def test_object_fallback_matches_int64(data):
     """The Python-int path gives the int64 path's writes (longer edges: no step model here)."""
     mode = data.draw(st.sampled_from(MODES), label="mode")
-    config = make_config("default", mode)
-    batch = data.draw(st.lists(edges(config, span_px=2048), min_size=1, max_size=3))
+    config = vector_config("default", mode)
+    batch = data.draw(st.lists(span_edges(config, span_px=2048), min_size=1, max_size=3))
     for accumulator in ACCUMULATORS:
-        config = make_config("default", mode, accumulator)
+        config = vector_config("default", mode, accumulator)
         fast, slow = run_edges(config, batch), run_edges(config, batch, force_object=True)
         assert batch_rows(fast) == batch_rows(slow)
         assert fast.coverage().tolist() == slow.coverage().tolist()
@@ -241,9 +172,9 @@ def corner_corpus(config: EdgeConfig) -> list[tuple[str, Edge]]:
 
 
 @pytest.mark.parametrize("mode, accumulator", COMBOS)
-@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("name", list(VECTOR_CONFIG_FIELDS))
 def test_corner_corpus(name, mode, accumulator):
-    config = make_config(name, mode, accumulator)
+    config = vector_config(name, mode, accumulator)
     corpus = corner_corpus(config)
     names = [n for n, _ in corpus]
     batch, expected = assert_identical(config, [e for _, e in corpus], "corner corpus")
@@ -258,14 +189,14 @@ def test_corner_corpus(name, mode, accumulator):
 
 
 def test_corner_corpus_covers_what_it_names():
-    config = make_config("default")
+    config = vector_config("default")
     for _name, edge in corner_corpus(config):
         setup(config, edge)  # all valid
     kinds = {n.split("/")[0] for n, _ in corner_corpus(config)}
     assert {f"octant{o}" for o in range(8)} <= kinds
     assert {"single_column_shallow", "single_column_steep", "longest_diag"} <= kinds
     assert {f"diag45_{d}" for d in ("ne", "nw", "se", "sw")} <= kinds
-    wide = [make_config("wide", m, a) for m, a in COMBOS]
+    wide = [vector_config("wide", m, a) for m, a in COMBOS]
     assert sum("longest_diag/" in n for c in wide for n, _ in corner_corpus(c)) == 2
     octants = set()
     for o in range(8):
@@ -281,8 +212,8 @@ def test_corner_corpus_covers_what_it_names():
 def test_seeded_mixed_batch(mode, accumulator):
     seed = 20240 + COMBOS.index((mode, accumulator))
     rng = random.Random(seed)
-    config = make_config("default", mode, accumulator)
-    batch = [random_edge(rng, config, rng.choice([2, 16, 128, None])) for _ in range(40)]
+    config = vector_config("default", mode, accumulator)
+    batch = [random_span_edge(rng, config, rng.choice([2, 16, 128, None])) for _ in range(40)]
     _, expected = assert_identical(config, batch, f"seed {seed}:")
     for k in range(0, len(batch), 7):  # single edges through the one-edge entry point
         alone = [(0, *row[1:]) for row in expected if row[0] == k]
@@ -297,11 +228,11 @@ def test_int64_overflow_fallback(mode):
     seed = 7 + MODES.index(mode)
     rng = random.Random(seed)
     batch = [
-        random_edge(rng, config, 8),
+        random_span_edge(rng, config, 8),
         Edge(0, 0, 5000 * 16, 5000 * 16 - 3, "left", None, 0),  # ~5000 rows of 2**50
-        random_edge(rng, config, 8),
+        random_span_edge(rng, config, 8),
         Edge(hi, 0, hi - 4500 * 16 - 5, 4500 * 16, "right", 0, config.full_scale),
-        random_edge(rng, config, 8),
+        random_span_edge(rng, config, 8),
     ]
     fits = [_fits_int64(setup(config, e)) for e in batch]
     assert fits == [True, False, True, False, True], f"seed {seed}: {fits}"
@@ -343,7 +274,7 @@ def _outcome(fn):
 @HYPOTHESIS
 @given(data=st.data())
 def test_invalid_edges_raise_the_same_error(data):
-    config = make_config(data.draw(st.sampled_from(["default", "tiny"])))
+    config = vector_config(data.draw(st.sampled_from(["default", "tiny"])))
     edge = data.draw(maybe_invalid_edges(config))
     step = _outcome(lambda: run_edge(config, edge))
     vector = _outcome(lambda: run_edges(config, [edge]))
@@ -398,9 +329,9 @@ def test_width_checks_agree(monkeypatch, register):
     rng = random.Random(seed)
     outcomes = []
     for mode, accumulator in WIDTH_COMBOS:
-        config = make_config("tiny", mode, accumulator)
+        config = vector_config("tiny", mode, accumulator)
         batch = [e for n, e in corner_corpus(config) if n.endswith(("left_full", "in_below_out"))]
-        batch += [random_edge(rng, config) for _ in range(10)]
+        batch += [random_span_edge(rng, config) for _ in range(10)]
         monkeypatch.setattr(EdgeConfig, "register_widths", narrowed)
         for edge in batch:
             step = _outcome(lambda e=edge, c=config: run_edge(c, e))

@@ -10,7 +10,7 @@ from ...model import Clip, Edge, EdgeConfig, EdgeError, setup
 CLIP_KINDS = ("empty", "start", "end", "both", "loose")
 
 
-def random_edges(
+def random_sim_edges(
     config: EdgeConfig,
     count: int,
     seed: int,

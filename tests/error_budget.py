@@ -1,4 +1,4 @@
-"""Shared helpers of the bound tests: configurations, edge strategies and the error budget.
+"""The error budget of the bound tests (test_bounds.py): slope, bound and coverages of a write.
 
 `fixed_point_term` is the model's fixed-point allowance of one write (docs/algorithm.md).
 """
@@ -7,17 +7,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from hypothesis import strategies as st
-
 from edgeaa.model import Edge, EdgeConfig, EdgeResult, EdgeSetup, Write, error_bound, reference
-
-# The configurations every bound test runs on (mode and accumulator are set per test).
-CONFIGS = {
-    "default": EdgeConfig(),
-    "wide": EdgeConfig(coord_bits=15, subpixel_bits=8),
-    "tiny": EdgeConfig(coord_bits=5, subpixel_bits=0, intensity_bits=4),
-}
-TWO_PIXEL_MODES = ("paper", "seg2", "seg4")
 
 
 def fixed_point_term(config: EdgeConfig, setup: EdgeSetup, column: int) -> Fraction:
@@ -60,42 +50,3 @@ def output_coverage(config: EdgeConfig, edge: Edge, write: Write) -> Fraction:
 def column_pixels(setup: EdgeSetup, column: int, x: int, y: int, reach: int = 2):
     """The pixels of a column around its primary pixel (x, y), rows -reach .. +reach."""
     return [(x + r * setup.row_dx, y + r * setup.row_dy) for r in range(-reach, reach + 1)]
-
-
-# -- hypothesis strategies ------------------------------------------------------------------
-
-
-def _anchor(lo: int, hi: int):
-    """Integers in [lo, hi], with the ends drawn often."""
-    return st.one_of(st.sampled_from((lo, hi)), st.integers(lo, hi))
-
-
-@st.composite
-def edges(draw, config: EdgeConfig, max_pixels: int | None = None) -> Edge:
-    """Edges of `config` in all eight octants, both inside sides and any intensities.
-
-    The major delta is at most max_pixels pixels (default: the whole coordinate range); short
-    deltas and the special slopes 0 and 1 are drawn often.
-    """
-    scale = config.subpixel_scale
-    hi = config.max_vertex
-    limit = hi if max_pixels is None else min(hi, max_pixels * scale)
-    major = draw(
-        st.one_of(
-            st.integers(1, min(limit, 3 * scale)),
-            st.integers(1, limit),
-            st.just(limit),
-        )
-    )
-    minor = draw(st.one_of(st.sampled_from((0, major)), st.integers(0, major)))
-    swap = draw(st.booleans())
-    du = draw(st.sampled_from((1, -1))) * major
-    dv = draw(st.sampled_from((1, -1))) * minor
-    dx, dy = (dv, du) if swap else (du, dv)
-    x0 = draw(_anchor(max(0, -dx), min(hi, hi - dx)))
-    y0 = draw(_anchor(max(0, -dy), min(hi, hi - dy)))
-    inside = draw(st.sampled_from(("left", "right")))
-    full = config.full_scale
-    i_in = draw(st.one_of(st.none(), st.integers(0, full)))
-    i_out = draw(st.integers(0, full).filter(lambda v: v != (full if i_in is None else i_in)))
-    return Edge(x0, y0, x0 + dx, y0 + dy, inside=inside, i_in=i_in, i_out=i_out)
