@@ -141,8 +141,9 @@ from amaranth.hdl._ast import Assign, Operator, Slice, Switch
 from amaranth.hdl._xfrm import ValueTransformer
 from amaranth.lib import data
 
-from ...hdl.core import EdgeAntialiaser, clip_layout, edge_layout, setup_layout, write_layout
-from ...model.config import EdgeConfig, RegisterWidth
+from ....hdl.core import EdgeAntialiaser, clip_layout, edge_layout, setup_layout, write_layout
+from ....model.config import EdgeConfig
+from . import spec
 
 __all__ = [
     "CHECKS",
@@ -363,263 +364,6 @@ class _Prebuilt(Elaboratable):
 # -- arithmetic helpers ----------------------------------------------------------------------
 
 
-def _fits(value, width: RegisterWidth):
-    return (value >= width.min) & (value <= width.max)
-
-
-def _all(conditions):
-    result = Value.cast(1)
-    for condition in conditions:
-        result = result & condition
-    return result
-
-
-def _implies(a, b):
-    return ~a | b
-
-
-def _fields(view, layout) -> types.SimpleNamespace:
-    """A namespace of the fields of a `data.View` (array fields as lists)."""
-    out = {}
-    for name, fld in layout:
-        value = view[name]
-        if isinstance(fld.shape, data.ArrayLayout):
-            value = [value[j] for j in range(fld.shape.length)]
-        out[name] = value
-    return types.SimpleNamespace(**out)
-
-
-def _fold(config: EdgeConfig, cmd) -> types.SimpleNamespace:
-    """The model's `setup` fold of a command (full-width expressions, no division)."""
-    s, scale = config.subpixel_bits, config.subpixel_scale
-    dx, dy = cmd.x1 - cmd.x0, cmd.y1 - cmd.y0
-    adx, ady = Mux(dx < 0, -dx, dx), Mux(dy < 0, -dy, dy)
-    x_major = adx >= ady
-    p0, q0, p1 = (
-        Mux(x_major, cmd.x0, cmd.y0),
-        Mux(x_major, cmd.y0, cmd.x0),
-        Mux(x_major, cmd.x1, cmd.y1),
-    )
-    dp, dq = Mux(x_major, dx, dy), Mux(x_major, dy, dx)
-    major_neg, minor_neg = dp <= 0, dq < 0
-    u0, v0, u1 = Mux(major_neg, -p0, p0), Mux(minor_neg, -q0, q0), Mux(major_neg, -p1, p1)
-    c0 = ((u0 << 1) + scale) >> (s + 1)
-    c1 = -((scale - (u1 << 1)) >> (s + 1))
-    e = (c0 << s) - u0
-    diff = cmd.i_in - cmd.i_out
-    i_d = Mux(diff < 0, -diff, diff)
-    det_pos = x_major ^ major_neg ^ minor_neg  # the model's det == +1
-    inside_is_a = (cmd.inside == 0) == det_pos
-    i_a, i_b = Mux(inside_is_a, cmd.i_in, cmd.i_out), Mux(inside_is_a, cmd.i_out, cmd.i_in)
-    bad = ((cmd.x0 == cmd.x1) & (cmd.y0 == cmd.y1)) | (cmd.i_in == cmd.i_out)
-    return types.SimpleNamespace(
-        x_major=x_major,
-        major_neg=major_neg,
-        minor_neg=minor_neg,
-        u0=u0,
-        du=Mux(x_major, adx, ady),
-        dv=Mux(x_major, ady, adx),
-        q0=q0,
-        v0=v0,
-        c0=c0,
-        c1=c1,
-        columns=c1 - c0 + 1,
-        e=e,
-        e_mag=Mux(e < 0, -e, e),
-        i_d=i_d,
-        value_base=i_b,
-        value_neg=i_a < i_b,
-        bad=bad,
-    )
-
-
-def _window(config: EdgeConfig, fold, clip) -> types.SimpleNamespace:
-    """The model's cut of a folded command's columns to its clip window (`setup`): the folded
-    bounds ``lo, hi``, the columns ``first .. last`` (``columns`` of them, none when <= 0),
-    whether the start moved, and lane A's first-pass multiplier ``2 (first S - u0)`` as the
-    core loads it (``W + s + 2`` bits; ``2 |e|`` followed by ``W + 1`` zero bits when the
-    start did not move)."""
-    W, s = config.coord_bits, config.subpixel_bits
-    neg = fold.major_neg
-    lo = Mux(
-        fold.x_major,
-        Mux(neg, -clip.x_max, clip.x_min),
-        Mux(neg, -clip.y_max, clip.y_min),
-    )
-    hi = Mux(
-        fold.x_major,
-        Mux(neg, -clip.x_min, clip.x_max),
-        Mux(neg, -clip.y_min, clip.y_max),
-    )
-    start_clip = fold.c0 < lo
-    first = Mux(start_clip, lo, fold.c0)
-    last = Mux(fold.c1 > hi, hi, fold.c1)
-    bits = W + s + 2
-    offset = ((first << s) - fold.u0) << 1
-    multiplier = Mux(start_clip, offset[:bits], (fold.e_mag << (W + 2))[:bits])
-    return types.SimpleNamespace(
-        lo=lo,
-        hi=hi,
-        start_clip=start_clip,
-        first=first,
-        last=last,
-        columns=last - first + 1,
-        multiplier=multiplier,
-        bits=bits,
-    )
-
-
-def _axes(b) -> types.SimpleNamespace:
-    """Major/minor coordinates and steps of a bank-like record (screen coordinates)."""
-    x_major = b.col_dx != 0
-    major = Mux(x_major, b.x, b.y)
-    minor = Mux(x_major, b.y, b.x)
-    col_step = Mux(x_major, b.col_dx, b.col_dy)
-    row_step = Mux(x_major, b.row_dy, b.row_dx)
-    end = major + Mux(col_step < 0, -b.remaining, b.remaining)
-    steps_ok = _all(
-        [
-            b.col_dx != -2,
-            b.col_dy != -2,
-            b.row_dx != -2,
-            b.row_dy != -2,
-            x_major == (b.col_dy == 0),
-            x_major == (b.row_dx == 0),
-            x_major == (b.row_dy != 0),
-        ]
-    )
-    return types.SimpleNamespace(
-        x_major=x_major,
-        major=major,
-        minor=minor,
-        col_step=col_step,
-        row_step=row_step,
-        end=end,
-        steps_ok=steps_ok,
-    )
-
-
-def _constants_ok(config: EdgeConfig, b) -> dict[str, Value]:
-    """Invariants of the per-edge constants and the accumulator of a bank-like record."""
-    F, n = config.F, config.segments
-    i_d = b.ifix >> F
-    k_bit = (b.khr << 1) >= b.du
-    out = {
-        "du_nonzero": b.du != 0,
-        "ifix_form": (b.ifix[:F] == 0) & (i_d != 0),
-        "jq_below_ifix": b.jq < b.ifix,
-        "jr_below_du": b.jr < b.du,
-        "kr_below_du": b.kr < b.du,
-        "khr_below_du": b.khr < b.du,
-        "kq_at_most_ifix": (b.kq < b.ifix) | ((b.kq == b.ifix) & (b.kr == 0)),
-        "value_range": ((b.value_sign == 1) & (b.value_base + i_d <= config.full_scale))
-        | ((b.value_sign == -1) & (b.value_base >= i_d)),
-    }
-    if config.accumulator == "exact":
-        out["half_increment"] = (b.kq == (b.khq << 1) + k_bit) & (
-            b.kr == (b.khr << 1) - Mux(k_bit, b.du, 0)
-        )
-    else:
-        out["half_increment"] = _all(
-            [b.jr == 0, b.kr == 0, b.khr == 0, (b.kq - (b.khq << 1)) >> 1 == 0]
-        )
-    if n:
-        log2n = n.bit_length() - 1
-        conds = [b.seg_thresholds[j - 1] == ((b.kq * j) >> (log2n + 1)) for j in range(1, n)]
-        conds += [
-            b.seg_intercepts[j] == ((b.kq * (8 * j * (j + 1) + 1)) >> (6 + 2 * log2n))
-            for j in range(n)
-        ]
-        out["segment_constants"] = _all(conds)
-    return out
-
-
-def _major_ok(config: EdgeConfig, axes) -> Value:
-    top = 1 << config.coord_bits
-    return _all([axes.steps_ok, axes.major >= 0, axes.major <= top, axes.end >= 0, axes.end <= top])
-
-
-def _column(config: EdgeConfig, b, axes) -> types.SimpleNamespace:
-    """The model's `column_areas`, `output_value` and loop step in full width."""
-    widths = config.register_widths()
-    F, n = config.F, config.segments
-    fits = {}
-    out = {}
-    if n == 0:
-        two, below, t = Value.cast(0), Value.cast(0), Value.cast(0)
-        area0, area1 = b.jq, Value.cast(0)
-    else:
-        rsum_a = b.jr + b.khr
-        carry_a = rsum_a >= b.du
-        dq_a = b.jq + b.khq + carry_a - b.ifix
-        dr_a = rsum_a - Mux(carry_a, b.du, 0)
-        above = (dq_a > 0) | ((dq_a == 0) & (dr_a != 0))
-        borrow = b.khr < b.jr
-        dq_b = b.khq - b.jq - borrow
-        dr_b = b.khr - b.jr + Mux(borrow, b.du, 0)
-        below_raw = (dq_b > 0) | ((dq_b == 0) & (dr_b != 0))
-        below = ~above & below_raw
-        two = above | below
-        dq = Mux(above, dq_a, dq_b)
-        shift = 2 + n.bit_length() - 1
-        if n == 1:
-            t = (dq >> shift) - b.seg_intercepts[0]
-        else:
-            seg = sum(dq >= threshold for threshold in b.seg_thresholds)
-            t = ((dq * (2 * n - 1)) >> shift) - b.seg_intercepts[n - 1]
-            for j in reversed(range(n - 1)):
-                t = Mux(seg == j, ((dq * (2 * j + 1)) >> shift) - b.seg_intercepts[j], t)
-        t_clamped = Mux(t < 0, 0, t)
-        area0 = Mux(above, b.jq - t_clamped, Mux(below, b.jq + t_clamped, b.jq))
-        area1 = Mux(above, t_clamped, b.ifix - t_clamped)
-        fits["dq"] = _fits(dq_a, widths["dq"]) & _fits(dr_a, widths["dr"])
-        fits["dq"] &= _implies(~above, _fits(dq_b, widths["dq"]) & _fits(dr_b, widths["dr"]))
-        fits["t"] = _implies(two, _fits(t, widths["t"]))
-        out.update(above=above, below_raw=below_raw, dq=dq, dq_above=dq_a, borrow=borrow, t=t)
-
-    def value(area):
-        rounded = (area + (1 << (F - 1))) >> F
-        return Mux(b.value_sign < 0, b.value_base - rounded, b.value_base + rounded)
-
-    value0, value1 = value(area0), value(area1)
-    fits["area"] = _fits(area0, widths["area"]) & _implies(two, _fits(area1, widths["area"]))
-    fits["value"] = _fits(value0, widths["value"]) & _implies(two, _fits(value1, widths["value"]))
-    # The neighbour: row + 1 along the stepping direction, or row - 1 when the edge enters
-    # from below.
-    x1 = Mux(below, b.x - b.row_dx, b.x + b.row_dx)
-    y1 = Mux(below, b.y - b.row_dy, b.y + b.row_dy)
-    # The loop step.
-    rsum = b.jr + b.kr
-    carry = rsum >= b.du
-    jsum = b.jq + b.kq + carry
-    row_step = jsum >= b.ifix
-    jq_next = Mux(row_step, jsum - b.ifix, jsum)
-    jr_next = rsum - Mux(carry, b.du, 0)
-    fits["jsum"] = _fits(jsum, widths["jsum"])
-    fits["next_acc"] = _fits(jq_next, widths["jq"]) & _fits(jr_next, widths["jr"])
-    top = 1 << config.coord_bits
-    major_next = axes.major + axes.col_step
-    fits["next_major"] = (major_next >= -1) & (major_next <= top + 1)
-    minor_next = axes.minor + Mux(row_step, axes.row_step, 0)
-    minor1 = axes.minor + Mux(below, -axes.row_step, axes.row_step)
-    return types.SimpleNamespace(
-        **out,
-        area0=area0,
-        area1=area1,
-        jsum=jsum,
-        two=two,
-        below=below,
-        value0=value0,
-        value1=value1,
-        x1=x1,
-        y1=y1,
-        fits=fits,
-        row_step=row_step,
-        minor_next=minor_next,
-        minor1=minor1,
-    )
-
-
 # -- the harness -----------------------------------------------------------------------------
 
 
@@ -738,8 +482,8 @@ class FormalHarness(Elaboratable):
         edges, writes, bank = core.edges, core.writes, stepper.setup
         beat = data.View(write_layout(config), ctx.payload)
         cmd = data.View(edge_layout(config), view.signal("cmd"))
-        incoming_bad = _fold(config, edges.payload).bad
-        cmd_bad = _fold(config, cmd).bad
+        incoming_bad = spec.fold(config, edges.payload).bad
+        cmd_bad = spec.fold(config, cmd).bad
         accepted = edges.valid & edges.ready
         finished = writes.valid & writes.ready & beat.last
         error = ctx.error
@@ -769,7 +513,7 @@ class FormalHarness(Elaboratable):
             (fold & ~cmd_bad) + window + run + final + bank.valid + stepper.active + last_waiting
         )
         held_bad = (fold & cmd_bad) + error
-        idle = _all(
+        idle = spec.all_(
             [
                 view.in_state("IDLE"),
                 ~error,
@@ -782,7 +526,7 @@ class FormalHarness(Elaboratable):
         contiguous = []
         younger = stepper.active
         for valid, is_last in positions:
-            contiguous.append(_implies(valid & ~is_last, younger))
+            contiguous.append(spec.implies(valid & ~is_last, younger))
             younger = valid
 
         # Tags: the command's badness, carried along the pipeline by the harness.
@@ -797,7 +541,9 @@ class FormalHarness(Elaboratable):
             m.d.sync += [
                 tag.eq(older) for tag, older in zip(tags, [tag_stepper, *tags[:-1]], strict=True)
             ]
-        tagged = [_implies(valid, ~tag) for (valid, _), tag in zip(positions, tags, strict=True)]
+        tagged = [
+            spec.implies(valid, ~tag) for (valid, _), tag in zip(positions, tags, strict=True)
+        ]
 
         errors_max = (1 << core.errors_bits) - 1
         pulses = Signal(core.errors_bits)
@@ -809,19 +555,19 @@ class FormalHarness(Elaboratable):
             (pending_bad == held_bad, "count: bad commands in flight"),
             ((pending_good >= 0) & (pending_bad >= 0), "count: more out than accepted"),
             (pending_good + pending_bad <= capacity(core), "count: capacity"),
-            (_implies(idle, (pending_good == 0) & (pending_bad == 0)), "count: idle"),
-            (_implies(error, view.in_state("IDLE")), "count: error only in IDLE"),
-            (_all(contiguous), "count: columns of an edge are contiguous"),
-            (_implies(window | run | final, ~cmd_bad), "count: bad command in the setup"),
-            (_implies(bank.valid, ~tag_bank), "count: bad command in the bank"),
-            (_implies(stepper.active, ~tag_stepper), "count: bad command stepped"),
-            (_all(tagged), "count: column or beat of a bad command"),
+            (spec.implies(idle, (pending_good == 0) & (pending_bad == 0)), "count: idle"),
+            (spec.implies(error, view.in_state("IDLE")), "count: error only in IDLE"),
+            (spec.all_(contiguous), "count: columns of an edge are contiguous"),
+            (spec.implies(window | run | final, ~cmd_bad), "count: bad command in the setup"),
+            (spec.implies(bank.valid, ~tag_bank), "count: bad command in the bank"),
+            (spec.implies(stepper.active, ~tag_stepper), "count: bad command stepped"),
+            (spec.all_(tagged), "count: column or beat of a bad command"),
             (core.errors == saturated, "count: errors counts error pulses"),
         ]
         # The registers loaded with the command (white-box helpers for the induction).
         not_idle = ~view.in_state("IDLE")
         for target, value in view.accept_writes():
-            count_properties.append((_implies(not_idle, target == value), "count: accepted"))
+            count_properties.append((spec.implies(not_idle, target == value), "count: accepted"))
         for condition, message in count_properties:
             self._emit(m, "count", condition, message)
         if "drop" in self.covers:
@@ -851,10 +597,10 @@ class FormalHarness(Elaboratable):
 
         # -- the setup: fold registers and the multiply-divide lanes ------------------------
         cmd = data.View(edge_layout(config), view.signal("cmd"))
-        fold = _fold(config, cmd)
+        fold = spec.fold(config, cmd)
         # The window is the one the core sampled with the command (the harness drives the
         # port freely in every clock).
-        win = _window(config, fold, data.View(clip_layout(config), view.signal("clip_r")))
+        win = spec.window(config, fold, data.View(clip_layout(config), view.signal("clip_r")))
         window, run, final = view.in_state("WINDOW"), view.in_state("RUN"), view.in_state("FINAL")
         busy = window | run | final
         cut = run | final  # the columns are cut to the window, lane A is loaded
@@ -865,13 +611,13 @@ class FormalHarness(Elaboratable):
         next_bank = Signal(setup_layout(config))
         for start, stop, value in view.bank_writes:
             m.d.comb += Value.cast(next_bank)[start:stop].eq(value)
-        nb = _fields(next_bank, setup_layout(config))
-        nb_axes = _axes(nb)
+        nb = spec.fields(next_bank, setup_layout(config))
+        nb_axes = spec.axes(nb)
         # The registers the setup loads when it accepts a command, besides the command: each
         # equals its assigned value with the command in place of the incoming payload.
         not_idle = ~view.in_state("IDLE")
         for target, value in view.accept_writes():
-            check(_implies(not_idle, target == value), f"accepted {target.name}")
+            check(spec.implies(not_idle, target == value), f"accepted {target.name}")
         # FOLD registers c0, c1 (as first, last) and the folded window; WINDOW cuts the
         # columns to it and registers v0; the first RUN clock forms the column count, the
         # second ends an edge with no column (so from counter 2 on there is one at least).
@@ -879,22 +625,22 @@ class FormalHarness(Elaboratable):
         counted = final | (run & (counter >= 1))
         visible = final | (run & (counter >= 2))
         late = [
-            _implies(busy, (view.signal("lo") == win.lo) & (view.signal("hi") == win.hi)),
-            _implies(window, (first == fold.c0) & (last == fold.c1) & (counter == 0)),
-            _implies(cut, (first == win.first) & (last == win.last)),
-            _implies(cut, start_clip == win.start_clip),
-            _implies(cut, view.signal("v0_r") == fold.v0),
-            _implies(counted, view.signal("columns") == win.columns),
-            _implies(visible, (win.columns >= 1) & (nb.remaining == win.columns - 1)),
-            _implies(cut, nb_axes.major == Mux(fold.major_neg, -win.first, win.first)),
-            _implies(visible, _major_ok(config, nb_axes)),
+            spec.implies(busy, (view.signal("lo") == win.lo) & (view.signal("hi") == win.hi)),
+            spec.implies(window, (first == fold.c0) & (last == fold.c1) & (counter == 0)),
+            spec.implies(cut, (first == win.first) & (last == win.last)),
+            spec.implies(cut, start_clip == win.start_clip),
+            spec.implies(cut, view.signal("v0_r") == fold.v0),
+            spec.implies(counted, view.signal("columns") == win.columns),
+            spec.implies(visible, (win.columns >= 1) & (nb.remaining == win.columns - 1)),
+            spec.implies(cut, nb_axes.major == Mux(fold.major_neg, -win.first, win.first)),
+            spec.implies(visible, spec.major_ok(config, nb_axes)),
         ]
-        check(_all(late), "fold and window registers")
+        check(spec.all_(late), "fold and window registers")
         optional = []
         if view.has("neg_du"):
             optional.append(view.signal("neg_du") == -du)
         registers = {
-            "fold_registers": _all(
+            "fold_registers": spec.all_(
                 [
                     ~fold.bad,
                     du == fold.du,
@@ -906,7 +652,7 @@ class FormalHarness(Elaboratable):
                     view.signal("value_neg") == fold.value_neg,
                 ]
             ),
-            "fold_geometry": _all(
+            "fold_geometry": spec.all_(
                 [
                     du != 0,
                     dv <= du,
@@ -916,7 +662,7 @@ class FormalHarness(Elaboratable):
                     fold.columns <= top + 1,
                 ]
             ),
-            "bank_steps": _all(
+            "bank_steps": spec.all_(
                 [
                     nb_axes.steps_ok,
                     nb_axes.x_major == fold.x_major,
@@ -928,20 +674,20 @@ class FormalHarness(Elaboratable):
             ),
         }
         for name, condition in registers.items():
-            check(_implies(busy, condition), name)
+            check(spec.implies(busy, condition), name)
         # |e| and its sign from FOLD; e is positive when the window moved the first column
         # (WINDOW clears the sign: no sign fix-up then).
         e_neg = view.signal("e_neg")
         e_ok = [
-            _implies(busy, view.signal("e_mag_r") == fold.e_mag),
-            _implies(window, e_neg == (fold.e < 0)),
-            _implies(cut, e_neg == ((fold.e < 0) & ~win.start_clip)),
+            spec.implies(busy, view.signal("e_mag_r") == fold.e_mag),
+            spec.implies(window, e_neg == (fold.e < 0)),
+            spec.implies(cut, e_neg == ((fold.e < 0) & ~win.start_clip)),
         ]
-        check(_all(e_ok), "e registers")
+        check(spec.all_(e_ok), "e registers")
         run_cycles = I + F + 1
         long_run = run_cycles + W + 1
         check(
-            _implies(run, counter < Mux(start_clip, long_run, run_cycles)),
+            spec.implies(run, counter < Mux(start_clip, long_run, run_cycles)),
             "counter",
         )
 
@@ -966,7 +712,7 @@ class FormalHarness(Elaboratable):
                 conds += [
                     view.signal(f"{name}_digit") == 0,
                     (q < consumed) | ((q == consumed) & (r == 0)),
-                    _implies(x == 0, (q == 0) & (r == 0)),
+                    spec.implies(x == 0, (q == 0) & (r == 0)),
                 ]
             else:
                 conds.append((q < (consumed << (s + 1))) | ((consumed == 0) & (q == 0) & (r == 0)))
@@ -977,7 +723,7 @@ class FormalHarness(Elaboratable):
             q_next = (q << 1) + quotient_digit
             if digit is not None:
                 q_next = q_next + Mux(bit, digit, 0)
-            return _all(conds), (total < (1 << (len(r) + 2))) & (q_next < (1 << len(q)))
+            return spec.all_(conds), (total < (1 << (len(r) + 2))) & (q_next < (1 << len(q)))
 
         # Lane B is loaded in FOLD and steps from the first RUN clock (counter 0).
         steps_b = Mux(final | (counter >= I + F - 1), I + F - 1, counter)
@@ -985,8 +731,8 @@ class FormalHarness(Elaboratable):
             "lane_b", I + F - 1, i_d << (F - 1), I + F - 1, steps_b, x_at_most=lambda x: x == dv
         )
         lane_b, lane_b_step = lane_b
-        check(_implies(busy, lane_b), "lane_b")
-        check(_implies(run & (counter < I + F - 1), lane_b_step), "lane_b step fits")
+        check(spec.implies(busy, lane_b), "lane_b")
+        check(spec.implies(run & (counter < I + F - 1), lane_b_step), "lane_b step fits")
         # Lane A is loaded in WINDOW: pass 1 over the W + s + 2 bit multiplier (stopped after
         # s + 1 bits when the start did not move), the fix-up at `fixup`, then pass 2.
         a_bits_a = max(win.bits, pass2_bits)
@@ -999,8 +745,8 @@ class FormalHarness(Elaboratable):
             x_at_most=lambda x: x == dv,
         )
         pass1, pass1_step = pass1
-        check(_implies(run & (counter <= fixup), pass1), "lane_a pass 1")
-        check(_implies(run & (counter < fixup), pass1_step), "lane_a pass 1 step fits")
+        check(spec.implies(run & (counter <= fixup), pass1), "lane_a pass 1")
+        check(spec.implies(run & (counter < fixup), pass1_step), "lane_a pass 1 step fits")
         in_pass2 = (run & (counter > fixup)) | final
         steps_a = Mux(final, pass2_bits, (counter - (fixup + 1))[: len(counter)])
         pass2 = lane(
@@ -1013,19 +759,19 @@ class FormalHarness(Elaboratable):
             digit=view.signal("lane_a_digit"),
         )
         pass2, pass2_step = pass2
-        check(_implies(in_pass2, pass2), "lane_a pass 2")
-        check(_implies(run & (counter > fixup), pass2_step), "lane_a pass 2 step fits")
+        check(spec.implies(in_pass2, pass2), "lane_a pass 2")
+        check(spec.implies(run & (counter > fixup), pass2_step), "lane_a pass 2 step fits")
         # The start row is in the image. Not checked for an edge whose start the window moved:
         # there it follows from q' = floor(2 e dv / du) <= 2 dv + S - 1 with e up to du + S/2,
         # a product of two per-edge values that SAT-based induction cannot handle (with
         # |e| <= S/2 the linear q' <= 2 |e| <= S suffices). Such an edge's start row is
         # followed as a ghost (`start_moved` below) and its bound left to simulation.
         bank_row = (nb_axes.minor >= 0) & (nb_axes.minor <= top)
-        check(_implies(in_pass2 & ~win.start_clip, bank_row), "bank start row")
+        check(spec.implies(in_pass2 & ~win.start_clip, bank_row), "bank start row")
 
         # What FINAL writes: once both lanes are done, all bank invariants.
-        for name, condition in _constants_ok(config, nb).items():
-            check(_implies(final, condition), f"next bank {name}")
+        for name, condition in spec.constants_ok(config, nb).items():
+            check(spec.implies(final, condition), f"next bank {name}")
         # Newer cores register kq, kr in the clock after lane B's last step.
         if view.is_register("kq"):
             kq, kr = view.signal("kq"), view.signal("kr")
@@ -1033,7 +779,7 @@ class FormalHarness(Elaboratable):
             k_bit = (b_r << 1) >= du
             k_ready = final | (run & (counter > I + F - 1))
             check(
-                _implies(
+                spec.implies(
                     k_ready,
                     (kq == (b_q << 1) + k_bit) & (kr == (b_r << 1) - Mux(k_bit, du, 0)),
                 ),
@@ -1042,11 +788,11 @@ class FormalHarness(Elaboratable):
 
         # -- the bank -----------------------------------------------------------------------
         bank = stepper.setup
-        bk = _fields(bank.payload, setup_layout(config))
-        bk_axes = _axes(bk)
-        for name, condition in _constants_ok(config, bk).items():
-            check(_implies(bank.valid, condition), f"bank {name}")
-        check(_implies(bank.valid, _major_ok(config, bk_axes)), "bank major axis")
+        bk = spec.fields(bank.payload, setup_layout(config))
+        bk_axes = spec.axes(bk)
+        for name, condition in spec.constants_ok(config, bk).items():
+            check(spec.implies(bank.valid, condition), f"bank {name}")
+        check(spec.implies(bank.valid, spec.major_ok(config, bk_axes)), "bank major axis")
         # Ghost flags: the edge in the bank / the stepper had its start moved by the window
         # (its start row is not bounded here; see "bank start row" above).
         moved_bank, moved_stepper = Signal(name="start_moved_bank"), Signal(name="start_moved")
@@ -1055,7 +801,7 @@ class FormalHarness(Elaboratable):
         with m.If(bank.valid & bank.ready):
             m.d.sync += moved_stepper.eq(moved_bank)
         bank_row = (bk_axes.minor >= 0) & (bk_axes.minor <= top)
-        check(_implies(bank.valid & ~moved_bank, bank_row), "bank start row")
+        check(spec.implies(bank.valid & ~moved_bank, bank_row), "bank start row")
 
         # -- the stepper --------------------------------------------------------------------
         st = types.SimpleNamespace(
@@ -1084,12 +830,12 @@ class FormalHarness(Elaboratable):
             seg_thresholds=stepper.seg_thresholds,
             seg_intercepts=stepper.seg_intercepts,
         )
-        st_axes = _axes(st)
+        st_axes = spec.axes(st)
         active = stepper.active
-        for name, condition in _constants_ok(config, st).items():
-            check(_implies(active, condition), f"stepper {name}")
-        check(_implies(active, _major_ok(config, st_axes)), "stepper major axis")
-        column = _column(config, st, st_axes)
+        for name, condition in spec.constants_ok(config, st).items():
+            check(spec.implies(active, condition), f"stepper {name}")
+        check(spec.implies(active, spec.major_ok(config, st_axes)), "stepper major axis")
+        column = spec.column(config, st, st_axes)
         # The minor axis: monotonic, at most one row per column, from a start row in range.
         # The harness follows the row in a wider ghost register, so that the proof does not
         # depend on the row staying within the register (only the bounded check shows that).
@@ -1106,12 +852,12 @@ class FormalHarness(Elaboratable):
             ]
         rows = Mux(st_axes.row_step < 0, start_row - row, row - start_row)
         check(
-            _implies(
+            spec.implies(
                 active,
-                _all(
+                spec.all_(
                     [
                         row[: W + 2] == st_axes.minor[: W + 2],
-                        _implies(~moved_stepper, (start_row >= 0) & (start_row <= top)),
+                        spec.implies(~moved_stepper, (start_row >= 0) & (start_row <= top)),
                         start_remaining <= top,
                         st.remaining <= start_remaining,
                         rows >= 0,
@@ -1122,18 +868,18 @@ class FormalHarness(Elaboratable):
             "stepper rows stepped",
         )
         for name, condition in column.fits.items():
-            check(_implies(active, condition), f"column {name} fits")
+            check(spec.implies(active, condition), f"column {name} fits")
         if self.fault == "tight_jq":
-            check(_implies(active, st.jq < (st.ifix >> 1)), "false invariant jq < ifix / 2")
+            check(spec.implies(active, st.jq < (st.ifix >> 1)), "false invariant jq < ifix / 2")
 
         # The per-edge constants the stepper derives at load (`EdgeStepper.derive`).
         derived = stepper.derive(st) if hasattr(stepper, "derive") else {}
         for name, value in derived.items():
-            check(_implies(active, stepper.derived[name] == value), f"stepper derived {name}")
+            check(spec.implies(active, stepper.derived[name] == value), f"stepper derived {name}")
         # Observation wires of the column being stepped.
-        check(_implies(active, view.stepper_signal("jsum") == column.jsum), "stepper jsum wire")
+        check(spec.implies(active, view.stepper_signal("jsum") == column.jsum), "stepper jsum wire")
         if config.segments:
-            check(_implies(active, view.stepper_signal("dq") == column.dq), "stepper dq wire")
+            check(spec.implies(active, view.stepper_signal("dq") == column.dq), "stepper dq wire")
 
         # The beat must equal the full-width column of the stepper's registers when the
         # column was stepped: the harness carries a snapshot of the registers along the
@@ -1151,16 +897,16 @@ class FormalHarness(Elaboratable):
             self._pipeline(ctx, st, active, column, beat, check_pipe, check_beat)
 
         if "minor" in self.checks or "minor" in self.assumes:
-            minor_ok = _all(
+            minor_ok = spec.all_(
                 [
                     st_axes.minor >= 0,
                     st_axes.minor <= top,
-                    _implies(column.two, (column.minor1 >= -1) & (column.minor1 <= top + 1)),
+                    spec.implies(column.two, (column.minor1 >= -1) & (column.minor1 <= top + 1)),
                     column.minor_next >= -1,
                     column.minor_next <= top + 1,
                 ]
             )
-            self._emit(m, "minor", _implies(active, minor_ok), "minor: rows within the image")
+            self._emit(m, "minor", spec.implies(active, minor_ok), "minor: rows within the image")
         for condition, message in asserts:
             self._emit(m, "bounds", condition, message)
         for condition, message in pipe_checks:
@@ -1214,12 +960,12 @@ class FormalHarness(Elaboratable):
         if latency == 2:
             # Stage p1: valid/last as the snapshot; the snapshot satisfies the stepper invariants.
             s1, v1 = snaps[0]
-            c1 = _column(config, s1, _axes(s1))
+            c1 = spec.column(config, s1, spec.axes(s1))
             check(stepper.stage_valid[0] == v1, "p1 valid")
-            check(_implies(v1, stepper.stage_last[0] == (s1.remaining == 0)), "p1 last")
-            for name, condition in _constants_ok(config, s1).items():
-                check(_implies(v1, condition), f"p1 snapshot {name}")
-            check(_implies(v1, _axes(s1).steps_ok), "p1 snapshot steps")
+            check(spec.implies(v1, stepper.stage_last[0] == (s1.remaining == 0)), "p1 last")
+            for name, condition in spec.constants_ok(config, s1).items():
+                check(spec.implies(v1, condition), f"p1 snapshot {name}")
+            check(spec.implies(v1, spec.axes(s1).steps_ok), "p1 snapshot steps")
             p1 = view.stepper_signal
             neg = s1.value_sign < 0
             i_d = s1.ifix >> F
@@ -1243,12 +989,12 @@ class FormalHarness(Elaboratable):
                 == ((s1.jq ^ neg.replicate(vw)) + (s1.value_base << F) + (1 << (F - 1)))[:vw],
             }
             for name, condition in lemmas.items():
-                check(_implies(v1, condition), f"p1 register {name}")
+                check(spec.implies(v1, condition), f"p1 register {name}")
             # The areas observed as the column leaves p1.
             check(
-                _implies(
+                spec.implies(
                     stepper.area_step,
-                    (stepper.area0 == c1.area0) & _implies(c1.two, stepper.area1 == c1.area1),
+                    (stepper.area0 == c1.area0) & spec.implies(c1.two, stepper.area1 == c1.area1),
                 ),
                 "p1 areas",
             )
@@ -1258,9 +1004,9 @@ class FormalHarness(Elaboratable):
         check = check_output
         s2, v2 = snaps[-1]
         bits = config.coord_bits + 2
-        c2 = _column(config, s2, _axes(s2))
+        c2 = spec.column(config, s2, spec.axes(s2))
         check(writes.valid == v2, "beat valid")
-        match = _all(
+        match = spec.all_(
             [
                 beat.lane0.x == s2.x,
                 beat.lane0.y == s2.y,
@@ -1269,7 +1015,7 @@ class FormalHarness(Elaboratable):
                 beat.last == (s2.remaining == 0),
                 # Coordinates modulo the register width: the rows are bounded only by the
                 # bounded `minor` check (here the ghost row may reach 2**(W + 1)).
-                _implies(
+                spec.implies(
                     c2.two,
                     (beat.lane1.x[:bits] == c2.x1[:bits])
                     & (beat.lane1.y[:bits] == c2.y1[:bits])
@@ -1277,7 +1023,7 @@ class FormalHarness(Elaboratable):
                 ),
             ]
         )
-        check(_implies(v2, match), "beat equals the full-width column")
+        check(spec.implies(v2, match), "beat equals the full-width column")
 
 
 # -- running SymbiYosys ----------------------------------------------------------------------

@@ -1,0 +1,5 @@
+"""`python -m edgeaa.sim.verification.formal [proof ...]`."""
+
+from . import main
+
+raise SystemExit(main())
