@@ -10,8 +10,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
+from .column import IntArith
 from .config import EdgeConfig
 
 INSIDE_SIDES = ("left", "right")
@@ -188,66 +189,131 @@ def segment_constants(config: EdgeConfig, kq: int) -> tuple[tuple[int, ...], tup
     return thresholds, intercepts
 
 
+@dataclass
+class Fold:
+    """An edge folded into the first octant: u along the major axis and v along the minor,
+    both increasing (`fold`). Fields are ints and bools in the model, values in the formal
+    specification."""
+
+    x_major: Any  # |dx| >= |dy|
+    major_neg: Any  # the major axis steps down (u = -p)
+    minor_neg: Any  # the minor axis steps down (v = -q)
+    u0: Any  # folded coordinates of P0 and P1, sub-pixel units
+    v0: Any
+    u1: Any
+    du: Any  # |major delta|, the remainder modulus
+    dv: Any  # |minor delta|
+    c0: Any  # first and last column whose interior the edge's projection overlaps
+    c1: Any
+    inside_is_a: Any  # the inside is the A side (towards smaller v)
+    i_d: Any  # |I_in - I_out|
+    value_base: Any  # I_B, the intensity at zero A-side coverage
+    value_neg: Any  # I_A < I_B: the value falls as the A-side area grows
+
+
+def fold(a, config: EdgeConfig, x0, y0, x1, y1, i_in, i_out, inside_left) -> Fold:
+    """Fold an edge command into the first octant (`edgeaa.model.column` explains `a`).
+
+    The columns are those whose interior the projection overlaps: floor(u0 + 1/2) ..
+    ceil(u1 - 1/2). A swap of the axes or one mirror flips left and right (det)."""
+    s, S = config.subpixel_bits, config.subpixel_scale
+    dx, dy = x1 - x0, y1 - y0
+    adx, ady = a.select(dx < 0, -dx, dx), a.select(dy < 0, -dy, dy)
+    x_major = adx >= ady
+    major_neg = a.select(x_major, dx, dy) <= 0
+    minor_neg = a.select(x_major, dy, dx) < 0
+    p0, q0, p1 = a.select(x_major, x0, y0), a.select(x_major, y0, x0), a.select(x_major, x1, y1)
+    u0, u1 = a.select(major_neg, -p0, p0), a.select(major_neg, -p1, p1)
+    diff = i_in - i_out
+    # det = +1: the folding map keeps orientation; then the left of travel is the A side.
+    det_pos = x_major ^ major_neg ^ minor_neg
+    inside_is_a = inside_left == det_pos
+    i_a, i_b = a.select(inside_is_a, i_in, i_out), a.select(inside_is_a, i_out, i_in)
+    return Fold(
+        x_major=x_major,
+        major_neg=major_neg,
+        minor_neg=minor_neg,
+        u0=u0,
+        v0=a.select(minor_neg, -q0, q0),
+        u1=u1,
+        du=a.select(x_major, adx, ady),
+        dv=a.select(x_major, ady, adx),
+        c0=((u0 << 1) + S) >> (s + 1),
+        c1=-((S - (u1 << 1)) >> (s + 1)),
+        inside_is_a=inside_is_a,
+        i_d=a.select(diff < 0, -diff, diff),
+        value_base=i_b,
+        value_neg=i_a < i_b,
+    )
+
+
+@dataclass
+class Window:
+    """A folded edge's columns cut to the clip window along the major axis (`window`)."""
+
+    lo: Any  # the window's major-axis bounds, folded like u
+    hi: Any
+    start_clip: Any  # the window moved the first column: c0 < lo
+    first: Any  # max(c0, lo)
+    last: Any  # min(c1, hi); none visible when last < first
+
+
+def window(a, folded: Fold, clip) -> Window:
+    """Cut the columns c0 .. c1 to the clip window's major-axis bounds (x_min .. x_max for an
+    x-major edge), which fold like u: (min, max), or (-max, -min) when the axis steps down."""
+    neg = folded.major_neg
+    lo = a.select(
+        folded.x_major,
+        a.select(neg, -clip.x_max, clip.x_min),
+        a.select(neg, -clip.y_max, clip.y_min),
+    )
+    hi = a.select(
+        folded.x_major,
+        a.select(neg, -clip.x_min, clip.x_max),
+        a.select(neg, -clip.y_min, clip.y_max),
+    )
+    start_clip = folded.c0 < lo
+    first = a.select(start_clip, lo, folded.c0)
+    last = a.select(folded.c1 > hi, hi, folded.c1)
+    return Window(lo=lo, hi=hi, start_clip=start_clip, first=first, last=last)
+
+
 def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     """Fold the edge into the first octant and compute the loop's constants and start state."""
     validate(config, edge)
-    s, F = config.subpixel_bits, config.F
-    S = config.subpixel_scale
-    dx, dy = edge.x1 - edge.x0, edge.y1 - edge.y0
-    x_major = abs(dx) >= abs(dy)
-    if x_major:
-        p0, q0, dp, dq = edge.x0, edge.y0, dx, dy
-    else:
-        p0, q0, dp, dq = edge.y0, edge.x0, dy, dx
-    step_major = 1 if dp > 0 else -1
-    step_minor = 1 if dq >= 0 else -1
-    du, dv = abs(dp), abs(dq)
-    # Normalised coordinates: u along the major axis, v along the minor, both increasing.
-    u0, v0, u1 = step_major * p0, step_minor * q0, step_major * (p0 + dp)
-
-    # Columns whose interior the edge's projection overlaps: floor(u0 + 1/2) .. ceil(u1 - 1/2),
-    # cut to the clip window's major-axis bounds (folded like u; an empty cut keeps c0).
-    c0 = floor_div(2 * u0 + S, 2 * S)
-    c1 = -floor_div(S - 2 * u1, 2 * S)
-    clip = edge.window(config)
-    lo, hi = (clip.x_min, clip.x_max) if x_major else (clip.y_min, clip.y_max)
-    if step_major < 0:
-        lo, hi = -hi, -lo
-    first, last = max(c0, lo), min(c1, hi)
-    columns = max(last - first + 1, 0)
-    clipped_start = columns > 0 and first > c0
-    if columns:
-        c0 = first
+    s, F, S = config.subpixel_bits, config.F, config.subpixel_scale
+    a = IntArith(config)
+    i_in, i_out = edge.intensities(config)
+    f = fold(a, config, edge.x0, edge.y0, edge.x1, edge.y1, i_in, i_out, edge.inside == "left")
+    w = window(a, f, edge.window(config))
+    columns = max(w.last - w.first + 1, 0)
+    clipped_start = columns > 0 and w.start_clip
+    c0 = w.first if columns else f.c0  # an empty cut keeps c0
 
     # Line height at the centre of column c0: vc = num / den pixels.
-    num = v0 * du + dv * (c0 * S - u0)
-    den = S * du
+    num = f.v0 * f.du + f.dv * (c0 * S - f.u0)
+    den = S * f.du
     row0 = floor_div(2 * num + den, 2 * den)  # row whose span [y - 1/2, y + 1/2) holds vc
     mf = 2 * num + den - 2 * row0 * den  # f = vc - (row0 - 1/2) = mf / (2 den), in [0, 1)
 
-    i_in, i_out = edge.intensities(config)
-    # Orientation of the folding map: a swap or one mirror flips left and right.
-    det = (1 if x_major else -1) * step_major * step_minor
-    # In the folded frame the left of travel (du, dv) is the side of smaller v: the A side.
-    inside_is_a = (edge.inside == "left") == (det == 1)
-    i_a, i_b = (i_in, i_out) if inside_is_a else (i_out, i_in)
-    ifix = abs(i_a - i_b) << F
-
-    jq, jr = divmod(abs(i_a - i_b) * mf << (F - s - 1), du)
-    kq, kr = divmod(abs(i_a - i_b) * dv << F, du)
-    khq, khr = divmod(abs(i_a - i_b) * dv << (F - 1), du)
+    i_d, du = f.i_d, f.du
+    jq, jr = divmod(i_d * mf << (F - s - 1), du)
+    kq, kr = divmod(i_d * f.dv << F, du)
+    khq, khr = divmod(i_d * f.dv << (F - 1), du)
     if config.accumulator == "truncated":
         jr = kr = khr = 0  # the paper's fixed point: remainders dropped
     thresholds, intercepts = segment_constants(config, kq)
 
+    step_major, step_minor = -1 if f.major_neg else 1, -1 if f.minor_neg else 1
+
     def screen(major: int, minor: int) -> tuple[int, int]:
-        return (major, minor) if x_major else (minor, major)
+        return (major, minor) if f.x_major else (minor, major)
 
     x, y = screen(step_major * c0, step_minor * row0)
     col_dx, col_dy = screen(step_major, 0)
     row_dx, row_dy = screen(0, step_minor)
     return EdgeSetup(
-        x_major=x_major,
+        x_major=f.x_major,
         columns=columns,
         clipped_start=clipped_start,
         x=x,
@@ -257,17 +323,17 @@ def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
         row_dx=row_dx,
         row_dy=row_dy,
         du=du,
-        dv=dv,
-        ifix=ifix,
+        dv=f.dv,
+        ifix=i_d << F,
         jq=jq,
         jr=jr,
         kq=kq,
         kr=kr,
         khq=khq,
         khr=khr,
-        value_base=i_b,
-        value_sign=1 if i_a >= i_b else -1,
-        inside_is_a=inside_is_a,
+        value_base=f.value_base,
+        value_sign=-1 if f.value_neg else 1,
+        inside_is_a=f.inside_is_a,
         seg_thresholds=thresholds,
         seg_intercepts=intercepts,
     )

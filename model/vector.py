@@ -51,9 +51,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .config import EdgeConfig, RegisterWidth
+from .column import ArrayArith, IntArith, column_areas, neighbour_offset, output_value
+from .config import EdgeConfig
 from .edge import Edge, EdgeSetup, setup
-from .step import WidthError, Write
+from .step import Write
 
 INT64_U_LIMIT = 1 << 62  # largest U_n an edge may reach on the int64 path
 INT64_IFIX_LIMIT = 1 << 58  # largest ifix on the int64 path (intermediates < 32 ifix)
@@ -143,14 +144,15 @@ def run_edges(
     """
     setups = tuple(setup(config, edge) for edge in edges)  # validates: raises EdgeError
     widths = config.register_widths()
+    constants = IntArith(config)
     for st in setups:
-        _check_constants(widths, st)
+        _check_constants(constants, st)
         _check_invariants(st)
     fits = [not force_object and _fits_int64(st) for st in setups]
     fast = [k for k, ok in enumerate(fits) if ok]
     slow = [k for k, ok in enumerate(fits) if not ok]
     parts = [
-        _run_group(config, widths, setups, chunk, dtype)
+        _run_group(config, setups, chunk, dtype)
         for group, dtype in ((fast, np.int64), (slow, object))
         for chunk in _chunks(setups, group)
     ]
@@ -176,14 +178,7 @@ def run_edges(
 # -- per-edge checks ---------------------------------------------------------------------------
 
 
-def _width_error(name: str, value: int, width: RegisterWidth) -> WidthError:
-    return WidthError(
-        f"register {name} = {value} does not fit {width.bits} bits "
-        f"({'signed' if width.signed else 'unsigned'})"
-    )
-
-
-def _check_constants(widths: dict[str, RegisterWidth], st: EdgeSetup) -> None:
+def _check_constants(a: IntArith, st: EdgeSetup) -> None:
     """The per-edge registers run_edge checks before its loop."""
     values = [
         ("du", st.du),
@@ -198,8 +193,7 @@ def _check_constants(widths: dict[str, RegisterWidth], st: EdgeSetup) -> None:
     if st.columns:
         values += [("remaining", st.columns - 1)]  # the largest value the loop assigns
     for name, value in values:
-        if not widths[name].holds(value):
-            raise _width_error(name, value, widths[name])
+        a.check(name, value)
 
 
 def _check_invariants(st: EdgeSetup) -> None:
@@ -249,34 +243,36 @@ def _divmod(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.divmod(a, b)
 
 
-def _check(widths: dict[str, RegisterWidth], name: str, values: np.ndarray) -> None:
-    if values.size == 0:
-        return
-    width = widths[name]
-    lo, hi = int(values.min()), int(values.max())
-    if lo < width.min:
-        raise _width_error(name, lo, width)
-    if hi > width.max:
-        raise _width_error(name, hi, width)
+class _PerEdge:
+    """`EdgeSetup` fields of a group of edges as arrays gathered by an index (one element per
+    column or per write): what the shared column arithmetic reads as ``st``."""
+
+    def __init__(self, sts: Sequence[EdgeSetup], dtype, index: np.ndarray):
+        self._sts, self._dtype, self._index = sts, dtype, index
+
+    def _column(self, values) -> np.ndarray:
+        # An object array must hold Python ints (not numpy scalars) so nothing wraps.
+        return np.array([int(v) for v in values], dtype=self._dtype)[self._index]
+
+    def __getattr__(self, name: str) -> np.ndarray:
+        if name in ("seg_thresholds", "seg_intercepts"):
+            count = len(getattr(self._sts[0], name)) if self._sts else 0
+            value = tuple(
+                self._column([getattr(st, name)[m] for st in self._sts]) for m in range(count)
+            )
+        else:
+            value = self._column([getattr(st, name) for st in self._sts])
+        setattr(self, name, value)  # gathered once
+        return value
 
 
 # -- the vectorized loop -----------------------------------------------------------------------
 
 
-def _run_group(
-    config: EdgeConfig,
-    widths: dict[str, RegisterWidth],
-    setups: Sequence[EdgeSetup],
-    group: list[int],
-    dtype,
-) -> list[np.ndarray]:
-    """Writes of the edges `group` (ascending), computed in `dtype` (int64 or object)."""
-    sts = [setups[k] for k in group]
-
-    def per_edge(name: str) -> np.ndarray:
-        # An object array must hold Python ints (not numpy scalars) so nothing wraps.
-        return np.array([int(getattr(st, name)) for st in sts], dtype=dtype)
-
+def _column_states(a: ArrayArith, sts: Sequence[EdgeSetup], dtype) -> dict[str, np.ndarray]:
+    """The loop registers of every column of the group in closed form (module docstring),
+    width-checked like the step model's, including the advance after each edge's last
+    column."""
     columns = np.array([st.columns for st in sts], dtype=np.int64)
     # States i = 0 .. columns: the last one is the advance after the last column, which the
     # step model also computes and width-checks.
@@ -286,100 +282,61 @@ def _run_group(
     i = np.arange(int(states.sum()), dtype=np.int64) - np.repeat(starts, states)
     if dtype is object:
         i = i.astype(object)
-
-    du, ifix, kq, kr = (per_edge(n)[e] for n in ("du", "ifix", "kq", "kr"))
-    carries, jr = _divmod(per_edge("jr")[e] + i * kr, du)
-    unreduced = per_edge("jq")[e] + i * kq + carries
-    rows, jq = _divmod(unreduced, ifix)
-    x = per_edge("x")[e] + i * per_edge("col_dx")[e] + rows * per_edge("row_dx")[e]
-    y = per_edge("y")[e] + i * per_edge("col_dy")[e] + rows * per_edge("row_dy")[e]
+    st = _PerEdge(sts, dtype, e)
+    carries, jr = _divmod(st.jr + i * st.kr, st.du)
+    unreduced = st.jq + i * st.kq + carries
+    rows, jq = _divmod(unreduced, st.ifix)
+    x = st.x + i * st.col_dx + rows * st.row_dx
+    y = st.y + i * st.col_dy + rows * st.row_dy
     for name, values in (("x", x), ("y", y), ("jq", jq), ("jr", jr)):
-        _check(widths, name, values)
+        a.check(name, values)
     # jsum of the advance out of state i (into i + 1): U_(i+1) - rows_i ifix.
     is_col = i < columns[e]
     nxt = np.flatnonzero(is_col) + 1
-    _check(widths, "jsum", unreduced[nxt] - rows[is_col] * ifix[is_col])
+    a.check("jsum", unreduced[nxt] - rows[is_col] * st.ifix[is_col])
+    return {"e": e[is_col], "jq": jq[is_col], "jr": jr[is_col], "x": x[is_col], "y": y[is_col]}
 
-    # From here on: the columns only (states 0 .. columns - 1).
-    e, jq, jr, x, y = e[is_col], jq[is_col], jr[is_col], x[is_col], y[is_col]
-    du, ifix = du[is_col], ifix[is_col]
-    zero = np.zeros(len(e), dtype=np.int64)
-    if config.segments == 0:  # pw: one pixel per column, area = J
-        area0, area1, offset, has = jq, zero, zero, np.zeros(len(e), dtype=bool)
-    else:
-        khq, khr = per_edge("khq")[e], per_edge("khr")[e]
-        # exit_depth_above: d = J + K/2 - ifix
-        rsum = jr + khr
-        carry = (rsum >= du).astype(dtype)
-        dq_above = jq + khq + carry - ifix
-        dr_above = rsum - carry * du
-        _check(widths, "dq", dq_above)
-        _check(widths, "dr", dr_above)
-        above = (dq_above > 0) | ((dq_above == 0) & (dr_above > 0))
-        # exit_depth_below: d = K/2 - J, evaluated (and width-checked) only when not above
-        borrow = (khr < jr).astype(dtype)
-        dq_below = khq - jq - borrow
-        dr_below = khr - jr + borrow * du
-        _check(widths, "dq", dq_below[~above])
-        _check(widths, "dr", dr_below[~above])
-        below = ~above & ((dq_below > 0) | ((dq_below == 0) & (dr_below > 0)))
-        has = above | below
-        t = _triangle_estimate(config, widths, sts, dtype, e, np.where(above, dq_above, dq_below))
-        _check(widths, "t", t[has])
-        t = np.where(t > 0, t, 0)
-        area0 = np.where(above, jq - t, np.where(below, jq + t, jq))
-        area1 = np.where(above, t, ifix - t)
-        offset = np.where(above, 1, -1)
-    _check(widths, "area", area0)
-    _check(widths, "area", area1[has])
 
-    # Interleave: each column's primary write, then its neighbour write if it has one.
-    count = 1 + has.astype(np.int64)
+def _interleave(count: np.ndarray, has: np.ndarray, pairs, dtype) -> list[np.ndarray]:
+    """Each column's primary value, then its neighbour's where it has one."""
     first = np.cumsum(count) - count
     second = first[has] + 1
-    total = int(count.sum())
-    row_dx, row_dy = per_edge("row_dx")[e], per_edge("row_dy")[e]
     out = []
-    for primary, neighbour in (
-        (e, e[has]),
-        (x, (x + offset * row_dx)[has]),
-        (y, (y + offset * row_dy)[has]),
-        (area0, area1[has]),
-    ):
-        column = np.empty(total, dtype=dtype)
+    for primary, neighbour in pairs:
+        column = np.empty(int(count.sum()), dtype=dtype)
         column[first] = primary
         column[second] = neighbour
         out.append(column)
-    e_out, x_out, y_out, area_out = out
+    return out
+
+
+def _run_group(
+    config: EdgeConfig, setups: Sequence[EdgeSetup], group: list[int], dtype
+) -> list[np.ndarray]:
+    """Writes of the edges `group` (ascending), computed in `dtype` (int64 or object)."""
+    sts = [setups[k] for k in group]
+    a = ArrayArith(config, dtype)
+    s = _column_states(a, sts, dtype)
+    e, x, y = s["e"], s["x"], s["y"]
+    st = _PerEdge(sts, dtype, e)
+    areas = column_areas(a, config, st, s["jq"], s["jr"])
+    has = np.broadcast_to(np.asarray(areas.two, dtype=bool), e.shape)
+    offset = np.asarray(neighbour_offset(a, areas)) if config.segments else 1
+    area1 = np.broadcast_to(np.asarray(areas.area1, dtype=dtype), e.shape)
+    e_out, x_out, y_out, area_out = _interleave(
+        1 + has.astype(np.int64),
+        has,
+        (
+            (e, e[has]),
+            (x, (x + offset * st.row_dx)[has]),
+            (y, (y + offset * st.row_dy)[has]),
+            (areas.area0, area1[has]),
+        ),
+        dtype,
+    )
     e_out = e_out.astype(np.int64)
-    _check(widths, "x", x_out)
-    _check(widths, "y", y_out)
-    F = config.F
-    base, sign = per_edge("value_base")[e_out], per_edge("value_sign")[e_out]
-    value = base + sign * ((area_out + (1 << (F - 1))) >> F)
-    _check(widths, "value", value)
+    a.check("x", x_out)
+    a.check("y", y_out)
+    value = output_value(a, config, _PerEdge(sts, dtype, e_out), area_out)
     edge_index = np.asarray(group, dtype=np.int64)[e_out]
     return [edge_index, x_out, y_out, value, area_out]
-
-
-def _triangle_estimate(
-    config: EdgeConfig,
-    widths: dict[str, RegisterWidth],
-    sts: Sequence[EdgeSetup],
-    dtype,
-    e: np.ndarray,
-    dq: np.ndarray,
-) -> np.ndarray:
-    """step.triangle_estimate before its clamp: the slope term minus segment j's intercept."""
-    n = config.segments
-    log2n = n.bit_length() - 1
-    j = np.zeros(len(dq), dtype=np.int64)
-    if n > 1:
-        thresholds = np.array([[int(c) for c in st.seg_thresholds] for st in sts], dtype=dtype)
-        for m in range(n - 1):
-            j += (dq >= thresholds[e, m]).astype(np.int64)
-    intercepts = np.array([[int(c) for c in st.seg_intercepts] for st in sts], dtype=dtype)
-    slope = 2 * j + 1
-    if dtype is object:
-        slope = slope.astype(object)
-    return ((slope * dq) >> (2 + log2n)) - intercepts[e, j]

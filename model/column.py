@@ -1,0 +1,225 @@
+"""The per-column arithmetic, written once and run on three kinds of number.
+
+One column of the stepping loop: the exit depths above and below (`exit_depths`), the
+N-segment triangle estimate (`triangle_estimate`), the column's scaled areas
+(`column_areas`), the output value (`output_value`) and the advance to the next column
+(`advance`). Each function takes an *arithmetic* that says how to select, negate a
+condition and check a register's width:
+
+* `IntArith` on Python ints: the step model (`step.run_edge`), raising `WidthError` as soon
+  as a value does not fit its register;
+* `ArrayArith` on numpy arrays (int64 or object arrays of Python ints), one element per
+  column: the vectorized model (`vector.run_edges`);
+* an Amaranth arithmetic (`edgeaa.sim.verification.formal.spec`) on Amaranth values: the
+  formal specification that the hand-optimised core is proven against.
+
+A `check(name, value, where)` applies where `where` holds: a register the step model assigns
+only on one branch (the exit depth below, the neighbour's area) is checked only there.
+The fields of `st` are `EdgeSetup`'s, each an int, an array (per column) or a value.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .config import EdgeConfig, RegisterWidth
+
+
+class WidthError(AssertionError):
+    """A register value outside its declared width: a bug in the model or the width table."""
+
+
+def width_error(name: str, value: int, width: RegisterWidth) -> WidthError:
+    return WidthError(
+        f"register {name} = {value} does not fit {width.bits} bits "
+        f"({'signed' if width.signed else 'unsigned'})"
+    )
+
+
+class IntArith:
+    """Python ints and bools; `check` raises `WidthError` for a value that does not fit."""
+
+    def __init__(self, config: EdgeConfig):
+        self.widths = config.register_widths()
+
+    @staticmethod
+    def select(cond, a, b):
+        return a if cond else b
+
+    @staticmethod
+    def not_(cond) -> bool:
+        return not cond
+
+    @staticmethod
+    def pick(index: int, values):
+        return values[index]
+
+    def check(self, name: str, value: int, where: bool = True) -> int:
+        if where:
+            width = self.widths[name]
+            if not width.holds(value):
+                raise width_error(name, value, width)
+        return value
+
+
+class ArrayArith:
+    """numpy arrays, one element per column, in `dtype` (np.int64, or object for Python ints
+    where int64 could overflow); `check` raises `WidthError` for the first register whose
+    smallest or largest element (where `where` holds) does not fit."""
+
+    def __init__(self, config: EdgeConfig, dtype):
+        self.widths = config.register_widths()
+        self.dtype = dtype
+
+    @staticmethod
+    def select(cond, a, b):
+        return np.where(cond, a, b)
+
+    @staticmethod
+    def not_(cond):
+        return ~np.asarray(cond, dtype=bool)
+
+    @staticmethod
+    def pick(index, values):
+        if isinstance(index, int):
+            return values[index]
+        out = values[0]
+        for j in range(1, len(values)):
+            out = np.where(index == j, values[j], out)
+        return out
+
+    def check(self, name: str, values, where=True):
+        picked = values if where is True else np.asarray(values)[where]
+        picked = np.asarray(picked)
+        if picked.size:
+            width = self.widths[name]
+            lo, hi = int(picked.min()), int(picked.max())
+            if lo < width.min:
+                raise width_error(name, lo, width)
+            if hi > width.max:
+                raise width_error(name, hi, width)
+        return values
+
+
+@dataclass
+class ColumnAreas:
+    """One column's exit tests and scaled A-side areas (units of 2**-F intensity LSB).
+
+    ``area0`` is the primary pixel's; ``area1`` the neighbour's when ``two``: row + 1 when the
+    edge leaves through the far boundary (``above``), row - 1 when it enters through the near
+    one (``below``). The exit depths and the clamped estimate ``t`` are kept for observers.
+    """
+
+    area0: Any
+    area1: Any
+    above: Any
+    below: Any
+    two: Any
+    dq_above: Any = 0  # exit depth above, quotient (d = J + K/2 - ifix)
+    dr_above: Any = 0
+    dq_below: Any = 0  # exit depth below, quotient (d = K/2 - J)
+    dr_below: Any = 0
+    borrow: Any = 0  # the below depth's borrow from the remainder
+    below_raw: Any = 0  # the below test alone (before "and not above")
+    dq: Any = 0  # the depth the estimate uses (above's, else below's)
+    t: Any = 0  # the estimate before clamping
+
+
+def exit_depths(a, st, jq, jr) -> dict[str, Any]:
+    """d = J + K/2 - ifix (how far the edge passes the row's far boundary at the column's end)
+    and d = K/2 - J (its near boundary at the column's start), each as a floor quotient and a
+    remainder over du, with the test d > 0 decided exactly. The depth below is the step
+    model's register only when the edge does not leave above."""
+    rsum = jr + st.khr
+    carry = rsum >= st.du
+    dq_above = a.check("dq", jq + st.khq + carry - st.ifix)
+    dr_above = a.check("dr", rsum - a.select(carry, st.du, 0))
+    above = (dq_above > 0) | ((dq_above == 0) & (dr_above > 0))
+    borrow = st.khr < jr
+    not_above = a.not_(above)
+    dq_below = a.check("dq", st.khq - jq - borrow, not_above)
+    dr_below = a.check("dr", st.khr - jr + a.select(borrow, st.du, 0), not_above)
+    below_raw = (dq_below > 0) | ((dq_below == 0) & (dr_below > 0))
+    return dict(
+        dq_above=dq_above,
+        dr_above=dr_above,
+        above=above,
+        dq_below=dq_below,
+        dr_below=dr_below,
+        borrow=borrow,
+        below_raw=below_raw,
+        below=not_above & below_raw,
+    )
+
+
+def triangle_estimate(a, config: EdgeConfig, st, dq, where=True):
+    """Add-only estimate of the cut-off triangle d^2/(2k), scaled like the accumulator, before
+    clamping at 0: on segment j (d >= j K/(2N)) the minimax line (2j+1)/(4N) d - intercept_j.
+    The slope multiply is by a small odd constant: shifts and adds in hardware."""
+    log2n = config.segments.bit_length() - 1
+    j = sum(dq >= threshold for threshold in st.seg_thresholds)
+    slope = ((2 * j + 1) * dq) >> (2 + log2n)
+    return a.check("t", slope - a.pick(j, st.seg_intercepts), where)
+
+
+def column_areas(a, config: EdgeConfig, st, jq, jr) -> ColumnAreas:
+    """The scaled A-side areas of one column (formula (1) and the paper's split)."""
+    if config.segments == 0:  # pw: one pixel per column, its area the accumulator
+        return ColumnAreas(a.check("area", jq), 0, False, False, False)
+    d = exit_depths(a, st, jq, jr)
+    two = d["above"] | d["below"]
+    dq = a.select(d["above"], d["dq_above"], d["dq_below"])
+    t = triangle_estimate(a, config, st, dq, two)
+    clamped = a.select(t > 0, t, 0)
+    area0 = a.select(d["above"], jq - clamped, a.select(d["below"], jq + clamped, jq))
+    area1 = a.select(d["above"], clamped, st.ifix - clamped)
+    return ColumnAreas(
+        area0=a.check("area", area0),
+        area1=a.check("area", area1, two),
+        two=two,
+        dq=dq,
+        t=t,
+        **d,
+    )
+
+
+def output_value(a, config: EdgeConfig, st, area, where=True):
+    """Intensity I_B + sign * round(area / 2**F): the scaled area is the intensity offset."""
+    F = config.F
+    rounded = (area + (1 << (F - 1))) >> F
+    value = a.select(st.value_sign < 0, st.value_base - rounded, st.value_base + rounded)
+    return a.check("value", value, where)
+
+
+def neighbour_offset(a, areas: ColumnAreas):
+    """The neighbour's row offset along the stepping direction: -1 below, else +1."""
+    return a.select(areas.below, -1, 1)
+
+
+@dataclass
+class Advance:
+    """The loop registers after one column, and what the step decided."""
+
+    x: Any
+    y: Any
+    jq: Any
+    jr: Any
+    jsum: Any  # jq + kq + carry, before the row step
+    row_step: Any  # J reached 1: the next column is one row further
+
+
+def advance(a, st, x, y, jq, jr) -> Advance:
+    """J += K with the remainder carried; step a row when J >= 1 (quotient and remainder
+    over du, so the accumulator does not drift)."""
+    rsum = jr + st.kr
+    carry = rsum >= st.du
+    jr_next = a.check("jr", rsum - a.select(carry, st.du, 0))
+    jsum = a.check("jsum", jq + st.kq + carry)
+    row_step = jsum >= st.ifix
+    jq_next = a.check("jq", a.select(row_step, jsum - st.ifix, jsum))
+    x_next = a.check("x", x + st.col_dx + a.select(row_step, st.row_dx, 0))
+    y_next = a.check("y", y + st.col_dy + a.select(row_step, st.row_dy, 0))
+    return Advance(x_next, y_next, jq_next, jr_next, jsum, row_step)
