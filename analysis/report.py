@@ -90,12 +90,6 @@ def fmt_float(value: float | None, digits: int = 6) -> str:
     return f"{value:.{digits}f}"
 
 
-def fmt_sci(value: float | None) -> str:
-    if value is None:
-        return "-"
-    return f"{value:.3e}"
-
-
 def pyplot():
     import matplotlib
 
