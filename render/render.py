@@ -125,6 +125,31 @@ def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
     """Quantize, shift and classify a scene for `config` (raises SceneError if it does not
     fit: image larger than 2**coord_bits, an intensity or a vertex out of range)."""
     S = config.subpixel_scale
+    intensities = _check_scene(scene, config)
+    contours, owners, dropped = _quantize(scene, S)
+    offset = _offset(config, scene, contours, owners)
+    coords, polygon, contour, starts, crossings = _split_edges(scene, contours, owners, offset, S)
+    inside, duplicates = _inside_sides(scene, coords, starts)
+    boxes = _write_boxes(coords, offset, S)
+    lo_x, lo_y, hi_x, hi_y = boxes
+    # culled: wholly outside the viewport, no write can land in the image
+    culled = (hi_x < 0) | (lo_x >= scene.width) | (hi_y < 0) | (lo_y >= scene.height)
+    horizontal = coords[:, 1] == coords[:, 3]
+    vertical = coords[:, 0] == coords[:, 2]
+    axis = horizontal | vertical
+    on_line = (2 * coords - S) % (2 * S) == 0  # a coordinate on a pixel boundary (k + 1/2)
+    pixel_boundary = (horizontal & on_line[:, 1]) | (vertical & on_line[:, 0])
+    nxt, prv = _outline(coords, inside, polygon)
+    ops = _vertex_ops(coords, inside, nxt)
+    polys = _polygon_plans(scene, intensities, starts, boxes, config.full_scale)
+    return Plan(
+        config, scene, offset, coords, polygon, contour, nxt, prv, inside, culled, axis,
+        pixel_boundary, ops, polys, dropped, crossings, duplicates,
+    )  # fmt: skip
+
+
+def _check_scene(scene: Scene, config: EdgeConfig) -> list[int]:
+    """Check the image size and the intensities; return each polygon's I_in."""
     full = config.full_scale
     limit = 1 << config.coord_bits
     for name, value in (("width", scene.width), ("height", scene.height)):
@@ -147,8 +172,13 @@ def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
                 f"(intensity_bits = {config.intensity_bits})"
             )
         intensities.append(value)
+    return intensities
 
-    # Quantize (round half up to the 2**-s grid), drop repeated vertices and collapsed contours.
+
+def _quantize(scene: Scene, S: int):
+    """Round the vertices half up to the 2**-s grid, drop repeated vertices and collapsed
+    contours. Returns the contours (sub-pixel units), their owners (polygon, contour, the
+    indices of the kept vertices) and how many contours were dropped."""
     contours, owners, dropped = [], [], 0
     for i, poly in enumerate(scene.polygons):
         for j, contour in enumerate(poly.contours):
@@ -160,6 +190,12 @@ def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
                 continue
             contours.append(pts)
             owners.append((i, j, np.flatnonzero(keep) if keep.any() else np.arange(1)))
+    return contours, owners, dropped
+
+
+def _offset(config: EdgeConfig, scene: Scene, contours, owners) -> tuple[int, int]:
+    """Whole pixels to add so that no vertex is negative; checks that the scene then fits."""
+    S = config.subpixel_scale
     offset = [0, 0]
     if contours:
         allpts = np.concatenate(contours)
@@ -167,6 +203,15 @@ def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
             lo = allpts[:, axis].min()
             offset[axis] = max(0, math.ceil(-lo / S))
         _check_range(config, scene, contours, owners, offset)
+    return offset[0], offset[1]
+
+
+def _split_edges(scene: Scene, contours, owners, offset, S: int):
+    """The edges of every polygon in engine coordinates, split where they cross.
+
+    Returns coords (E, 4), the polygon and contour of each edge, the first edge of each
+    polygon (and the edge count last) and how many vertices were inserted at crossings.
+    """
     shift = np.array(offset, dtype=np.int64) * S
     coords, polygon, contour = [], [], []
     starts = [0] * (len(scene.polygons) + 1)
@@ -188,14 +233,18 @@ def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
             contour.append(np.full(n, len(contour)))
             count += n
         starts[i + 1] = count
+    return _joined(coords, 4), _joined(polygon), _joined(contour), starts, crossings
 
-    def cat(parts, dtype, width=None):
-        if parts:
-            return np.concatenate(parts).astype(dtype)
-        return np.zeros((0, width) if width else 0, dtype=dtype)
 
-    coords = cat(coords, np.int64, 4)
-    polygon, contour = cat(polygon, np.int64), cat(contour, np.int64)
+def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:
+    if parts:
+        return np.concatenate(parts).astype(np.int64)
+    return np.zeros((0, width) if width else 0, dtype=np.int64)
+
+
+def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
+    """Each edge's inside side by its polygon's fill rule ('' if not a boundary); returns the
+    sides and how many coincident boundary edges were left to the first of them."""
     inside = np.full(len(coords), "", dtype="<U5")
     duplicates = 0
     for i, poly in enumerate(scene.polygons):
@@ -213,22 +262,24 @@ def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
                     duplicates += 1
                 elif inside[e]:
                     seen.add(key)
+    return inside, duplicates
 
-    # Culling: writes lie within the edge's box grown by WRITE_MARGIN px (docs/model.md s. 5-6).
+
+def _write_boxes(coords: np.ndarray, offset, S: int) -> tuple[np.ndarray, ...]:
+    """Image pixels lo_x, lo_y, hi_x, hi_y (inclusive) each edge's writes can land on: its
+    bounding box grown by WRITE_MARGIN px (docs/model.md s. 5-6)."""
     ox, oy = offset
     lo_x = np.floor_divide(np.minimum(coords[:, 0], coords[:, 2]), S) - WRITE_MARGIN - ox
     hi_x = -np.floor_divide(-np.maximum(coords[:, 0], coords[:, 2]), S) + WRITE_MARGIN - ox
     lo_y = np.floor_divide(np.minimum(coords[:, 1], coords[:, 3]), S) - WRITE_MARGIN - oy
     hi_y = -np.floor_divide(-np.maximum(coords[:, 1], coords[:, 3]), S) + WRITE_MARGIN - oy
-    culled = (hi_x < 0) | (lo_x >= scene.width) | (hi_y < 0) | (lo_y >= scene.height)
-    horizontal = coords[:, 1] == coords[:, 3]
-    vertical = coords[:, 0] == coords[:, 2]
-    axis = horizontal | vertical
-    on_line = (2 * coords - S) % (2 * S) == 0  # a coordinate on a pixel boundary (k + 1/2)
-    pixel_boundary = (horizontal & on_line[:, 1]) | (vertical & on_line[:, 0])
+    return lo_x, lo_y, hi_x, hi_y
 
-    nxt, prv = _outline(coords, inside, polygon)
-    ops = _vertex_ops(coords, inside, nxt)
+
+def _polygon_plans(scene: Scene, intensities, starts, boxes, full: int) -> list[PolygonPlan]:
+    """Each polygon's window and I_out: the background unless it overlaps an earlier polygon
+    or equals the background, then the intensity farthest from I_in."""
+    lo_x, lo_y, hi_x, hi_y = boxes
     polys = []
     windows = []
     for i, poly in enumerate(scene.polygons):
@@ -252,10 +303,7 @@ def plan_scene(scene: Scene, config: EdgeConfig) -> Plan:
             else _alternative_out(value, scene.background, full)
         )
         polys.append(PolygonPlan(i, value, i_out, poly.fill_rule, a, b, window, equal, overlaps))
-    return Plan(
-        config, scene, (ox, oy), coords, polygon, contour, nxt, prv, inside, culled, axis,
-        pixel_boundary, ops, polys, dropped, crossings, duplicates,
-    )  # fmt: skip
+    return polys
 
 
 def _meets(a, b) -> bool:
