@@ -25,7 +25,7 @@ import sys
 import numpy as np
 
 from edgeaa.model import EdgeConfig
-from edgeaa.render import builtin, plan_scene, render
+from edgeaa.render import builtin, plan_scene, render_scene
 from edgeaa.render.engines import beat_clocks
 from edgeaa.render.progress import ProgressBar
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
@@ -50,7 +50,7 @@ def main() -> int:
     rows = []
     for name in args.scenes.split(","):
         plan = plan_scene(builtin(name, config), config)
-        sent = render(plan, engine="model").sent
+        sent = render_scene(plan, engine="model").sent
         edges = [plan.edge(int(e), clip=True) for e in sent]
         print(f"{name}: {len(edges)} edges sent", file=sys.stderr)
         verilator_harness.build(config)  # cached

@@ -67,7 +67,7 @@ def _load(args, config):
 def cmd_render(args: argparse.Namespace) -> int:
     from ..cli import config_from_args
     from .progress import ProgressBar
-    from .render import plan_scene, render
+    from .render import plan_scene, render_scene
     from .scene import SceneError
 
     config = config_from_args(args)
@@ -106,10 +106,10 @@ def cmd_render(args: argparse.Namespace) -> int:
 
     bar = ProgressBar("render", enabled=not args.quiet)
     try:
-        result = render(plan, engine=args.engine, skip=not args.no_skip, progress=bar)
+        result = render_scene(plan, engine=args.engine, skip=not args.no_skip, progress=bar)
         baseline = None
         if args.stats:
-            baseline = render(plan, engine=args.engine, skip=False, progress=bar)
+            baseline = render_scene(plan, engine=args.engine, skip=False, progress=bar)
     except RuntimeError as error:  # a simulator failed to build or run
         bar.close()
         first = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)

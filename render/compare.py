@@ -3,7 +3,7 @@
 Methods, each drawing the whole scene polygon by polygon over the background:
 
 - ``no AA``: one sample at the pixel centre (the renderer's own span fill alone);
-- ``edgeaa paper``, ``edgeaa seg4``: `edgeaa.render.render` with the model;
+- ``edgeaa paper``, ``edgeaa seg4``: `edgeaa.render.render_scene` with the model;
 - ``16x16 SSAA``: 256 samples per pixel on an ordered grid (the ``grid16`` pattern of
   `edgeaa.analysis.sampling`, here evaluated on whole polygons with the same exact scanline
   test as the span fill, since that module samples single-edge half-planes);
@@ -25,7 +25,7 @@ import numpy as np
 from ..model import EdgeConfig
 from .exact import exact_image
 from .geometry import sample_mask
-from .render import Plan, plan_scene, render
+from .render import Plan, plan_scene, render_scene
 from .scene import Scene
 
 SSAA = 16  # samples per axis
@@ -139,7 +139,7 @@ def compare_images(scene: Scene, config: EdgeConfig) -> tuple[dict[str, np.ndarr
     plan = plan_scene(scene, config)
     images = {"no AA (centre)": centre_sampled(plan)}
     for mode in ("paper", "seg4"):
-        images[f"edgeaa {mode}"] = render(plan_scene(scene, config.with_(mode=mode))).image
+        images[f"edgeaa {mode}"] = render_scene(plan_scene(scene, config.with_(mode=mode))).image
     images[f"{SSAA}x{SSAA} SSAA"] = supersampled(plan)
     images["Skia"] = skia_scene(plan)
     label = "AGG" if all(p.fill_rule == "nonzero" for p in scene.polygons) else "AGG (non-zero)"

@@ -12,7 +12,7 @@ Steps (docs/scenes.md has the reasoning):
    when it overlaps no earlier polygon (its edge writes are then final intensities straight
    from the engine), otherwise the intensity farthest from I_in (the finest coverage the
    engine can give, composited in integers).
-2. `render`: send the edges that need antialiasing to the engine, each with the image as
+2. `render_scene`: send the edges that need antialiasing to the engine, each with the image as
    its clip window (the core steps only the columns inside it); compute the writes of
    horizontal and vertical edges on the fill path (`axis_writes`, bit-identical to the
    model); for each polygon in order, fill the pixels whose centre is inside (scanline,
@@ -479,7 +479,7 @@ def composite(below: np.ndarray, q: np.ndarray, intensity: int, d: int) -> np.nd
     return below + _rdiv(q * (intensity - below), d)
 
 
-def render(
+def render_scene(
     scene: Scene | Plan,
     config: EdgeConfig | None = None,
     *,

@@ -12,7 +12,7 @@ import pytest
 from edgeaa.cli import main
 from edgeaa.model import Edge, EdgeConfig, exact_coverage, run_edge
 from edgeaa.model.vector import run_edges
-from edgeaa.render import Polygon, Scene, SceneError, builtin, parse_path, parse_scene, render
+from edgeaa.render import Polygon, Scene, SceneError, builtin, parse_path, parse_scene, render_scene
 from edgeaa.render import plan_scene as plan
 from edgeaa.render.engines import beat_clocks
 from edgeaa.render.exact import error_rows, exact_image, writers_per_pixel
@@ -32,7 +32,7 @@ def plans():
 
 @pytest.fixture(scope="module")
 def model_renders(plans):
-    return {name: render(p, engine="model") for name, p in plans.items()}
+    return {name: render_scene(p, engine="model") for name, p in plans.items()}
 
 
 def star(rule: str, intensity: int = 255) -> Scene:
@@ -192,7 +192,7 @@ def test_the_fill_rule_decides_a_self_overlapping_star():
     centre = (24, 24)  # inside the inner pentagon: winding number 2
     tip = (24, 8)  # inside a point of the star: winding number 1
     for rule, centre_filled in (("nonzero", True), ("evenodd", False)):
-        result = render(star(rule), DEFAULT)
+        result = render_scene(star(rule), DEFAULT)
         assert result.image[centre[1], centre[0]] == (255 if centre_filled else 0), rule
         assert result.image[tip[1], tip[0]] == 255, rule
         rows = {r.label: r for r in error_rows(result, exact_image(result.plan))}
@@ -226,7 +226,7 @@ def test_inside_sides_follow_the_fill_rule():
     double = plan(Scene(16, 16, (Polygon((square, square)),)), DEFAULT)
     assert double.duplicates == 4 and (double.inside != "").sum() == 4
     # the doubled square renders like the single one
-    assert np.array_equal(render(double).image, render(one).image)
+    assert np.array_equal(render_scene(double).image, render_scene(one).image)
 
 
 def test_crossing_edges_are_split_on_the_grid():
@@ -268,7 +268,7 @@ def test_single_edge_pixels_are_within_the_estimate_bound():
     intensity step (paper) plus output rounding; vertex pixels are reported."""
     quad = ((4.3125, 3.75), (57.5, 9.125), (50.0625, 44.6875), (9.25, 37.5))
     scene = Scene(64, 48, (Polygon((quad,), 230),), background=20, name="quad")
-    result = render(scene, DEFAULT)
+    result = render_scene(scene, DEFAULT)
     exact = exact_image(result.plan)
     err = np.abs(result.image - exact)
     writers = writers_per_pixel(result)
@@ -299,10 +299,10 @@ def test_error_on_the_builtins_is_small(plans, model_renders):
 
 def test_a_whole_pixel_shift_of_the_scene_shifts_the_image():
     tri = ((3.0625, 2.5), (40.75, 9.3125), (12.5, 30.875))
-    image = render(Scene(48, 40, (Polygon((tri,), 200),), background=30), DEFAULT).image
+    image = render_scene(Scene(48, 40, (Polygon((tri,), 200),), background=30), DEFAULT).image
     moved = tuple((x - 5, y - 3) for x, y in tri)  # negative: shifted into range by the plan
     scene = Scene(48, 40, (Polygon((moved,), 200),), background=30)
-    result = render(scene, DEFAULT)
+    result = render_scene(scene, DEFAULT)
     assert result.plan.offset == (2, 1)  # whole pixels: -1.9375 -> 0.0625, -0.5 -> 0.5
     assert np.array_equal(result.image[:37, :43], image[3:, 5:])
 
@@ -312,7 +312,7 @@ def test_a_whole_pixel_shift_of_the_scene_shifts_the_image():
 
 def test_model_and_verilator_give_the_same_image_on_the_builtins(plans, model_renders):
     for name in BUILTINS:
-        fast = render(plans[name], engine="verilator")
+        fast = render_scene(plans[name], engine="verilator")
         model = model_renders[name]
         assert np.array_equal(fast.image, model.image), name
         for field in ("edge", "x", "y", "value"):
@@ -335,8 +335,8 @@ def test_amaranth_gives_the_model_image_on_a_tiny_scene():
             ],
         }
     )
-    slow = render(scene, DEFAULT, engine="amaranth")
-    model = render(scene, DEFAULT, engine="model")
+    slow = render_scene(scene, DEFAULT, engine="amaranth")
+    model = render_scene(scene, DEFAULT, engine="model")
     assert np.array_equal(slow.image, model.image)
     edges = [slow.plan.edge(int(e), clip=True) for e in slow.sent]
     assert np.array_equal(slow.engine_run.beat_clocks, beat_clocks(DEFAULT, edges))
@@ -348,7 +348,7 @@ def test_amaranth_gives_the_model_image_on_a_tiny_scene():
 def test_every_skipping_rule_saves_work_and_leaves_the_image_unchanged(plans, model_renders):
     totals = {}
     for name in BUILTINS:
-        skipping, full = model_renders[name], render(plans[name], skip=False)
+        skipping, full = model_renders[name], render_scene(plans[name], skip=False)
         assert np.array_equal(skipping.image, full.image), name
         assert skipping.cycles < full.cycles and len(skipping.sent) < len(full.sent), name
         assert skipping.pixels_touched < full.pixels_touched, name
@@ -369,7 +369,7 @@ def test_every_skipping_rule_saves_work_and_leaves_the_image_unchanged(plans, mo
         assert saved.any(), (name, attr)
         try:
             getattr(plan, attr)[:] = False
-            alone = render(plan)
+            alone = render_scene(plan)
         finally:
             getattr(plan, attr)[:] = saved
         assert np.array_equal(alone.image, model_renders[name].image), (name, attr)
@@ -534,7 +534,7 @@ def test_the_example_in_the_docs_renders(tmp_path):
     text = (Path(__file__).resolve().parents[1] / "docs" / "scenes.md").read_text()
     example = text.split("```json\n", 1)[1].split("```", 1)[0]
     scene = parse_scene(json.loads(example))
-    result = render(scene, DEFAULT)
+    result = render_scene(scene, DEFAULT)
     assert result.image.shape == (40, 64) and len(result.sent) > 0
     rows = {r.label: r for r in error_rows(result, exact_image(result.plan))}
     assert rows["one edge"].max_abs <= 8 and rows["fill only"].max_abs == 0
