@@ -6,7 +6,7 @@
 - `evaluate`: every method on one common pixel set, against the exact area.
 - `slope`: `edgeaa plot error-vs-slope`; `bench`: `edgeaa bench`; `stress`: `edgeaa stress`.
 - `hardware`: the hook for cycles per column, LUTs and Fmax in the bench.
-- `cli`: `add_commands(subparsers, add_config_options)` registers the commands.
+- `cli`: the commands `plot error-vs-slope`, `bench` and `stress` (registered on import).
 
 Results and the commands that produced them: docs/results.md.
 """

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.vector import run_edges
 from . import peers, sampling
@@ -45,7 +46,7 @@ from .evaluate import (
 )
 from .geometry import random_image_edges
 from .hardware import hardware_figures
-from .report import Progress, fmt_float, pyplot, save, table
+from .report import fmt_float, pyplot, save, table
 
 FILL_METHODS = EDGEAA_METHODS + SAMPLE_METHODS + peers.FILL_PEERS
 DEFAULT_EDGES, QUICK_EDGES = 1000, 60
@@ -122,7 +123,7 @@ def run_bench(
     best: dict[str, MethodRun] = {}
     line_best: dict[str, tuple[float, list]] = {}
     steps = repeats * (len(methods) + (len(peers.LINE_PEERS) + 1 if line_list else 0))
-    bar = Progress("bench", steps, enabled=progress)
+    bar = ProgressBar("bench", steps, enabled=progress)
     for _ in range(repeats):
         for name in methods:
             run = run_method(config, edges, pixels, name, coverage="output", jobs=jobs)

@@ -1,8 +1,6 @@
-"""The analysis subcommands of `edgeaa`: plot error-vs-slope, bench, stress.
+"""The analysis commands of `edgeaa`: plot error-vs-slope, bench, stress.
 
-`add_commands(subparsers, add_config_options)` registers them on the top-level subparsers of
-`edgeaa.cli.build_parser` (add_config_options is cli.py's `_add_config_options`). Bad input
-raises `edgeaa.cli.UsageError`, which `edgeaa.cli.main` prints as one line (exit status 2).
+They register themselves (`edgeaa.command.Command`) when this module is imported.
 """
 
 from __future__ import annotations
@@ -10,57 +8,90 @@ from __future__ import annotations
 import argparse
 import os
 
+from ..command import Command, add_config_options, config_from_args, usage_error
+
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 
 
-def _usage(command: str, message: str):
-    from ..cli import UsageError
-
-    return UsageError(f"edgeaa {command}: error: {message}")
-
-
-def _check_output(command: str, path: str) -> None:
+def _check_output(prog: str, path: str) -> None:
     if not path.lower().endswith(PLOT_SUFFIXES):
-        raise _usage(command, f"-o {path}: the plot must be a {', '.join(PLOT_SUFFIXES)} file")
+        raise usage_error(prog, f"-o {path}: the plot must be a {', '.join(PLOT_SUFFIXES)} file")
     directory = os.path.dirname(path)
     if directory and not os.path.isdir(directory):
-        raise _usage(command, f"-o {path}: directory {directory} does not exist")
+        raise usage_error(prog, f"-o {path}: directory {directory} does not exist")
 
 
-def _int_list(command: str, option: str, text: str, lo: int, hi: int) -> tuple[int, ...]:
+def _int_list(prog: str, option: str, text: str, lo: int, hi: int) -> tuple[int, ...]:
     try:
         values = tuple(int(v) for v in text.split(",") if v.strip())
     except ValueError:
-        raise _usage(
-            command, f"{option} must be integers separated by commas, not {text!r}"
+        raise usage_error(
+            prog, f"{option} must be integers separated by commas, not {text!r}"
         ) from None
     if not values:
-        raise _usage(command, f"{option} must list at least one value")
+        raise usage_error(prog, f"{option} must list at least one value")
     for value in values:
         if not lo <= value <= hi:
-            raise _usage(command, f"{option}: {value} is outside [{lo}, {hi}]")
+            raise usage_error(prog, f"{option}: {value} is outside [{lo}, {hi}]")
     return values
 
 
 # -- edgeaa plot error-vs-slope -----------------------------------------------------------------
 
 
-def cmd_error_vs_slope(args: argparse.Namespace) -> int:
-    from ..cli import config_from_args
+SLOPE_PROG = "edgeaa plot error-vs-slope"
+
+
+class PlotCommand(Command):
+    name = "plot"
+    help = "draw the analysis figures (error-vs-slope)"
+    description = "Draw an analysis figure."
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        figures = parser.add_subparsers(dest="figure", metavar="FIGURE", parser_class=type(parser))
+        figures.required = True
+        slope = figures.add_parser(
+            "error-vs-slope",
+            help="maximum and RMS coverage error against the edge angle, every method",
+            description="Sweep the edge angle from 0 to 90 degrees over sub-pixel offsets and "
+            "plot the maximum and RMS coverage error against the exact area of edgeaa's modes "
+            "(with their bounds k/8, k/64, k/256, k/1024), the sample-based baselines (point, "
+            "ordered grids 2x2..16x16, rotated grid, 8-rooks) and the peers (Skia, AGG).",
+        )
+        slope.add_argument(
+            "-o",
+            "--output",
+            default="error_vs_slope.png",
+            help="plot file (.png, .svg or .pdf; default error_vs_slope.png)",
+        )
+        slope.add_argument("--step", type=float, default=1.0, help="angle step in degrees (1)")
+        slope.add_argument("--length", type=int, default=64, help="edge length in px (64)")
+        slope.add_argument("--offsets", type=int, default=64, help="sub-pixel start offsets (64)")
+        slope.add_argument(
+            "--no-peers", dest="peers", action="store_false", help="leave out Skia and AGG"
+        )
+        slope.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+        add_config_options(slope)
+
+    def run(self, args: argparse.Namespace) -> int:
+        figures = {"error-vs-slope": _plot_error_vs_slope}
+        return figures[args.figure](args)
+
+
+def _plot_error_vs_slope(args: argparse.Namespace) -> int:
     from . import slope
     from .report import machine_line
 
-    command = "plot error-vs-slope"
     config = config_from_args(args)
-    _check_output(command, args.output)
+    _check_output(SLOPE_PROG, args.output)
     if not 0 < args.step <= 45:
-        raise _usage(command, f"--step must be in (0, 45] degrees, not {args.step}")
+        raise usage_error(SLOPE_PROG, f"--step must be in (0, 45] degrees, not {args.step}")
     if args.offsets < 1:
-        raise _usage(command, f"--offsets must be at least 1, not {args.offsets}")
+        raise usage_error(SLOPE_PROG, f"--offsets must be at least 1, not {args.offsets}")
     need = 2 + 1 + args.length
     if args.length < 4 or need > (1 << config.coord_bits) - 1:
-        raise _usage(
-            command,
+        raise usage_error(
+            SLOPE_PROG,
             f"--length {args.length} px: must be at least 4 and fit the coordinate range "
             f"[0, {(1 << config.coord_bits) - 1}] px with 3 px to spare",
         )
@@ -86,217 +117,191 @@ def cmd_error_vs_slope(args: argparse.Namespace) -> int:
 # -- edgeaa bench ----------------------------------------------------------------------------------
 
 
-def cmd_bench(args: argparse.Namespace) -> int:
-    from ..cli import config_from_args
-    from . import bench
-    from .report import machine_line
+class BenchCommand(Command):
+    name = "bench"
+    help = "error and run time of every method on seeded random edges, with Skia and AGG"
+    description = (
+        "On a fixed, seeded set of random edges: maximum and RMS coverage error "
+        "against the exact area and run time (as a ratio to edgeaa's vectorized model in the "
+        "same run) of edgeaa's modes, the sample-based baselines and the real rasterizers "
+        "Skia and AGG (and, on lines, scikit-image's line_aa). Prints the tables and writes a "
+        "Pareto plot of error against time."
+    )
 
-    config = config_from_args(args)
-    _check_output("bench", args.output)
-    count = (
-        args.edges
-        if args.edges is not None
-        else (bench.QUICK_EDGES if args.quick else bench.DEFAULT_EDGES)
-    )
-    repeats = (
-        args.repeats
-        if args.repeats is not None
-        else (bench.QUICK_REPEATS if args.quick else bench.DEFAULT_REPEATS)
-    )
-    if count < 1:
-        raise _usage("bench", f"--edges must be at least 1, not {count}")
-    if repeats < 1:
-        raise _usage("bench", f"--repeats must be at least 1, not {repeats}")
-    if config.coord_bits < 6:
-        raise _usage("bench", "--coord-bits must be at least 6 (edges of up to 200 px)")
-    result = bench.run_bench(
-        config,
-        count=count,
-        seed=args.seed,
-        repeats=repeats,
-        lines=not args.no_lines,
-        progress=not args.quiet,
-        hardware=not args.quick,
-        synthesis=not args.no_synth,
-    )
-    print(machine_line())
-    print(bench.bench_tables(result))
-    bench.plot_pareto(result, args.output)
-    return 0
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument(
+            "--quick",
+            action="store_true",
+            help="few edges and repeats, no hardware columns (seconds)",
+        )
+        parser.add_argument(
+            "--no-synth",
+            action="store_true",
+            help="skip synthesis for the LUT and Fmax columns (about a minute per mode, cached)",
+        )
+        parser.add_argument(
+            "--edges", type=int, default=None, help="random edges (default 1000, --quick 60)"
+        )
+        parser.add_argument("--seed", type=int, default=1, help="random seed (1)")
+        parser.add_argument(
+            "--repeats",
+            type=int,
+            default=None,
+            help="timed runs per method, minimum kept (default 5, --quick 2)",
+        )
+        parser.add_argument("--no-lines", action="store_true", help="skip the line comparison")
+        parser.add_argument(
+            "-o",
+            "--output",
+            default="bench_pareto.png",
+            help="Pareto plot file (default bench_pareto.png)",
+        )
+        parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+        add_config_options(parser)
+
+    def run(self, args: argparse.Namespace) -> int:
+        from . import bench
+        from .report import machine_line
+
+        config = config_from_args(args)
+        _check_output(self.prog, args.output)
+        quick = args.quick
+        count = (
+            args.edges
+            if args.edges is not None
+            else (bench.QUICK_EDGES if quick else bench.DEFAULT_EDGES)
+        )
+        repeats = (
+            args.repeats
+            if args.repeats is not None
+            else (bench.QUICK_REPEATS if quick else bench.DEFAULT_REPEATS)
+        )
+        if count < 1:
+            raise usage_error(self.prog, f"--edges must be at least 1, not {count}")
+        if repeats < 1:
+            raise usage_error(self.prog, f"--repeats must be at least 1, not {repeats}")
+        if config.coord_bits < 6:
+            raise usage_error(self.prog, "--coord-bits must be at least 6 (edges of up to 200 px)")
+        result = bench.run_bench(
+            config,
+            count=count,
+            seed=args.seed,
+            repeats=repeats,
+            lines=not args.no_lines,
+            progress=not args.quiet,
+            hardware=not quick,
+            synthesis=not args.no_synth,
+        )
+        print(machine_line())
+        print(bench.bench_tables(result))
+        bench.plot_pareto(result, args.output)
+        return 0
 
 
 # -- edgeaa stress ---------------------------------------------------------------------------------
 
 
-def cmd_stress(args: argparse.Namespace) -> int:
-    from ..model.config import (
-        COORD_BITS_RANGE,
-        INTENSITY_BITS_RANGE,
-        SUBPIXEL_BITS_RANGE,
-        EdgeConfig,
-    )
-    from . import stress
-    from .report import machine_line
-
-    _check_output("stress", args.output)
-    widths = (
-        _int_list("stress", "--widths", args.widths, *COORD_BITS_RANGE)
-        if args.widths
-        else (stress.QUICK_WIDTHS if args.quick else stress.FULL_WIDTHS)
-    )
-    intensities = (
-        _int_list("stress", "--intensities", args.intensities, *INTENSITY_BITS_RANGE)
-        if args.intensities
-        else (stress.QUICK_INTENSITIES if args.quick else stress.FULL_INTENSITIES)
-    )
-    lo, hi = SUBPIXEL_BITS_RANGE
-    if not lo <= args.subpixel_bits <= hi:
-        raise _usage("stress", f"--subpixel-bits must be in [{lo}, {hi}], not {args.subpixel_bits}")
-    lo, hi = COORD_BITS_RANGE
-    if not lo <= args.plot_coord_bits <= hi:
-        raise _usage("stress", f"--plot-coord-bits must be in [{lo}, {hi}]")
-    if args.plot_intensity_bits not in intensities:
-        raise _usage(
-            "stress",
-            f"--plot-intensity-bits {args.plot_intensity_bits} must be one of --intensities "
-            f"({','.join(map(str, intensities))})",
-        )
-    s, plot_i = args.subpixel_bits, args.plot_intensity_bits
-    progress = not args.quiet
-    print(machine_line())
-    print(f"stress: widths {widths}, intensity bits {intensities}, subpixel bits {s}")
-    if not args.skip_bounds:
-        rows = stress.bound_sweep(widths, s, plot_i, progress=progress)
-        print(f"\nbound on the stress edges (intensity bits {plot_i}, derived F):")
-        print(stress.bound_table(rows))
-    safe = stress.safe_frac_bits(
-        widths, intensities, s, full_span_intensity=plot_i, progress=progress
-    )
-    print("\nsmallest safe fraction bits F of the truncated accumulator, measured and derived:")
-    print(stress.safe_table(safe))
-    plot_config = EdgeConfig(
-        coord_bits=args.plot_coord_bits, subpixel_bits=s, intensity_bits=plot_i, mode="paper"
-    )
-    curves = stress.drift_curves(args.plot_coord_bits, s, plot_i)
-    shallow = stress.length_curves(args.plot_coord_bits, s, plot_i)
-    stress.plot_stress(curves, shallow, safe, plot_config, args.output)
-    return 0
-
-
-# -- registration -------------------------------------------------------------------------------
-
-
-def add_commands(subparsers, add_config_options) -> None:
-    """Register `plot error-vs-slope`, `bench` and `stress` on edgeaa's subparsers."""
-    plot = subparsers.add_parser(
-        "plot",
-        help="draw the analysis figures (error-vs-slope)",
-        description="Draw an analysis figure.",
-    )
-    figures = plot.add_subparsers(dest="figure", metavar="FIGURE", parser_class=type(plot))
-    figures.required = True
-    slope = figures.add_parser(
-        "error-vs-slope",
-        help="maximum and RMS coverage error against the edge angle, every method",
-        description="Sweep the edge angle from 0 to 90 degrees over sub-pixel offsets and plot "
-        "the maximum and RMS coverage error against the exact area of edgeaa's modes (with "
-        "their bounds k/8, k/64, k/256, k/1024), the sample-based baselines (point, ordered "
-        "grids 2x2..16x16, rotated grid, 8-rooks) and the peers (Skia, AGG).",
-    )
-    slope.add_argument(
-        "-o",
-        "--output",
-        default="error_vs_slope.png",
-        help="plot file (.png, .svg or .pdf; default error_vs_slope.png)",
-    )
-    slope.add_argument("--step", type=float, default=1.0, help="angle step in degrees (1)")
-    slope.add_argument("--length", type=int, default=64, help="edge length in px (64)")
-    slope.add_argument("--offsets", type=int, default=64, help="sub-pixel start offsets (64)")
-    slope.add_argument(
-        "--no-peers", dest="peers", action="store_false", help="leave out Skia and AGG"
-    )
-    slope.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    add_config_options(slope)
-    slope.set_defaults(func=cmd_error_vs_slope)
-
-    bench = subparsers.add_parser(
-        "bench",
-        help="error and run time of every method on seeded random edges, with Skia and AGG",
-        description="On a fixed, seeded set of random edges: maximum and RMS coverage error "
-        "against the exact area and run time (as a ratio to edgeaa's vectorized model in the "
-        "same run) of edgeaa's modes, the sample-based baselines and the real rasterizers "
-        "Skia and AGG (and, on lines, scikit-image's line_aa). Prints the tables and writes a "
-        "Pareto plot of error against time.",
-    )
-    bench.add_argument(
-        "--quick",
-        action="store_true",
-        help="few edges and repeats, no hardware columns (seconds)",
-    )
-    bench.add_argument(
-        "--no-synth",
-        action="store_true",
-        help="skip synthesis for the LUT and Fmax columns (about a minute per mode, cached)",
-    )
-    bench.add_argument(
-        "--edges", type=int, default=None, help="random edges (default 1000, --quick 60)"
-    )
-    bench.add_argument("--seed", type=int, default=1, help="random seed (1)")
-    bench.add_argument(
-        "--repeats",
-        type=int,
-        default=None,
-        help="timed runs per method, minimum kept (default 5, --quick 2)",
-    )
-    bench.add_argument("--no-lines", action="store_true", help="skip the line comparison")
-    bench.add_argument(
-        "-o",
-        "--output",
-        default="bench_pareto.png",
-        help="Pareto plot file (default bench_pareto.png)",
-    )
-    bench.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    add_config_options(bench)
-    bench.set_defaults(func=cmd_bench)
-
-    stress = subparsers.add_parser(
-        "stress",
-        help="numerical stability: extreme edges, drift of the truncated accumulator",
-        description="Check the error bound on extreme edges (longest, slopes 1/L and "
+class StressCommand(Command):
+    name = "stress"
+    help = "numerical stability: extreme edges, drift of the truncated accumulator"
+    description = (
+        "Check the error bound on extreme edges (longest, slopes 1/L and "
         "(L-1)/L, sub-pixel extremes, every sub-pixel phase) for each coordinate width, "
         "every mode and both accumulators; sweep the fraction bits F of the truncated "
         "accumulator and print the smallest safe F beside the derived one; plot the drift "
-        "against length and F.",
+        "against length and F."
     )
-    stress.add_argument(
-        "--quick", action="store_true", help="small widths and intensities only (seconds)"
-    )
-    stress.add_argument(
-        "--widths",
-        help="coordinate widths W, e.g. 2,4,8 (default 2,4,6,8,10,11,12,14,16; --quick 2,4,6,8,11)",
-    )
-    stress.add_argument(
-        "--intensities",
-        help="intensity bits I for the F table, e.g. 4,8 (default 4,8,12,16; --quick 4,8)",
-    )
-    stress.add_argument("--subpixel-bits", type=int, default=4, help="sub-pixel bits s (4)")
-    stress.add_argument(
-        "--plot-coord-bits", type=int, default=11, help="W of the drift curves (11)"
-    )
-    stress.add_argument(
-        "--plot-intensity-bits",
-        type=int,
-        default=8,
-        help="I of the drift curves and of the bound check (8)",
-    )
-    stress.add_argument(
-        "--skip-bounds", action="store_true", help="only the word-length sweep and the plot"
-    )
-    stress.add_argument(
-        "-o",
-        "--output",
-        default="stress_drift.png",
-        help="drift plot file (default stress_drift.png)",
-    )
-    stress.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
-    stress.set_defaults(func=cmd_stress)
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument(
+            "--quick", action="store_true", help="small widths and intensities only (seconds)"
+        )
+        parser.add_argument(
+            "--widths",
+            help="coordinate widths W, e.g. 2,4,8 (default 2,4,6,8,10,11,12,14,16; "
+            "--quick 2,4,6,8,11)",
+        )
+        parser.add_argument(
+            "--intensities",
+            help="intensity bits I for the F table, e.g. 4,8 (default 4,8,12,16; --quick 4,8)",
+        )
+        parser.add_argument("--subpixel-bits", type=int, default=4, help="sub-pixel bits s (4)")
+        parser.add_argument(
+            "--plot-coord-bits", type=int, default=11, help="W of the drift curves (11)"
+        )
+        parser.add_argument(
+            "--plot-intensity-bits",
+            type=int,
+            default=8,
+            help="I of the drift curves and of the bound check (8)",
+        )
+        parser.add_argument(
+            "--skip-bounds", action="store_true", help="only the word-length sweep and the plot"
+        )
+        parser.add_argument(
+            "-o",
+            "--output",
+            default="stress_drift.png",
+            help="drift plot file (default stress_drift.png)",
+        )
+        parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+
+    def run(self, args: argparse.Namespace) -> int:
+        from ..model.config import EdgeConfig
+        from . import stress
+        from .report import machine_line
+
+        widths, intensities = self._check(args)
+        s, plot_i = args.subpixel_bits, args.plot_intensity_bits
+        progress = not args.quiet
+        print(machine_line())
+        print(f"stress: widths {widths}, intensity bits {intensities}, subpixel bits {s}")
+        if not args.skip_bounds:
+            rows = stress.bound_sweep(widths, s, plot_i, progress=progress)
+            print(f"\nbound on the stress edges (intensity bits {plot_i}, derived F):")
+            print(stress.bound_table(rows))
+        safe = stress.safe_frac_bits(
+            widths, intensities, s, full_span_intensity=plot_i, progress=progress
+        )
+        print("\nsmallest safe fraction bits F of the truncated accumulator, measured and derived:")
+        print(stress.safe_table(safe))
+        plot_config = EdgeConfig(
+            coord_bits=args.plot_coord_bits, subpixel_bits=s, intensity_bits=plot_i, mode="paper"
+        )
+        curves = stress.drift_curves(args.plot_coord_bits, s, plot_i)
+        shallow = stress.length_curves(args.plot_coord_bits, s, plot_i)
+        stress.plot_stress(curves, shallow, safe, plot_config, args.output)
+        return 0
+
+    def _check(self, args: argparse.Namespace) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """The widths and intensity bits to sweep, after checking every option."""
+        from ..model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
+        from . import stress
+
+        prog = self.prog
+        _check_output(prog, args.output)
+        widths = (
+            _int_list(prog, "--widths", args.widths, *COORD_BITS_RANGE)
+            if args.widths
+            else (stress.QUICK_WIDTHS if args.quick else stress.FULL_WIDTHS)
+        )
+        intensities = (
+            _int_list(prog, "--intensities", args.intensities, *INTENSITY_BITS_RANGE)
+            if args.intensities
+            else (stress.QUICK_INTENSITIES if args.quick else stress.FULL_INTENSITIES)
+        )
+        lo, hi = SUBPIXEL_BITS_RANGE
+        if not lo <= args.subpixel_bits <= hi:
+            raise usage_error(
+                prog, f"--subpixel-bits must be in [{lo}, {hi}], not {args.subpixel_bits}"
+            )
+        lo, hi = COORD_BITS_RANGE
+        if not lo <= args.plot_coord_bits <= hi:
+            raise usage_error(prog, f"--plot-coord-bits must be in [{lo}, {hi}]")
+        if args.plot_intensity_bits not in intensities:
+            raise usage_error(
+                prog,
+                f"--plot-intensity-bits {args.plot_intensity_bits} must be one of --intensities "
+                f"({','.join(map(str, intensities))})",
+            )
+        return widths, intensities

@@ -1,35 +1,13 @@
-"""Small shared helpers: progress lines, the machine record, tables and plot styling."""
+"""Small shared helpers: the machine record, tables and plot styling."""
 
 from __future__ import annotations
 
 import os
 import platform
-import sys
-import time
 
 import numpy as np
 
 from . import peers
-
-
-class Progress:
-    """A progress line on stderr, at most every `every` seconds (and always the last)."""
-
-    def __init__(self, label: str, total: int, every: float = 2.0, enabled: bool = True):
-        self.label, self.total, self.every, self.enabled = label, total, every, enabled
-        self.start = self.last = time.perf_counter()
-        self.done = 0
-
-    def step(self, what: str = "", n: int = 1) -> None:
-        self.done += n
-        now = time.perf_counter()
-        if self.enabled and (now - self.last >= self.every or self.done >= self.total):
-            self.last = now
-            print(
-                f"{self.label}: {self.done}/{self.total} {what} ({now - self.start:.1f} s)",
-                file=sys.stderr,
-                flush=True,
-            )
 
 
 def cpu_model() -> str:

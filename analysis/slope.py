@@ -23,10 +23,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from . import peers
 from .evaluate import BOUND_PER_K, EDGEAA_METHODS, SAMPLE_METHODS, mode_of, pixel_set, run_method
-from .report import Progress, fmt_float, pyplot, save, table
+from .report import fmt_float, pyplot, save, table
 
 DEFAULT_METHODS = EDGEAA_METHODS + SAMPLE_METHODS + ("skia", "agg")
 
@@ -98,7 +99,7 @@ def error_vs_slope(
     ]
     sweep = SlopeSweep(config, angles, k_per_angle, pixels=len(pixels), edges=len(edges))
     jobs = peers.fill_jobs(config, edges, batch) if set(methods) & set(peers.FILL_PEERS) else None
-    bar = Progress("error-vs-slope", len(methods), enabled=progress)
+    bar = ProgressBar("error-vs-slope", len(methods), enabled=progress)
     counts = np.bincount(angle_of_pixel, minlength=n_angles)
     for name in methods:
         run = run_method(config, edges, pixels, name, coverage="model", jobs=jobs)

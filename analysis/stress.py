@@ -41,12 +41,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.step import WidthError
 from ..model.vector import run_edges
 from .evaluate import BOUND_PER_K
 from .geometry import column_index, exact_coverage_pixels, pixel_keys
-from .report import Progress, fmt_float, pyplot, save, table
+from .report import fmt_float, pyplot, save, table
 
 UNITS = {"pw": 1.0, "paper": 2.0, "seg2": 2.5, "seg4": 81 / 32}  # u_N, docs/algorithm.md 9.1
 FULL_WIDTHS = (2, 4, 6, 8, 10, 11, 12, 14, 16)
@@ -202,7 +203,7 @@ def bound_sweep(
     widths: tuple[int, ...], subpixel_bits: int, intensity_bits: int, progress: bool = True
 ) -> list[BoundRow]:
     rows = []
-    bar = Progress("stress bounds", len(widths) * 8, enabled=progress)
+    bar = ProgressBar("stress bounds", len(widths) * 8, enabled=progress)
     for w in widths:
         base = EdgeConfig(coord_bits=w, subpixel_bits=subpixel_bits, intensity_bits=intensity_bits)
         edges = stress_edges(base)
@@ -325,7 +326,7 @@ def safe_frac_bits(
       (the budget of docs/model.md is a budget for exactly this drift).
     """
     rows = []
-    bar = Progress("stress word length", len(widths) * len(intensities), enabled=progress)
+    bar = ProgressBar("stress word length", len(widths) * len(intensities), enabled=progress)
     for w, i in itertools.product(widths, intensities):
         base = EdgeConfig(
             coord_bits=w,

@@ -1,8 +1,8 @@
 """`edgeaa render`: a scene in, an antialiased image out (docs/scenes.md).
 
-`add_commands(subparsers, add_config_options)` registers the command on the top-level
-subparsers of `edgeaa.cli.build_parser`. Bad input raises `edgeaa.cli.UsageError` (one line,
-exit status 2); a simulator that cannot run is reported in one line with exit status 1.
+The command registers itself (`edgeaa.command.Command`) when this module is imported. Bad
+input is a `usage_error` (one line, exit status 2); a simulator that cannot run is reported in
+one line with exit status 1.
 """
 
 from __future__ import annotations
@@ -14,24 +14,19 @@ import time
 
 import numpy as np
 
+from ..command import Command, ProgressBar, add_config_options, config_from_args, usage_error
 from .builtin import BUILTINS
 
-COMMAND = "edgeaa render"
-
-
-def _usage(message: str):
-    from ..cli import UsageError
-
-    return UsageError(f"{COMMAND}: error: {message}")
+PROG = "edgeaa render"
 
 
 def _crop(text: str) -> tuple[int, int, int, int]:
     try:
         x0, y0, x1, y1 = (int(v) for v in text.split(","))
     except ValueError:
-        raise _usage(f"--crop must be X0,Y0,X1,Y1 (integers), not {text!r}") from None
+        raise usage_error(PROG, f"--crop must be X0,Y0,X1,Y1 (integers), not {text!r}") from None
     if x1 <= x0 or y1 <= y0 or min(x0, y0) < 0:
-        raise _usage(f"--crop {text}: need 0 <= X0 < X1 and 0 <= Y0 < Y1")
+        raise usage_error(PROG, f"--crop {text}: need 0 <= X0 < X1 and 0 <= Y0 < Y1")
     return x0, y0, x1, y1
 
 
@@ -56,54 +51,124 @@ def _load(args, config):
     from .scene import load_scene
 
     if (args.scene is None) == (args.builtin is None):
-        raise _usage(
-            f"give a scene file or --builtin NAME (one of them; built-ins: {', '.join(BUILTINS)})"
+        raise usage_error(
+            PROG,
+            f"give a scene file or --builtin NAME (one of them; built-ins: {', '.join(BUILTINS)})",
         )
     if args.builtin is not None:
         return builtin(args.builtin, config)
     return load_scene(args.scene)
 
 
-def cmd_render(args: argparse.Namespace) -> int:
-    from ..cli import config_from_args
-    from .progress import ProgressBar
-    from .render import plan_scene, render_scene
-    from .scene import SceneError
+class RenderCommand(Command):
+    name = "render"
+    help = "render a scene (polygons, text) to an antialiased PNG with the model or the core"
+    description = (
+        "Render a scene (a JSON file of polygons and SVG paths, or a built-in) "
+        "through the model or the cycle-accurate core: polygons are filled, their edges "
+        "antialiased by the engine, pixels touched by several edges combined, and polygons "
+        "composited in order. The model and the simulated hardware give the same image bit "
+        "for bit. Format and rules: docs/scenes.md."
+    )
 
-    config = config_from_args(args)
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        from .engines import ENGINES
+
+        parser.add_argument("scene", nargs="?", help="scene file (JSON, see docs/scenes.md)")
+        parser.add_argument(
+            "--builtin", choices=BUILTINS, help="a built-in scene instead of a file"
+        )
+        parser.add_argument(
+            "--engine",
+            choices=ENGINES,
+            default="model",
+            help="model (default), verilator (the core compiled by Verilator, cycle-accurate; "
+            "first build about 40 s, cached) or amaranth (the core in Amaranth's Python "
+            "simulator: slow, small scenes only)",
+        )
+        parser.add_argument("-o", "--output", help="PNG file to write (the figure with --compare)")
+        parser.add_argument(
+            "--stats",
+            action="store_true",
+            help="also render without skipping and print cycles, writes and time with and "
+            "without, as ratios, and the saving of each rule",
+        )
+        parser.add_argument(
+            "--error",
+            action="store_true",
+            help="measure the image against the exact per-pixel polygon area (shapely): max "
+            "and RMS, split into pixels written by one edge, by several, and fill only",
+        )
+        parser.add_argument(
+            "--no-skip",
+            action="store_true",
+            help="send every boundary edge to the engine, unclipped, and composite over the "
+            "whole image (same image, more work)",
+        )
+        parser.add_argument(
+            "--compare",
+            action="store_true",
+            help="write a figure to -o instead: no antialiasing, edgeaa paper and seg4, 16x16 "
+            "supersampling, Skia and AGG side by side, with error heat maps",
+        )
+        parser.add_argument("--crop", help="with --compare: the pixels X0,Y0,X1,Y1 to show")
+        parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+        add_config_options(parser)
+
+    def run(self, args: argparse.Namespace) -> int:
+        from .render import plan_scene
+        from .scene import SceneError
+
+        config = config_from_args(args)
+        _check_output(args)
+        crop = _crop(args.crop) if args.crop else None
+        try:
+            scene = _load(args, config)
+            plan = plan_scene(scene, config)
+        except SceneError as error:
+            raise usage_error(PROG, str(error)) from None
+        if crop and (crop[2] > scene.width or crop[3] > scene.height):
+            raise usage_error(
+                PROG, f"--crop {args.crop} is outside the {scene.width} x {scene.height} image"
+            )
+        boundary = int(plan.boundary.sum())
+        print(
+            f"{PROG}: {scene.name}, {scene.width} x {scene.height} px, "
+            f"{len(scene.polygons)} polygons, {plan.edge_count} edges ({boundary} boundary); "
+            f"engine {args.engine}; {config}"
+        )
+        if args.compare:
+            return _compare(args, scene, config, crop)
+        return _render(args, plan)
+
+
+def _check_output(args: argparse.Namespace) -> None:
     if args.output is not None:
         if not args.output.lower().endswith(".png"):
-            raise _usage(f"-o {args.output}: the output must be a .png file")
+            raise usage_error(PROG, f"-o {args.output}: the output must be a .png file")
         directory = os.path.dirname(args.output)
         if directory and not os.path.isdir(directory):
-            raise _usage(f"-o {args.output}: directory {directory} does not exist")
+            raise usage_error(PROG, f"-o {args.output}: directory {directory} does not exist")
     if args.compare and args.output is None:
-        raise _usage("--compare needs -o FIGURE.png")
-    crop = _crop(args.crop) if args.crop else None
-    try:
-        scene = _load(args, config)
-        plan = plan_scene(scene, config)
-    except SceneError as error:
-        raise _usage(str(error)) from None
-    if crop and (crop[2] > scene.width or crop[3] > scene.height):
-        raise _usage(f"--crop {args.crop} is outside the {scene.width} x {scene.height} image")
+        raise usage_error(PROG, "--compare needs -o FIGURE.png")
 
-    boundary = int(plan.boundary.sum())
-    print(
-        f"{COMMAND}: {scene.name}, {scene.width} x {scene.height} px, "
-        f"{len(scene.polygons)} polygons, {plan.edge_count} edges ({boundary} boundary); "
-        f"engine {args.engine}; {config}"
-    )
-    if args.compare:
-        from .compare import plot_compare
 
-        rows = plot_compare(scene, config, args.output, crop)
-        print(f"{'method':22} {'max |err| LSB':>14} {'RMS LSB':>8}")
-        for label, worst, rms in rows:
-            print(f"{label:22} {worst:14.3f} {rms:8.3f}")
-        print(f"wrote {args.output}")
-        return 0
+def _compare(args: argparse.Namespace, scene, config, crop) -> int:
+    from .compare import plot_compare
 
+    rows = plot_compare(scene, config, args.output, crop)
+    print(f"{'method':22} {'max |err| LSB':>14} {'RMS LSB':>8}")
+    for label, worst, rms in rows:
+        print(f"{label:22} {worst:14.3f} {rms:8.3f}")
+    print(f"wrote {args.output}")
+    return 0
+
+
+def _render(args: argparse.Namespace, plan) -> int:
+    """Render the plan (twice with --stats), write the PNG and print what was asked for."""
+    from .render import render_scene
+
+    config = plan.config
     bar = ProgressBar("render", enabled=not args.quiet)
     try:
         result = render_scene(plan, engine=args.engine, skip=not args.no_skip, progress=bar)
@@ -113,7 +178,7 @@ def cmd_render(args: argparse.Namespace) -> int:
     except RuntimeError as error:  # a simulator failed to build or run
         bar.close()
         first = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
-        print(f"{COMMAND}: error: the {args.engine} engine failed: {first}", file=sys.stderr)
+        print(f"{PROG}: error: the {args.engine} engine failed: {first}", file=sys.stderr)
         return 1
     bar.close()
     run = result.engine_run
@@ -142,57 +207,3 @@ def cmd_render(args: argparse.Namespace) -> int:
         )
         print(error_table(error_rows(result, exact)))
     return 0
-
-
-def add_commands(subparsers, add_config_options) -> None:
-    """Register `render` on edgeaa's subparsers."""
-    from .engines import ENGINES
-
-    parser = subparsers.add_parser(
-        "render",
-        help="render a scene (polygons, text) to an antialiased PNG with the model or the core",
-        description="Render a scene (a JSON file of polygons and SVG paths, or a built-in) "
-        "through the model or the cycle-accurate core: polygons are filled, their edges "
-        "antialiased by the engine, pixels touched by several edges combined, and polygons "
-        "composited in order. The model and the simulated hardware give the same image bit "
-        "for bit. Format and rules: docs/scenes.md.",
-    )
-    parser.add_argument("scene", nargs="?", help="scene file (JSON, see docs/scenes.md)")
-    parser.add_argument("--builtin", choices=BUILTINS, help="a built-in scene instead of a file")
-    parser.add_argument(
-        "--engine",
-        choices=ENGINES,
-        default="model",
-        help="model (default), verilator (the core compiled by Verilator, cycle-accurate; "
-        "first build about 40 s, cached) or amaranth (the core in Amaranth's Python "
-        "simulator: slow, small scenes only)",
-    )
-    parser.add_argument("-o", "--output", help="PNG file to write (the figure with --compare)")
-    parser.add_argument(
-        "--stats",
-        action="store_true",
-        help="also render without skipping and print cycles, writes and time with and "
-        "without, as ratios, and the saving of each rule",
-    )
-    parser.add_argument(
-        "--error",
-        action="store_true",
-        help="measure the image against the exact per-pixel polygon area (shapely): max and "
-        "RMS, split into pixels written by one edge, by several, and fill only",
-    )
-    parser.add_argument(
-        "--no-skip",
-        action="store_true",
-        help="send every boundary edge to the engine, unclipped, and composite over the "
-        "whole image (same image, more work)",
-    )
-    parser.add_argument(
-        "--compare",
-        action="store_true",
-        help="write a figure to -o instead: no antialiasing, edgeaa paper and seg4, 16x16 "
-        "supersampling, Skia and AGG side by side, with error heat maps",
-    )
-    parser.add_argument("--crop", help="with --compare: the pixels X0,Y0,X1,Y1 to show")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
-    add_config_options(parser)
-    parser.set_defaults(func=cmd_render)

@@ -151,3 +151,56 @@ def test_synth_prints_both_cores_and_their_ratio(capsys):
     edgeaa, baseline, ratio = (rows["ice40", n] for n in ("edgeaa", "bresenham", "ratio"))
     assert all(float(v) > 0 for v in edgeaa + baseline)
     assert float(ratio[0]) == pytest.approx(int(edgeaa[0]) / int(baseline[0]), abs=0.01)
+
+
+# -- the command registry --------------------------------------------------------------------
+
+COMMAND_NAMES = ["edge", "demo", "verilog", "synth", "plot", "bench", "stress", "render"]
+
+
+def test_every_registered_command_is_in_the_help_in_order(capsys):
+    from edgeaa.command import COMMANDS
+
+    assert list(COMMANDS) == COMMAND_NAMES
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--help"])
+    assert exit_info.value.code == 0
+    help_text = capsys.readouterr().out
+    listed = [line.split()[0] for line in help_text.splitlines() if line.startswith("    ")]
+    listed = [name for name in listed if name in COMMANDS]
+    assert listed == COMMAND_NAMES
+    for name, command in COMMANDS.items():
+        assert command.help.split()[0] in help_text, name
+
+
+def test_command_modules_do_not_import_the_entry_point():
+    # The commands register on import; only the entry point may import them all (no cycle).
+    program = (
+        "import sys\n"
+        "import edgeaa.edge_cli, edgeaa.analysis.cli, edgeaa.render.cli\n"
+        "from edgeaa.command import COMMANDS\n"
+        "print(' '.join(COMMANDS), 'edgeaa.cli' in sys.modules)\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", program], capture_output=True, text=True, check=True
+    )
+    assert proc.stdout.split() == [*COMMAND_NAMES, "False"]
+
+
+def test_a_step_progress_bar_ends_its_line_on_a_terminal(monkeypatch):
+    import io
+
+    from edgeaa import command
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    monkeypatch.setattr(command, "DELAY", 0.0)
+    monkeypatch.setattr(command, "EVERY", 0.0)
+    stream = Terminal()
+    bar = command.ProgressBar("job", 2, stream=stream)
+    bar.step("first")
+    bar.step("second")
+    text = stream.getvalue()
+    assert text.count("\r") == 2 and "100.0% (2/2, " in text and text.endswith(" s)\n")

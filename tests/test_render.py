@@ -485,9 +485,9 @@ def test_render_stats_and_error_and_16_bit_output(tmp_path, capsys):
 
 
 def test_progress_goes_to_stderr(tmp_path, capsys, monkeypatch):
-    from edgeaa.render import progress
+    from edgeaa import command
 
-    monkeypatch.setattr(progress, "DELAY", 0.0)
+    monkeypatch.setattr(command, "DELAY", 0.0)
     assert main(["render", "--builtin", "starburst", "-o", str(tmp_path / "s.png")]) == 0
     captured = capsys.readouterr()
     assert "render:" in captured.err and "100.0%" in captured.err

