@@ -2,7 +2,8 @@
 
 Bad input (a coordinate out of range, a zero-length edge, widths that cannot hold the edge,
 an unknown mode) is reported as one line on stderr with exit status 2, never a traceback.
-Nothing imports this module: the commands live in their own modules and register themselves.
+No command module imports this one (only `__main__` and the tests do): the commands live in
+their own modules and register themselves.
 """
 
 from __future__ import annotations
