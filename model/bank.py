@@ -36,10 +36,10 @@ BANK_FIELDS = (
     BankField("x", "x"),  # screen pixel of the first column's primary write
     BankField("y", "y"),
     BankField("remaining", "remaining"),  # columns - 1
-    BankField("col_dx", "step"),  # screen step of one column and of one row
-    BankField("col_dy", "step"),
-    BankField("row_dx", "step"),
-    BankField("row_dy", "step"),
+    BankField("col_dx", "unit"),  # screen step of one column and of one row
+    BankField("col_dy", "unit"),
+    BankField("row_dx", "unit"),
+    BankField("row_dy", "unit"),
     BankField("du", "du"),
     BankField("ifix", "ifix"),
     BankField("jq", "jq"),
@@ -51,7 +51,7 @@ BANK_FIELDS = (
     BankField("seg_thresholds", "seg_const", "thresholds"),
     BankField("seg_intercepts", "seg_const", "intercepts"),
     BankField("value_base", "value"),
-    BankField("value_sign", "step"),
+    BankField("value_sign", "unit"),
 )
 
 

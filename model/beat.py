@@ -71,6 +71,12 @@ def beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> Beat:
     return Beat(pixel(LANES[0]), lane1, bool(get(("last",))))
 
 
+def payload_row(get: Callable[[tuple[str, ...]], int]) -> list[int]:
+    """The payload's leaves as one row of `BEAT_COLUMNS`, as sampled (lane 1 included when it
+    is not valid: its don't-care values are deterministic and the harnesses compare them)."""
+    return [int(get(path)) for path in PAYLOAD_PATHS]
+
+
 def beat_row(beat: Beat) -> list[int]:
     """A beat as one row of `BEAT_COLUMNS` (lane 1 zero when it is not valid)."""
     lane1 = (0, 0, 0) if beat.lane1 is None else beat.lane1

@@ -155,7 +155,7 @@ class EdgeConfig:
             "area": RegisterWidth(acc + 1),  # a pixel's scaled area, [0, ifix]
             "seg_const": RegisterWidth(acc),  # per-edge thresholds and intercepts
             "value": RegisterWidth(self.intensity_bits),  # output intensity
-            "step": RegisterWidth(2, signed=True),  # a unit step or sign: -1, 0 or +1
+            "unit": RegisterWidth(2, signed=True),  # a unit step or a sign: -1, 0 or +1
         }
 
     def with_(self, **changes) -> EdgeConfig:

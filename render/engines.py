@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Edge, EdgeConfig
+from ..model.beat import LANES, PIXEL_FIELDS, RUN_COLUMNS
 from ..model.timing import write_cycles
 from ..sim.verification.scoreboard import edge_columns
 
@@ -67,17 +68,18 @@ def beat_clocks(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:
 
 
 def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
-    """Beat rows [clock, x0, y0, v0, lane1_valid, x1, y1, v1, last] to the model's write order
-    (edge index, x, y, value): lane 0 then lane 1 of each beat.
+    """Beat rows of `edgeaa.model.beat.RUN_COLUMNS` (the clock, then the beat) to the model's
+    write order (edge index, x, y, value): lane 0 then lane 1 of each beat.
 
     `columns` holds each sent edge's visible columns
     (`edgeaa.sim.verification.scoreboard.edge_columns`):
     the core emits that many beats per edge, the last one with `last`, and none for an edge
     with 0 (no column in its clip window). Edge indices count every edge sent. Raises unless
     the beats and their `last` flags fit the counts exactly."""
-    beats = np.asarray(beats, dtype=np.int64).reshape(-1, 9)
+    beats = np.asarray(beats, dtype=np.int64).reshape(-1, len(RUN_COLUMNS))
+    field = {name: beats[:, index] for index, name in enumerate(RUN_COLUMNS)}
     columns = np.asarray(columns, dtype=np.int64).reshape(-1)
-    last = beats[:, 8].astype(bool)
+    last = field["last"].astype(bool)
     visible = int(np.count_nonzero(columns))
     if int(last.sum()) != visible or len(beats) != int(columns.sum()):
         raise RuntimeError(
@@ -88,14 +90,13 @@ def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
     if not np.array_equal(np.flatnonzero(last), ends):
         raise RuntimeError("the core's `last` beats do not end the edges after their columns")
     edge_of_beat = np.repeat(np.arange(len(columns), dtype=np.int64), columns)
-    two = beats[:, 4].astype(bool)
+    two = field["lane1_valid"].astype(bool)
     count = 1 + two.astype(np.int64)
     first = np.cumsum(count) - count
     total = int(count.sum())
     out = [np.empty(total, dtype=np.int64) for _ in range(4)]
-    for column, lane0, lane1 in zip(out, (edge_of_beat, beats[:, 1], beats[:, 2], beats[:, 3]),
-                                    (edge_of_beat, beats[:, 5], beats[:, 6], beats[:, 7]),
-                                    strict=True):  # fmt: skip
+    pixel = [tuple(field[f"{lane}_{name}"] for lane in LANES) for name in PIXEL_FIELDS]
+    for column, (lane0, lane1) in zip(out, [(edge_of_beat, edge_of_beat), *pixel], strict=True):
         column[first] = lane0
         column[first[two] + 1] = lane1[two]
     return tuple(out)

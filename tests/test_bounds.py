@@ -30,6 +30,7 @@ from fixtures import GEOMETRY_CONFIGS, random_any_length_edge, slope_edges
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+import edgeaa.model.column as column_module
 import edgeaa.model.step as step_module
 from edgeaa.model import (
     ACCUMULATORS,
@@ -521,15 +522,25 @@ def zero_intercepts(monkeypatch):
 def single_slope(monkeypatch):
     """triangle_estimate with slope 1/4 on every segment and no intercept."""
 
-    def mutated(config, st_, dq, reg):
-        return max(dq >> 2, 0)
+    def mutated(a, config, st_, dq, where=True):
+        return a.check("t", dq >> 2, where)
 
-    monkeypatch.setattr(step_module, "triangle_estimate", mutated)
+    monkeypatch.setattr(column_module, "triangle_estimate", mutated)
 
 
 def no_bottom_exit(monkeypatch):
     """The neighbour below is never written (one pixel per column when entering from below)."""
-    monkeypatch.setattr(step_module, "exit_depth_below", lambda st_, jq, jr, reg: (0, False))
+    monkeypatch.setattr(column_module, "exit_depths", never_below(column_module.exit_depths))
+
+
+def never_below(exit_depths):
+    """`exit_depths` with the test "the edge enters from the row below" always false."""
+
+    def mutated(a, st_, jq, jr):
+        depths = exit_depths(a, st_, jq, jr)
+        return {**depths, "below": depths["below"] & False}
+
+    return mutated
 
 
 @pytest.mark.parametrize(

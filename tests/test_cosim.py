@@ -66,8 +66,8 @@ def test_a_wrong_model_is_caught(monkeypatch):
     """The bench can fail: with the model's rounding changed, the core disagrees."""
     import edgeaa.model.step as step
 
-    def off_by_one(config, st, area, reg):
-        return reg("value", min(config.full_scale, st.value_base + 1))
+    def off_by_one(a, config, st, area, where=True):
+        return a.check("value", min(config.full_scale, st.value_base + 1), where)
 
     monkeypatch.setattr(step, "output_value", off_by_one)
     with pytest.raises(CosimError, match="the model says"):

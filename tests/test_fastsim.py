@@ -54,11 +54,17 @@ def test_every_beat_leaves_in_the_clock_the_timing_model_predicts(config):
 
 def test_a_wrong_model_is_caught(monkeypatch):
     """The comparison can fail: change the model's neighbour test and the beats differ."""
-    import edgeaa.model.step as step
+    import edgeaa.model.column as column
 
     edges = random_sim_edges(DEFAULT, 50, seed=13)
     run = verilator_harness.run(DEFAULT, edges)
-    monkeypatch.setattr(step, "exit_depth_below", lambda st, jq, jr, reg: (0, False))
+    original = column.exit_depths
+
+    def never_below(a, st, jq, jr):
+        depths = original(a, st, jq, jr)
+        return {**depths, "below": depths["below"] & False}
+
+    monkeypatch.setattr(column, "exit_depths", never_below)
     assert run.as_beats() != expected_beats(DEFAULT, edges)[0]
 
 

@@ -10,14 +10,23 @@ the commands back to back and the sink is always ready, so beat clocks follow
 from __future__ import annotations
 
 import time
+from functools import partial
 
 import numpy as np
 from amaranth.sim import Simulator
 
 from ...hdl import EdgeAntialiaser
 from ...model import Edge, EdgeConfig
+from ...model.beat import payload_row
 from ..verification.commands import edge_command
 from .verilator_harness import BEAT_FIELDS, FastRun, drain_clocks
+
+
+def payload_leaf(payload, path: tuple[str, ...]) -> int:
+    """A leaf of the sampled ``writes.payload`` (a `data.Const` of `write_layout`)."""
+    for name in path:
+        payload = payload[name]
+    return int(payload)
 
 
 def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:
@@ -46,11 +55,7 @@ def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:
                 if progress is not None:
                     progress(index, len(commands))
             if valid:
-                lane0, lane1 = beat.lane0, beat.lane1
-                rows.append(
-                    [clocks, lane0.x, lane0.y, lane0.value, beat.lane1_valid]
-                    + [lane1.x, lane1.y, lane1.value, beat.last]
-                )
+                rows.append([clocks, *payload_row(partial(payload_leaf, beat))])
             quiet = 0 if (valid or index < len(commands)) else quiet + 1
             clocks += 1
         ctx.set(dut.edges.valid, 0)

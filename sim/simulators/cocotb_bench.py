@@ -24,8 +24,9 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
 
 from ...model import Clip, Edge, EdgeConfig
+from ...model.beat import Beat, beat_from_fields, beats_from_array, port_name
 from ..verification.commands import edge_command
-from ..verification.scoreboard import Beat, Scoreboard, beats_from_array
+from ..verification.scoreboard import Scoreboard
 
 DRAIN_CLOCKS = 64  # clocks the sink must stay empty after the last expected beat
 
@@ -45,15 +46,11 @@ def _drive_command(dut, command) -> None:
 
 
 def _read_beat(dut) -> Beat:
-    def pixel(lane):
-        return (
-            getattr(dut, f"writes__payload__{lane}__x").value.to_signed(),
-            getattr(dut, f"writes__payload__{lane}__y").value.to_signed(),
-            int(getattr(dut, f"writes__payload__{lane}__value").value),
-        )
+    def leaf(path: tuple[str, ...]) -> int:
+        value = getattr(dut, port_name(path)).value
+        return value.to_signed() if path[-1] in ("x", "y") else int(value)
 
-    lane1 = pixel("lane1") if int(dut.writes__payload__lane1_valid.value) else None
-    return Beat(pixel("lane0"), lane1, bool(int(dut.writes__payload__last.value)))
+    return beat_from_fields(leaf)
 
 
 @cocotb.test()

@@ -1,39 +1,36 @@
 """The golden side of every hardware comparison: the model's writes as the core's beats.
 
 The core emits one beat per column with two lanes (the primary pixel, then the neighbour
-when the column has two writes). `expected_beats` turns model results into that form, and
-`Scoreboard` checks observed beats against it in order and, at the end, that nothing is
-missing (verilog-axis style: the run ends with "the scoreboard is empty").
+when the column has two writes; the format is `edgeaa.model.beat`). `expected_beats` turns
+model results into that form, and `Scoreboard` checks observed beats against it in order and,
+at the end, that nothing is missing (verilog-axis style: the run ends with "the scoreboard
+is empty").
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
-from typing import NamedTuple
 
 import numpy as np
 
 from ...model import Edge, EdgeConfig, EdgeError, run_edge, setup
+from ...model.beat import Beat, beats_from_array, beats_to_array, column_beats
 from ...model.step import EdgeResult
 
-Pixel = tuple[int, int, int]  # x, y, value
-
-
-class Beat(NamedTuple):
-    lane0: Pixel
-    lane1: Pixel | None  # None: the column has one write
-    last: bool  # the edge's last column
+__all__ = [
+    "Beat",
+    "Scoreboard",
+    "beats_from_array",
+    "beats_to_array",
+    "edge_beats",
+    "edge_columns",
+    "expected_beats",
+]
 
 
 def edge_beats(result: EdgeResult) -> list[Beat]:
     """One edge's model writes as beats, column by column."""
-    beats = []
-    for index, column in enumerate(result.columns):
-        lanes = [(w.x, w.y, w.value) for w in column]
-        beats.append(
-            Beat(lanes[0], lanes[1] if len(lanes) > 1 else None, index == len(result.columns) - 1)
-        )
-    return beats
+    return column_beats(result.columns)
 
 
 def expected_beats(config: EdgeConfig, edges: Iterable[Edge]) -> tuple[list[Beat], int]:
@@ -61,29 +58,6 @@ def edge_columns(config: EdgeConfig, edges: Iterable[Edge]) -> np.ndarray:
         except EdgeError:
             counts.append(0)
     return np.array(counts, dtype=np.int64)
-
-
-def beats_to_array(beats: list[Beat]) -> np.ndarray:
-    """Beats as rows of int32: lane0 x, y, value, lane1 valid, x, y, value, last."""
-    rows = np.zeros((len(beats), 8), dtype=np.int32)
-    for i, (lane0, lane1, last) in enumerate(beats):
-        rows[i, 0:3] = lane0
-        if lane1 is not None:
-            rows[i, 3] = 1
-            rows[i, 4:7] = lane1
-        rows[i, 7] = last
-    return rows
-
-
-def beats_from_array(rows: np.ndarray) -> list[Beat]:
-    return [
-        Beat(
-            (int(r[0]), int(r[1]), int(r[2])),
-            (int(r[4]), int(r[5]), int(r[6])) if r[3] else None,
-            bool(r[7]),
-        )
-        for r in rows.tolist()
-    ]
 
 
 class Scoreboard:
