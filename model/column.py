@@ -159,10 +159,19 @@ def triangle_estimate(a, config: EdgeConfig, st, dq, where=True):
     """Add-only estimate of the cut-off triangle d^2/(2k), scaled like the accumulator, before
     clamping at 0: on segment j (d >= j K/(2N)) the minimax line (2j+1)/(4N) d - intercept_j.
     The slope multiply is by a small odd constant: shifts and adds in hardware."""
-    log2n = config.segments.bit_length() - 1
-    j = sum(dq >= threshold for threshold in st.seg_thresholds)
-    slope = ((2 * j + 1) * dq) >> (2 + log2n)
-    return a.check("t", slope - a.pick(j, st.seg_intercepts), where)
+    shift = 2 + config.segments.bit_length() - 1
+    thresholds = st.seg_thresholds if config.segments > 1 else ()  # (a bank has none for N = 1)
+    segment = sum(dq >= threshold for threshold in thresholds)
+    lines = [
+        (_times(dq, 2 * j + 1) >> shift) - intercept
+        for j, intercept in enumerate(st.seg_intercepts)
+    ]
+    return a.check("t", a.pick(segment, lines), where)
+
+
+def _times(value, k: int):
+    """`value` times a small odd constant (no multiply at all for 1)."""
+    return value if k == 1 else k * value
 
 
 def column_areas(a, config: EdgeConfig, st, jq, jr) -> ColumnAreas:

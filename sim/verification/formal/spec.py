@@ -12,9 +12,13 @@ import types
 from amaranth.hdl import Mux, Value
 from amaranth.lib import data
 
+from ....model.column import advance, column_areas, output_value
 from ....model.config import EdgeConfig, RegisterWidth
+from ....model.edge import fold as model_fold
+from ....model.edge import window as model_window
 
 __all__ = [
+    "HdlArith",
     "all_",
     "axes",
     "column",
@@ -54,81 +58,80 @@ def fields(view, layout) -> types.SimpleNamespace:
     return types.SimpleNamespace(**out)
 
 
+class HdlArith:
+    """The model's arithmetic (`edgeaa.model.column`) on Amaranth values, in full width:
+    selects are `Mux`, and each register check becomes a condition in `fits`, grouped as the
+    ``bounds`` check reports them (registers the proofs bound otherwise are not recorded)."""
+
+    GROUPS = {"dq": "dq", "dr": "dq", "t": "t", "area": "area", "value": "value"}
+    GROUPS |= {"jsum": "jsum", "jq": "next_acc", "jr": "next_acc"}
+
+    def __init__(self, config: EdgeConfig):
+        self.widths = config.register_widths()
+        self.fits: dict[str, Value] = {}
+
+    @staticmethod
+    def select(cond, a, b):
+        return Mux(cond, a, b)
+
+    @staticmethod
+    def not_(cond):
+        return ~Value.cast(cond)
+
+    @staticmethod
+    def pick(index, values):
+        if isinstance(index, int):
+            return values[index]
+        out = values[0]
+        for j in range(1, len(values)):
+            out = Mux(index == j, values[j], out)
+        return out
+
+    def check(self, name: str, value, where=True):
+        group = self.GROUPS.get(name)
+        if group is not None and where is not False:
+            condition = fits(value, self.widths[name])
+            if where is not True:
+                condition = implies(where, condition)
+            held = self.fits.get(group)
+            self.fits[group] = condition if held is None else held & condition
+        return value
+
+
 def fold(config: EdgeConfig, cmd) -> types.SimpleNamespace:
-    """The model's `setup` fold of a command (full-width expressions, no division)."""
-    s, scale = config.subpixel_bits, config.subpixel_scale
-    dx, dy = cmd.x1 - cmd.x0, cmd.y1 - cmd.y0
-    adx, ady = Mux(dx < 0, -dx, dx), Mux(dy < 0, -dy, dy)
-    x_major = adx >= ady
-    p0, q0, p1 = (
-        Mux(x_major, cmd.x0, cmd.y0),
-        Mux(x_major, cmd.y0, cmd.x0),
-        Mux(x_major, cmd.x1, cmd.y1),
-    )
-    dp, dq = Mux(x_major, dx, dy), Mux(x_major, dy, dx)
-    major_neg, minor_neg = dp <= 0, dq < 0
-    u0, v0, u1 = Mux(major_neg, -p0, p0), Mux(minor_neg, -q0, q0), Mux(major_neg, -p1, p1)
-    c0 = ((u0 << 1) + scale) >> (s + 1)
-    c1 = -((scale - (u1 << 1)) >> (s + 1))
-    e = (c0 << s) - u0
-    diff = cmd.i_in - cmd.i_out
-    i_d = Mux(diff < 0, -diff, diff)
-    det_pos = x_major ^ major_neg ^ minor_neg  # the model's det == +1
-    inside_is_a = (cmd.inside == 0) == det_pos
-    i_a, i_b = Mux(inside_is_a, cmd.i_in, cmd.i_out), Mux(inside_is_a, cmd.i_out, cmd.i_in)
+    """The model's `setup` fold of a command (`edgeaa.model.edge.fold`; no division), with
+    what the core forms from it: the start offset ``e = c0 S - u0``, its magnitude, the
+    unclipped column count and the bad-command test."""
+    f = model_fold(
+        HdlArith(config), config, cmd.x0, cmd.y0, cmd.x1, cmd.y1, cmd.i_in, cmd.i_out,
+        cmd.inside == 0,
+    )  # fmt: skip
+    e = (f.c0 << config.subpixel_bits) - f.u0
     bad = ((cmd.x0 == cmd.x1) & (cmd.y0 == cmd.y1)) | (cmd.i_in == cmd.i_out)
     return types.SimpleNamespace(
-        x_major=x_major,
-        major_neg=major_neg,
-        minor_neg=minor_neg,
-        u0=u0,
-        du=Mux(x_major, adx, ady),
-        dv=Mux(x_major, ady, adx),
-        q0=q0,
-        v0=v0,
-        c0=c0,
-        c1=c1,
-        columns=c1 - c0 + 1,
+        **vars(f),
+        q0=Mux(f.x_major, cmd.y0, cmd.x0),
+        columns=f.c1 - f.c0 + 1,
         e=e,
         e_mag=Mux(e < 0, -e, e),
-        i_d=i_d,
-        value_base=i_b,
-        value_neg=i_a < i_b,
         bad=bad,
     )
 
 
 def window(config: EdgeConfig, fold, clip) -> types.SimpleNamespace:
-    """The model's cut of a folded command's columns to its clip window (`setup`): the folded
-    bounds ``lo, hi``, the columns ``first .. last`` (``columns`` of them, none when <= 0),
-    whether the start moved, and lane A's first-pass multiplier ``2 (first S - u0)`` as the
-    core loads it (``W + s + 2`` bits; ``2 |e|`` followed by ``W + 1`` zero bits when the
-    start did not move)."""
+    """The model's cut of a folded command's columns to its clip window
+    (`edgeaa.model.edge.window`): the folded bounds ``lo, hi``, the columns ``first .. last``
+    (``columns`` of them, none when <= 0), whether the start moved, and lane A's first-pass
+    multiplier ``2 (first S - u0)`` as the core loads it (``W + s + 2`` bits; ``2 |e|``
+    followed by ``W + 1`` zero bits when the start did not move)."""
     W, s = config.coord_bits, config.subpixel_bits
-    neg = fold.major_neg
-    lo = Mux(
-        fold.x_major,
-        Mux(neg, -clip.x_max, clip.x_min),
-        Mux(neg, -clip.y_max, clip.y_min),
-    )
-    hi = Mux(
-        fold.x_major,
-        Mux(neg, -clip.x_min, clip.x_max),
-        Mux(neg, -clip.y_min, clip.y_max),
-    )
-    start_clip = fold.c0 < lo
-    first = Mux(start_clip, lo, fold.c0)
-    last = Mux(fold.c1 > hi, hi, fold.c1)
+    w = model_window(HdlArith(config), fold, clip)
     bits = W + s + 2
-    offset = ((first << s) - fold.u0) << 1
-    multiplier = Mux(start_clip, offset[:bits], (fold.e_mag << (W + 2))[:bits])
+    offset = ((w.first << s) - fold.u0) << 1
+    multiplier = Mux(w.start_clip, offset[:bits], (fold.e_mag << (W + 2))[:bits])
     return types.SimpleNamespace(
-        lo=lo,
-        hi=hi,
-        start_clip=start_clip,
-        first=first,
-        last=last,
-        columns=last - first + 1,
+        **vars(w),
+        columns=w.last - w.first + 1,
         multiplier=multiplier,
         bits=bits,
     )
@@ -205,81 +208,37 @@ def major_ok(config: EdgeConfig, axes) -> Value:
 
 
 def column(config: EdgeConfig, b, axes) -> types.SimpleNamespace:
-    """The model's `column_areas`, `output_value` and loop step in full width."""
-    widths = config.register_widths()
-    F, n = config.F, config.segments
-    ok = {}  # name -> the full-width value fits its register
-    out = {}
-    if n == 0:
-        two, below, t = Value.cast(0), Value.cast(0), Value.cast(0)
-        area0, area1 = b.jq, Value.cast(0)
-    else:
-        rsum_a = b.jr + b.khr
-        carry_a = rsum_a >= b.du
-        dq_a = b.jq + b.khq + carry_a - b.ifix
-        dr_a = rsum_a - Mux(carry_a, b.du, 0)
-        above = (dq_a > 0) | ((dq_a == 0) & (dr_a != 0))
-        borrow = b.khr < b.jr
-        dq_b = b.khq - b.jq - borrow
-        dr_b = b.khr - b.jr + Mux(borrow, b.du, 0)
-        below_raw = (dq_b > 0) | ((dq_b == 0) & (dr_b != 0))
-        below = ~above & below_raw
-        two = above | below
-        dq = Mux(above, dq_a, dq_b)
-        shift = 2 + n.bit_length() - 1
-        if n == 1:
-            t = (dq >> shift) - b.seg_intercepts[0]
-        else:
-            seg = sum(dq >= threshold for threshold in b.seg_thresholds)
-            t = ((dq * (2 * n - 1)) >> shift) - b.seg_intercepts[n - 1]
-            for j in reversed(range(n - 1)):
-                t = Mux(seg == j, ((dq * (2 * j + 1)) >> shift) - b.seg_intercepts[j], t)
-        t_clamped = Mux(t < 0, 0, t)
-        area0 = Mux(above, b.jq - t_clamped, Mux(below, b.jq + t_clamped, b.jq))
-        area1 = Mux(above, t_clamped, b.ifix - t_clamped)
-        ok["dq"] = fits(dq_a, widths["dq"]) & fits(dr_a, widths["dr"])
-        ok["dq"] &= implies(~above, fits(dq_b, widths["dq"]) & fits(dr_b, widths["dr"]))
-        ok["t"] = implies(two, fits(t, widths["t"]))
-        out.update(above=above, below_raw=below_raw, dq=dq, dq_above=dq_a, borrow=borrow, t=t)
-
-    def value(area):
-        rounded = (area + (1 << (F - 1))) >> F
-        return Mux(b.value_sign < 0, b.value_base - rounded, b.value_base + rounded)
-
-    value0, value1 = value(area0), value(area1)
-    ok["area"] = fits(area0, widths["area"]) & implies(two, fits(area1, widths["area"]))
-    ok["value"] = fits(value0, widths["value"]) & implies(two, fits(value1, widths["value"]))
-    # The neighbour: row + 1 along the stepping direction, or row - 1 when the edge enters
-    # from below.
-    x1 = Mux(below, b.x - b.row_dx, b.x + b.row_dx)
-    y1 = Mux(below, b.y - b.row_dy, b.y + b.row_dy)
-    # The loop step.
-    rsum = b.jr + b.kr
-    carry = rsum >= b.du
-    jsum = b.jq + b.kq + carry
-    row_step = jsum >= b.ifix
-    jq_next = Mux(row_step, jsum - b.ifix, jsum)
-    jr_next = rsum - Mux(carry, b.du, 0)
-    ok["jsum"] = fits(jsum, widths["jsum"])
-    ok["next_acc"] = fits(jq_next, widths["jq"]) & fits(jr_next, widths["jr"])
+    """One column of the model (`edgeaa.model.column`: the areas, the output values and the
+    loop step) on the registers of a bank-like record, in full width, with ``fits``: each
+    group of the model's registers fits its width where the model assigns it."""
+    a = HdlArith(config)
+    areas = column_areas(a, config, b, b.jq, b.jr)
+    value0 = output_value(a, config, b, areas.area0)
+    value1 = output_value(a, config, b, areas.area1, areas.two)
+    step = advance(a, b, b.x, b.y, b.jq, b.jr)
+    below = Value.cast(areas.below)
     top = 1 << config.coord_bits
     major_next = axes.major + axes.col_step
-    ok["next_major"] = (major_next >= -1) & (major_next <= top + 1)
-    minor_next = axes.minor + Mux(row_step, axes.row_step, 0)
-    minor1 = axes.minor + Mux(below, -axes.row_step, axes.row_step)
+    a.fits["next_major"] = (major_next >= -1) & (major_next <= top + 1)
+    out = {}
+    if config.segments:
+        out = {name: getattr(areas, name) for name in ("above", "below_raw", "dq", "borrow", "t")}
+        out["dq_above"] = areas.dq_above
     return types.SimpleNamespace(
         **out,
-        area0=area0,
-        area1=area1,
-        jsum=jsum,
-        two=two,
+        area0=areas.area0,
+        area1=Value.cast(areas.area1),
+        jsum=step.jsum,
+        two=Value.cast(areas.two),
         below=below,
         value0=value0,
         value1=value1,
-        x1=x1,
-        y1=y1,
-        fits=ok,
-        row_step=row_step,
-        minor_next=minor_next,
-        minor1=minor1,
+        # The neighbour: row + 1 along the stepping direction, or row - 1 when the edge
+        # enters from below.
+        x1=Mux(below, b.x - b.row_dx, b.x + b.row_dx),
+        y1=Mux(below, b.y - b.row_dy, b.y + b.row_dy),
+        fits=a.fits,
+        row_step=step.row_step,
+        minor_next=axes.minor + Mux(step.row_step, axes.row_step, 0),
+        minor1=axes.minor + Mux(below, -axes.row_step, axes.row_step),
     )
