@@ -44,6 +44,8 @@ class IntArith:
 
     def __init__(self, config: EdgeConfig):
         self.widths = config.register_widths()
+        # (min, max) per register: the check runs a dozen times per column.
+        self.bounds = {name: (w.min, w.max) for name, w in self.widths.items()}
 
     @staticmethod
     def select(cond, a, b):
@@ -59,9 +61,9 @@ class IntArith:
 
     def check(self, name: str, value: int, where: bool = True) -> int:
         if where:
-            width = self.widths[name]
-            if not width.holds(value):
-                raise width_error(name, value, width)
+            lo, hi = self.bounds[name]
+            if not lo <= value <= hi:
+                raise width_error(name, value, self.widths[name])
         return value
 
 
@@ -104,7 +106,7 @@ class ArrayArith:
         return values
 
 
-@dataclass
+@dataclass(slots=True)
 class ColumnAreas:
     """One column's exit tests and scaled A-side areas (units of 2**-F intensity LSB).
 
@@ -208,7 +210,7 @@ def neighbour_offset(a, areas: ColumnAreas):
     return a.select(areas.below, -1, 1)
 
 
-@dataclass
+@dataclass(slots=True)
 class Advance:
     """The loop registers after one column, and what the step decided."""
 
