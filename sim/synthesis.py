@@ -81,7 +81,6 @@ __all__ = [
     "ToolError",
     "ToolNotFoundError",
     "assert_no_muldiv",
-    "estimate",
     "find_tool",
     "muldiv_cells",
     "port_bits",
@@ -467,13 +466,6 @@ def synthesize(
         wrapper=wrapper,
         **pnr,
     )
-
-
-def estimate(
-    component: wiring.Component, targets=("ice40", "ecp5"), **kwargs
-) -> dict[str, SynthResult]:
-    """`synthesize` for several targets; keyword arguments are passed on."""
-    return {name: synthesize(component, name, **kwargs) for name in targets}
 
 
 # -- cells of a design: the multiplier detector ------------------------------------------------

@@ -204,7 +204,3 @@ def cosimulate(
         clocks=result["clocks"],
         seconds=result["seconds"],
     )
-
-
-def which_verilator() -> str | None:
-    return shutil.which("verilator", path=verilator_env()["PATH"])

@@ -10,7 +10,7 @@ and a transfer per cycle is possible.
 - `stream_put_random` / `stream_get_random`: the same with random idle cycles before valid
   (a source with bubbles) or ready randomly low (a sink with back-pressure), drawn from a
   seeded ``random.Random`` so failures replay.
-- `stream_put_all` / `stream_get_n` / `stream_get_packet`: sequences of the above.
+- `stream_put_all` / `stream_get_packet`: sequences of the above.
 
 `stream_get_random` also checks the hold rule the edgeaa cores keep (as in AXI-Stream): once
 ``valid`` is high it stays high, with the same payload, until the transfer. A violation raises
@@ -36,8 +36,6 @@ from amaranth.hdl import Value
 __all__ = [
     "StreamProtocolError",
     "stream_get",
-    "stream_get_maybe",
-    "stream_get_n",
     "stream_get_packet",
     "stream_get_random",
     "stream_put",
@@ -82,14 +80,6 @@ async def stream_get(ctx, stream):
             break
     ctx.set(stream.ready, 0)
     return payload
-
-
-async def stream_get_maybe(ctx, stream):
-    """Hold ready high for one cycle; return the payload if a transfer happened, else None."""
-    ctx.set(stream.ready, 1)
-    _, _, payload, valid = await ctx.tick().sample(stream.payload, stream.valid)
-    ctx.set(stream.ready, 0)
-    return payload if valid else None
 
 
 async def stream_put_random(ctx, stream, payload, rng: random.Random, *, idle: float = 0.5):
@@ -146,15 +136,6 @@ async def stream_put_all(
             await stream_put(ctx, stream, payload)
         else:
             await stream_put_random(ctx, stream, payload, rng, idle=idle)
-
-
-async def stream_get_n(
-    ctx, stream, count: int, rng: random.Random | None = None, *, stall: float = 0.0
-) -> list:
-    """Take `count` payloads; with `rng`, with random back-pressure (and the hold check)."""
-    if rng is None:
-        return [await stream_get(ctx, stream) for _ in range(count)]
-    return [await stream_get_random(ctx, stream, rng, stall=stall) for _ in range(count)]
 
 
 async def stream_get_packet(
