@@ -1,0 +1,111 @@
+"""The core's payload layouts, each derived from the model's one declaration of its concept.
+
+* `edge_layout`: one edge command (`edgeaa.model.Edge`), the ``edges`` stream's payload;
+* `clip_layout`: the clip window (`edgeaa.model.Clip`), the ``clip`` port;
+* `setup_layout`: the register bank from the setup to the stepper, one field per
+  `edgeaa.model.bank.bank_fields` entry, sized by its register in the width table;
+* `write_layout`: one output beat, the lanes and flags of `edgeaa.model.beat`.
+"""
+
+from __future__ import annotations
+
+from amaranth.hdl import Const, signed, unsigned
+from amaranth.lib import data
+
+from ..model.bank import bank_fields
+from ..model.beat import LANES, PAYLOAD_PATHS, PIXEL_FIELDS
+from ..model.config import EdgeConfig, RegisterWidth
+
+__all__ = [
+    "check_config",
+    "clip_layout",
+    "const_mul",
+    "edge_layout",
+    "full_clip",
+    "log2",
+    "pixel_layout",
+    "register_shape",
+    "setup_layout",
+    "write_layout",
+]
+
+
+def check_config(config) -> EdgeConfig:
+    if not isinstance(config, EdgeConfig):
+        raise TypeError(f"config must be an EdgeConfig, not {config!r}")
+    return config
+
+
+def register_shape(width: RegisterWidth):
+    """The Amaranth shape of a width-table entry."""
+    return signed(width.bits) if width.signed else unsigned(width.bits)
+
+
+def log2(n: int) -> int:
+    return n.bit_length() - 1
+
+
+def const_mul(value, k: int):
+    """``value * k`` for a small non-negative constant, as shifts and adds (no $mul cell)."""
+    if k == 0:
+        return Const(0, 1)
+    terms = [value << i for i in range(k.bit_length()) if (k >> i) & 1]
+    result = terms[0]
+    for term in terms[1:]:
+        result = result + term
+    return result
+
+
+def edge_layout(config: EdgeConfig) -> data.StructLayout:
+    """One edge command: vertices in sub-pixel units, intensities and the inside side."""
+    coord = unsigned(config.coord_bits + config.subpixel_bits)
+    intensity = unsigned(config.intensity_bits)
+    return data.StructLayout(
+        {
+            "x0": coord,
+            "y0": coord,
+            "x1": coord,
+            "y1": coord,
+            "i_in": intensity,
+            "i_out": intensity,
+            "inside": unsigned(1),
+        }
+    )
+
+
+def clip_layout(config: EdgeConfig) -> data.StructLayout:
+    """The clip window (`edgeaa.model.Clip`): whole pixels, bounds included, each bound in
+    ``[0, 2**coord_bits]``; ``x_max = y_max = 2**coord_bits`` and zero minima clip nothing."""
+    bound = unsigned(config.coord_bits + 1)
+    return data.StructLayout({"x_min": bound, "y_min": bound, "x_max": bound, "y_max": bound})
+
+
+def full_clip(config: EdgeConfig) -> dict[str, int]:
+    """The ``clip`` value that clips nothing (`edgeaa.model.Clip.full`): the port's init."""
+    top = 1 << config.coord_bits
+    return {"x_min": 0, "y_min": 0, "x_max": top, "y_max": top}
+
+
+def pixel_layout(config: EdgeConfig) -> data.StructLayout:
+    """One lane of a beat: `PIXEL_FIELDS`, each sized by the register of the same name."""
+    widths = config.register_widths()
+    return data.StructLayout({name: register_shape(widths[name]) for name in PIXEL_FIELDS})
+
+
+def write_layout(config: EdgeConfig) -> data.StructLayout:
+    """One output beat: the writes of one column (one or two pixels) in `LANES`, then the
+    one-bit flags of `PAYLOAD_PATHS` (``lane1_valid``, ``last``)."""
+    pixel = pixel_layout(config)
+    fields = {lane: pixel for lane in LANES}
+    fields.update({path[0]: unsigned(1) for path in PAYLOAD_PATHS if len(path) == 1})
+    return data.StructLayout(fields)
+
+
+def setup_layout(config: EdgeConfig) -> data.StructLayout:
+    """The register bank handed from the setup to the stepper (the model's `EdgeSetup`): one
+    field per `bank_fields` entry, arrays of ``length`` registers."""
+    fields = {}
+    for field in bank_fields(config):
+        shape = register_shape(field.width(config))
+        fields[field.name] = data.ArrayLayout(shape, field.length(config)) if field.array else shape
+    return data.StructLayout(fields)

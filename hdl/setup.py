@@ -1,0 +1,672 @@
+# amaranth: UnusedElaboratable=no
+"""The per-edge setup of the core (`EdgeSetupUnit`): folds an edge command into the first
+octant, cuts its columns to the clip window and computes the bank the stepper needs (the
+model's `edgeaa.model.edge.setup`) with two lanes of a sequential multiply-divide unit
+(Horner shift-add multiplication interleaved with radix-2 restoring division, one bit per
+clock). Its latency is fixed per configuration, and ``W + 1`` clocks longer for an edge whose
+start the clip window cuts (`edgeaa.model.timing` owns the numbers).
+
+States (``a``: the clock a command is accepted): IDLE (``edges.ready``; accepts the command
+and samples ``clip`` with it), FOLD (``a + 1``: the fold; a bad command is dropped here, IDLE
+again in ``a + 2``), WINDOW (``a + 2``: the columns cut to the window, lane A loaded), RUN
+(``R = I + F + 1`` clocks from ``a + 3``, ``W + 1`` more when the window cuts the start; an
+edge with no column inside the window leaves RUN after its second clock, IDLE again in
+``a + 5``, no bank write), FINAL (writes the bank as soon as it is free; IDLE the clock
+after).
+
+Timing structure (for the clock rate; no path carries more than about one wide carry chain):
+the accept clock registers the command with its deltas ``x1 - x0``, ``x0 - x1`` (and for y),
+the "delta not positive" flags, the bad-command flag and the clip window; FOLD picks the major
+axis with one compare of the magnitudes (every choice that depends on it is formed for both
+axes and selected after it: the folded flags, ``du``, ``dv``, ``c0``, ``c1`` and the folded
+window bounds ``lo``, ``hi``); WINDOW cuts ``[c0, c1]`` to ``[lo, hi]`` with one compare each
+and forms the clipped start offset ``lo S - u0`` (one add) and ``v0`` in parallel; the column
+count is formed in the first RUN clock and tested in the second; the lanes form their three
+candidate remainders and quotients in parallel; ``kq, kr`` are registered when lane B is done,
+before FINAL.
+
+Bad commands: the model's `validate` rejects a zero-length edge (P0 == P1) and I_in == I_out
+(out-of-range coordinates or intensities cannot be expressed on ports of exactly the width).
+The setup accepts such a command, detects it in FOLD, drops it (nothing reaches the bank),
+pulses ``error``, counts it in ``errors`` and is ready for the next command two clocks after
+accepting the bad one.
+
+Clipping (the model's `Edge.clip`): only the major axis is clipped. In the folded frame
+(``u = step_major * p``) the window's major-axis bounds are ``lo, hi = min, max``, or
+``-max, -min`` when the major axis steps down; the edge steps the columns
+``first = max(c0, lo) .. last = min(c1, hi)``. A window that cuts the end only makes the
+count smaller; one that cuts the start (``c0 < lo``) starts the edge at column ``lo``, whose
+start offset ``e = lo S - u0`` is up to the edge's length, so lane A's first pass takes
+``W + s + 2`` clocks instead of ``s + 1``. An edge with no column inside (``last < first``,
+including a window with min > max) produces no beat and is not an error (``errors`` and
+``error`` are unchanged). The minor axis is not clipped: a write may land outside the window.
+
+Arithmetic (all exact; proofs in the comments below):
+
+* fold: ``du, dv = |major delta|, |minor delta|``; ``u0, v0, u1`` the folded coordinates;
+  ``c0 = (2 u0 + S) >> (s + 1)``, ``c1 = (2 u1 + S - 1) >> (s + 1)`` (= the model's
+  ``-((S - 2 u1) >> (s + 1))``).
+* window: ``first = max(c0, lo)``, ``last = min(c1, hi)``, ``columns = last - first + 1``
+  (none visible when ``<= 0``); ``e = first S - u0``: ``|e| <= S / 2`` when ``first = c0``,
+  else ``S / 2 < e < du + S / 2``.
+* lane A, pass 1 (``s + 1`` clocks, or ``W + s + 2`` for ``first > c0``):
+  ``q', r' = divmod(2 |e| dv, du)`` (``q' <= 2 |e| < 2**(W + s + 2)``); fix the sign of ``e``
+  to get ``q, r = divmod(2 e dv, du)``; then ``M = 2 v0 + S + q``, ``row0 = M >> (s + 1)``,
+  ``m = M mod 2S`` and the model's ``mf = m du + r``.
+* lane A, pass 2 (``I + F - s - 1`` clocks): ``jq, jr = divmod(|I_d| mf << (F - s - 1), du)``
+  computed as Horner over the bits of ``|I_d|`` with multiplicand ``r`` and the quotient digit
+  ``m`` added per set bit (``mf = m du + r``).
+* lane B (``I + F - 1`` clocks, in parallel): ``khq, khr = divmod(|I_d| dv << (F - 1), du)``.
+* when lane B is done (RUN, counter ``I + F - 1``): ``kq = 2 khq + (2 khr >= du)``,
+  ``kr = 2 khr - du (2 khr >= du)`` (exactly the model's ``divmod(|I_d| dv << F, du)``);
+  FINAL: the segment constants from ``kq`` (shift-adds) and, for the truncated accumulator,
+  ``jr = kr = khr = 0``.
+"""
+
+from __future__ import annotations
+
+import types
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed, unsigned
+from amaranth.lib import stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..model import timing
+from ..model.config import EdgeConfig
+from .layouts import (
+    check_config,
+    clip_layout,
+    const_mul,
+    edge_layout,
+    full_clip,
+    log2,
+    register_shape,
+    setup_layout,
+)
+
+__all__ = ["ERRORS_BITS", "EdgeSetupUnit", "accept_values"]
+
+ERRORS_BITS = 16
+STATES = ("IDLE", "FOLD", "WINDOW", "RUN", "FINAL")
+
+
+def accept_values(config: EdgeConfig, command) -> dict:
+    """The registers the setup loads from a command when it accepts it, name -> value of
+    `command` (an `edge_layout` view): the bad-command flag, the deltas and their negations
+    and the "delta not positive" flags. The setup loads them from the incoming payload; the
+    formal harness checks them against the latched command."""
+    same = (command.x0 == command.x1) & (command.y0 == command.y1)
+    return {
+        "bad": same | (command.i_in == command.i_out),  # zero length, or I_in == I_out
+        "dx_r": command.x1 - command.x0,
+        "ndx_r": command.x0 - command.x1,
+        "dy_r": command.y1 - command.y0,
+        "ndy_r": command.y0 - command.y1,
+        "dx_le0": command.x1 <= command.x0,
+        "dy_le0": command.y1 <= command.y0,
+    }
+
+
+def _registers(config: EdgeConfig) -> types.SimpleNamespace:
+    """The setup's registers besides the command, the lanes and the accepted deltas."""
+    widths = config.register_widths()
+    W, s, I = config.coord_bits, config.subpixel_bits, config.intensity_bits  # noqa: E741
+    coord = W + s
+    long_run = timing.run_cycles(config, clipped_start=True)
+
+    def reg(name, shape=1):
+        return Signal(shape, name=name)
+
+    return types.SimpleNamespace(
+        x_major=reg("x_major"),
+        major_neg=reg("major_neg"),
+        minor_neg=reg("minor_neg"),
+        du=reg("du", register_shape(widths["du"])),
+        dv=reg("dv", register_shape(widths["du"])),
+        neg_du=reg("neg_du", signed(widths["du"].bits + 1)),  # -du
+        # first, last: c0, c1 from FOLD, cut to the window [lo, hi] in WINDOW.
+        first=reg("first", signed(W + 2)),
+        last=reg("last", signed(W + 2)),
+        lo=reg("lo", signed(W + 2)),
+        hi=reg("hi", signed(W + 2)),
+        start_clip=reg("start_clip"),  # the window moved the first column: c0 < lo
+        v0_r=reg("v0_r", signed(coord + 1)),
+        columns=reg("columns", signed(W + 3)),  # last - first + 1, <= 0: none visible
+        e_neg=reg("e_neg"),
+        e_mag_r=reg("e_mag_r", unsigned(max(s, 1))),
+        i_d=reg("i_d", unsigned(I)),
+        value_base=reg("value_base", unsigned(I)),
+        value_neg=reg("value_neg"),
+        row0=reg("row0", signed(W + 2)),
+        counter=reg("counter", range(long_run)),
+        kq=reg("kq", register_shape(widths["kq"])),
+        kr=reg("kr", register_shape(widths["kr"])),
+    )
+
+
+class EdgeSetupUnit(wiring.Component):
+    """The per-edge setup: edge commands in, one bank of stepper constants per good edge out.
+
+    ``edges`` (in stream, `edge_layout`), ``clip`` (in, `clip_layout`, sampled with the
+    command), ``bank`` (out stream, `setup_layout`: written in FINAL, held until taken),
+    ``errors`` (saturating count of bad commands) and ``error`` (a one-clock pulse per bad
+    command). See the module docstring for the states and the arithmetic.
+
+    Observation points for the formal harness (attributes, not ports; all created here):
+
+    * ``cmd``, ``clip_r``: the latched command and the window sampled with it;
+    * ``accepted``: the other registers loaded at accept, name -> register; each equals
+      `accept_values` of ``cmd`` until the next accept;
+    * ``regs``: the fold, window and RUN registers (`_registers`: ``x_major``, ``major_neg``,
+      ``minor_neg``, ``du``, ``dv``, ``neg_du``, ``first``, ``last``, ``lo``, ``hi``,
+      ``start_clip``, ``v0_r``, ``columns``, ``e_neg``, ``e_mag_r``, ``i_d``,
+      ``value_base``, ``value_neg``, ``row0``, ``counter``, ``kq``, ``kr``);
+    * ``lane_a``, ``lane_b``: the two multiply-divide lanes (`_MulDivLane`: ``q``, ``r``,
+      ``a``, ``x``, ``digit``, ``x_du``, ``x_2du``, ``digit2``);
+    * ``in_idle``, ``in_fold``, ``in_window``, ``in_run``, ``in_final``: the state;
+    * ``next_bank`` (`setup_layout`): the value FINAL writes into the bank, combinational.
+    """
+
+    def __init__(self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS):
+        self._config = check_config(config)
+        if isinstance(errors_bits, bool) or not isinstance(errors_bits, int) or errors_bits < 1:
+            raise TypeError(f"errors_bits must be a positive integer, not {errors_bits!r}")
+        self._errors_bits = errors_bits
+        super().__init__(
+            {
+                "edges": In(stream.Signature(edge_layout(config))),
+                "clip": In(clip_layout(config), init=full_clip(config)),
+                "bank": Out(stream.Signature(setup_layout(config))),
+                "errors": Out(unsigned(errors_bits)),
+                "error": Out(unsigned(1)),
+            }
+        )
+        W, s, F = config.coord_bits, config.subpixel_bits, config.F
+        I = config.intensity_bits  # noqa: E741
+        coord = W + s
+        self.cmd = Signal(edge_layout(config), name="cmd")
+        self.clip_r = Signal(clip_layout(config), name="clip_r")
+        shapes = {"bad": 1, "dx_le0": 1, "dy_le0": 1}
+        self.accepted = {
+            name: Signal(shapes.get(name, signed(coord + 1)), name=name)
+            for name in ("bad", "dx_r", "ndx_r", "dy_r", "ndy_r", "dx_le0", "dy_le0")
+        }
+        self.regs = _registers(config)
+        # The lane pass lengths (structure; their total is the timing model's RUN length).
+        self.pass1_bits = s + 1  # 2 |e| <= S
+        self.pass1_long = W + s + 2  # 2 e < 2 du + S when the window moved the first column
+        self.pass2_bits = I + F - s - 1  # |I_d| << (F - s - 1)
+        if self.pass1_bits + 1 + self.pass2_bits != timing.run_cycles(config):
+            raise ValueError("lane A's passes and fix-up are not the timing model's RUN")
+        if self.pass1_long - self.pass1_bits != timing.start_clip_cycles(config):
+            raise ValueError("lane A's long first pass is not the timing model's extra clocks")
+        # Lane A's quotient holds floor(2 e dv / du) <= 2 e < 2**(W + s + 2) after pass 1.
+        a_bits = max(self.pass1_long, self.pass2_bits)
+        self.lane_a = _MulDivLane("lane_a", config, a_bits, s + 1, q_bits=self.pass1_long)
+        self.lane_b = _MulDivLane("lane_b", config, I + F - 1, 0)  # |I_d| << (F - 1)
+        for state in STATES:
+            setattr(self, f"in_{state.lower()}", Signal(name=f"in_{state.lower()}"))
+        self.next_bank = Signal(setup_layout(config), name="next_bank")
+
+    @property
+    def config(self) -> EdgeConfig:
+        return self._config
+
+    @property
+    def errors_bits(self) -> int:
+        return self._errors_bits
+
+    def elaborate(self, platform):
+        m = Module()
+        accept = self._accept()
+        fold = self._fold(m)
+        window = self._window(m)
+        lanes = self._lanes(m)
+        self._final(m)
+        self._fsm(m, accept, fold, window, lanes)
+        return m
+
+    # -- the accepted command ----------------------------------------------------------------
+
+    def _accept(self) -> list:
+        """IDLE's loads: the command, the window and `accept_values` of the command (the
+        deltas and their negations are registered with it, off FOLD's paths)."""
+        incoming = self.edges.payload
+        values = accept_values(self._config, incoming)
+        return [
+            self.cmd.eq(incoming),
+            self.clip_r.eq(self.clip),
+            *(self.accepted[name].eq(value) for name, value in values.items()),
+        ]
+
+    # -- fold (combinational from `cmd`, registered at the end of the FOLD clock) ------------
+
+    def _fold(self, m) -> list:
+        """FOLD's loads: the folded registers, ``c0, c1`` (as first, last), the folded
+        window, |e| and its sign, and lane B."""
+        config = self._config
+        W, s, F = config.coord_bits, config.subpixel_bits, config.F
+        I = config.intensity_bits  # noqa: E741
+        coord = W + s
+        cmd, acc, r = self.cmd, self.accepted, self.regs
+        dx_le0, dy_le0 = acc["dx_le0"], acc["dy_le0"]
+        dx, dy = Signal(signed(coord + 1)), Signal(signed(coord + 1))
+        adx, ady = Signal(unsigned(coord)), Signal(unsigned(coord))
+        nadx, nady = Signal(signed(coord + 1)), Signal(signed(coord + 1))  # -|dx|, -|dy|
+        f_x_major = Signal()
+        dq = Signal(signed(coord + 1))
+        f_diff = Signal(signed(I + 1))
+        f_id = Signal(unsigned(I))
+        m.d.comb += [
+            dx.eq(acc["dx_r"]),
+            dy.eq(acc["dy_r"]),
+            adx.eq(Mux(dx < 0, acc["ndx_r"], dx)),
+            ady.eq(Mux(dy < 0, acc["ndy_r"], dy)),
+            nadx.eq(Mux(dx < 0, dx, acc["ndx_r"])),
+            nady.eq(Mux(dy < 0, dy, acc["ndy_r"])),
+            f_x_major.eq((adx + nady) >= 0),  # |dx| >= |dy|
+            dq.eq(Mux(f_x_major, dy, dx)),
+            f_diff.eq(cmd.i_in - cmd.i_out),
+            f_id.eq(Mux(f_diff < 0, -f_diff, f_diff)),
+        ]
+
+        f_c0, f_c1, f_lo, f_hi = self._fold_columns(m, f_x_major)
+        value_base, value_neg = self._orientation(m, f_x_major, f_diff, dx, dy)
+        e, e_mag = self._start_offset(m, f_x_major)
+        # Lane B starts with X = dv: dv - du and dv - 2 du from |dx| and |dy| directly (lane A
+        # copies them from lane B in WINDOW).
+        f_dv = Mux(f_x_major, ady, adx)
+        f_dv_du = Mux(f_x_major, ady + nadx, adx + nady)
+        f_dv_2du = Mux(f_x_major, ady + (nadx << 1), adx + (nady << 1))
+        return [
+            r.x_major.eq(f_x_major),
+            r.major_neg.eq(Mux(f_x_major, dx_le0, dy_le0)),  # the model: dp > 0 steps up
+            r.minor_neg.eq(dq < 0),
+            r.du.eq(Mux(f_x_major, adx, ady)),
+            r.dv.eq(f_dv),
+            r.neg_du.eq(Mux(f_x_major, nadx, nady)),
+            r.first.eq(f_c0),
+            r.last.eq(f_c1),
+            r.lo.eq(f_lo),
+            r.hi.eq(f_hi),
+            r.i_d.eq(f_id),
+            r.value_base.eq(value_base),
+            r.value_neg.eq(value_neg),
+            r.e_neg.eq(e < 0),
+            r.e_mag_r.eq(e_mag),
+            r.counter.eq(0),
+            *self.lane_b.load(f_id << (F - 1), I + F - 1, f_dv, f_dv_du, f_dv_2du),
+        ]
+
+    def _fold_columns(self, m, f_x_major):
+        """c0, c1 and the folded window bounds lo, hi."""
+        config = self._config
+        W, s = config.coord_bits, config.subpixel_bits
+        S = 1 << s
+        cmd, clip, acc = self.cmd, self.clip_r, self.accepted
+        dx_le0, dy_le0 = acc["dx_le0"], acc["dy_le0"]
+
+        # The columns and the window along the major axis: every candidate (x or y major, each
+        # with its own sign) is formed in parallel with the major-axis test, which picks one.
+        # c0 = floor(u0 / S + 1/2) and c1 = ceil(u1 / S - 1/2) = floor((2 u1 + S - 1) / 2S)
+        # (arithmetic shifts floor); the window's bounds fold like u: (lo, hi) = (min, max),
+        # or (-max, -min) when the major axis steps down.
+        def first_column(p0, le0):
+            return Mux(le0, (S - (p0 << 1)) >> (s + 1), ((p0 << 1) + S) >> (s + 1))
+
+        def last_column(p1, le0):
+            return Mux(le0, ((S - 1) - (p1 << 1)) >> (s + 1), ((p1 << 1) + (S - 1)) >> (s + 1))
+
+        def bound(le0, low, high):
+            return Mux(le0, -high, low)
+
+        f_c0, f_c1 = Signal(signed(W + 2)), Signal(signed(W + 2))
+        f_lo, f_hi = Signal(signed(W + 2)), Signal(signed(W + 2))
+        m.d.comb += [
+            f_c0.eq(Mux(f_x_major, first_column(cmd.x0, dx_le0), first_column(cmd.y0, dy_le0))),
+            f_c1.eq(Mux(f_x_major, last_column(cmd.x1, dx_le0), last_column(cmd.y1, dy_le0))),
+            f_lo.eq(
+                Mux(
+                    f_x_major,
+                    bound(dx_le0, clip.x_min, clip.x_max),
+                    bound(dy_le0, clip.y_min, clip.y_max),
+                )
+            ),
+            f_hi.eq(
+                Mux(
+                    f_x_major,
+                    bound(dx_le0, clip.x_max, clip.x_min),
+                    bound(dy_le0, clip.y_max, clip.y_min),
+                )
+            ),
+        ]
+        return f_c0, f_c1, f_lo, f_hi
+
+    def _orientation(self, m, f_x_major, f_diff, dx, dy):
+        """I_B and the sign of I_A - I_B: a swap or one mirror flips left and right (the
+        model's det). Both candidates (x or y major) are formed in parallel with the
+        major-axis test."""
+        I = self._config.intensity_bits  # noqa: E741
+        cmd, acc = self.cmd, self.accepted
+        f_value_base, f_value_neg = Signal(unsigned(I)), Signal()
+        candidates = []
+        for major_x, major_le0, minor_neg in (
+            (0, acc["dy_le0"], dx < 0),
+            (1, acc["dx_le0"], dy < 0),
+        ):
+            det_neg = (not major_x) ^ major_le0 ^ minor_neg
+            inside_is_a = (cmd.inside == 0) ^ det_neg
+            candidates.append(
+                (
+                    Mux(inside_is_a, cmd.i_out, cmd.i_in),
+                    # value_sign = +1 iff I_A >= I_B; I_A = I_in iff inside is A.
+                    Mux(inside_is_a, f_diff < 0, f_diff > 0),
+                )
+            )
+        m.d.comb += [
+            f_value_base.eq(Mux(f_x_major, candidates[1][0], candidates[0][0])),
+            f_value_neg.eq(Mux(f_x_major, candidates[1][1], candidates[0][1])),
+        ]
+        return f_value_base, f_value_neg
+
+    def _start_offset(self, m, f_x_major):
+        """e = c0 S - u0 (|e| <= S/2) and |e|: they depend on the low bits of u0 = +-p0 only,
+        so both candidates (x or y major, each with its own sign) are formed in parallel with
+        the major-axis test, which picks one."""
+        s = self._config.subpixel_bits
+        S = 1 << s
+        cmd, acc = self.cmd, self.accepted
+
+        def start_offset(u0):
+            """e = c0 S - u0 for c0 = floor(u0 / S + 1/2): in (-S/2, S/2]."""
+            return ((((u0 << 1) + S) >> (s + 1)) << s) - u0
+
+        e_cands, e_mag_cands = [], []
+        for p0, le0 in ((cmd.y0, acc["dy_le0"]), (cmd.x0, acc["dx_le0"])):
+            e_cand = Signal(signed(s + 2), name=f"e_cand{len(e_cands)}")
+            e_mag_cand = Signal(unsigned(max(s, 1)), name=f"e_mag_cand{len(e_cands)}")
+            m.d.comb += [
+                e_cand.eq(Mux(le0, start_offset(-p0), start_offset(p0))),
+                e_mag_cand.eq(Mux(e_cand < 0, -e_cand, e_cand)),
+            ]
+            e_cands.append(e_cand)
+            e_mag_cands.append(e_mag_cand)
+        e = Signal(signed(s + 2))
+        e_mag = Signal(unsigned(max(s, 1)))
+        m.d.comb += [
+            e.eq(Mux(f_x_major, e_cands[1], e_cands[0])),
+            e_mag.eq(Mux(f_x_major, e_mag_cands[1], e_mag_cands[0])),
+        ]
+        return e, e_mag
+
+    # -- WINDOW: from the registers of FOLD --------------------------------------------------
+
+    def _window(self, m) -> list:
+        """WINDOW's loads: [c0, c1] cut to the window, v0, and lane A's first pass, which
+        starts at column `first`."""
+        config = self._config
+        W, s = config.coord_bits, config.subpixel_bits
+        cmd, r, lane_b = self.cmd, self.regs, self.lane_b
+        w_start_clip = Signal()
+        w_cut_end = Signal()
+        # lo S - u0, the offset of column lo's centre from u0 (low W + s + 1 bits): the start
+        # row's offset when the window moved the first column (then in (S/2, du + S/2)).
+        w_p0 = Mux(r.x_major, cmd.x0, cmd.y0)
+        offset = Signal(unsigned(W + s + 1), name="clip_offset")
+        r_q0 = Mux(r.x_major, cmd.y0, cmd.x0)
+        r_v0 = Signal(signed(W + s + 1), name="v0")
+        m.d.comb += [
+            w_start_clip.eq(r.first < r.lo),
+            w_cut_end.eq(r.last > r.hi),
+            offset.eq(Mux(r.major_neg, (r.lo << s) + w_p0, (r.lo << s) - w_p0)),
+            r_v0.eq(Mux(r.minor_neg, -r_q0, r_q0)),
+        ]
+        # Lane A's pass-1 multiplier, W + s + 2 bits: 2 (lo S - u0), or 2 |e| followed by
+        # W + 1 zero bits (which the fix-up at counter s + 1 leaves unused).
+        multiplier = Mux(w_start_clip, offset << 1, r.e_mag_r << (W + 2))
+        return [
+            r.first.eq(Mux(w_start_clip, r.lo, r.first)),
+            r.last.eq(Mux(w_cut_end, r.hi, r.last)),
+            r.start_clip.eq(w_start_clip),
+            r.e_neg.eq(r.e_neg & ~w_start_clip),  # e > S/2 when the start moved
+            r.v0_r.eq(r_v0),
+            *self.lane_a.load(multiplier, self.pass1_long, lane_b.x, lane_b.x_du, lane_b.x_2du),
+        ]
+
+    # -- RUN: the multiply-divide lanes ------------------------------------------------------
+
+    def _lanes(self, m) -> types.SimpleNamespace:
+        """The lanes' steps, lane A's fix-up (loads of its second pass) and the end of RUN."""
+        config = self._config
+        s, F = config.subpixel_bits, config.F
+        I = config.intensity_bits  # noqa: E741
+        S = 1 << s
+        r, lane_a, lane_b = self.regs, self.lane_a, self.lane_b
+        run_cycles = timing.run_cycles(config)  # pass 1, fix-up, pass 2 of lane A
+        long_run_cycles = timing.run_cycles(config, clipped_start=True)
+        counter = r.counter
+        # Fix-up (at counter s + 1, or W + s + 2 when start-clipped): lane A holds
+        # q', r' = divmod(2 |e| dv, du) for e = first S - u0 (e > S/2 when start-clipped,
+        # |e| <= S/2 otherwise). With 2 e dv = q du + r (floor division),
+        # 2 num + den = du (2 v0 + S + q) + r, 0 <= r < du, so row0 = floor((2 v0 + S + q) / 2S)
+        # and mf = m du + r, m = (2 v0 + S + q) mod 2S.
+        # A negative e has |e| <= S/2, so q' <= S: its negation is formed on s + 2 bits only
+        # (a short carry chain ahead of the add of big_m).
+        widths = config.register_widths()
+        q_neg = Signal(signed(s + 3))
+        q_fix = Signal(signed(self.pass1_long + 1))
+        r_fix = Signal(register_shape(widths["du"]))
+        r_fix_du = Signal(signed(widths["du"].bits + 1))  # r_fix - du
+        r_fix_2du = Signal(signed(widths["du"].bits + 2))  # r_fix - 2 du
+        big_m = Signal(signed(config.coord_bits + s + 4))
+        flip = r.e_neg & (lane_a.r != 0)
+        q_small = lane_a.q[: s + 2]
+        m.d.comb += [
+            q_neg.eq(Mux(flip, -q_small - 1, -q_small)),
+            q_fix.eq(Mux(r.e_neg, q_neg, lane_a.q[: self.pass1_long])),
+            r_fix.eq(Mux(flip, r.du - lane_a.r, lane_a.r)),
+            r_fix_du.eq(r_fix + r.neg_du),
+            r_fix_2du.eq(r_fix + (r.neg_du << 1)),
+            big_m.eq((r.v0_r << 1) + S + q_fix),
+        ]
+        digit = big_m[: s + 1]
+        pass2 = (r_fix, r_fix_du, r_fix_2du, digit, digit + 2)
+        # kq, kr = divmod(|I_d| dv << F, du) from lane B's result, registered in the clock
+        # after lane B's last step (RUN, counter I + F - 1): FINAL reads the registers.
+        k_bit = Signal()
+        khr_less = Signal(signed(widths["khr"].bits + 2))  # 2 khr - du
+        m.d.comb += [
+            khr_less.eq((lane_b.r << 1) + r.neg_du),
+            k_bit.eq(~khr_less[-1]),  # 2 khr >= du
+        ]
+        return types.SimpleNamespace(
+            # The fix-up clock and the last RUN clock (constant compares, by start_clip).
+            fixup=Mux(r.start_clip, counter == self.pass1_long, counter == self.pass1_bits),
+            done=Mux(r.start_clip, counter == long_run_cycles - 1, counter == run_cycles - 1),
+            fixup_loads=[
+                r.row0.eq(big_m >> (s + 1)),
+                *lane_a.load(r.i_d << (F - s - 1), self.pass2_bits, *pass2),
+            ],
+            a_step=lane_a.step(m, r.neg_du, "lane_a"),
+            b_step=lane_b.step(m, r.neg_du, "lane_b"),
+            b_bits=I + F - 1,  # lane B is done at counter I + F - 1
+            k_loads=[
+                r.kq.eq((lane_b.q << 1) + k_bit),
+                r.kr.eq(Mux(k_bit, khr_less, lane_b.r << 1)),
+            ],
+        )
+
+    # -- FINAL: the bank contents ------------------------------------------------------------
+
+    def _final(self, m):
+        """``next_bank``, the bank FINAL writes, from the registers and both lanes' results."""
+        config = self._config
+        W, F, n = config.coord_bits, config.F, config.segments
+        r, lane_a, lane_b, nb = self.regs, self.lane_a, self.lane_b, self.next_bank
+        truncated = config.accumulator == "truncated"
+        major, minor = Signal(signed(W + 2)), Signal(signed(W + 2))
+        m.d.comb += [
+            major.eq(Mux(r.major_neg, -r.first, r.first)),
+            minor.eq(Mux(r.minor_neg, -r.row0, r.row0)),
+        ]
+        plus, minus, zero = Const(1, signed(2)), Const(-1, signed(2)), Const(0, signed(2))
+        major_step = Mux(r.major_neg, minus, plus)
+        minor_step = Mux(r.minor_neg, minus, plus)
+        m.d.comb += [
+            nb.x.eq(Mux(r.x_major, major, minor)),
+            nb.y.eq(Mux(r.x_major, minor, major)),
+            nb.remaining.eq(r.columns - 1),
+            nb.col_dx.eq(Mux(r.x_major, major_step, zero)),
+            nb.col_dy.eq(Mux(r.x_major, zero, major_step)),
+            nb.row_dx.eq(Mux(r.x_major, zero, minor_step)),
+            nb.row_dy.eq(Mux(r.x_major, minor_step, zero)),
+            nb.du.eq(r.du),
+            nb.ifix.eq(r.i_d << F),
+            nb.jq.eq(lane_a.q),
+            nb.jr.eq(0 if truncated else lane_a.r),
+            nb.kq.eq(r.kq),
+            nb.kr.eq(0 if truncated else r.kr),
+            nb.khq.eq(lane_b.q),
+            nb.khr.eq(0 if truncated else lane_b.r),
+            nb.value_base.eq(r.value_base),
+            nb.value_sign.eq(Mux(r.value_neg, minus, plus)),
+        ]
+        if n:  # thresholds j K / 2N and intercepts K (8 j (j + 1) + 1) / 64 N^2 (shift-adds)
+            log2n = log2(n)
+            for j in range(1, n):
+                m.d.comb += nb.seg_thresholds[j - 1].eq(const_mul(r.kq, j) >> (log2n + 1))
+            for j in range(n):
+                constant = const_mul(r.kq, 8 * j * (j + 1) + 1) >> (6 + 2 * log2n)
+                m.d.comb += nb.seg_intercepts[j].eq(constant)
+
+    # -- the state machine -------------------------------------------------------------------
+
+    def _fsm(self, m, accept, fold, window, lanes):
+        bank = self.bank
+        with m.If(bank.ready):
+            m.d.sync += bank.valid.eq(0)
+        m.d.sync += self.error.eq(0)
+        with m.FSM(name="setup") as fsm:
+            with m.State("IDLE"):
+                m.d.comb += self.edges.ready.eq(1)
+                with m.If(self.edges.valid):
+                    m.d.sync += accept
+                    m.next = "FOLD"
+            with m.State("FOLD"):
+                with m.If(self.accepted["bad"]):
+                    m.d.sync += self.error.eq(1)
+                    with m.If(self.errors != (1 << self._errors_bits) - 1):
+                        m.d.sync += self.errors.eq(self.errors + 1)
+                    m.next = "IDLE"
+                with m.Else():
+                    m.d.sync += fold
+                    m.next = "WINDOW"
+            with m.State("WINDOW"):
+                m.d.sync += window
+                m.next = "RUN"
+            with m.State("RUN"):
+                self._run(m, lanes)
+            with m.State("FINAL"), m.If(~bank.valid | bank.ready):
+                m.d.sync += [bank.valid.eq(1), bank.payload.eq(self.next_bank)]
+                m.next = "IDLE"
+        for state in STATES:
+            m.d.comb += getattr(self, f"in_{state.lower()}").eq(fsm.ongoing(state))
+
+    def _run(self, m, lanes):
+        r = self.regs
+        counter = r.counter
+        m.d.sync += counter.eq(counter + 1)
+        with m.If(counter == 0):
+            m.d.sync += r.columns.eq(r.last - r.first + 1)
+        with m.If(lanes.fixup):
+            m.d.sync += lanes.fixup_loads
+        with m.Else():
+            m.d.sync += lanes.a_step
+        with m.If(counter < lanes.b_bits):
+            m.d.sync += lanes.b_step
+        with m.If(counter == lanes.b_bits):  # lane B is done
+            m.d.sync += lanes.k_loads
+        with m.If(lanes.done):
+            m.next = "FINAL"
+        # No column inside the window: the edge ends here, nothing is written.
+        with m.If((counter == 1) & (r.columns[-1] | (r.columns == 0))):
+            m.next = "IDLE"
+
+
+class _MulDivLane:
+    """Registers of one lane of the sequential multiply-divide unit.
+
+    One clock of `step` performs ``V = 2 V + b X`` (b the next bit of the multiplier, MSB first)
+    while keeping ``V = Q du + R`` with ``0 <= R < du``: with ``R < du`` and ``X <= du`` the new
+    remainder candidate ``2 R + b X`` is below ``3 du``, so the quotient digit is 0, 1 or 2.
+    ``digit`` (when b is set) adds a known multiple of ``du`` to ``V``
+    (``V = 2 V + b (digit du + X)``). Trailing zero multiplier bits make it a plain restoring
+    division, so ``n`` clocks give ``divmod(A X 2**k, du)`` for an ``n - k`` bit ``A``.
+
+    The three candidates ``2 R + b X - d du`` (d = 0, 1, 2) are formed in parallel from
+    per-pass constants (``x_du = X - du``, ``x_2du = X - 2 du``; ``-du``, ``-2 du`` when b is
+    clear): the digit is the largest d whose candidate is not negative. The quotient's three
+    candidates ``2 Q + b digit + d`` are formed in parallel too (``digit2 = digit + 2``).
+    """
+
+    def __init__(
+        self, name: str, config: EdgeConfig, a_bits: int, digit_bits: int, q_bits: int = 0
+    ):
+        widths = config.register_widths()
+        self.a_bits = a_bits
+        self.q = Signal(unsigned(max(widths["jq"].bits, q_bits)), name=f"{name}_q")
+        self.r = Signal(register_shape(widths["jr"]), name=f"{name}_r")
+        self.a = Signal(unsigned(a_bits), name=f"{name}_a")
+        self.x = Signal(register_shape(widths["du"]), name=f"{name}_x")
+        self.digit = Signal(unsigned(max(digit_bits, 1)), name=f"{name}_digit")
+        du_bits = widths["du"].bits
+        self.x_du = Signal(signed(du_bits + 1), name=f"{name}_x_du")  # X - du, in [-du, 0]
+        self.x_2du = Signal(signed(du_bits + 2), name=f"{name}_x_2du")  # X - 2 du
+        self.digit2 = Signal(unsigned(max(digit_bits, 1) + 1), name=f"{name}_digit2")
+
+    def load(self, a, a_bits: int, x, x_du, x_2du, digit=0, digit2=2):
+        """Start on the `a_bits`-bit multiplier `a` followed by ``self.a_bits - a_bits`` zero
+        bits: after ``self.a_bits`` steps ``q, r = divmod(a (digit du + x) 2**k, du)``.
+        `x_du`, `x_2du` and `digit2` must be ``x - du``, ``x - 2 du`` and ``digit + 2``."""
+        return [
+            self.q.eq(0),
+            self.r.eq(0),
+            self.a.eq(a << (self.a_bits - a_bits)),
+            self.x.eq(x),
+            self.x_du.eq(x_du),
+            self.x_2du.eq(x_2du),
+            self.digit.eq(digit),
+            self.digit2.eq(digit2),
+        ]
+
+    def step(self, m: Module, neg_du, name: str):
+        """Add the step's combinational logic to `m` (`neg_du` is ``-du``); return its
+        register updates."""
+        bit = self.a[-1]
+        width = len(self.r) + 3
+        total = Signal(unsigned(len(self.r) + 2), name=f"{name}_total")  # 2 R + b X
+        less_du = Signal(signed(width), name=f"{name}_less_du")  # 2 R + b X - du
+        less_2du = Signal(signed(width), name=f"{name}_less_2du")  # 2 R + b X - 2 du
+        m.d.comb += [
+            total.eq((self.r << 1) + Mux(bit, self.x, 0)),
+            less_du.eq((self.r << 1) + Mux(bit, self.x_du, neg_du)),
+            less_2du.eq((self.r << 1) + Mux(bit, self.x_2du, neg_du << 1)),
+        ]
+        twice, once = ~less_2du[-1], ~less_du[-1]
+        # 2 Q + b digit + d: the low bits (where b digit + d lands) for each d, and the high
+        # bits of 2 Q plus the carry out of the low bits (Q's high part, or it plus one).
+        low_bits = len(self.digit2) + 1
+        q_low = self.q[: low_bits - 1] << 1
+        lows = [
+            q_low + Mux(bit, self.digit, 0),
+            q_low + Mux(bit, self.digit, 0) + 1,
+            q_low + Mux(bit, self.digit2, 2),
+        ]
+        low = Signal(unsigned(low_bits + 1), name=f"{name}_q_low")
+        m.d.comb += low.eq(Mux(twice, lows[2], Mux(once, lows[1], lows[0])))
+        q_high = self.q[low_bits - 1 :]
+        return [
+            self.a.eq(self.a << 1),
+            self.r.eq(Mux(twice, less_2du, Mux(once, less_du, total))),
+            self.q.eq(Cat(low[:low_bits], Mux(low[low_bits], q_high + 1, q_high))),
+        ]
