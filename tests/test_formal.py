@@ -16,11 +16,10 @@ import pytest
 from amaranth.sim import Simulator
 
 from edgeaa.hdl import EdgeAntialiaser, setup_layout
+from edgeaa.hdl.setup import STATES, accept_values
 from edgeaa.model import Edge, EdgeConfig, setup
 from edgeaa.sim.verification.formal import (
     PROOFS,
-    CoreView,
-    FormalError,
     FormalHarness,
     FormalToolNotFoundError,
     capacity,
@@ -104,20 +103,21 @@ def test_changed_stalled_payload_is_caught(tools):
 # -- the plumbing ----------------------------------------------------------------------------
 
 
-def test_core_view_finds_the_internals():
-    view = CoreView(EdgeAntialiaser(EdgeConfig()))
-    names = ("cmd", "clip_r", "du", "dv", "counter", "lane_a_q", "lane_b_r", "row0", "i_d")
-    for name in (*names, "first", "last", "lo", "hi", "start_clip", "columns"):
-        assert view.signal(name).name == name
-    assert set(view.encoding) >= {"IDLE", "FOLD", "WINDOW", "RUN", "FINAL"}
-    width = sum(stop - start for start, stop, _ in view.bank_writes)
-    assert width == setup_layout(EdgeConfig()).size
-
-
-def test_core_view_names_a_missing_signal():
-    view = CoreView(EdgeAntialiaser(EdgeConfig()))
-    with pytest.raises(FormalError, match="no signal named 'no_such_register'"):
-        view.signal("no_such_register")
+def test_observation_points():
+    """What the harness reads: the setup's registers, state and next bank, the stepper's
+    pipeline stages, all made in the components' constructors."""
+    config = EdgeConfig()
+    core = EdgeAntialiaser(config)
+    setup_unit, stepper = core.setup, core.stepper
+    names = ("du", "dv", "counter", "row0", "i_d", "first", "last", "lo", "hi", "start_clip")
+    for name in (*names, "columns", "kq", "kr"):
+        assert getattr(setup_unit.regs, name).name == name
+    assert setup_unit.lane_a.q.name == "lane_a_q" and setup_unit.lane_b.r.name == "lane_b_r"
+    assert all(hasattr(setup_unit, f"in_{state.lower()}") for state in STATES)
+    assert set(setup_unit.accepted) == set(accept_values(config, setup_unit.cmd))
+    assert len(setup_unit.next_bank.as_value()) == setup_layout(config).size
+    assert [stage.valid.name for stage in stepper.stages] == ["p1_valid"]
+    assert stepper.stages[0].t_above.name == "p1_t_above"
 
 
 def test_harness_rejects_unknown_options():

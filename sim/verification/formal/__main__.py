@@ -1,5 +1,5 @@
 """`python -m edgeaa.sim.verification.formal [proof ...]`."""
 
-from . import main
+from .run import main
 
 raise SystemExit(main())

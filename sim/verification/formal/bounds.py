@@ -1,0 +1,319 @@
+"""``bounds``: no register overflows for any command.
+
+The invariants of the setup registers (fold of the latched command, its columns cut to the
+latched window, the column count), of both multiply-divide lanes (remainder below du,
+quotient bounded by the multiplier bits consumed so far, each step's sums within their
+registers; lane A's first pass over ``2 (first S - u0)``, ``W + s + 2`` bits when the window
+moved the first column), of the bank the setup is about to write (``next_bank``), of the bank
+and of the stepper (jq < ifix, jr < du, kq <= ifix, the half increment, segment constants,
+derived constants, value range, the major axis within [0, 2**W] from the first to the last
+column). The start row (the minor axis of the first column) is within [0, 2**W] for edges
+whose start the window did not move; for the others its bound needs the product
+(first - c0) * slope, which SAT-based induction cannot handle: the harness follows those
+edges with a ghost flag and leaves their start row to simulation (the core tests compare
+every bank with the model's `setup`). Every intermediate sum of the column being stepped (the
+exit depths dq/dr, t, the areas, the output values, jsum and the next jq, jr) is computed in
+full width by `spec.column` and must fit the `EdgeConfig.register_widths` entry that
+`run_edge` checks; the stepper's ``jsum`` and ``dq`` wires must equal them.
+
+`check` leaves in `ctx` what the pipeline checks and the covers read: ``st`` (the stepper's
+registers as a bank-like record), ``st_axes``, ``column`` (`spec.column` of ``st``).
+"""
+
+from __future__ import annotations
+
+import types
+
+from amaranth.hdl import Mux, Signal, Value, signed, unsigned
+
+from ....hdl.layouts import setup_layout
+from ....hdl.setup import accept_values
+from ....model import timing
+from ....model.bank import bank_fields
+from .spec import all_, axes, column, constants_ok, fields, fold, implies, major_ok, window
+
+
+def check(ctx):
+    asserts = []
+
+    def add(condition, name):
+        asserts.append((condition, f"bounds: {name}"))
+
+    s = _setup(ctx, add)
+    _lanes(ctx, s, add)
+    _bank(ctx, s, add)
+    _stepper(ctx, add)
+    for condition, message in asserts:
+        ctx.emit("bounds", condition, message)
+
+
+# -- the setup: fold and window registers ----------------------------------------------------
+
+
+def _setup(ctx, add) -> types.SimpleNamespace:
+    """The setup's registers against the fold and window of the latched command; returns
+    what the lane and bank checks share."""
+    config, setup = ctx.config, ctx.setup
+    r = setup.regs
+    top = 1 << config.coord_bits
+    f = fold(config, setup.cmd)
+    # The window is the one the core sampled with the command (the harness drives the
+    # port freely in every clock).
+    win = window(config, f, setup.clip_r)
+    in_window, run, final = setup.in_window, setup.in_run, setup.in_final
+    busy = in_window | run | final
+    cut = run | final  # the columns are cut to the window, lane A is loaded
+    counter = r.counter
+    nb = fields(setup.next_bank, setup_layout(config))
+    nb_axes = axes(nb)
+    # The registers the setup loads when it accepts a command, besides the command: each
+    # equals its value with the latched command in place of the incoming payload.
+    for name, value in accept_values(config, setup.cmd).items():
+        add(implies(~setup.in_idle, setup.accepted[name] == value), f"accepted {name}")
+    # FOLD registers c0, c1 (as first, last) and the folded window; WINDOW cuts the
+    # columns to it and registers v0; the first RUN clock forms the column count, the
+    # second ends an edge with no column (so from counter 2 on there is one at least).
+    counted = final | (run & (counter >= 1))
+    visible = final | (run & (counter >= 2))
+    late = [
+        implies(busy, (r.lo == win.lo) & (r.hi == win.hi)),
+        implies(in_window, (r.first == f.c0) & (r.last == f.c1) & (counter == 0)),
+        implies(cut, (r.first == win.first) & (r.last == win.last)),
+        implies(cut, r.start_clip == win.start_clip),
+        implies(cut, r.v0_r == f.v0),
+        implies(counted, r.columns == win.columns),
+        implies(visible, (win.columns >= 1) & (nb.remaining == win.columns - 1)),
+        implies(cut, nb_axes.major == Mux(f.major_neg, -win.first, win.first)),
+        implies(visible, major_ok(config, nb_axes)),
+    ]
+    add(all_(late), "fold and window registers")
+    registers = {
+        "fold_registers": all_(
+            [
+                ~f.bad,
+                r.du == f.du,
+                r.dv == f.dv,
+                r.neg_du == -r.du,
+                r.i_d == f.i_d,
+                r.minor_neg == f.minor_neg,
+                r.value_base == f.value_base,
+                r.value_neg == f.value_neg,
+            ]
+        ),
+        "fold_geometry": all_(
+            [
+                r.du != 0,
+                r.dv <= r.du,
+                f.c0 >= -top,
+                f.c0 <= top,
+                f.columns >= 1,
+                f.columns <= top + 1,
+            ]
+        ),
+        "bank_steps": all_(
+            [
+                nb_axes.steps_ok,
+                nb_axes.x_major == f.x_major,
+                nb_axes.col_step == Mux(f.major_neg, -1, 1),
+                nb_axes.row_step == Mux(f.minor_neg, -1, 1),
+                nb.du == f.du,
+                nb.ifix == f.i_d << config.F,
+            ]
+        ),
+    }
+    for name, condition in registers.items():
+        add(implies(busy, condition), name)
+    # |e| and its sign from FOLD; e is positive when the window moved the first column
+    # (WINDOW clears the sign: no sign fix-up then).
+    e_ok = [
+        implies(busy, r.e_mag_r == f.e_mag),
+        implies(in_window, r.e_neg == (f.e < 0)),
+        implies(cut, r.e_neg == ((f.e < 0) & ~win.start_clip)),
+    ]
+    add(all_(e_ok), "e registers")
+    run_cycles = timing.run_cycles(config)
+    long_run = timing.run_cycles(config, clipped_start=True)
+    add(implies(run, counter < Mux(r.start_clip, long_run, run_cycles)), "counter")
+    return types.SimpleNamespace(win=win, busy=busy, nb=nb, nb_axes=nb_axes)
+
+
+# -- the setup: the multiply-divide lanes ------------------------------------------------------
+
+
+def _lane(ctx, lane, a_bits, multiplier, bits, steps, *, x_at_most, digit=None):
+    """Invariants of a lane after `steps` of its `bits`-bit multiplier, and whether its next
+    step's sums fit their registers."""
+    s = ctx.config.subpixel_bits
+    du = ctx.setup.regs.du
+    q, r, a, x = lane.q, lane.r, lane.a, lane.x
+    wide = (Value.cast(multiplier).as_unsigned() << (a_bits - bits)) << steps
+    consumed = wide >> a_bits
+    conds = [a == wide[:a_bits], r < du, x_at_most(x)]
+    # The lane keeps X - du, X - 2 du and digit + 2 precomputed.
+    conds += [
+        lane.x_du == x - du,
+        lane.x_2du == x - (du << 1),
+        lane.digit2 == lane.digit + 2,
+    ]
+    if digit is None:
+        conds += [
+            lane.digit == 0,
+            (q < consumed) | ((q == consumed) & (r == 0)),
+            implies(x == 0, (q == 0) & (r == 0)),
+        ]
+    else:
+        conds.append((q < (consumed << (s + 1))) | ((consumed == 0) & (q == 0) & (r == 0)))
+    # The next step in full width (`_MulDivLane.step`).
+    bit = a[-1]
+    total = (r << 1) + Mux(bit, x, 0)
+    quotient_digit = Mux(total >= (du << 1), 2, Mux(total >= du, 1, 0))
+    q_next = (q << 1) + quotient_digit
+    if digit is not None:
+        q_next = q_next + Mux(bit, digit, 0)
+    return all_(conds), (total < (1 << (len(r) + 2))) & (q_next < (1 << len(q)))
+
+
+def _lanes(ctx, s, add):
+    config, setup = ctx.config, ctx.setup
+    F, I = config.F, config.intensity_bits  # noqa: E741
+    sub = config.subpixel_bits
+    r, win = setup.regs, s.win
+    run, final, counter = setup.in_run, setup.in_final, r.counter
+    pass1_bits, pass2_bits = sub + 1, I + F - sub - 1
+    fixup = Mux(r.start_clip, win.bits, pass1_bits)
+
+    def dv_is(x):
+        return x == r.dv
+
+    # Lane B is loaded in FOLD and steps from the first RUN clock (counter 0).
+    steps_b = Mux(final | (counter >= I + F - 1), I + F - 1, counter)
+    b_bits = I + F - 1
+    lane_b, lane_b_step = _lane(
+        ctx, setup.lane_b, b_bits, r.i_d << (F - 1), b_bits, steps_b, x_at_most=dv_is
+    )
+    add(implies(s.busy, lane_b), "lane_b")
+    add(implies(run & (counter < I + F - 1), lane_b_step), "lane_b step fits")
+    # Lane A is loaded in WINDOW: pass 1 over the W + s + 2 bit multiplier (stopped after
+    # s + 1 bits when the start did not move), the fix-up at `fixup`, then pass 2.
+    a_bits = max(win.bits, pass2_bits)
+    lane_a = setup.lane_a
+    pass1, pass1_step = _lane(
+        ctx, lane_a, a_bits, win.multiplier, win.bits, counter, x_at_most=dv_is
+    )
+    add(implies(run & (counter <= fixup), pass1), "lane_a pass 1")
+    add(implies(run & (counter < fixup), pass1_step), "lane_a pass 1 step fits")
+    in_pass2 = (run & (counter > fixup)) | final
+    steps_a = Mux(final, pass2_bits, (counter - (fixup + 1))[: len(counter)])
+    pass2, pass2_step = _lane(
+        ctx,
+        lane_a,
+        a_bits,
+        r.i_d << (F - sub - 1),
+        pass2_bits,
+        steps_a,
+        x_at_most=lambda x: x < r.du,
+        digit=lane_a.digit,
+    )
+    add(implies(in_pass2, pass2), "lane_a pass 2")
+    add(implies(run & (counter > fixup), pass2_step), "lane_a pass 2 step fits")
+    # The start row is in the image. Not checked for an edge whose start the window moved:
+    # there it follows from q' = floor(2 e dv / du) <= 2 dv + S - 1 with e up to du + S/2,
+    # a product of two per-edge values that SAT-based induction cannot handle (with
+    # |e| <= S/2 the linear q' <= 2 |e| <= S suffices). Such an edge's start row is
+    # followed as a ghost (`start_moved` below) and its bound left to simulation.
+    top = 1 << config.coord_bits
+    bank_row = (s.nb_axes.minor >= 0) & (s.nb_axes.minor <= top)
+    add(implies(in_pass2 & ~win.start_clip, bank_row), "bank start row")
+    # What FINAL writes: once both lanes are done, all bank invariants.
+    for name, condition in constants_ok(config, s.nb).items():
+        add(implies(final, condition), f"next bank {name}")
+    # kq, kr are registered in the clock after lane B's last step.
+    b_q, b_r = setup.lane_b.q, setup.lane_b.r
+    k_bit = (b_r << 1) >= r.du
+    k_ready = final | (run & (counter > I + F - 1))
+    k_ok = (r.kq == (b_q << 1) + k_bit) & (r.kr == (b_r << 1) - Mux(k_bit, r.du, 0))
+    add(implies(k_ready, k_ok), "kq, kr registered from lane B")
+
+
+# -- the bank ----------------------------------------------------------------------------------
+
+
+def _bank(ctx, s, add):
+    """The bank's invariants, and the ghost flags of an edge whose start the window moved
+    (its start row is not bounded here; see "bank start row" above)."""
+    m, config, setup = ctx.m, ctx.config, ctx.setup
+    bank = setup.bank
+    top = 1 << config.coord_bits
+    bk = fields(bank.payload, setup_layout(config))
+    bk_axes = axes(bk)
+    for name, condition in constants_ok(config, bk).items():
+        add(implies(bank.valid, condition), f"bank {name}")
+    add(implies(bank.valid, major_ok(config, bk_axes)), "bank major axis")
+    moved_bank, moved_stepper = Signal(name="start_moved_bank"), Signal(name="start_moved")
+    with m.If(setup.in_final & (~bank.valid | bank.ready)):
+        m.d.sync += moved_bank.eq(setup.regs.start_clip)
+    with m.If(bank.valid & bank.ready):
+        m.d.sync += moved_stepper.eq(moved_bank)
+    bank_row = (bk_axes.minor >= 0) & (bk_axes.minor <= top)
+    add(implies(bank.valid & ~moved_bank, bank_row), "bank start row")
+    ctx.bk, ctx.bk_axes, ctx.moved_stepper = bk, bk_axes, moved_stepper
+
+
+# -- the stepper -------------------------------------------------------------------------------
+
+
+def stepper_registers(config, stepper) -> types.SimpleNamespace:
+    """The stepper's `bank_fields` registers as a bank-like record (arrays as lists)."""
+    regs = {field.name: getattr(stepper, field.name) for field in bank_fields(config)}
+    regs.update(seg_thresholds=stepper.seg_thresholds, seg_intercepts=stepper.seg_intercepts)
+    return types.SimpleNamespace(**regs)
+
+
+def _stepper(ctx, add):
+    m, config, stepper = ctx.m, ctx.config, ctx.stepper
+    W = config.coord_bits
+    top = 1 << W
+    bank = ctx.setup.bank
+    st = stepper_registers(config, stepper)
+    st_axes = axes(st)
+    active = stepper.active
+    for name, condition in constants_ok(config, st).items():
+        add(implies(active, condition), f"stepper {name}")
+    add(implies(active, major_ok(config, st_axes)), "stepper major axis")
+    col = column(config, st, st_axes)
+    # The minor axis: monotonic, at most one row per column, from a start row in range.
+    # The harness follows the row in a wider ghost register, so that the proof does not
+    # depend on the row staying within the register (only the bounded check shows that).
+    start_row = Signal(signed(W + 3))
+    start_remaining = Signal(unsigned(W + 1))
+    row = Signal(signed(W + 4))
+    with m.If(stepper.step):
+        m.d.sync += row.eq(row + Mux(col.row_step, st_axes.row_step, 0))
+    with m.If(bank.valid & bank.ready):
+        m.d.sync += [
+            start_row.eq(ctx.bk_axes.minor),
+            start_remaining.eq(ctx.bk.remaining),
+            row.eq(ctx.bk_axes.minor),
+        ]
+    rows = Mux(st_axes.row_step < 0, start_row - row, row - start_row)
+    stepped = [
+        row[: W + 2] == st_axes.minor[: W + 2],
+        implies(~ctx.moved_stepper, (start_row >= 0) & (start_row <= top)),
+        start_remaining <= top,
+        st.remaining <= start_remaining,
+        rows >= 0,
+        rows <= start_remaining - st.remaining,
+    ]
+    add(implies(active, all_(stepped)), "stepper rows stepped")
+    for name, condition in col.fits.items():
+        add(implies(active, condition), f"column {name} fits")
+    if ctx.fault == "tight_jq":
+        add(implies(active, st.jq < (st.ifix >> 1)), "false invariant jq < ifix / 2")
+    # The per-edge constants the stepper derives at load (`EdgeStepper.derive`).
+    for name, value in stepper.derive(st).items():
+        add(implies(active, stepper.derived[name] == value), f"stepper derived {name}")
+    # Observation wires of the column being stepped.
+    add(implies(active, stepper.jsum == col.jsum), "stepper jsum wire")
+    if config.segments:
+        add(implies(active, stepper.dq == col.dq), "stepper dq wire")
+    ctx.st, ctx.st_axes, ctx.column = st, st_axes, col

@@ -1,0 +1,138 @@
+# amaranth: UnusedElaboratable=no
+"""`FormalHarness`: the core with free inputs and the check groups, covers and faults asked
+for (the package docstring describes them)."""
+
+from __future__ import annotations
+
+import types
+
+from amaranth.asserts import AnySeq
+from amaranth.hdl import Assert, Assume, ClockDomain, Elaboratable, Module, Signal, Value
+
+from ....hdl.core import EdgeAntialiaser
+from ....model.config import EdgeConfig
+from .bounds import check as check_bounds
+from .count import capacity
+from .count import check as check_count
+from .covers import add as add_covers
+from .pipeline import check as check_pipeline
+from .stream import check as check_stream
+
+__all__ = ["CHECKS", "COVERS", "FAULTS", "FormalHarness", "capacity"]
+
+CHECKS = ("stream", "count", "bounds", "pipe", "beat", "minor")
+COVERS = ("drop", "stepper")
+FAULTS = ("stall_payload", "silent_drop", "tight_jq")
+
+
+def _choose(name: str, value, allowed) -> tuple[str, ...]:
+    value = tuple(value)
+    unknown = [item for item in value if item not in allowed]
+    if unknown:
+        raise ValueError(f"{name} must be among {', '.join(allowed)}, not {unknown}")
+    return value
+
+
+class FormalHarness(Elaboratable):
+    """The core with free inputs and the properties of `checks` (see the package docstring).
+
+    ``reset``: the reset is a free input (else the domain has no reset). ``covers``: add the
+    Cover statements. ``assumes``: check groups proven elsewhere, assumed here. ``fault``: one
+    of `FAULTS`, a deliberate error the checks must catch.
+    """
+
+    def __init__(
+        self,
+        config: EdgeConfig | None = None,
+        checks=("stream", "count", "bounds"),
+        *,
+        covers=(),
+        assumes=(),
+        reset: bool = True,
+        fault: str | None = None,
+    ):
+        self.config = EdgeConfig() if config is None else config
+        if not isinstance(self.config, EdgeConfig):
+            raise TypeError(f"config must be an EdgeConfig, not {config!r}")
+        self.checks = _choose("checks", checks, CHECKS)
+        if fault is not None and fault not in FAULTS:
+            raise ValueError(f"fault must be one of {', '.join(FAULTS)} or None, not {fault!r}")
+        covers = COVERS if covers is True else () if covers is False else covers
+        self.covers = _choose("covers", covers, COVERS)
+        self.assumes = _choose("assumes", assumes, CHECKS)
+        self.reset = reset
+        self.fault = fault
+        self.core = EdgeAntialiaser(self.config)
+        # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
+        self.domain = ClockDomain("sync", reset_less=not reset)
+
+    @property
+    def clk(self) -> Signal:
+        return self.domain.clk
+
+    def elaborate(self, platform):
+        m = Module()
+        core = self.core
+        m.submodules.dut = core
+        m.domains.sync = self.domain
+        if self.reset:
+            m.d.comb += self.domain.rst.eq(AnySeq(1))
+        edges, writes = core.edges, core.writes
+        m.d.comb += [
+            edges.valid.eq(AnySeq(1)),
+            edges.payload.eq(AnySeq(len(Value.cast(edges.payload)))),
+            # The window is free in every clock: the core must sample it with the command.
+            Value.cast(core.clip).eq(AnySeq(len(Value.cast(core.clip)))),
+            writes.ready.eq(AnySeq(1)),
+        ]
+        ctx = self._context(m)
+        stepper_covers = "stepper" in self.covers
+        if "stream" in self.checks or stepper_covers:
+            check_stream(ctx)
+        wanted = set(self.checks) | set(self.assumes)
+        if "count" in wanted or self.covers:
+            check_count(ctx)
+        if wanted & {"bounds", "pipe", "beat", "minor"} or stepper_covers:
+            check_bounds(ctx)
+            check_pipeline(ctx)
+        add_covers(ctx)
+        return m
+
+    def _context(self, m) -> types.SimpleNamespace:
+        """What the check families share: the module, the core and its two parts, what they
+        observe of the outputs (faults act here), and `emit`."""
+        core = self.core
+        writes = core.writes
+        ctx = types.SimpleNamespace(
+            m=m,
+            config=self.config,
+            core=core,
+            setup=core.setup,
+            stepper=core.stepper,
+            checks=self.checks,
+            assumes=self.assumes,
+            covers=self.covers,
+            fault=self.fault,
+            emit=self._emit(m),
+        )
+        ctx.payload = Value.cast(writes.payload)
+        ctx.error = core.error
+        held = Signal()  # a beat was valid and not taken in the previous clock
+        m.d.sync += held.eq(writes.valid & ~writes.ready)
+        if self.fault == "stall_payload":
+            ctx.payload = ctx.payload ^ held
+        if self.fault == "silent_drop":
+            ctx.error = Value.cast(0)
+        ctx.held = held
+        return ctx
+
+    def _emit(self, m):
+        def emit(group, condition, message):
+            """An Assert if `group` is checked, an Assume if it is assumed (proven
+            elsewhere)."""
+            if group in self.checks:
+                m.d.comb += Assert(condition, message)
+            elif group in self.assumes:
+                m.d.comb += Assume(condition, message)
+
+        return emit

