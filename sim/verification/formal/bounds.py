@@ -55,7 +55,6 @@ def _setup(ctx, add) -> types.SimpleNamespace:
     what the lane and bank checks share."""
     config, setup = ctx.config, ctx.setup
     r = setup.regs
-    top = 1 << config.coord_bits
     f = fold(config, setup.cmd)
     # The window is the one the core sampled with the command (the harness drives the
     # port freely in every clock).
@@ -87,7 +86,28 @@ def _setup(ctx, add) -> types.SimpleNamespace:
         implies(visible, major_ok(config, nb_axes)),
     ]
     add(all_(late), "fold and window registers")
-    registers = {
+    registers = _fold_registers(config, r, f, nb, nb_axes)
+    for name, condition in registers.items():
+        add(implies(busy, condition), name)
+    # |e| and its sign from FOLD; e is positive when the window moved the first column
+    # (WINDOW clears the sign: no sign fix-up then).
+    e_ok = [
+        implies(busy, r.e_mag_r == f.e_mag),
+        implies(in_window, r.e_neg == (f.e < 0)),
+        implies(cut, r.e_neg == ((f.e < 0) & ~win.start_clip)),
+    ]
+    add(all_(e_ok), "e registers")
+    run_cycles = timing.run_cycles(config)
+    long_run = timing.run_cycles(config, clipped_start=True)
+    add(implies(run, counter < Mux(r.start_clip, long_run, run_cycles)), "counter")
+    return types.SimpleNamespace(win=win, busy=busy, nb=nb, nb_axes=nb_axes)
+
+
+def _fold_registers(config, r, f, nb, nb_axes) -> dict:
+    """Invariants that hold while the setup is busy (WINDOW, RUN, FINAL): the FOLD registers
+    are the fold of the latched command, its geometry, and the steps of the next bank."""
+    top = 1 << config.coord_bits
+    return {
         "fold_registers": all_(
             [
                 ~f.bad,
@@ -121,20 +141,6 @@ def _setup(ctx, add) -> types.SimpleNamespace:
             ]
         ),
     }
-    for name, condition in registers.items():
-        add(implies(busy, condition), name)
-    # |e| and its sign from FOLD; e is positive when the window moved the first column
-    # (WINDOW clears the sign: no sign fix-up then).
-    e_ok = [
-        implies(busy, r.e_mag_r == f.e_mag),
-        implies(in_window, r.e_neg == (f.e < 0)),
-        implies(cut, r.e_neg == ((f.e < 0) & ~win.start_clip)),
-    ]
-    add(all_(e_ok), "e registers")
-    run_cycles = timing.run_cycles(config)
-    long_run = timing.run_cycles(config, clipped_start=True)
-    add(implies(run, counter < Mux(r.start_clip, long_run, run_cycles)), "counter")
-    return types.SimpleNamespace(win=win, busy=busy, nb=nb, nb_axes=nb_axes)
 
 
 # -- the setup: the multiply-divide lanes ------------------------------------------------------
@@ -262,7 +268,7 @@ def _bank(ctx, s, add):
 # -- the stepper -------------------------------------------------------------------------------
 
 
-def stepper_registers(config, stepper) -> types.SimpleNamespace:
+def _stepper_registers(config, stepper) -> types.SimpleNamespace:
     """The stepper's `bank_fields` registers as a bank-like record (arrays as lists)."""
     regs = {field.name: getattr(stepper, field.name) for field in bank_fields(config)}
     regs.update(seg_thresholds=stepper.seg_thresholds, seg_intercepts=stepper.seg_intercepts)
@@ -274,7 +280,7 @@ def _stepper(ctx, add):
     W = config.coord_bits
     top = 1 << W
     bank = ctx.setup.bank
-    st = stepper_registers(config, stepper)
+    st = _stepper_registers(config, stepper)
     st_axes = axes(st)
     active = stepper.active
     for name, condition in constants_ok(config, st).items():

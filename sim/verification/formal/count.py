@@ -44,8 +44,7 @@ def check(ctx):
     accepted = edges.valid & edges.ready
     finished = writes.valid & writes.ready & beat.last
     error = ctx.error
-    in_fold, in_window = setup.in_fold, setup.in_window
-    in_run, in_final = setup.in_run, setup.in_final
+    in_window, in_run, in_final = setup.in_window, setup.in_run, setup.in_final
     # An edge with no column inside its window ends in its second RUN clock, when the
     # column count the setup formed is not positive (that the count is right, i.e. that
     # exactly the edges the model gives no column end here, is a `bounds` check).
@@ -64,6 +63,43 @@ def check(ctx):
         *((stage.valid, stage.last) for stage in stepper.stages),
         (writes.valid, beat.last),
     ]
+    occupancy = _occupancy(ctx, positions, cmd_bad, error)
+    tags = _tags(ctx, positions, cmd_bad)
+
+    errors_max = (1 << core.errors_bits) - 1
+    pulses = Signal(core.errors_bits)
+    saturated = Mux(error & (pulses != errors_max), pulses + 1, pulses)
+    m.d.sync += pulses.eq(saturated)
+
+    properties = [
+        (pending_good == occupancy.good, "count: good commands in flight"),
+        (pending_bad == occupancy.bad, "count: bad commands in flight"),
+        ((pending_good >= 0) & (pending_bad >= 0), "count: more out than accepted"),
+        (pending_good + pending_bad <= capacity(core), "count: capacity"),
+        (implies(occupancy.idle, (pending_good == 0) & (pending_bad == 0)), "count: idle"),
+        (implies(error, setup.in_idle), "count: error only in IDLE"),
+        (all_(occupancy.contiguous), "count: columns of an edge are contiguous"),
+        (implies(in_window | in_run | in_final, ~cmd_bad), "count: bad command in the setup"),
+        (implies(bank.valid, ~tags.bank), "count: bad command in the bank"),
+        (implies(stepper.active, ~tags.stepper), "count: bad command stepped"),
+        (all_(tags.positions), "count: column or beat of a bad command"),
+        (core.errors == saturated, "count: errors counts error pulses"),
+    ]
+    # The registers loaded with the command (white-box helpers for the induction).
+    for name, value in accept_values(config, setup.cmd).items():
+        condition = implies(~setup.in_idle, setup.accepted[name] == value)
+        properties.append((condition, "count: accepted"))
+    for condition, message in properties:
+        ctx.emit("count", condition, message)
+    ctx.finished, ctx.pending_good = finished, pending_good
+
+
+def _occupancy(ctx, positions, cmd_bad, error) -> types.SimpleNamespace:
+    """The commands the core's state holds: ``good`` and ``bad`` counts, ``idle``, and
+    ``contiguous`` (each column that is not its edge's last has the next one behind it)."""
+    setup, stepper, bank = ctx.setup, ctx.stepper, ctx.setup.bank
+    in_fold, in_window = setup.in_fold, setup.in_window
+    in_run, in_final = setup.in_run, setup.in_final
     last_waiting = sum(valid & is_last for valid, is_last in positions)
     held_good = (
         (in_fold & ~cmd_bad)
@@ -90,34 +126,7 @@ def check(ctx):
     for valid, is_last in positions:
         contiguous.append(implies(valid & ~is_last, younger))
         younger = valid
-    tags = _tags(ctx, positions, cmd_bad)
-
-    errors_max = (1 << core.errors_bits) - 1
-    pulses = Signal(core.errors_bits)
-    saturated = Mux(error & (pulses != errors_max), pulses + 1, pulses)
-    m.d.sync += pulses.eq(saturated)
-
-    properties = [
-        (pending_good == held_good, "count: good commands in flight"),
-        (pending_bad == held_bad, "count: bad commands in flight"),
-        ((pending_good >= 0) & (pending_bad >= 0), "count: more out than accepted"),
-        (pending_good + pending_bad <= capacity(core), "count: capacity"),
-        (implies(idle, (pending_good == 0) & (pending_bad == 0)), "count: idle"),
-        (implies(error, setup.in_idle), "count: error only in IDLE"),
-        (all_(contiguous), "count: columns of an edge are contiguous"),
-        (implies(in_window | in_run | in_final, ~cmd_bad), "count: bad command in the setup"),
-        (implies(bank.valid, ~tags.bank), "count: bad command in the bank"),
-        (implies(stepper.active, ~tags.stepper), "count: bad command stepped"),
-        (all_(tags.positions), "count: column or beat of a bad command"),
-        (core.errors == saturated, "count: errors counts error pulses"),
-    ]
-    # The registers loaded with the command (white-box helpers for the induction).
-    for name, value in accept_values(config, setup.cmd).items():
-        condition = implies(~setup.in_idle, setup.accepted[name] == value)
-        properties.append((condition, "count: accepted"))
-    for condition, message in properties:
-        ctx.emit("count", condition, message)
-    ctx.finished, ctx.pending_good = finished, pending_good
+    return types.SimpleNamespace(good=held_good, bad=held_bad, idle=idle, contiguous=contiguous)
 
 
 def _tags(ctx, positions, cmd_bad):

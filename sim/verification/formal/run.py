@@ -246,6 +246,47 @@ def _failed(log: str, messages: dict[str, str]) -> list[str]:
     return sorted(set(out))
 
 
+def _lookup(proof: str | Proof) -> Proof:
+    if isinstance(proof, Proof):
+        return proof
+    try:
+        return PROOFS[proof]
+    except KeyError:
+        raise ValueError(
+            f"proof must be one of {', '.join(PROOFS)} or a Proof, not {proof!r}"
+        ) from None
+
+
+def _run_sby(tools: dict[str, str], base: Path, timeout: float | None) -> tuple[str, str]:
+    """Run sby on ``base/check.sby``: (status, log)."""
+    env = dict(os.environ)
+    env.update(
+        YOSYS=tools["yosys"],
+        SMTBMC=tools["smtbmc"],
+        WITNESS=tools["witness"],
+        AMARANTH_USE_YOSYS="builtin",
+    )
+    env["PATH"] = os.pathsep.join([str(Path(tools["solver"]).parent), env.get("PATH", "")])
+    # Its own process group, so that a timeout also ends smtbmc and the solver.
+    proc = subprocess.Popen(
+        [tools["sby"], "-f", "check.sby"],
+        cwd=base,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
+    try:
+        log, _ = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        log, _ = proc.communicate()
+        return "TIMEOUT", log
+    status_file = base / "check" / "status"
+    return (status_file.read_text().split()[0] if status_file.exists() else "ERROR"), log
+
+
 def run_proof(
     proof: str | Proof,
     config: EdgeConfig | None = None,
@@ -267,13 +308,7 @@ def run_proof(
     traces); otherwise a temporary directory is removed afterwards. `timeout` (seconds) ends
     sby, smtbmc and the solver and reports TIMEOUT.
     """
-    if isinstance(proof, str):
-        try:
-            proof = PROOFS[proof]
-        except KeyError:
-            raise ValueError(
-                f"proof must be one of {', '.join(PROOFS)} or a Proof, not {proof!r}"
-            ) from None
+    proof = _lookup(proof)
     mode = mode or proof.mode
     depth = proof.depth if depth is None else depth
     skip = proof.skip if skip is None else skip
@@ -292,14 +327,6 @@ def run_proof(
         fault=fault,
     )
     text = harness_rtlil(harness)
-    env = dict(os.environ)
-    env.update(
-        YOSYS=tools["yosys"],
-        SMTBMC=tools["smtbmc"],
-        WITNESS=tools["witness"],
-        AMARANTH_USE_YOSYS="builtin",
-    )
-    env["PATH"] = os.pathsep.join([str(Path(tools["solver"]).parent), env.get("PATH", "")])
     keep = workdir is not None
     base = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="edgeaa-formal-"))
     try:
@@ -307,24 +334,7 @@ def run_proof(
         (base / "harness.il").write_text(text)
         (base / "check.sby").write_text(sby_script(mode, depth, skip=skip, solver=solver))
         start = time.monotonic()
-        # Its own process group, so that a timeout also ends smtbmc and the solver.
-        proc = subprocess.Popen(
-            [tools["sby"], "-f", "check.sby"],
-            cwd=base,
-            env=env,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            start_new_session=True,
-        )
-        try:
-            log, _ = proc.communicate(timeout=timeout)
-            status_file = base / "check" / "status"
-            status = status_file.read_text().split()[0] if status_file.exists() else "ERROR"
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            log, _ = proc.communicate()
-            status = "TIMEOUT"
+        status, log = _run_sby(tools, base, timeout)
         elapsed = time.monotonic() - start
         return FormalResult(
             name=proof.name + (f"+{fault}" if fault else ""),
