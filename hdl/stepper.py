@@ -153,7 +153,7 @@ class EdgeStepper(wiring.Component):
             prev = self.stages[index - 2]
             carried = {name: getattr(prev, name) for name in ("valid", "last", *_LANE_CONSTS)}
             self._stage(m, index, en, {**carried, **self._p2(m, prev)})
-        t_clamped = self._estimate(m, col)
+        t_clamped = self._estimate(m)
         self._output(m, en, t_clamped)
         self._loop(m, advance, last)
         self._load(m)
@@ -306,7 +306,7 @@ class EdgeStepper(wiring.Component):
 
     # -- the triangle estimate, clamped -------------------------------------------------------
 
-    def _estimate(self, m, col):
+    def _estimate(self, m):
         """The clamped triangle estimate of the column in the last stage."""
         widths = self._config.register_widths()
         n = self._config.segments
