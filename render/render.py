@@ -33,6 +33,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import Clip, Edge, EdgeConfig, setup
+from ..model.column import ArrayArith, IntArith, output_value
+from ..model.edge import fold
 from .engines import EngineRun, cycles, run_engine
 from .geometry import (
     halfplane_coverage,
@@ -400,14 +402,15 @@ def _vertex_ops(coords: np.ndarray, inside: np.ndarray, nxt: np.ndarray) -> np.n
     return ops
 
 
-def _column_ranges(coords: np.ndarray, S: int) -> tuple[np.ndarray, ...]:
+def _column_ranges(config: EdgeConfig, coords: np.ndarray) -> tuple[np.ndarray, ...]:
     """Per edge: x-major, and its stepped columns' first and last major coordinate (screen):
-    the columns c whose interior (c - 1/2, c + 1/2) meets the edge's projection."""
-    x_major = np.abs(coords[:, 2] - coords[:, 0]) >= np.abs(coords[:, 3] - coords[:, 1])
-    u0 = np.where(x_major, coords[:, 0], coords[:, 1])
-    u1 = np.where(x_major, coords[:, 2], coords[:, 3])
-    lo, hi = np.minimum(u0, u1), np.maximum(u0, u1)
-    return x_major, np.floor_divide(2 * lo + S, 2 * S), -np.floor_divide(S - 2 * hi, 2 * S)
+    the model's fold (`edgeaa.model.edge.fold`) on arrays, its folded columns c0 .. c1
+    mirrored back when the major axis steps down."""
+    zero = np.zeros(len(coords), dtype=np.int64)
+    f = fold(ArrayArith(config, np.int64), config, *coords.T, zero, zero, True)
+    lo = np.where(f.major_neg, -f.c1, f.c0)
+    hi = np.where(f.major_neg, -f.c0, f.c1)
+    return f.x_major, lo, hi
 
 
 # -- the fill path ------------------------------------------------------------------------------
@@ -423,8 +426,7 @@ def axis_writes(config: EdgeConfig, edge: Edge) -> tuple[np.ndarray, np.ndarray,
     st = setup(config, edge)
     if st.dv != 0:
         raise ValueError(f"not a horizontal or vertical edge: {edge}")
-    F = config.F
-    value = st.value_base + st.value_sign * ((st.jq + (1 << (F - 1))) >> F)
+    value = output_value(IntArith(config), config, st, st.jq)
     i = np.arange(st.columns, dtype=np.int64)
     return st.x + i * st.col_dx, st.y + i * st.col_dy, np.full(st.columns, value, np.int64)
 
@@ -651,7 +653,7 @@ def combine(plan: Plan, w: Writes, q, d: int, key, f):
         joints = oriented(plan.coords, plan.inside)[1].tolist()  # vertex between e and next[e]
         left = (plan.inside == "left").tolist()
         nxt, prv, ops = plan.next.tolist(), plan.prev.tolist(), plan.ops.tolist()
-        x_major, c_lo, c_hi = (a.tolist() for a in _column_ranges(plan.coords, S))
+        x_major, c_lo, c_hi = (a.tolist() for a in _column_ranges(plan.config, plan.coords))
         edge_l, q_l, h_l = edge.tolist(), q.tolist(), h.tolist()
         ex_l, ey_l = ex.tolist(), ey.tolist()
         f_l = f.tolist()

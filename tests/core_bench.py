@@ -42,6 +42,7 @@ from edgeaa.hdl import (
 from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
+from edgeaa.model.bank import bank_values
 from edgeaa.sim.verification.commands import edge_clip, edge_payload
 from edgeaa.sim.verification.scoreboard import Beat, edge_beats
 
@@ -254,24 +255,14 @@ def observed_beat(beat: dict) -> Beat:
 
 
 def expected_bank(config: EdgeConfig, edge: Edge) -> dict[str, int]:
-    st_ = setup(config, edge)
-    bank = {
-        "x": st_.x,
-        "y": st_.y,
-        "remaining": st_.columns - 1,
-        "col_dx": st_.col_dx,
-        "col_dy": st_.col_dy,
-        "row_dx": st_.row_dx,
-        "row_dy": st_.row_dy,
-        "value_base": st_.value_base,
-        "value_sign": st_.value_sign,
-    }
-    for name in ("du", "ifix", "jq", "jr", "kq", "kr", "khq", "khr"):
-        bank[name] = getattr(st_, name)
-    for j, value in enumerate(st_.seg_thresholds):
-        bank[f"seg_thresholds.{j}"] = value
-    for j, value in enumerate(st_.seg_intercepts):
-        bank[f"seg_intercepts.{j}"] = value
+    """The bank `setup()` gives the edge, keyed like `decoder` keys the core's bank (array
+    elements as ``name.j``)."""
+    bank = {}
+    for name, value in bank_values(config, setup(config, edge)).items():
+        if isinstance(value, tuple):
+            bank.update({f"{name}.{j}": item for j, item in enumerate(value)})
+        else:
+            bank[name] = value
     return bank
 
 
