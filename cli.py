@@ -11,15 +11,15 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import edge_cli
+from . import edge_cli, verify_cli
 from .analysis import cli as analysis_cli
 from .command import COMMANDS, EXIT_BAD_INPUT, PROG, OneLineErrorParser, UsageError, usage_error
 from .model import ConfigError, EdgeError
 from .render import cli as render_cli
 
-# Their commands register as they are imported, above: edge, demo, verilog, synth; plot,
-# bench, stress; render. That import order is the order of `edgeaa --help`.
-COMMAND_MODULES = (edge_cli, analysis_cli, render_cli)
+# Their commands register as they are imported, above: edge, demo, verilog, synth; verify;
+# plot, bench, stress; render. That import order is the order of `edgeaa --help`.
+COMMAND_MODULES = (edge_cli, verify_cli, analysis_cli, render_cli)
 
 
 def build_parser() -> argparse.ArgumentParser:

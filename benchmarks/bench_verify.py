@@ -1,0 +1,71 @@
+"""`edgeaa verify` throughput: edges per second on 1 and 2 local worker processes, and the
+projected time of 10^9 edges on one core.
+
+Each worker count gets its own pool, warmed up with one small shard per worker (process start
+and imports excluded), then runs the same seeded plan as `edgeaa verify --edges N --seed S`.
+The compiled core's build is cached and excluded. Where a worker's time goes is split into the
+simulation (the Verilated harness) and the rest (drawing the edges, the model, the checks).
+
+    python benchmarks/bench_verify.py [--edges 20000] [--workers 1 2] [--seed 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+
+from edgeaa.model import EdgeConfig
+from edgeaa.sim.verification import regress
+from edgeaa.sim.verification.shards import default_shards
+
+PROJECTED_EDGES = 10**9
+
+
+def measure(config: EdgeConfig, edges: int, seed: int, workers: int) -> dict:
+    """One plan on a fresh, warmed-up pool of `workers` processes: the run's summary."""
+    runner = regress.open_runner(config, "verilator", workers, cluster=None)
+    try:
+        warm_up = regress.Plan(config, 100 * workers, workers, seed + 1)
+        regress.run_plan(warm_up, runner, regress.ShardStore(None, warm_up.manifest()))
+        plan = regress.Plan(config, edges, default_shards(edges), seed)
+        summary = regress.run_plan(plan, runner, regress.ShardStore(None, plan.manifest()))
+    finally:
+        runner.close()
+    if not summary["passed"]:
+        raise SystemExit(f"mismatches with {workers} workers: {summary['mismatches'][:3]}")
+    return summary
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--edges", type=int, default=20_000, help="edges per measurement")
+    parser.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="pool sizes")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    config = EdgeConfig()
+    load = os.getloadavg()[0]
+    print(f"core: {config}")
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+        f"{platform.python_version()}, load average {load:.2f} at the start"
+    )
+    print(
+        f"{'workers':>7} {'edges':>8} {'seconds':>8} {'edges/s':>9} {'per worker':>10} "
+        f"{'in sim':>7} {'10^9 edges, 1 core':>19}"
+    )
+    for workers in args.workers:
+        summary = measure(config, args.edges, args.seed, workers)
+        rate = summary["edges_per_second"]
+        per_worker = rate / workers
+        sim_share = summary["sim_seconds"] / summary["worker_seconds"]
+        hours = PROJECTED_EDGES / per_worker / 3600
+        print(
+            f"{workers:7d} {summary['edges_run']:8d} {summary['seconds']:8.1f} {rate:9,.0f} "
+            f"{per_worker:10,.0f} {sim_share:7.0%} {hours:17.1f} h"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,357 @@
+"""One shard of a sharded regression (`edgeaa verify`): seeded random edges through the
+simulated core against the model, checked in a worker process.
+
+A shard is `ShardTask.edges` random edges drawn from its own seed, so any shard can be rerun
+alone from the seed printed with a mismatch (`edgeaa verify --shard-seed SEED`). The edges are
+those of the tests (`random_sim_edges`: every octant, sub-pixel vertices, random sides and
+intensities, clip windows of every kind, bad commands) and run as two command streams:
+
+* ``stalled``: the first half, with random source idles and sink back-pressure: every beat bit
+  for bit and in order against the model, and the core's bad-command counter;
+* ``ready``: the rest, offered back to back to an always-ready sink: the same checks, and every
+  beat in the clock `edgeaa.model.timing.write_cycles` predicts.
+
+The Amaranth runner has no stalls: with ``engine="amaranth"`` the whole shard is one ready
+stream. The expected beats come from the vectorized model (`edgeaa.model.vector.run_edges`,
+the same per-column arithmetic as the step model and tested equal to it), six to eight times
+faster than the step model, which would otherwise take most of a shard's time.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import shlex
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...model import Edge, EdgeConfig, EdgeError, validate
+from ...model.beat import BEAT_COLUMNS, COLUMN, LANES, PIXEL_FIELDS, beats_from_array
+from ...model.timing import write_cycles
+from ...model.vector import run_edges
+from ..simulators import verilator_harness
+from ..simulators.verilator_harness import BEAT_FIELDS, FastRun, drain_clocks, edge_commands
+from .workloads import random_sim_edges
+
+ENGINES = ("verilator", "amaranth")
+
+# The workload, as the tests draw it (tests/test_cosim.py, tests/test_fastsim.py).
+IDLE, STALL = 0.2, 0.3  # probability per clock of a source idle and of sink back-pressure
+BAD_FRACTION = 0.02  # zero-length edges and I_in == I_out: the core drops and counts them
+CLIP_FRACTION = 0.5  # edges with a random clip window (empty, start, end, both, loose)
+# Longest major delta of a shard's edges, one per shard in turn: short edges keep the setup
+# busy (setup-bound), long ones the stepper; 48 is the tests' default.
+MAX_PIXELS = (16, 48, 200)
+SHARD_EDGES = 2000  # default edges per shard: a few seconds of work, so progress is smooth
+
+LANE1_FIELDS = [COLUMN[f"{LANES[1]}_{name}"] for name in PIXEL_FIELDS]
+
+
+# -- the plan: shard seeds and sizes ---------------------------------------------------------
+
+
+def shard_seed(run_seed: int, index: int) -> int:
+    """The seed of shard `index` of a run: 48 bits of a hash, so neighbouring run seeds do not
+    share shards and the seed fits the harness's unsigned stall seed."""
+    digest = hashlib.sha256(f"edgeaa-verify/{run_seed}/{index}".encode()).digest()
+    return int.from_bytes(digest[:6], "little")
+
+
+def default_shards(edges: int) -> int:
+    """Shards of about `SHARD_EDGES` edges: a function of the edge count only, so a rerun on
+    another number of workers resumes the same shards."""
+    return max(1, math.ceil(edges / SHARD_EDGES))
+
+
+def shard_sizes(edges: int, shards: int) -> list[int]:
+    """`edges` split into `shards` sizes that differ by at most one."""
+    base, extra = divmod(edges, shards)
+    return [base + (index < extra) for index in range(shards)]
+
+
+@dataclass(frozen=True)
+class ShardTask:
+    """What a worker needs to check one shard (the compiled core travels separately)."""
+
+    index: int
+    seed: int
+    edges: int
+    config: EdgeConfig
+    engine: str = "verilator"
+
+    @property
+    def max_pixels(self) -> int:
+        return MAX_PIXELS[self.seed % len(MAX_PIXELS)]
+
+    def draw_edges(self) -> list[Edge]:
+        return random_sim_edges(
+            self.config,
+            self.edges,
+            self.seed,
+            max_pixels=self.max_pixels,
+            bad_fraction=BAD_FRACTION,
+            clip_fraction=CLIP_FRACTION,
+        )
+
+    def streams(self) -> list[tuple[str, int, list[Edge]]]:
+        """(name, index of its first edge in the shard, edges) of each command stream."""
+        edges = self.draw_edges()
+        if self.engine == "amaranth":
+            return [("ready", 0, edges)]
+        half = len(edges) // 2
+        streams = [("stalled", 0, edges[:half]), ("ready", half, edges[half:])]
+        return [stream for stream in streams if stream[2]]  # a one-edge shard: ready only
+
+
+# -- the compiled core, built once and shipped to the workers --------------------------------
+
+
+@dataclass(frozen=True)
+class CompiledCore:
+    """The Verilated core and harness of one configuration, built once by the driver.
+
+    Workers on this machine run the cached executable at `path`; a worker elsewhere (a
+    cluster) writes `image`, the executable's bytes, to its own temporary directory once.
+    Pass ``ship=True`` to `build` for that; a local pool needs only the path.
+    """
+
+    key: str  # the build's cache directory name: a hash of the Verilog, harness and flags
+    path: str
+    image: bytes = field(default=b"", repr=False)
+
+    @classmethod
+    def build(cls, config: EdgeConfig, *, ship: bool = False) -> CompiledCore:
+        path = verilator_harness.build(config)
+        return cls(path.parent.name, str(path), path.read_bytes() if ship else b"")
+
+    def executable(self) -> Path:
+        path = Path(self.path)
+        if path.is_file() and os.access(path, os.X_OK):
+            return path
+        if not self.image:
+            raise RuntimeError(f"the compiled core {path} is not on this worker and was not sent")
+        local = Path(tempfile.gettempdir()) / f"edgeaa-verify-{self.key}" / "harness"
+        if not local.exists():  # one file per key; concurrent writers each rename a whole copy
+            local.parent.mkdir(parents=True, exist_ok=True)
+            partial = local.with_name(f"harness.{os.getpid()}")
+            partial.write_bytes(self.image)
+            partial.chmod(0o755)
+            os.replace(partial, local)
+        return local
+
+
+def run_harness(
+    exe: Path, config: EdgeConfig, edges: list[Edge], *, seed: int, idle: float, stall: float
+) -> FastRun:
+    """`verilator_harness.run` on an executable built already: its `build` elaborates the
+    core to Verilog on every call (1 to 2 s, more than a shard's simulation)."""
+    with tempfile.TemporaryDirectory(prefix="edgeaa-verify-") as tmp:
+        commands, beats = Path(tmp) / "commands.bin", Path(tmp) / "beats.bin"
+        edge_commands(config, edges).tofile(commands)
+        argv = [exe, commands, beats, seed, round(idle * 1000), round(stall * 1000)]
+        argv.append(drain_clocks(config))
+        start = time.perf_counter()
+        proc = subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=False)
+        seconds = time.perf_counter() - start
+        if proc.returncode != 0:
+            raise RuntimeError(f"harness failed ({proc.returncode}): {proc.stderr[-2000:]}")
+        clocks, errors = (int(v) for v in proc.stdout.split())
+        rows = np.fromfile(beats, dtype=np.int64).reshape(-1, BEAT_FIELDS)
+    return FastRun(rows, clocks, errors, seconds)
+
+
+def simulate(task: ShardTask, core: CompiledCore | None, stream: str, edges: list[Edge]) -> FastRun:
+    """The simulated core's view of one command stream: its beats, clocks and error count."""
+    if task.engine == "amaranth":
+        from ..simulators import amaranth_sim
+
+        return amaranth_sim.run(task.config, edges)
+    idle, stall = (IDLE, STALL) if stream == "stalled" else (0.0, 0.0)
+    return run_harness(
+        core.executable(), task.config, edges, seed=task.seed, idle=idle, stall=stall
+    )
+
+
+# -- the model's side ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ModelStream:
+    """The model's beats of a command stream, as rows of `BEAT_COLUMNS` (lane 1 zero when not
+    valid), the visible columns of each edge (0 for a bad command or an empty window) and how
+    many commands are bad."""
+
+    rows: np.ndarray
+    columns: np.ndarray
+    dropped: int
+
+
+def model_stream(config: EdgeConfig, edges: list[Edge]) -> ModelStream:
+    """Expected beats from the vectorized model: its writes grouped into columns (a column's
+    writes are consecutive and share the major-axis pixel; the next column's differs by one)."""
+    good = np.ones(len(edges), dtype=bool)
+    for index, edge in enumerate(edges):
+        try:
+            validate(config, edge)  # what makes a command bad (setup runs once, in run_edges)
+        except EdgeError:
+            good[index] = False
+    columns = np.zeros(len(edges), dtype=np.int64)
+    dropped = len(edges) - int(good.sum())
+    if not good.any():
+        return ModelStream(np.zeros((0, len(BEAT_COLUMNS)), np.int64), columns, dropped)
+    batch = run_edges(config, [edge for edge, ok in zip(edges, good, strict=True) if ok])
+    columns[good] = [st.columns for st in batch.setups]
+    x_major = np.array([st.x_major for st in batch.setups])
+    rows = _beat_rows(batch.edge_index, batch.x, batch.y, batch.value, x_major)
+    if len(rows) != columns.sum():
+        raise AssertionError(f"the model's writes form {len(rows)} columns, not {columns.sum()}")
+    return ModelStream(rows, columns, dropped)
+
+
+def _beat_rows(edge_index, x, y, value, x_major) -> np.ndarray:
+    """Writes (in the model's order) as beat rows: one per column, lane 0 then lane 1."""
+    n = len(edge_index)
+    major = np.where(x_major[edge_index], x, y)
+    starts = np.ones(n, dtype=bool)
+    starts[1:] = (edge_index[1:] != edge_index[:-1]) | (major[1:] != major[:-1])
+    first = np.flatnonzero(starts)
+    size = np.diff(np.append(first, n))
+    if (size > 2).any():
+        raise AssertionError("the model wrote more than two pixels in a column")
+    pair = size == 2
+    rows = np.zeros((len(first), len(BEAT_COLUMNS)), dtype=np.int64)
+    for lane, index in ((LANES[0], first), (LANES[1], first[pair])):
+        target = slice(None) if lane == LANES[0] else pair
+        for name, values in zip(PIXEL_FIELDS, (x, y, value), strict=True):
+            rows[target, COLUMN[f"{lane}_{name}"]] = values[index + (lane == LANES[1])]
+    rows[:, COLUMN["lane1_valid"]] = pair
+    column_edge = edge_index[first]
+    rows[:-1, COLUMN["last"]] = column_edge[1:] != column_edge[:-1]
+    rows[-1:, COLUMN["last"]] = 1
+    return rows
+
+
+# -- the checks ------------------------------------------------------------------------------
+
+
+def core_rows(run: FastRun) -> np.ndarray:
+    """The core's beats as rows of `BEAT_COLUMNS`, lane 1 zeroed where it is not valid (its
+    values are then don't-cares)."""
+    rows = run.beats[:, 1:].copy()
+    rows[np.ix_(rows[:, COLUMN["lane1_valid"]] == 0, LANE1_FIELDS)] = 0
+    return rows
+
+
+def first_difference(got: np.ndarray, want: np.ndarray) -> int | None:
+    """Index of the first row that differs, or where the shorter one ends; None if equal."""
+    n = min(len(got), len(want))
+    differ = np.flatnonzero((got[:n] != want[:n]).any(axis=1))
+    if len(differ):
+        return int(differ[0])
+    return None if len(got) == len(want) else n
+
+
+def describe(row: np.ndarray | None) -> str:
+    return "no beat" if row is None else str(beats_from_array(row[None, :])[0])
+
+
+def edge_of_beat(columns: np.ndarray, beat: int) -> tuple[int, int]:
+    """(edge, column within the edge) of the stream's beat `beat` by the model's count; past the
+    end, the last edge."""
+    ends = np.cumsum(columns)
+    edge = min(int(np.searchsorted(ends, beat, side="right")), len(columns) - 1)
+    return edge, beat - int(ends[edge] - columns[edge])
+
+
+def check_stream(config: EdgeConfig, stream: str, edges: list[Edge], run: FastRun) -> list[dict]:
+    """The first disagreement of each kind in one stream: beats, the bad-command count and (for
+    a ready stream whose beats agree) beat clocks. Edge indices are within the stream."""
+    model = model_stream(config, edges)
+    got = core_rows(run)
+    found = []
+    beat = first_difference(got, model.rows)
+    if beat is not None:
+        edge, column = edge_of_beat(model.columns, beat)
+        core = describe(got[beat] if beat < len(got) else None)
+        want = describe(model.rows[beat] if beat < len(model.rows) else None)
+        text = f"beat {beat} (column {column} of edge {edge}) is {core}, the model says {want}"
+        found.append({"kind": "beat", "edge": edge, "beat": beat, "message": text})
+    if run.errors != model.dropped:
+        text = f"the core counted {run.errors} bad commands, the model {model.dropped}"
+        found.append({"kind": "errors", "edge": None, "beat": None, "message": text})
+    if stream == "ready" and beat is None:
+        predicted = np.array([c for t in write_cycles(config, edges) for c in t.beats], np.int64)
+        late = first_difference(run.beats[:, :1], predicted[:, None])
+        if late is not None:
+            edge, column = edge_of_beat(model.columns, late)
+            text = (
+                f"beat {late} (column {column} of edge {edge}) left in clock "
+                f"{int(run.beats[late, 0])}, the timing model says {int(predicted[late])}"
+            )
+            found.append({"kind": "clock", "edge": edge, "beat": late, "message": text})
+    return found
+
+
+def check_shard(task: ShardTask, core: CompiledCore | None = None) -> dict:
+    """Run and check one shard; the result is plain data (it is stored as a JSON line)."""
+    start = time.perf_counter()
+    result = {"index": task.index, "seed": task.seed, "edges": task.edges, "beats": 0}
+    result.update(clocks=0, dropped=0, timed_edges=0, sim_seconds=0.0, mismatches=[])
+    for stream, offset, edges in task.streams():
+        run = simulate(task, core, stream, edges)
+        result["sim_seconds"] += run.seconds
+        result["beats"] += len(run.beats)
+        result["clocks"] += run.clocks
+        result["dropped"] += run.errors
+        result["timed_edges"] += len(edges) if stream == "ready" else 0
+        for found in check_stream(task.config, stream, edges, run):
+            edge = None if found["edge"] is None else offset + found["edge"]
+            edge_line = None if edge is None else reproduce_edge(task.config, edges[edge - offset])
+            found.update(stream=stream, edge=edge, reproduce=edge_line)
+            found.update(reproduce_shard=reproduce_shard(task), shard=task.index, seed=task.seed)
+            result["mismatches"].append(found)
+    result["seconds"] = time.perf_counter() - start
+    return result
+
+
+# -- reproducers -----------------------------------------------------------------------------
+
+
+def config_arguments(config: EdgeConfig) -> list[str]:
+    """The `edgeaa` configuration options that give `config` (every one spelled out)."""
+    argv = ["--mode", config.mode, "--accumulator", config.accumulator]
+    argv += ["--coord-bits", str(config.coord_bits), "--subpixel-bits", str(config.subpixel_bits)]
+    argv += ["--intensity-bits", str(config.intensity_bits)]
+    if config.frac_bits is not None:
+        argv += ["--frac-bits", str(config.frac_bits)]
+    return argv
+
+
+def pixels(value: int, config: EdgeConfig) -> str:
+    """A sub-pixel coordinate in pixels, exactly (a dyadic fraction: the float is exact)."""
+    text = repr(value / config.subpixel_scale)
+    return text[:-2] if text.endswith(".0") else text
+
+
+def reproduce_edge(config: EdgeConfig, edge: Edge) -> str:
+    """The `edgeaa edge` command that runs `edge` through the model: its writes as the core
+    should give them (or, for a bad command, the model's one-line refusal)."""
+    i_in, i_out = edge.intensities(config)
+    argv = ["edgeaa", "edge"] + [pixels(v, config) for v in (edge.x0, edge.y0, edge.x1, edge.y1)]
+    argv += ["--inside", edge.inside, "--i-in", str(i_in), "--i-out", str(i_out)]
+    if edge.clip is not None:
+        argv += ["--clip", *(str(v) for v in edge.clip)]
+    return shlex.join(argv + config_arguments(config))
+
+
+def reproduce_shard(task: ShardTask) -> str:
+    """The `edgeaa verify` command that reruns this shard alone, on the same engine."""
+    argv = ["edgeaa", "verify", "--shard-seed", str(task.seed), "--edges", str(task.edges)]
+    argv += ["--engine", task.engine]
+    return shlex.join(argv + config_arguments(task.config))
