@@ -9,6 +9,8 @@ their own modules and register themselves.
 from __future__ import annotations
 
 import argparse
+import errno
+import os
 import sys
 
 from . import edge_cli, verify_cli
@@ -41,14 +43,46 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what `seq 100000 | head` reports for seq
+EXIT_INTERRUPTED = 130  # 128 + SIGINT
+FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO)  # stdout could not be written
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
+    argv = sys.argv[1:] if argv is None else argv
     try:
+        if not argv:
+            raise usage_error(PROG, f"give a command ({', '.join(COMMANDS)}); see {PROG} --help")
         args = parser.parse_args(argv)
-        return args.run(args)
+        status = args.run(args)
+        sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
+        return status
     except (UsageError, ConfigError, EdgeError) as error:
         message = str(error)
         if not message.startswith(PROG):
             message = str(usage_error(PROG, message))
         print(message, file=sys.stderr)
         return EXIT_BAD_INPUT
+    except BrokenPipeError:  # `edgeaa ... | head`: the reader has all it wanted
+        _silence_stdout()
+        return EXIT_BROKEN_PIPE
+    except OSError as error:
+        if error.errno not in FULL_ERRNOS:  # files are written by atomic_output, not here
+            raise
+        _silence_stdout()
+        print(f"{PROG}: error: cannot write the output: {error.strerror}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _silence_stdout() -> None:
+    """Point standard output at /dev/null so that the interpreter's final flush of what is
+    still buffered does not fail again (the recipe of Python's signal documentation)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # captured or replaced stdout: nothing to do
+        pass

@@ -13,8 +13,14 @@ Bad input is reported as one line on stderr with exit status 2, never a tracebac
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
+import re
 import sys
+import tempfile
+import threading
 import time
+from fractions import Fraction
 
 from .model import ACCUMULATORS, MODES, EdgeConfig
 from .model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
@@ -33,10 +39,162 @@ def usage_error(prog: str, message: str) -> UsageError:
 
 
 class OneLineErrorParser(argparse.ArgumentParser):
-    """An ArgumentParser whose errors are one line (no usage dump) with exit status 2."""
+    """An ArgumentParser whose errors are one line (no usage dump) with exit status 2.
+
+    An option that takes a value may be given once: a second one would silently replace the
+    first (`--inside left --inside right`), so it is refused. Flags may repeat (no effect).
+    """
 
     def error(self, message):
         raise usage_error(self.prog, message)
+
+    def add_argument(self, *args, **kwargs):
+        if args and args[0].startswith("-") and kwargs.get("action", "store") == "store":
+            kwargs["action"] = StoreOnce
+        return super().add_argument(*args, **kwargs)
+
+
+class StoreOnce(argparse.Action):
+    """`store`, refusing a second occurrence of the option."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        seen = namespace.__dict__.setdefault("_given_once", set())
+        if self.dest in seen:
+            raise argparse.ArgumentError(self, "given twice; give it once")
+        seen.add(self.dest)
+        setattr(namespace, self.dest, values)
+
+
+# -- numbers and values in messages ----------------------------------------------------------
+
+MAX_SHOWN = 40  # characters of a bad value quoted in a message
+MAX_NUMBER_TEXT = 60  # characters of a number on the command line
+DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+MAX_EXPONENT = 60  # |exponent| of a decimal: far past any coordinate, cheap to evaluate
+
+
+def shown(value) -> str:
+    """A value for a message: its repr, cut short (a number may have thousands of digits)."""
+    text = repr(value)
+    if len(text) > MAX_SHOWN:
+        text = f"{text[: MAX_SHOWN - 12]}... ({len(text)} characters)"
+    return text
+
+
+def decimal(text: str) -> Fraction:
+    """A decimal number exactly, without the unbounded work of `Fraction('0e1000000000')`.
+
+    Raises ValueError (the message says what is allowed) for anything that is not a plain
+    decimal (`inf`, `nan`, `1/3`, `0x10`), longer than MAX_NUMBER_TEXT characters, or with an
+    exponent beyond +-MAX_EXPONENT (zero excepted: `0e1000000000` is 0).
+    """
+    text = text.strip()
+    match = DECIMAL.fullmatch(text) if len(text) <= MAX_NUMBER_TEXT else None
+    if match is None:
+        raise ValueError(
+            f"must be a decimal number such as 10.25 (at most {MAX_NUMBER_TEXT} characters), "
+            f"not {shown(text)}"
+        )
+    mantissa, exponent = match.group(1), match.group(2)
+    if not exponent:
+        return Fraction(text)
+    if not mantissa.strip("0."):
+        return Fraction(0)
+    power = int(exponent[1:])
+    if abs(power) > MAX_EXPONENT:
+        raise ValueError(f"{shown(text)} is out of range (exponents up to +-{MAX_EXPONENT})")
+    return Fraction(text)
+
+
+def integer_type(lo: int, hi: int):
+    """An argparse type: an integer in [lo, hi], its digits read only when they are few."""
+
+    def parse(text: str) -> int:
+        text = text.strip()
+        if not re.fullmatch(r"[+-]?\d{1,30}", text):
+            raise argparse.ArgumentTypeError(
+                f"must be an integer in [{lo}, {hi}], not {shown(text)}"
+            )
+        value = int(text)
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be an integer in [{lo}, {hi}], not {value}")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def number_type(lo: float, hi: float):
+    """An argparse type: a finite decimal in [lo, hi] (no inf, nan or huge exponents)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = decimal(text)
+        except ValueError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be in [{lo:g}, {hi:g}], not {shown(text)}")
+        return float(value)
+
+    parse.__name__ = "number"
+    return parse
+
+
+# -- output files ----------------------------------------------------------------------------
+
+
+def check_output(prog: str, path: str, suffixes: tuple[str, ...], inputs=()) -> None:
+    """Refuse, before any work, an output that cannot be written or would replace an input."""
+    if not path.lower().endswith(suffixes):
+        allowed = ", ".join(suffixes)
+        raise usage_error(prog, f"-o {shown(path)}: unsupported format (allowed: {allowed})")
+    if os.path.isdir(path):
+        raise usage_error(prog, f"-o {shown(path)} is a directory; give a file name")
+    directory = os.path.dirname(path) or "."
+    if not os.path.isdir(directory):
+        raise usage_error(prog, f"-o {shown(path)}: directory {shown(directory)} does not exist")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise usage_error(prog, f"-o {shown(path)}: directory {shown(directory)} is not writable")
+    for source in inputs:
+        if source is not None and _same_file(path, source):
+            raise usage_error(prog, f"-o {shown(path)} is the input file; give another name")
+
+
+def _same_file(a: str, b: str) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet)
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def atomic_output(prog: str, path: str):
+    """Yield a temporary file name beside `path` (same suffix) to write; on success it is
+    renamed to `path` in one step, on any failure removed: `path` is never half-written."""
+    directory, name = os.path.split(path)
+    suffix = os.path.splitext(name)[1]
+    try:
+        handle, temporary = tempfile.mkstemp(
+            prefix=f".{name}.", suffix=suffix, dir=directory or "."
+        )
+    except OSError as error:
+        raise usage_error(prog, f"cannot write {shown(path)}: {error.strerror}") from None
+    os.close(handle)
+    os.chmod(temporary, 0o666 & ~_umask())  # mkstemp's 0600 would outlive the rename
+    try:
+        yield temporary
+        os.replace(temporary, path)
+    except OSError as error:
+        raise usage_error(prog, f"cannot write {shown(path)}: {error.strerror or error}") from None
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(temporary)
 
 
 # -- the registry ----------------------------------------------------------------------------
@@ -142,8 +300,11 @@ class ProgressBar:
     given up front, `bar.step(stage)`.
     """
 
-    def __init__(self, label: str, total: int = 0, enabled: bool = True, stream=None):
+    def __init__(
+        self, label: str, total: int = 0, enabled: bool = True, stream=None, delay: float = None
+    ):
         self.label, self.total, self.enabled = label, total, enabled
+        self.delay = DELAY if delay is None else delay
         self.stream = stream if stream is not None else sys.stderr
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.start = time.perf_counter()
@@ -165,26 +326,48 @@ class ProgressBar:
         if not self.enabled:
             return
         now = time.perf_counter() - self.start
-        finished = done >= total
+        finished = total > 0 and done >= total
         every = EVERY if self.tty else 10 * EVERY
-        if now < DELAY or (not finished and now - self.last < every):
+        if now < self.delay or (not finished and now - self.last < every):
             return
         self.last = now
         self.shown = True
-        fraction = done / total if total else 1.0
-        width = 30
-        bar = "#" * round(width * fraction) + "-" * (width - round(width * fraction))
-        text = (
-            f"{self.label}: {self.stage:<12} [{bar}] {100 * fraction:5.1f}% "
-            f"({done}/{total}, {now:.1f} s)"
-        )
+        if total > 0:
+            fraction = done / total
+            width = 30
+            bar = "#" * round(width * fraction) + "-" * (width - round(width * fraction))
+            counts = f"[{bar}] {100 * fraction:5.1f}% ({done}/{total}, {now:.1f} s)"
+        else:  # a step of unknown length: the time so far
+            counts = f"({now:.1f} s)"
+        text = f"{self.label}: {self.stage:<12} {counts}"
         if self.tty:
             self.stream.write("\r" + text)
         else:
             self.stream.write(text + "\n")
         self.stream.flush()
 
+    @contextlib.contextmanager
+    def ticking(self, stage: str):
+        """Redraw the bar (its elapsed time) while a step with no progress of its own runs,
+        such as a compiler or a synthesis tool: long work is visible from its start."""
+        self(self.done, self.total, stage)
+        stop = threading.Event()
+
+        def tick():
+            while not stop.wait(EVERY):
+                self(self.done, self.total)
+
+        thread = threading.Thread(target=tick, daemon=True)
+        thread.start()
+        try:
+            yield
+        finally:
+            stop.set()
+            thread.join()
+
     def close(self) -> None:
+        """End the bar's line (on a terminal); a later call starts a new one."""
         if self.shown and self.tty:
             self.stream.write("\n")
             self.stream.flush()
+        self.shown = False

@@ -8,23 +8,40 @@ one line with exit status 1.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 
 import numpy as np
 
-from ..command import Command, ProgressBar, add_config_options, config_from_args, usage_error
+from ..command import (
+    Command,
+    ProgressBar,
+    add_config_options,
+    atomic_output,
+    check_output,
+    config_from_args,
+    shown,
+    usage_error,
+)
 from .builtin import BUILTINS
 
 PROG = "edgeaa render"
+# The side-by-side figure supersamples 16 x 16 and the exact reference cuts one shapely box
+# per pixel: both need far more memory per pixel than a render (docs/scenes.md).
+MAX_COMPARE_PIXELS = 1 << 16  # 65,536 (256 x 256)
+MAX_ERROR_PIXELS = 1 << 20  # 1,048,576 (1024 x 1024)
 
 
 def _crop(text: str) -> tuple[int, int, int, int]:
     try:
-        x0, y0, x1, y1 = (int(v) for v in text.split(","))
+        parts = text.split(",")
+        if len(parts) != 4 or any(len(v.strip()) > 9 for v in parts):
+            raise ValueError
+        x0, y0, x1, y1 = (int(v) for v in parts)
     except ValueError:
-        raise usage_error(PROG, f"--crop must be X0,Y0,X1,Y1 (integers), not {text!r}") from None
+        raise usage_error(
+            PROG, f"--crop must be X0,Y0,X1,Y1 (integers), not {shown(text)}"
+        ) from None
     if x1 <= x0 or y1 <= y0 or min(x0, y0) < 0:
         raise usage_error(PROG, f"--crop {text}: need 0 <= X0 < X1 and 0 <= Y0 < Y1")
     return x0, y0, x1, y1
@@ -117,14 +134,21 @@ class RenderCommand(Command):
 
     def run(self, args: argparse.Namespace) -> int:
         from .render import plan_scene
-        from .scene import SceneError
+        from .scene import SceneError, check_pixels
 
         config = config_from_args(args)
-        _check_output(args)
+        _check_options(args)
         crop = _crop(args.crop) if args.crop else None
         try:
             scene = _load(args, config)
-            plan = plan_scene(scene, config)
+            if args.compare:
+                check_pixels("--compare", scene.width, scene.height, MAX_COMPARE_PIXELS)
+            if args.error:
+                check_pixels("--error", scene.width, scene.height, MAX_ERROR_PIXELS)
+            bar = ProgressBar("render", enabled=not args.quiet)
+            with bar.ticking("plan"):
+                plan = plan_scene(scene, config)
+            bar.close()
         except SceneError as error:
             raise usage_error(PROG, str(error)) from None
         if crop and (crop[2] > scene.width or crop[3] > scene.height):
@@ -139,16 +163,30 @@ class RenderCommand(Command):
         )
         if args.compare:
             return _compare(args, scene, config, crop)
-        return _render(args, plan)
+        return _render(args, plan, bar)
 
 
-def _check_output(args: argparse.Namespace) -> None:
+# Options that do nothing or contradict each other: (given, with, why they cannot be mixed).
+CONFLICTS = (
+    ("compare", "error", "--compare already measures every method against the exact area"),
+    ("compare", "stats", "--compare renders with the model in two modes, not one engine"),
+    ("compare", "no_skip", "--compare renders with the model in two modes, not one engine"),
+    ("stats", "no_skip", "--stats renders both with and without skipping"),
+)
+
+
+def _check_options(args: argparse.Namespace) -> None:
+    """Refuse conflicting or no-op options and unwritable outputs, before any work."""
+    for first, second, why in CONFLICTS:
+        if getattr(args, first) and getattr(args, second):
+            names = (f"--{n.replace('_', '-')}" for n in (first, second))
+            raise usage_error(PROG, f"{' and '.join(names)} cannot be combined: {why}")
+    if args.compare and args.engine != "model":
+        raise usage_error(PROG, "--compare renders with the model: --engine does not apply")
+    if args.crop and not args.compare:
+        raise usage_error(PROG, "--crop selects the pixels of the --compare figure; add --compare")
     if args.output is not None:
-        if not args.output.lower().endswith(".png"):
-            raise usage_error(PROG, f"-o {args.output}: the output must be a .png file")
-        directory = os.path.dirname(args.output)
-        if directory and not os.path.isdir(directory):
-            raise usage_error(PROG, f"-o {args.output}: directory {directory} does not exist")
+        check_output(PROG, args.output, (".png",), inputs=(args.scene,))
     if args.compare and args.output is None:
         raise usage_error(PROG, "--compare needs -o FIGURE.png")
 
@@ -156,7 +194,8 @@ def _check_output(args: argparse.Namespace) -> None:
 def _compare(args: argparse.Namespace, scene, config, crop) -> int:
     from .compare import plot_compare
 
-    rows = plot_compare(scene, config, args.output, crop)
+    with atomic_output(PROG, args.output) as temporary:
+        rows = plot_compare(scene, config, temporary, crop)
     print(f"{'method':22} {'max |err| LSB':>14} {'RMS LSB':>8}")
     for label, worst, rms in rows:
         print(f"{label:22} {worst:14.3f} {rms:8.3f}")
@@ -164,13 +203,24 @@ def _compare(args: argparse.Namespace, scene, config, crop) -> int:
     return 0
 
 
-def _render(args: argparse.Namespace, plan) -> int:
+def _build_engine(engine: str, config, bar: ProgressBar) -> None:
+    """Compile the Verilator harness first (cached; the first build takes half a minute), with
+    the bar running, so that the engine's time is the simulation's alone."""
+    if engine == "verilator":
+        from ..sim.simulators import verilator_harness
+
+        with bar.ticking("verilator build (first time only, then cached)"):
+            verilator_harness.build(config)
+        bar.close()
+
+
+def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
     """Render the plan (twice with --stats), write the PNG and print what was asked for."""
     from .render import render_scene
 
     config = plan.config
-    bar = ProgressBar("render", enabled=not args.quiet)
     try:
+        _build_engine(args.engine, config, bar)
         result = render_scene(plan, engine=args.engine, skip=not args.no_skip, progress=bar)
         baseline = None
         if args.stats:
@@ -186,10 +236,12 @@ def _render(args: argparse.Namespace, plan) -> int:
     print(
         f"engine: {len(result.sent)} edges, {result.cycles:,} cycles (timing model){measured}, "
         f"{result.engine_writes:,} writes; fill path: {len(result.fill_path)} edges, "
-        f"{result.fill_path_writes:,} writes; {result.seconds:.3f} s"
+        f"{result.fill_path_writes:,} writes; {result.seconds:.3f} s "
+        f"(engine {run.seconds:.3f} s)"
     )
     if args.output is not None:
-        kind = write_png(result.image, config.full_scale, config.intensity_bits, args.output)
+        with atomic_output(PROG, args.output) as temporary:
+            kind = write_png(result.image, config.full_scale, config.intensity_bits, temporary)
         print(f"wrote {args.output} ({kind})")
     if baseline is not None:
         from .stats import stats_report

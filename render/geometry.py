@@ -261,6 +261,8 @@ def _intersect(i: int, j: int, rows: list, splits: dict) -> None:
     ax, ay, bx, by = rows[i]
     cx, cy, dx, dy = rows[j]
     rx, ry, sx, sy = bx - ax, by - ay, dx - cx, dy - cy
+    if (rx, ry) == (0, 0) or (sx, sy) == (0, 0):
+        return  # a repeated vertex: a zero-length segment splits nothing and is not split
     den = _cross(rx, ry, sx, sy)
     if den:
         tn, un = _cross(cx - ax, cy - ay, sx, sy), _cross(cx - ax, cy - ay, rx, ry)

@@ -13,7 +13,10 @@ a curve B(t) stays within ``h**2 / 8 * max |B''|`` of its chord; ``|B''| = 2 |P0
 P2|`` for a quadratic and ``<= 6 max(|P0 - 2 P1 + P2|, |P1 - 2 P2 + P3|)`` for a cubic.
 
 Errors are `SceneError`s (ValueError) with one-line messages naming the polygon, contour
-and vertex or path position at fault.
+and vertex or path position at fault. Limits (docs/scenes.md, "Errors and limits") are
+checked as the scene is read, before anything is allocated for it: file size, pixels,
+edges per scene and per polygon (flattened curve pieces included), coordinate magnitude and
+the smallest tolerance.
 """
 
 from __future__ import annotations
@@ -23,7 +26,15 @@ import math
 import re
 from dataclasses import dataclass
 
+from ..command import shown
+
 DEFAULT_TOLERANCE = 1.0 / 16  # px: max distance between a curve and its chords
+MIN_TOLERANCE = 1.0 / 1024  # px: finer than the finest sub-pixel grid (1/256 px)
+MAX_FILE_BYTES = 32 << 20  # a scene file; the text built-in as JSON is about 60 kB
+MAX_PIXELS = 1 << 24  # width x height: 16,777,216 (4096 x 4096); the image is int64
+MAX_EDGES = 200_000  # edges of a scene, curves flattened
+MAX_POLYGON_EDGES = 10_000  # edges of one polygon: its crossing search is quadratic
+MAX_COORD = float(1 << 20)  # px, |x| and |y|: 16 times the widest coordinate range
 FILL_RULES = {"nonzero": "nonzero", "non-zero": "nonzero", "evenodd": "evenodd"}
 FILL_RULES["even-odd"] = "evenodd"
 SCENE_KEYS = ("width", "height", "background", "tolerance", "polygons", "name")
@@ -65,32 +76,98 @@ class Scene:
 # -- JSON --------------------------------------------------------------------------------------
 
 
-def load_scene(path: str) -> Scene:
-    """Read a scene file (JSON, see docs/scenes.md)."""
+def read_text(path: str) -> str:
+    """The file's text: UTF-8 (a byte-order mark allowed), at most MAX_FILE_BYTES."""
     try:
-        with open(path, encoding="utf-8") as file:
-            data = json.load(file)
+        with open(path, "rb") as file:
+            raw = file.read(MAX_FILE_BYTES + 1)
     except OSError as error:
         raise SceneError(f"cannot read scene {path}: {error.strerror or error}") from None
+    if len(raw) > MAX_FILE_BYTES:
+        raise SceneError(f"{path}: larger than the limit of {MAX_FILE_BYTES >> 20} MiB")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        raise SceneError(
+            f"{path}: not UTF-8 text (byte {raw[error.start]:#04x} at offset {error.start})"
+        ) from None
+
+
+class _BadJson(ValueError):
+    """Raised from the JSON decoder's hooks; its message is the whole complaint."""
+
+
+def _no_duplicates(pairs: list) -> dict:
+    keys = set()
+    for key, _ in pairs:
+        if key in keys:
+            raise _BadJson(f"key {shown(key)} appears twice in one object; give each key once")
+        keys.add(key)
+    return dict(pairs)
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadJson(f"number {shown(text)} is beyond the range of a double")
+    return value
+
+
+def _short_int(text: str) -> int:
+    if len(text.lstrip("-")) > 30:  # int() of thousands of digits is slow, then refused
+        raise _BadJson(f"integer {shown(text)} has more than 30 digits")
+    return int(text)
+
+
+def _no_constant(text: str):
+    raise _BadJson(f"{text} is not allowed: numbers must be finite")
+
+
+def parse_json(text: str, source: str = "scene"):
+    """JSON with finite numbers of sane length and no duplicate keys; SceneError otherwise."""
+    try:
+        return json.loads(
+            text,
+            object_pairs_hook=_no_duplicates,
+            parse_float=_finite_float,
+            parse_int=_short_int,
+            parse_constant=_no_constant,
+        )
     except json.JSONDecodeError as error:
         raise SceneError(
-            f"{path}: not valid JSON: {error.msg} (line {error.lineno}, column {error.colno})"
+            f"{source}: not valid JSON: {error.msg} (line {error.lineno}, column {error.colno})"
         ) from None
+    except _BadJson as error:
+        raise SceneError(f"{source}: {error}") from None
+    except RecursionError:
+        raise SceneError(f"{source}: JSON nested too deeply (a scene needs 5 levels)") from None
+
+
+def load_scene(path: str) -> Scene:
+    """Read a scene file (JSON, see docs/scenes.md)."""
+    data = parse_json(read_text(path), path)
     name = path.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     return parse_scene(data, source=path, name=name)
 
 
 def _number(where: str, value, *, positive: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SceneError(f"{where} must be a number, not {value!r}")
+        raise SceneError(f"{where} must be a number, not {shown(value)}")
     if positive and value <= 0:
-        raise SceneError(f"{where} must be positive, not {value!r}")
+        raise SceneError(f"{where} must be positive, not {shown(value)}")
     return float(value)
+
+
+def _coordinate(where: str, value) -> float:
+    value = _number(where, value)
+    if abs(value) > MAX_COORD:
+        raise SceneError(f"{where} = {value:g} px is beyond the limit of +-{MAX_COORD:,.0f} px")
+    return value
 
 
 def _integer(where: str, value, lo: int | None = None) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
-        raise SceneError(f"{where} must be an integer, not {value!r}")
+        raise SceneError(f"{where} must be an integer, not {shown(value)}")
     if lo is not None and value < lo:
         raise SceneError(f"{where} must be at least {lo}, not {value}")
     return value
@@ -104,14 +181,18 @@ def _check_keys(where: str, data: dict, allowed: tuple[str, ...]) -> None:
 
 def _contour(where: str, points) -> Contour:
     if not isinstance(points, list):
-        raise SceneError(f"{where} must be a list of [x, y] vertices, not {points!r}")
+        raise SceneError(f"{where} must be a list of [x, y] vertices, not {shown(points)}")
+    if len(points) > MAX_POLYGON_EDGES:
+        raise SceneError(
+            f"{where} has {len(points):,} vertices, more than the limit of "
+            f"{MAX_POLYGON_EDGES:,} edges per polygon"
+        )
     out = []
     for i, point in enumerate(points):
         if not (isinstance(point, list | tuple) and len(point) == 2):
-            raise SceneError(f"{where} vertex {i} must be [x, y], not {point!r}")
-        out.append(
-            (_number(f"{where} vertex {i} x", point[0]), _number(f"{where} vertex {i} y", point[1]))
-        )
+            raise SceneError(f"{where} vertex {i} must be [x, y], not {shown(point)}")
+        x = _coordinate(f"{where} vertex {i} x", point[0])
+        out.append((x, _coordinate(f"{where} vertex {i} y", point[1])))
     distinct = {p for p in out}
     if len(out) < 3 or len(distinct) < 3:
         raise SceneError(
@@ -121,7 +202,7 @@ def _contour(where: str, points) -> Contour:
 
 
 def parse_scene(data, source: str = "scene", name: str = "scene") -> Scene:
-    """Build a Scene from parsed JSON, checking every field."""
+    """Build a Scene from parsed JSON, checking every field and every limit."""
     if not isinstance(data, dict):
         raise SceneError(f"{source}: a scene is a JSON object with width, height and polygons")
     _check_keys(source, data, SCENE_KEYS)
@@ -130,20 +211,43 @@ def parse_scene(data, source: str = "scene", name: str = "scene") -> Scene:
             raise SceneError(f"{source}: missing field {key!r}")
     width = _integer(f"{source}: width", data["width"], 1)
     height = _integer(f"{source}: height", data["height"], 1)
+    check_pixels(source, width, height)
     background = _integer(f"{source}: background", data.get("background", 0), 0)
     tolerance = _number(
         f"{source}: tolerance", data.get("tolerance", DEFAULT_TOLERANCE), positive=True
     )
+    if tolerance < MIN_TOLERANCE:
+        raise SceneError(
+            f"{source}: tolerance {tolerance:g} px is below the limit of "
+            f"1/{1 / MIN_TOLERANCE:.0f} px"
+        )
     polygons = data["polygons"]
     if not isinstance(polygons, list):
         raise SceneError(f"{source}: polygons must be a list")
-    parsed = tuple(
-        parse_polygon(item, f"{source}: polygon {i}", tolerance) for i, item in enumerate(polygons)
-    )
+    parsed, edges = [], 0
+    for i, item in enumerate(polygons):
+        polygon = parse_polygon(item, f"{source}: polygon {i}", tolerance)
+        edges += sum(len(c) for c in polygon.contours)
+        if edges > MAX_EDGES:
+            raise SceneError(
+                f"{source}: more than the limit of {MAX_EDGES:,} edges per scene "
+                f"(reached at polygon {i})"
+            )
+        parsed.append(polygon)
     name = data.get("name", name)
     if not isinstance(name, str):
         raise SceneError(f"{source}: name must be a string")
-    return Scene(width, height, parsed, background, name, tolerance)
+    return Scene(width, height, tuple(parsed), background, name, tolerance)
+
+
+def check_pixels(source: str, width: int, height: int, limit: int = MAX_PIXELS) -> None:
+    """Refuse an image of more than `limit` pixels before anything is allocated for it."""
+    if width * height > limit:
+        side = math.isqrt(limit)
+        raise SceneError(
+            f"{source}: the image is {width} x {height} = {width * height:,} pixels, more than "
+            f"the limit of {limit:,} ({side} x {side})"
+        )
 
 
 def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Polygon:
@@ -159,11 +263,7 @@ def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Pol
     if "points" in item:
         contours = (_contour(f"{where}", item["points"]),)
     elif "contours" in item:
-        if not isinstance(item["contours"], list) or not item["contours"]:
-            raise SceneError(f"{where}: contours must be a non-empty list of vertex lists")
-        contours = tuple(
-            _contour(f"{where} contour {j}", c) for j, c in enumerate(item["contours"])
-        )
+        contours = _contours(where, item["contours"])
     else:
         if not isinstance(item["path"], str):
             raise SceneError(f"{where}: path must be a string of SVG path data")
@@ -172,9 +272,9 @@ def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Pol
     if intensity is not None:
         intensity = _integer(f"{where}: intensity", intensity, 0)
     rule = item.get("fill_rule", "nonzero")
-    if rule not in FILL_RULES:
+    if not isinstance(rule, str) or rule not in FILL_RULES:
         raise SceneError(
-            f"{where}: unknown fill_rule {rule!r} (allowed: nonzero, evenodd; "
+            f"{where}: unknown fill_rule {shown(rule)} (allowed: nonzero, evenodd; "
             "also non-zero, even-odd)"
         )
     label = item.get("name", "")
@@ -183,26 +283,45 @@ def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Pol
     return Polygon(contours, intensity, FILL_RULES[rule], label)
 
 
+def _contours(where: str, data) -> tuple[Contour, ...]:
+    if not isinstance(data, list) or not data:
+        raise SceneError(f"{where}: contours must be a non-empty list of vertex lists")
+    contours, edges = [], 0
+    for j, points in enumerate(data):
+        contours.append(_contour(f"{where} contour {j}", points))
+        edges += len(contours[-1])
+        if edges > MAX_POLYGON_EDGES:
+            raise SceneError(
+                f"{where}: more than the limit of {MAX_POLYGON_EDGES:,} edges per polygon "
+                f"(reached at contour {j})"
+            )
+    return tuple(contours)
+
+
 # -- SVG path data -----------------------------------------------------------------------------
 
 _TOKEN = re.compile(r"[A-Za-z]|[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _ARGS = {"M": 2, "L": 2, "H": 1, "V": 1, "C": 6, "S": 4, "Q": 4, "T": 2, "Z": 0}
 
 
+SEPARATORS = " \t\n\f\r,"  # SVG's whitespace (space, tab, LF, FF, CR) and the comma
+
+
 def _tokens(data: str, where: str) -> list[tuple[int, str]]:
     tokens, pos = [], 0
     for match in _TOKEN.finditer(data):
-        gap = data[pos : match.start()]
-        if gap.strip(" \t\r\n,"):
-            bad = gap.strip(" \t\r\n,")[0]
-            raise SceneError(f"{where}: unexpected {bad!r} at position {pos + gap.index(bad)}")
+        _check_gap(data, pos, match.start(), where)
         tokens.append((match.start(), match.group()))
         pos = match.end()
-    tail = data[pos:]
-    if tail.strip(" \t\r\n,"):
-        bad = tail.strip(" \t\r\n,")[0]
-        raise SceneError(f"{where}: unexpected {bad!r} at position {pos + tail.index(bad)}")
+    _check_gap(data, pos, len(data), where)
     return tokens
+
+
+def _check_gap(data: str, start: int, stop: int, where: str) -> None:
+    gap = data[start:stop]
+    if gap.strip(SEPARATORS):
+        bad = gap.strip(SEPARATORS)[0]
+        raise SceneError(f"{where}: unexpected {bad!r} at position {start + gap.index(bad)}")
 
 
 def quadratic_pieces(p0: Point, p1: Point, p2: Point, tolerance: float) -> int:
@@ -262,93 +381,174 @@ def _close(points: list[Point], contours: list[Contour]) -> None:
 
 
 def parse_path(
-    data: str, tolerance: float = DEFAULT_TOLERANCE, where: str = "path"
+    data: str,
+    tolerance: float = DEFAULT_TOLERANCE,
+    where: str = "path",
+    limit: int = MAX_POLYGON_EDGES,
 ) -> tuple[Contour, ...]:
     """SVG path data to closed contours: M/L/H/V/Z, C/S cubic and Q/T quadratic curves,
     absolute and relative; every subpath is closed for filling (as SVG fills do). Subpaths
-    with fewer than 3 distinct vertices enclose nothing and are dropped."""
+    with fewer than 3 distinct vertices enclose nothing and are dropped. A command without
+    its numbers is an error; so is a path whose points (curve pieces included) would pass
+    `limit`, refused before a curve is flattened."""
+    path = _PathReader(where, tolerance, limit)
     tokens = _tokens(data, where)
-    contours: list[Contour] = []
-    points: list[Point] = []
-    cur = start = (0.0, 0.0)
-    command = None
-    last_cubic = last_quad = None  # reflected control points for S and T
-    started = False
     i = 0
     while i < len(tokens):
         pos, token = tokens[i]
         if token.isalpha():
-            if token.upper() == "A":
-                raise SceneError(
-                    f"{where}: arc commands (A/a) are not supported (position {pos}); "
-                    "convert arcs to curves"
-                )
-            if token.upper() not in _ARGS:
-                raise SceneError(f"{where}: unknown path command {token!r} at position {pos}")
-            if not started and token not in "Mm":
-                raise SceneError(f"{where}: path data must start with M or m (position {pos})")
-            started = True
-            command = token
+            path.command(token, pos)
             i += 1
-            if command in "Zz":
-                _close(points, contours)
-                points = []
-                cur = start
-                last_cubic = last_quad = None
-                command = None
             continue
-        if command is None:
-            what = "start with M or m" if not started else "name a command before numbers"
-            raise SceneError(f"{where}: path data must {what} (position {pos})")
-        upper, relative = command.upper(), command.islower()
-        n = _ARGS[upper]
-        args = []
-        for j in range(n):
-            if i + j >= len(tokens) or tokens[i + j][1].isalpha():
-                raise SceneError(
-                    f"{where}: command {command!r} at position {pos} needs {n} numbers"
-                )
-            args.append(float(tokens[i + j][1]))
+        n = path.arguments(pos)
+        if i + n > len(tokens) or any(t.isalpha() for _, t in tokens[i : i + n]):
+            raise SceneError(
+                f"{where}: command {path.name!r} at position {path.name_pos} needs {n} numbers"
+            )
+        path.draw([_path_number(where, p, t) for p, t in tokens[i : i + n]])
         i += n
-        ox, oy = cur if relative else (0.0, 0.0)
+    return path.finish()
+
+
+def _path_number(where: str, pos: int, token: str) -> float:
+    value = float(token)
+    if not abs(value) <= MAX_COORD:
+        raise SceneError(
+            f"{where}: number {shown(token)} at position {pos} is beyond the limit of "
+            f"+-{MAX_COORD:,.0f} px"
+        )
+    return value
+
+
+class _PathReader:
+    """The state of path data being read: the current point, the subpath, the contours."""
+
+    def __init__(self, where: str, tolerance: float, limit: int):
+        self.where, self.tolerance, self.limit = where, tolerance, limit
+        self.contours: list[Contour] = []
+        self.points: list[Point] = []
+        self.count = 0  # points so far, every subpath: the limit counts them
+        self.cur = self.start = (0.0, 0.0)
+        self.name = self.name_pos = None  # the current command and where it was named
+        self.waiting = False  # the command has not had its numbers yet
+        self.last_cubic = self.last_quad = None  # reflected control points for S and T
+
+    def command(self, token: str, pos: int) -> None:
+        where = self.where
+        if token.upper() == "A":
+            raise SceneError(
+                f"{where}: arc commands (A/a) are not supported (position {pos}); "
+                "convert arcs to curves"
+            )
+        if token.upper() not in _ARGS:
+            raise SceneError(f"{where}: unknown path command {token!r} at position {pos}")
+        if self.name_pos is None and token not in "Mm":
+            raise SceneError(f"{where}: path data must start with M or m (position {pos})")
+        self._check_waiting()
+        self.name, self.name_pos = token, pos
+        self.waiting = token not in "Zz"
+        if not self.waiting:
+            _close(self.points, self.contours)
+            self.points, self.cur = [], self.start
+            self.last_cubic = self.last_quad = None
+
+    def _check_waiting(self) -> None:
+        if self.waiting:
+            n = _ARGS[self.name.upper()]
+            raise SceneError(
+                f"{self.where}: command {self.name!r} at position {self.name_pos} needs {n} numbers"
+            )
+
+    def arguments(self, pos: int) -> int:
+        """How many numbers the current command takes (SceneError if numbers may not come)."""
+        if self.name is None or self.name in "Zz":
+            what = "start with M or m" if self.name is None else "name a command before numbers"
+            raise SceneError(f"{self.where}: path data must {what} (position {pos})")
+        return _ARGS[self.name.upper()]
+
+    def draw(self, args: list[float]) -> None:
+        self.waiting = False
+        upper, relative = self.name.upper(), self.name.islower()
+        ox, oy = self.cur if relative else (0.0, 0.0)
         if upper == "M":
-            _close(points, contours)
-            cur = start = (ox + args[0], oy + args[1])
-            points = [cur]
-            command = "l" if relative else "L"  # further pairs are lines
-            last_cubic = last_quad = None
-            continue
-        if not points:  # drawing after Z without M starts at the subpath's start
-            points = [cur]
-        if upper == "L":
-            new = [(ox + args[0], oy + args[1])]
-        elif upper == "H":
-            new = [(ox + args[0] if relative else args[0], cur[1])]
-        elif upper == "V":
-            new = [(cur[0], oy + args[0] if relative else args[0])]
+            _close(self.points, self.contours)
+            self.cur = self.start = self._point(ox + args[0], oy + args[1])
+            self.points = [self.cur]
+            self.name = "l" if relative else "L"  # further pairs are lines
+            self.last_cubic = self.last_quad = None
+            return
+        if not self.points:  # drawing after Z without M starts at the subpath's start
+            self.points = [self.cur]
+        if upper in "LHV":
+            new = [self._line(upper, relative, args)]
         elif upper in "CS":
-            if upper == "C":
-                c1 = (ox + args[0], oy + args[1])
-                rest = args[2:]
-            else:
-                c1 = (2 * cur[0] - last_cubic[0], 2 * cur[1] - last_cubic[1]) if last_cubic else cur
-                rest = args
-            c2 = (ox + rest[0], oy + rest[1])
-            end = (ox + rest[2], oy + rest[3])
-            new = flatten_cubic(cur, c1, c2, end, tolerance)
-        else:  # Q, T
-            if upper == "Q":
-                c1 = (ox + args[0], oy + args[1])
-                end = (ox + args[2], oy + args[3])
-            else:
-                c1 = (2 * cur[0] - last_quad[0], 2 * cur[1] - last_quad[1]) if last_quad else cur
-                end = (ox + args[0], oy + args[1])
-            new = flatten_quadratic(cur, c1, end, tolerance)
-        last_cubic = c2 if upper in "CS" else None
-        last_quad = c1 if upper in "QT" else None
-        points.extend(new)
-        cur = new[-1]
-    _close(points, contours)
-    if not contours:
-        raise SceneError(f"{where}: the path encloses nothing (no subpath with 3 vertices)")
-    return tuple(contours)
+            new = self._cubic(upper, (ox, oy), args)
+        else:
+            new = self._quadratic(upper, (ox, oy), args)
+        self.points.extend(new)
+        self.cur = new[-1]
+
+    def _point(self, x: float, y: float, count: bool = True) -> Point:
+        """A new point (or a control point: not counted), checked against the limits."""
+        if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
+            raise SceneError(
+                f"{self.where}: the path reaches ({x:g}, {y:g}) px (command {self.name!r} at "
+                f"position {self.name_pos}), beyond the limit of +-{MAX_COORD:,.0f} px"
+            )
+        if count:
+            self._count(1)
+        return (x, y)
+
+    def _count(self, n: int) -> None:
+        self.count += n
+        if self.count > self.limit:
+            raise SceneError(
+                f"{self.where}: the path needs more than the limit of {self.limit:,} edges per "
+                f"polygon (at command {self.name!r}, position {self.name_pos}; curves count "
+                f"their pieces at tolerance {self.tolerance:g} px)"
+            )
+
+    def _line(self, upper: str, relative: bool, args: list[float]) -> Point:
+        x, y = self.cur
+        dx, dy = (x, y) if relative else (0.0, 0.0)
+        if upper == "L":
+            return self._point(dx + args[0], dy + args[1])
+        if upper == "H":
+            return self._point(dx + args[0], y)
+        return self._point(x, dy + args[0])
+
+    def _cubic(self, upper: str, origin: Point, args: list[float]) -> list[Point]:
+        ox, oy = origin
+        cur, last = self.cur, self.last_cubic
+        if upper == "C":
+            c1, rest = self._point(ox + args[0], oy + args[1], count=False), args[2:]
+        else:
+            c1 = (2 * cur[0] - last[0], 2 * cur[1] - last[1]) if last else cur
+            rest = args
+        c2 = self._point(ox + rest[0], oy + rest[1], count=False)
+        end = self._point(ox + rest[2], oy + rest[3], count=False)  # counted in the pieces
+        self._count(cubic_pieces(cur, c1, c2, end, self.tolerance))
+        self.last_cubic, self.last_quad = c2, None
+        return flatten_cubic(cur, c1, c2, end, self.tolerance)
+
+    def _quadratic(self, upper: str, origin: Point, args: list[float]) -> list[Point]:
+        ox, oy = origin
+        cur, last = self.cur, self.last_quad
+        if upper == "Q":
+            c1 = self._point(ox + args[0], oy + args[1], count=False)
+            end = self._point(ox + args[2], oy + args[3], count=False)  # counted in the pieces
+        else:
+            c1 = (2 * cur[0] - last[0], 2 * cur[1] - last[1]) if last else cur
+            end = self._point(ox + args[0], oy + args[1], count=False)
+        self._count(quadratic_pieces(cur, c1, end, self.tolerance))
+        self.last_cubic, self.last_quad = None, c1
+        return flatten_quadratic(cur, c1, end, self.tolerance)
+
+    def finish(self) -> tuple[Contour, ...]:
+        self._check_waiting()
+        _close(self.points, self.contours)
+        if not self.contours:
+            raise SceneError(
+                f"{self.where}: the path encloses nothing (no subpath with 3 vertices)"
+            )
+        return tuple(self.contours)

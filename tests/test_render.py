@@ -498,7 +498,7 @@ BAD_COMMANDS = [
     ([], "give a scene file or --builtin NAME"),
     (["x.json", "--builtin", "text"], "give a scene file or --builtin NAME"),
     (["--builtin", "circle"], "invalid choice: 'circle'"),
-    (["--builtin", "text", "-o", "out.jpg"], "the output must be a .png file"),
+    (["--builtin", "text", "-o", "out.jpg"], "unsupported format (allowed: .png)"),
     (["--builtin", "text", "--compare"], "--compare needs -o FIGURE.png"),
     (["--builtin", "text", "--engine", "spice"], "invalid choice: 'spice'"),
     (["/nonexistent/scene.json"], "cannot read scene /nonexistent/scene.json"),
