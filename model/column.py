@@ -39,6 +39,17 @@ def width_error(name: str, value: int, width: RegisterWidth) -> WidthError:
     )
 
 
+def pick_by_select(select, index, values):
+    """``values[index]`` for an index that is an int, or (with `select`) an array or a value:
+    a chain of selects on ``index == j``."""
+    if isinstance(index, int):
+        return values[index]
+    out = values[0]
+    for j in range(1, len(values)):
+        out = select(index == j, values[j], out)
+    return out
+
+
 class IntArith:
     """Python ints and bools; `check` raises `WidthError` for a value that does not fit."""
 
@@ -86,12 +97,7 @@ class ArrayArith:
 
     @staticmethod
     def pick(index, values):
-        if isinstance(index, int):
-            return values[index]
-        out = values[0]
-        for j in range(1, len(values)):
-            out = np.where(index == j, values[j], out)
-        return out
+        return pick_by_select(np.where, index, values)
 
     def check(self, name: str, values, where=True):
         picked = values if where is True else np.asarray(values)[where]

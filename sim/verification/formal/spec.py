@@ -12,7 +12,7 @@ import types
 from amaranth.hdl import Mux, Value
 from amaranth.lib import data
 
-from ....model.column import advance, column_areas, output_value
+from ....model.column import advance, column_areas, output_value, pick_by_select
 from ....model.config import EdgeConfig, RegisterWidth
 from ....model.edge import fold as model_fold
 from ....model.edge import window as model_window
@@ -80,12 +80,7 @@ class HdlArith:
 
     @staticmethod
     def pick(index, values):
-        if isinstance(index, int):
-            return values[index]
-        out = values[0]
-        for j in range(1, len(values)):
-            out = Mux(index == j, values[j], out)
-        return out
+        return pick_by_select(Mux, index, values)
 
     def check(self, name: str, value, where=True):
         group = self.GROUPS.get(name)
