@@ -44,7 +44,7 @@ import numpy as np
 from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.step import WidthError
-from ..model.vector import run_edges
+from ..model.vector import chunked, run_edges
 from .evaluate import BOUND_PER_K
 from .geometry import column_index, exact_coverage_pixels, pixel_keys
 from .report import fmt_float, pyplot, save, table
@@ -140,17 +140,13 @@ class WriteCheck:
 
 
 def _chunks(config: EdgeConfig, edges: list[Edge]) -> list[list[Edge]]:
-    chunks, chunk, states = [], [], 0
-    for edge in edges:
-        du = max(abs(edge.x1 - edge.x0), abs(edge.y1 - edge.y0))
-        chunk.append(edge)
-        states += du // config.subpixel_scale + 2
-        if states >= MAX_STATES:
-            chunks.append(chunk)
-            chunk, states = [], 0
-    if chunk:
-        chunks.append(chunk)
-    return chunks
+    """Batches of about MAX_STATES column states (an edge steps at most du / S + 2)."""
+    scale = config.subpixel_scale
+
+    def states(edge: Edge) -> int:
+        return max(abs(edge.x1 - edge.x0), abs(edge.y1 - edge.y0)) // scale + 2
+
+    return chunked(edges, states, MAX_STATES)
 
 
 def check_writes(config: EdgeConfig, edges: list[Edge]) -> WriteCheck:

@@ -220,19 +220,25 @@ def _fits_int64(st: EdgeSetup) -> bool:
     return u_last <= INT64_U_LIMIT and st.ifix <= INT64_IFIX_LIMIT
 
 
-def _chunks(setups: Sequence[EdgeSetup], group: list[int]) -> list[list[int]]:
-    """Split a group of edges into runs of about CHUNK_STATES column states (cache-sized
-    arrays: several times faster than one huge batch)."""
-    chunks, chunk, states = [], [], 0
-    for k in group:
-        chunk.append(k)
-        states += setups[k].columns + 1
-        if states >= CHUNK_STATES:
+def chunked(items: Sequence, weight, limit: int) -> list[list]:
+    """Split `items` into runs whose `weight` adds up to about `limit` each (each run closes
+    once it reaches the limit)."""
+    chunks, chunk, total = [], [], 0
+    for item in items:
+        chunk.append(item)
+        total += weight(item)
+        if total >= limit:
             chunks.append(chunk)
-            chunk, states = [], 0
+            chunk, total = [], 0
     if chunk:
         chunks.append(chunk)
     return chunks
+
+
+def _chunks(setups: Sequence[EdgeSetup], group: list[int]) -> list[list[int]]:
+    """Split a group of edges into runs of about CHUNK_STATES column states (cache-sized
+    arrays: several times faster than one huge batch)."""
+    return chunked(group, lambda k: setups[k].columns + 1, CHUNK_STATES)
 
 
 def _divmod(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
