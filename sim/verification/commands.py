@@ -9,10 +9,13 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from ...hdl.layouts import edge_layout
 from ...model import Clip, Edge, EdgeConfig
 from ...model.edge import validate_clip
 
-EDGE_FIELDS = ("x0", "y0", "x1", "y1", "i_in", "i_out", "inside")  # edges.payload
+# The ``edges`` payload's fields in port order (the core's `edge_layout`; widths aside, the
+# same in every configuration).
+EDGE_FIELDS = tuple(str(name) for name, _ in edge_layout(EdgeConfig()))
 CLIP_FIELDS = Clip._fields  # clip: x_min, y_min, x_max, y_max
 COMMAND_FIELDS = EDGE_FIELDS + CLIP_FIELDS  # a command file row
 
