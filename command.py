@@ -102,22 +102,21 @@ def decimal(text: str) -> Fraction:
         return Fraction(0)
     power = int(exponent[1:])
     if abs(power) > MAX_EXPONENT:
-        raise ValueError(f"{shown(text)} is out of range (exponents up to +-{MAX_EXPONENT})")
+        raise ValueError(f"= {shown(text)} is out of range (exponents up to +-{MAX_EXPONENT})")
     return Fraction(text)
 
 
-def integer_type(lo: int, hi: int):
-    """An argparse type: an integer in [lo, hi], its digits read only when they are few."""
+def integer_type(lo: int | None = None, hi: int | None = None):
+    """An argparse type: an integer (in [lo, hi] when given), read only when it is short."""
+    allowed = "an integer" if lo is None else f"an integer in [{lo}, {hi}]"
 
     def parse(text: str) -> int:
         text = text.strip()
-        if not re.fullmatch(r"[+-]?\d{1,30}", text):
-            raise argparse.ArgumentTypeError(
-                f"must be an integer in [{lo}, {hi}], not {shown(text)}"
-            )
+        if not re.fullmatch(r"[+-]?\d{1,18}", text):
+            raise argparse.ArgumentTypeError(f"must be {allowed}, not {shown(text)}")
         value = int(text)
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be an integer in [{lo}, {hi}], not {value}")
+        if lo is not None and not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be {allowed}, not {value}")
         return value
 
     parse.__name__ = "integer"
@@ -130,14 +129,19 @@ def number_type(lo: float, hi: float):
     def parse(text: str) -> float:
         try:
             value = decimal(text)
-        except ValueError as error:
-            raise argparse.ArgumentTypeError(str(error)) from None
-        if not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be in [{lo:g}, {hi:g}], not {shown(text)}")
+        except ValueError:
+            value = None
+        if value is None or not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(
+                f"must be a number in [{lo:g}, {hi:g}], not {shown(text)}"
+            )
         return float(value)
 
     parse.__name__ = "number"
     return parse
+
+
+INTEGER = integer_type()  # the model checks the range and names it
 
 
 # -- output files ----------------------------------------------------------------------------
@@ -234,28 +238,28 @@ def add_config_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("configuration (shared by the model and the hardware)")
     group.add_argument(
         "--coord-bits",
-        type=int,
+        type=INTEGER,
         default=11,
         help=f"integer bits of a vertex coordinate, {COORD_BITS_RANGE[0]}-{COORD_BITS_RANGE[1]}"
         " (default 11: vertices in [0, 2048) px)",
     )
     group.add_argument(
         "--subpixel-bits",
-        type=int,
+        type=INTEGER,
         default=4,
         help=f"fractional bits of a vertex coordinate, {SUBPIXEL_BITS_RANGE[0]}-"
         f"{SUBPIXEL_BITS_RANGE[1]} (default 4: 1/16 px steps)",
     )
     group.add_argument(
         "--intensity-bits",
-        type=int,
+        type=INTEGER,
         default=8,
         help=f"bits of an output intensity, {INTENSITY_BITS_RANGE[0]}-{INTENSITY_BITS_RANGE[1]}"
         " (default 8)",
     )
     group.add_argument(
         "--frac-bits",
-        type=int,
+        type=INTEGER,
         default=None,
         help="fraction bits of the accumulator below one intensity LSB "
         "(default: derived from the error budget, see docs/model.md)",

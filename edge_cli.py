@@ -6,10 +6,24 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
+from pathlib import Path
 
-from .command import Command, add_config_options, config_from_args, usage_error
-from .model import MODES, Clip, Edge, EdgeConfig, run_edge
+from .command import (
+    INTEGER,
+    Command,
+    ProgressBar,
+    add_config_options,
+    atomic_output,
+    check_output,
+    config_from_args,
+    decimal,
+    integer_type,
+    shown,
+    usage_error,
+)
+from .model import MODES, Clip, Edge, EdgeConfig, EdgeError, run_edge
 from .model.reference import error_bound, exact_coverage_array
 
 
@@ -33,12 +47,14 @@ class EdgeCommand(Command):
             "inside and gets I_in (default left)",
         )
         parser.add_argument(
-            "--i-in", type=int, default=None, help="inside intensity (default full)"
+            "--i-in", type=INTEGER, default=None, help="inside intensity (default full)"
         )
-        parser.add_argument("--i-out", type=int, default=0, help="outside intensity (default 0)")
+        parser.add_argument(
+            "--i-out", type=INTEGER, default=0, help="outside intensity (default 0)"
+        )
         parser.add_argument(
             "--clip",
-            type=int,
+            type=INTEGER,
             nargs=4,
             metavar=("XMIN", "YMIN", "XMAX", "YMAX"),
             help="clip window in whole pixels, bounds included: only the columns whose "
@@ -51,10 +67,7 @@ class EdgeCommand(Command):
         config = config_from_args(args)
         edge = Edge.from_pixels(
             config,
-            args.x0,
-            args.y0,
-            args.x1,
-            args.y1,
+            *(_coordinate(name, getattr(args, name.lower())) for name in ("X0", "Y0", "X1", "Y1")),
             inside=args.inside,
             i_in=args.i_in,
             i_out=args.i_out,
@@ -76,7 +89,22 @@ class EdgeCommand(Command):
         return 0
 
 
+def _coordinate(name: str, text: str) -> str:
+    """The coordinate argument, once it is known to be a decimal that is cheap to read
+    (`Fraction('0e1000000000')` would take hours)."""
+    try:
+        value = decimal(text)
+    except ValueError as error:
+        raise EdgeError(f"{name} {error}") from None
+    return text.strip() if value else "0"  # the model quotes the text in its messages
+
+
 # -- edgeaa demo ---------------------------------------------------------------------------
+
+
+MAX_SPOKES = 4096  # the demo is meant to take seconds
+PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+VERILOG_SUFFIXES = (".v", ".sv")
 
 
 def starburst(config: EdgeConfig, spokes: int = 64, radius: float = 40.0) -> list[Edge]:
@@ -106,14 +134,23 @@ class DemoCommand(Command):
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--spokes", type=int, default=64, help="edges in the starburst")
-        parser.add_argument("-o", "--output", help="also plot error against direction to this file")
+        parser.add_argument(
+            "--spokes",
+            type=integer_type(1, MAX_SPOKES),
+            default=64,
+            help=f"edges in the starburst (1 to {MAX_SPOKES})",
+        )
+        parser.add_argument(
+            "-o",
+            "--output",
+            help="also plot error against direction to this file (.png, .svg, .pdf)",
+        )
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
-        if args.spokes < 1:
-            raise usage_error(self.prog, f"--spokes must be at least 1, not {args.spokes}")
         base = config_from_args(args)
+        if args.output:
+            check_output(self.prog, args.output, PLOT_SUFFIXES)
         edges = starburst(base, spokes=args.spokes)
         print(f"edgeaa demo: {len(edges)} starburst edges, every mode against the exact area")
         print(f"{'mode':6} {'writes':>7} {'max |err|':>10} {'max err/k':>10} {'bound/k':>10}")
@@ -121,7 +158,8 @@ class DemoCommand(Command):
         for mode in MODES:
             per_mode[mode] = _demo_mode(base.with_(mode=mode), edges)
         if args.output:
-            _plot_demo(per_mode, args.output)
+            with atomic_output(self.prog, args.output) as temporary:
+                _plot_demo(per_mode, temporary)
             print(f"wrote {args.output}")
         return 0
 
@@ -188,7 +226,9 @@ class VerilogCommand(Command):
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("-o", "--output", help="output file (default: standard output)")
+        parser.add_argument(
+            "-o", "--output", help="output file, .v or .sv (default: standard output)"
+        )
         parser.add_argument("--name", default="edgeaa_core", help="top module name")
         add_config_options(parser)
 
@@ -196,12 +236,20 @@ class VerilogCommand(Command):
         from .hdl import verilog
 
         config = config_from_args(args)
+        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_$]{0,63}", args.name):
+            raise usage_error(
+                self.prog,
+                f"--name must be a Verilog identifier (a letter or _, then letters, digits, _ "
+                f"or $; at most 64), not {shown(args.name)}",
+            )
+        if args.output not in (None, "-"):
+            check_output(self.prog, args.output, VERILOG_SUFFIXES)
         source = verilog(config, name=args.name)
         if args.output in (None, "-"):
             sys.stdout.write(source)
         else:
-            with open(args.output, "w") as file:
-                file.write(source)
+            with atomic_output(self.prog, args.output) as temporary:
+                Path(temporary).write_text(source)
             print(f"wrote {args.output}: module {args.name}, {config}", file=sys.stderr)
         return 0
 
@@ -225,7 +273,12 @@ class SynthCommand(Command):
             default=["ice40", "ecp5"],
             help="FPGA families (default both)",
         )
-        parser.add_argument("--seed", type=int, default=1, help="nextpnr placement seed")
+        parser.add_argument(
+            "--seed",
+            type=integer_type(0, 2**31 - 1),
+            default=1,
+            help="nextpnr placement seed (default 1)",
+        )
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
@@ -243,10 +296,14 @@ class SynthCommand(Command):
         print("both cores inside the same I/O harness; figures are the core's (harness subtracted)")
         print(f"{'target':7} {'design':10} {'LUT4':>6} {'FF':>6} {'Fmax MHz':>9}")
         results = {}
-        for target in args.target:
+        targets = list(dict.fromkeys(args.target))  # `--target ice40 ice40` runs it once
+        bar = ProgressBar("synth", total=len(targets) * len(designs), delay=0.0)
+        for target in targets:
             for name, make in designs.items():
-                print(f"  ... {target} {name}", file=sys.stderr, flush=True)
-                result = synthesize(make(), target, wrap=True, seed=args.seed)
+                with bar.ticking(f"{target} {name}"):
+                    result = synthesize(make(), target, wrap=True, seed=args.seed)
+                bar.step()
+                bar.close()  # the row goes to stdout on a line of its own
                 results[target, name] = result
                 print(
                     f"{target:7} {name:10} {result.core_luts:6d} {result.core_ffs:6d} "

@@ -6,27 +6,40 @@ They register themselves (`edgeaa.command.Command`) when this module is imported
 from __future__ import annotations
 
 import argparse
-import os
 
-from ..command import Command, add_config_options, config_from_args, usage_error
+from ..command import (
+    Command,
+    add_config_options,
+    atomic_output,
+    check_output,
+    config_from_args,
+    integer_type,
+    number_type,
+    shown,
+    usage_error,
+)
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+# Upper bounds that keep each job to minutes, not days (every default is far below them).
+MAX_OFFSETS = 1024
+MAX_EDGES = 100_000
+MAX_REPEATS = 100
+SEED = integer_type(0, 2**32 - 1)  # numpy's seed range
 
 
 def _check_output(prog: str, path: str) -> None:
-    if not path.lower().endswith(PLOT_SUFFIXES):
-        raise usage_error(prog, f"-o {path}: the plot must be a {', '.join(PLOT_SUFFIXES)} file")
-    directory = os.path.dirname(path)
-    if directory and not os.path.isdir(directory):
-        raise usage_error(prog, f"-o {path}: directory {directory} does not exist")
+    check_output(prog, path, PLOT_SUFFIXES)
 
 
 def _int_list(prog: str, option: str, text: str, lo: int, hi: int) -> tuple[int, ...]:
     try:
-        values = tuple(int(v) for v in text.split(",") if v.strip())
+        parts = [v for v in text.split(",") if v.strip()]
+        if any(len(v.strip()) > 6 for v in parts) or len(parts) > 64:
+            raise ValueError
+        values = tuple(dict.fromkeys(int(v) for v in parts))  # once each, in order
     except ValueError:
         raise usage_error(
-            prog, f"{option} must be integers separated by commas, not {text!r}"
+            prog, f"{option} must be integers separated by commas, not {shown(text)}"
         ) from None
     if not values:
         raise usage_error(prog, f"{option} must list at least one value")
@@ -64,9 +77,21 @@ class PlotCommand(Command):
             default="error_vs_slope.png",
             help="plot file (.png, .svg or .pdf; default error_vs_slope.png)",
         )
-        slope.add_argument("--step", type=float, default=1.0, help="angle step in degrees (1)")
-        slope.add_argument("--length", type=int, default=64, help="edge length in px (64)")
-        slope.add_argument("--offsets", type=int, default=64, help="sub-pixel start offsets (64)")
+        slope.add_argument(
+            "--step",
+            type=number_type(0.01, 45),
+            default=1.0,
+            help="angle step in degrees, 0.01 to 45 (1)",
+        )
+        slope.add_argument(
+            "--length", type=integer_type(4, 1 << 16), default=64, help="edge length in px (64)"
+        )
+        slope.add_argument(
+            "--offsets",
+            type=integer_type(1, MAX_OFFSETS),
+            default=64,
+            help=f"sub-pixel start offsets, 1 to {MAX_OFFSETS} (64)",
+        )
         slope.add_argument(
             "--no-peers", dest="peers", action="store_false", help="leave out Skia and AGG"
         )
@@ -84,10 +109,6 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
 
     config = config_from_args(args)
     _check_output(SLOPE_PROG, args.output)
-    if not 0 < args.step <= 45:
-        raise usage_error(SLOPE_PROG, f"--step must be in (0, 45] degrees, not {args.step}")
-    if args.offsets < 1:
-        raise usage_error(SLOPE_PROG, f"--offsets must be at least 1, not {args.offsets}")
     need = 2 + 1 + args.length
     if args.length < 4 or need > (1 << config.coord_bits) - 1:
         raise usage_error(
@@ -110,7 +131,8 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
         f"sub-pixel offsets, {args.length} px), {sweep.pixels} pixels; config {config}"
     )
     print(slope.sweep_table(sweep))
-    slope.plot_sweep(sweep, args.output)
+    with atomic_output(SLOPE_PROG, args.output) as temporary:
+        slope.plot_sweep(sweep, temporary)
     return 0
 
 
@@ -140,12 +162,15 @@ class BenchCommand(Command):
             help="skip synthesis for the LUT and Fmax columns (about a minute per mode, cached)",
         )
         parser.add_argument(
-            "--edges", type=int, default=None, help="random edges (default 1000, --quick 60)"
+            "--edges",
+            type=integer_type(1, MAX_EDGES),
+            default=None,
+            help=f"random edges, 1 to {MAX_EDGES:,} (default 1000, --quick 60)",
         )
-        parser.add_argument("--seed", type=int, default=1, help="random seed (1)")
+        parser.add_argument("--seed", type=SEED, default=1, help="random seed (1)")
         parser.add_argument(
             "--repeats",
-            type=int,
+            type=integer_type(1, MAX_REPEATS),
             default=None,
             help="timed runs per method, minimum kept (default 5, --quick 2)",
         )
@@ -176,10 +201,6 @@ class BenchCommand(Command):
             if args.repeats is not None
             else (bench.QUICK_REPEATS if quick else bench.DEFAULT_REPEATS)
         )
-        if count < 1:
-            raise usage_error(self.prog, f"--edges must be at least 1, not {count}")
-        if repeats < 1:
-            raise usage_error(self.prog, f"--repeats must be at least 1, not {repeats}")
         if config.coord_bits < 6:
             raise usage_error(self.prog, "--coord-bits must be at least 6 (edges of up to 200 px)")
         result = bench.run_bench(
@@ -194,7 +215,8 @@ class BenchCommand(Command):
         )
         print(machine_line())
         print(bench.bench_tables(result))
-        bench.plot_pareto(result, args.output)
+        with atomic_output(self.prog, args.output) as temporary:
+            bench.plot_pareto(result, temporary)
         return 0
 
 
@@ -225,13 +247,15 @@ class StressCommand(Command):
             "--intensities",
             help="intensity bits I for the F table, e.g. 4,8 (default 4,8,12,16; --quick 4,8)",
         )
-        parser.add_argument("--subpixel-bits", type=int, default=4, help="sub-pixel bits s (4)")
         parser.add_argument(
-            "--plot-coord-bits", type=int, default=11, help="W of the drift curves (11)"
+            "--subpixel-bits", type=integer_type(), default=4, help="sub-pixel bits s (4)"
+        )
+        parser.add_argument(
+            "--plot-coord-bits", type=integer_type(), default=11, help="W of the drift curves (11)"
         )
         parser.add_argument(
             "--plot-intensity-bits",
-            type=int,
+            type=integer_type(),
             default=8,
             help="I of the drift curves and of the bound check (8)",
         )
@@ -270,7 +294,8 @@ class StressCommand(Command):
         )
         curves = stress.drift_curves(args.plot_coord_bits, s, plot_i)
         shallow = stress.length_curves(args.plot_coord_bits, s, plot_i)
-        stress.plot_stress(curves, shallow, safe, plot_config, args.output)
+        with atomic_output(self.prog, args.output) as temporary:
+            stress.plot_stress(curves, shallow, safe, plot_config, temporary)
         return 0
 
     def _check(self, args: argparse.Namespace) -> tuple[tuple[int, ...], tuple[int, ...]]:

@@ -74,7 +74,7 @@ def test_edge_clip_reaches_the_model(capsys):
         (["edge", "0", "0", "3", "1", "--frac-bits", "3"], "frac_bits must be in [6, 48]"),
         (["edge", "0", "0", "3", "1", "--i-in", "300"], "I_in must be an integer in [0, 255]"),
         (["edge", "0", "0", "3", "1", "--i-in", "0"], "I_in equals I_out"),
-        (["edge", "0", "0", "x", "1"], "X1 must be a number"),
+        (["edge", "0", "0", "x", "1"], "X1 must be a decimal number"),
         (["edge", "0", "0", "3", "1", "--clip", "0", "0", "3000", "9"], "clip x_max must be"),
         (["edge", "0", "0"], "required"),
         (["nonsense"], "invalid choice"),
@@ -204,3 +204,139 @@ def test_a_step_progress_bar_ends_its_line_on_a_terminal(monkeypatch):
     bar.step("second")
     text = stream.getvalue()
     assert text.count("\r") == 2 and "100.0% (2/2, " in text and text.endswith(" s)\n")
+
+
+# -- robustness: every bad input one line with status 2, nothing half-written ---------------
+
+HUGE = "9" * 5000
+
+
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["edge", "0", "0", "inf", "1"], "X1 must be a decimal number"),
+        (["edge", "0", "0", "nan", "1"], "X1 must be a decimal number"),
+        (["edge", "0", "0", "1e309", "1"], "out of range (exponents up to +-60)"),
+        (["edge", "0", "0", "1e40", "1"], "outside the configured range"),
+        (["edge", "0", "0", "1e-1000000000", "1"], "out of range"),
+        (["edge", "0", "0", HUGE, "1"], "at most 60 characters"),
+        (["edge", "0", "0", "3", "1", "--clip", "0", "0", HUGE, "9"], "(5002 characters)"),
+        (["edge", "0", "0", "3", "1", "--coord-bits", HUGE], "must be an integer"),
+        (["edge", "0", "0", "3", "1", "--inside", "left", "--inside", "right"], "given twice"),
+        (["demo", "--spokes", "1000000000"], "must be an integer in [1, 4096]"),
+        (["plot", "error-vs-slope", "--step", "1e-300"], "must be a number in [0.01, 45]"),
+        (["plot", "error-vs-slope", "--step", "nan"], "must be a number in [0.01, 45]"),
+        (["bench", "--seed", "-1"], "must be an integer in [0, 4294967295]"),
+        (["verilog", "--name", "a b"], "--name must be a Verilog identifier"),
+        (["verilog", "-o", "/dev/full"], "unsupported format (allowed: .v, .sv)"),
+        ([], "give a command (edge, demo"),
+    ],
+)
+def test_hostile_arguments_are_one_line_errors(capsys, argv, fragment):
+    status, out, err = run_cli(capsys, *argv)
+    assert (status, out) == (2, "")
+    assert fragment in err and err.count("\n") == 1 and len(err) < 300, err
+
+
+def test_an_exponent_of_a_billion_on_zero_is_zero_and_quick(capsys):
+    # Fraction("0e1000000000") would compute 10**1000000000: the argument is read first.
+    status, out, _ = run_cli(capsys, "edge", "0e1000000000", "0", "3", "1", "--json")
+    assert status == 0
+    assert json.loads(out) == json.loads(run_cli(capsys, "edge", "0", "0", "3", "1", "--json")[1])
+
+
+def test_output_checks_come_before_the_work(capsys, tmp_path):
+    folder = tmp_path / "figures"
+    folder.mkdir()
+    cases = [
+        (["verilog", "-o", str(folder)], "unsupported format"),
+        (["verilog", "-o", str(tmp_path / "missing" / "core.v")], "does not exist"),
+        (["demo", "-o", str(tmp_path / "demo.gif")], "unsupported format"),
+        (["plot", "error-vs-slope", "-o", str(tmp_path / "x" / "p.png")], "does not exist"),
+    ]
+    (tmp_path / "dir.v").mkdir()
+    cases.append((["verilog", "-o", str(tmp_path / "dir.v")], "is a directory"))
+    for argv, fragment in cases:
+        status, _, err = run_cli(capsys, *argv)
+        assert status == 2 and fragment in err and err.count("\n") == 1, (argv, err)
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_temporary(capsys, tmp_path, monkeypatch):
+    from pathlib import Path
+
+    from edgeaa import edge_cli
+
+    class FullDisk(type(Path())):
+        def write_text(self, text):
+            with open(self, "w") as file:
+                file.write(text[:1000])  # half the core, then the disk is full
+            raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(edge_cli, "Path", FullDisk)
+    target = tmp_path / "core.v"
+    target.write_text("the previous core\n")
+    status, _, err = run_cli(capsys, "verilog", "-o", str(target))
+    assert status == 2 and "cannot write" in err and "No space left on device" in err
+    assert target.read_text() == "the previous core\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["core.v"]
+
+
+def test_atomic_output_renames_only_on_success(tmp_path):
+    from pathlib import Path
+
+    from edgeaa.command import UsageError, atomic_output
+
+    target = tmp_path / "out.png"
+    target.write_bytes(b"old")
+    with pytest.raises(RuntimeError), atomic_output("edgeaa test", str(target)) as temporary:
+        Path(temporary).write_bytes(b"half")
+        raise RuntimeError("killed half way")
+    assert target.read_bytes() == b"old" and len(list(tmp_path.iterdir())) == 1
+    with atomic_output("edgeaa test", str(target)) as temporary:
+        Path(temporary).write_bytes(b"new")
+    assert target.read_bytes() == b"new" and len(list(tmp_path.iterdir())) == 1
+    missing = str(tmp_path / "gone" / "x.png")
+    with pytest.raises(UsageError, match="cannot write"), atomic_output("edgeaa test", missing):
+        pass
+
+
+def test_a_closed_pipe_ends_quietly():
+    program = "import sys; from edgeaa.cli import main; sys.exit(main(sys.argv[1:]))"
+    proc = subprocess.Popen(
+        [sys.executable, "-c", program, "edge", "0", "0", "2000", "1"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    proc.stdout.readline()
+    proc.stdout.close()  # as `| head -1` does
+    err = proc.stderr.read().decode()
+    proc.stderr.close()
+    assert proc.wait() == 141 and err == "", err
+
+
+def test_a_full_disk_on_stdout_is_one_line():
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run(
+            [sys.executable, "-m", "edgeaa", "edge", "0", "0", "2000", "1"],
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            check=False,
+        )
+    assert proc.returncode == 2
+    assert proc.stderr == "edgeaa: error: cannot write the output: No space left on device\n"
+
+
+def test_a_ticking_bar_shows_a_step_without_counts(monkeypatch):
+    import io
+    import time
+
+    from edgeaa import command
+
+    monkeypatch.setattr(command, "EVERY", 0.01)
+    stream = io.StringIO()
+    bar = command.ProgressBar("synth", total=2, stream=stream, delay=0.0)
+    with bar.ticking("ice40 edgeaa"):
+        time.sleep(0.3)  # a tool that reports nothing: the bar still moves (not a tty: 0.1 s)
+    lines = stream.getvalue().splitlines()
+    assert len(lines) >= 2 and all("ice40 edgeaa" in line and "(0/2, " in line for line in lines)
