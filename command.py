@@ -48,10 +48,11 @@ class OneLineErrorParser(argparse.ArgumentParser):
     def error(self, message):
         raise usage_error(self.prog, message)
 
-    def add_argument(self, *args, **kwargs):
-        if args and args[0].startswith("-") and kwargs.get("action", "store") == "store":
-            kwargs["action"] = StoreOnce
-        return super().add_argument(*args, **kwargs)
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # The registry is shared with argument groups: their options are checked too.
+        self.register("action", None, StoreOnce)
+        self.register("action", "store", StoreOnce)
 
 
 class StoreOnce(argparse.Action):
@@ -149,11 +150,11 @@ INTEGER = integer_type()  # the model checks the range and names it
 
 def check_output(prog: str, path: str, suffixes: tuple[str, ...], inputs=()) -> None:
     """Refuse, before any work, an output that cannot be written or would replace an input."""
+    if os.path.isdir(path):
+        raise usage_error(prog, f"-o {shown(path)} is a directory; give a file name")
     if not path.lower().endswith(suffixes):
         allowed = ", ".join(suffixes)
         raise usage_error(prog, f"-o {shown(path)}: unsupported format (allowed: {allowed})")
-    if os.path.isdir(path):
-        raise usage_error(prog, f"-o {shown(path)} is a directory; give a file name")
     directory = os.path.dirname(path) or "."
     if not os.path.isdir(directory):
         raise usage_error(prog, f"-o {shown(path)}: directory {shown(directory)} does not exist")

@@ -249,7 +249,7 @@ def test_output_checks_come_before_the_work(capsys, tmp_path):
     folder = tmp_path / "figures"
     folder.mkdir()
     cases = [
-        (["verilog", "-o", str(folder)], "unsupported format"),
+        (["verilog", "-o", str(folder)], "is a directory"),
         (["verilog", "-o", str(tmp_path / "missing" / "core.v")], "does not exist"),
         (["demo", "-o", str(tmp_path / "demo.gif")], "unsupported format"),
         (["plot", "error-vs-slope", "-o", str(tmp_path / "x" / "p.png")], "does not exist"),

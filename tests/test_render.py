@@ -538,3 +538,129 @@ def test_the_example_in_the_docs_renders(tmp_path):
     assert result.image.shape == (40, 64) and len(result.sent) > 0
     rows = {r.label: r for r in error_rows(result, exact_image(result.plan))}
     assert rows["one edge"].max_abs <= 8 and rows["fill only"].max_abs == 0
+
+
+# -- errors and limits (docs/scenes.md) ------------------------------------------------------
+
+
+def _render_file(tmp_path, capsys, content: bytes, *options):
+    scene = tmp_path / "scene.json"
+    scene.write_bytes(content)
+    status = main(["render", str(scene), "--quiet", *options])
+    return status, capsys.readouterr().err
+
+
+SQUARE = {"points": [[1, 1], [9, 1], [9, 9], [1, 9]]}
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"\xff\xfe{}", "not UTF-8 text (byte 0xff at offset 0)"),
+        (b"[" * 100000 + b"]" * 100000, "JSON nested too deeply"),
+        (b'{"width": 8, "width": 9, "height": 8, "polygons": []}', "key 'width' appears twice"),
+        (b'{"width": NaN, "height": 8, "polygons": []}', "NaN is not allowed"),
+        (b'{"width": 1e400, "height": 8, "polygons": []}', "'1e400' is beyond the range"),
+        (b'{"width": ' + b"1" * 5000 + b', "height": 8, "polygons": []}', "more than 30 digits"),
+        (b'{"width": 65536, "height": 65536, "polygons": []}', "more than the limit of 16,777,216"),
+        (b'{"width": 8, "height": 8, "tolerance": 1e-9, "polygons": []}', "below the limit"),
+    ],
+)
+def test_bad_scene_files_are_one_line_errors(tmp_path, capsys, content, message):
+    status, err = _render_file(tmp_path, capsys, content)
+    assert status == 2 and message in err and err.count("\n") == 1, err
+
+
+@pytest.mark.parametrize(
+    ("polygon", "message"),
+    [
+        ({"points": [[0, 0], [1, [1]], [2, 0]]}, "vertex 1 y must be a number, not [1]"),
+        ({"points": [[0, 0], [1e300, 0], [2, 2]]}, "beyond the limit of +-1,048,576 px"),
+        ({**SQUARE, "fill_rule": ["evenodd"]}, "unknown fill_rule ['evenodd']"),
+        ({"path": "M 0 0 L 8 0 L 8 8 L"}, "command 'L' at position 18 needs 2 numbers"),
+        ({"path": "M 0 0 L 8 0 L M 8 8 Z"}, "command 'L' at position 12 needs 2 numbers"),
+        ({"path": "M 0 0 C 1e300 0 0 1e300 9 9 Z"}, "'1e300' at position 8 is beyond the limit"),
+        ({"path": "M 0 0 C 1e6 1e6 -1e6 -1e6 9 9 S 1e6 1e6 0 0"}, "limit of 10,000 edges"),
+        ({"path": "M 0 0 " + "l 1 0 " * 10001 + "z"}, "more than the limit of 10,000 edges"),
+        ({"points": [[i % 7, i // 7] for i in range(10001)]}, "limit of 10,000 edges"),
+    ],
+)
+def test_bad_polygons_are_refused_with_the_limit(polygon, message):
+    with pytest.raises(SceneError) as error:
+        parse_scene({"width": 8, "height": 8, "polygons": [polygon]})
+    assert message in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_scene_past_the_edge_limit_is_refused_before_it_is_flattened():
+    from edgeaa.render.scene import MAX_EDGES, MAX_POLYGON_EDGES
+
+    ring = [[i % 2, i // 2] for i in range(MAX_POLYGON_EDGES)]
+    polygons = [{"points": ring}] * (MAX_EDGES // MAX_POLYGON_EDGES + 1)
+    with pytest.raises(SceneError, match="more than the limit of 200,000 edges per scene"):
+        parse_scene({"width": 8, "height": 8, "polygons": polygons})
+
+
+def test_svg_whitespace_includes_form_feed():
+    expected = parse_path("M 0 0 L 8 0 L 8 8 Z")
+    assert parse_path("M\f0\t0\nL\r8,0\f\fL 8 8Z") == expected
+
+
+def test_a_zero_length_segment_splits_nothing():
+    # It used to divide by zero (Fraction(0, 0)) on the collinear branch of _intersect.
+    square = np.array([[0, 0], [0, 0], [4, 0], [4, 4], [0, 4]], dtype=np.int64)
+    contours, inserted = split_crossings([square])
+    assert inserted == 0 and contours[0].tolist() == square.tolist()
+
+
+def test_a_huge_image_at_coord_bits_16_is_refused_before_allocating(tmp_path, capsys):
+    scene = {"width": 65536, "height": 65536, "polygons": [SQUARE]}
+    status, err = _render_file(tmp_path, capsys, json.dumps(scene).encode(), "--coord-bits", "16")
+    assert status == 2 and "4,294,967,296 pixels, more than the limit of 16,777,216" in err
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--crop", "0,0,4,4"], "--crop selects the pixels of the --compare figure"),
+        (["--compare", "--error", "-o", "f.png"], "--compare and --error cannot be combined"),
+        (["--stats", "--no-skip"], "--stats and --no-skip cannot be combined"),
+        (["--compare", "--engine", "verilator", "-o", "f.png"], "--engine does not apply"),
+        (["--mode", "seg4", "--mode", "paper"], "argument --mode: given twice"),
+        (["-o", "."], "is a directory"),
+        (["-o", "missing/out.png"], "directory 'missing' does not exist"),
+    ],
+)
+def test_conflicting_render_options_are_refused(tmp_path, capsys, monkeypatch, options, message):
+    monkeypatch.chdir(tmp_path)
+    scene = json.dumps({"width": 16, "height": 16, "polygons": [SQUARE]}).encode()
+    status, err = _render_file(tmp_path, capsys, scene, *options)
+    assert status == 2 and message in err and err.count("\n") == 1, err
+
+
+def test_the_output_may_not_be_the_input(tmp_path, capsys):
+    scene = tmp_path / "scene.png"  # a scene file with an image's name
+    scene.write_text(json.dumps({"width": 16, "height": 16, "polygons": [SQUARE]}))
+    before = scene.read_bytes()
+    assert main(["render", str(scene), "-o", str(tmp_path / "." / "scene.png")]) == 2
+    assert "is the input file" in capsys.readouterr().err and scene.read_bytes() == before
+
+
+def test_compare_refuses_a_scene_too_large_for_its_reference(tmp_path, capsys):
+    scene = json.dumps({"width": 512, "height": 512, "polygons": [SQUARE]}).encode()
+    status, err = _render_file(tmp_path, capsys, scene, "--compare", "-o", str(tmp_path / "f.png"))
+    assert status == 2 and "--compare: the image is 512 x 512" in err and "65,536" in err
+
+
+def test_a_png_that_fails_to_save_leaves_nothing(tmp_path, capsys, monkeypatch):
+    from edgeaa.render import cli as render_cli
+
+    def save_half(image, full_scale, intensity_bits, path):
+        with open(path, "wb") as file:
+            file.write(b"\x89PNG\r\n\x1a\n")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(render_cli, "write_png", save_half)
+    out = tmp_path / "out.png"
+    assert main(["render", "--builtin", "starburst", "--quiet", "-o", str(out)]) == 2
+    assert "cannot write" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
