@@ -52,25 +52,12 @@ from .layouts import (
     clip_layout,
     edge_layout,
     full_clip,
-    pixel_layout,
-    setup_layout,
     write_layout,
 )
 from .setup import ERRORS_BITS, EdgeSetupUnit
 from .stepper import EdgeStepper
 
-__all__ = [
-    "ERRORS_BITS",
-    "EdgeAntialiaser",
-    "EdgeSetupUnit",
-    "EdgeStepper",
-    "clip_layout",
-    "edge_layout",
-    "pixel_layout",
-    "setup_layout",
-    "verilog",
-    "write_layout",
-]
+__all__ = ["ERRORS_BITS", "EdgeAntialiaser", "verilog"]
 
 
 class EdgeAntialiaser(wiring.Component):
