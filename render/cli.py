@@ -203,6 +203,17 @@ def _compare(args: argparse.Namespace, scene, config, crop) -> int:
     return 0
 
 
+def _cause(error: Exception) -> str:
+    """One line for a simulator's failure: its first line, and the compiler's first error
+    when the first line only says that the build failed."""
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    if not lines:
+        return repr(error)
+    errors = [line for line in lines[1:] if "error" in line.lower()]
+    cause = (errors or lines[1:2] or [None])[0]
+    return f"{lines[0].rstrip(':')}: {cause}" if cause and lines[0].endswith(":") else lines[0]
+
+
 def _build_engine(engine: str, config, bar: ProgressBar) -> None:
     """Compile the Verilator harness first (cached; the first build takes half a minute), with
     the bar running, so that the engine's time is the simulation's alone."""
@@ -227,8 +238,7 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
             baseline = render_scene(plan, engine=args.engine, skip=False, progress=bar)
     except RuntimeError as error:  # a simulator failed to build or run
         bar.close()
-        first = str(error).strip().splitlines()[0] if str(error).strip() else repr(error)
-        print(f"{PROG}: error: the {args.engine} engine failed: {first}", file=sys.stderr)
+        print(f"{PROG}: error: the {args.engine} engine failed: {_cause(error)}", file=sys.stderr)
         return 1
     bar.close()
     run = result.engine_run

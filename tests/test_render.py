@@ -664,3 +664,15 @@ def test_a_png_that_fails_to_save_leaves_nothing(tmp_path, capsys, monkeypatch):
     assert main(["render", "--builtin", "starburst", "--quiet", "-o", str(out)]) == 2
     assert "cannot write" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_failed_build_is_one_line_with_its_cause():
+    from edgeaa.render.cli import _cause
+
+    log = "Verilator build failed:\nmake -C obj\n%Error: core.v:12:5: Signal too wide\nmake: *** 1"
+    assert (
+        _cause(RuntimeError(log)) == "Verilator build failed: %Error: core.v:12:5: Signal too wide"
+    )
+    assert _cause(RuntimeError("harness failed (139): \nSegmentation fault")) == (
+        "harness failed (139): Segmentation fault"
+    )
