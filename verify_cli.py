@@ -115,6 +115,8 @@ class VerifyCommand(Command):
             store = ShardStore(args.out, plan.manifest())
         except RunMismatch as error:
             raise usage_error(self.prog, str(error)) from None
+        except OSError as error:  # not a directory, no permission, ...
+            raise usage_error(self.prog, f"--out {args.out}: {error.strerror}") from None
         if not args.json:
             print(_heading(plan, workers, cluster, len(store.finished)))
         try:

@@ -348,6 +348,7 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
         (["--workers", "0", "--cluster", "local"], "--workers 0 runs in this process"),
         (["--engine", "icarus"], "invalid choice: 'icarus'"),
         (["--scenes"], "unrecognized arguments: --scenes"),
+        (["--out", "/dev/null/run"], "--out /dev/null/run: Not a directory"),
     ],
 )
 def test_bad_input_is_one_line_with_status_2(capsys, argv, message):
