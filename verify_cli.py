@@ -20,6 +20,9 @@ EXIT_MISMATCH = 1
 EXIT_INTERRUPTED = 130  # the shell's status for Ctrl-C
 DEFAULT_EDGES = 10_000
 DEFAULT_SEED = 1
+MAX_EDGES = 10**12  # a thousand times the 10^9: weeks on a large cluster
+# Processes on one machine: more only add memory (a cluster scales further, --cluster).
+MAX_WORKERS = 256
 
 
 class VerifyCommand(Command):
@@ -77,7 +80,8 @@ class VerifyCommand(Command):
             type=int,
             default=None,
             help="worker processes: of the local pool (default: all cores, "
-            f"{os.cpu_count()} here) or of --cluster local; 0 runs the shards in this process",
+            f"{os.cpu_count()} here) or of --cluster local, at most {MAX_WORKERS}; 0 runs the "
+            "shards in this process",
         )
         parser.add_argument(
             "--cluster",
@@ -142,8 +146,8 @@ class VerifyCommand(Command):
         from .sim.verification.regress import ADDRESS_VARIABLE, Plan
         from .sim.verification.shards import default_shards
 
-        if args.edges < 1:
-            raise usage_error(self.prog, f"--edges must be at least 1, not {args.edges}")
+        if not 1 <= args.edges <= MAX_EDGES:
+            raise usage_error(self.prog, f"--edges must be in [1, 10**12], not {args.edges}")
         if args.shard_seed is not None:
             if args.seed is not None or args.shards is not None:
                 raise usage_error(
@@ -161,9 +165,10 @@ class VerifyCommand(Command):
                 self.prog, f"--shards must be in [1, --edges = {args.edges}], not {shards}"
             )
         workers = (os.cpu_count() or 1) if args.workers is None else args.workers
-        if workers < 0:
+        if not 0 <= workers <= MAX_WORKERS:
             raise usage_error(
-                self.prog, f"--workers must be 0 (this process) or more, not {workers}"
+                self.prog,
+                f"--workers must be 0 (this process) to {MAX_WORKERS}, not {workers}",
             )
         cluster = args.cluster or os.environ.get(ADDRESS_VARIABLE) or None
         if cluster is not None and workers == 0:
@@ -188,7 +193,7 @@ def _run(plan, store, workers: int, cluster: str | None, *, quiet: bool) -> dict
 
 
 def _interrupted(plan, store, out: str | None) -> str:
-    finished = f"{len(store.finished)} of {len(plan.tasks())} shards finished"
+    finished = f"{len(store.finished)} of {plan.count} shards finished"
     if out is None:
         return f"{finished}, none recorded (give --out DIR to resume a run)"
     return f"{finished} and recorded in {out}; rerun the same command to finish"

@@ -42,7 +42,7 @@ from .shards import (
     check_shard,
     reproduce_shard,
     shard_seed,
-    shard_sizes,
+    shard_size,
 )
 
 MANIFEST = "run.json"
@@ -74,14 +74,19 @@ class Plan:
     engine: str = "verilator"
     shard_seed: int | None = None
 
-    def tasks(self) -> list[ShardTask]:
+    @property
+    def count(self) -> int:
+        """Shards in the plan."""
+        return 1 if self.shard_seed is not None else self.shards
+
+    def tasks(self) -> Iterator[ShardTask]:
+        """The shards in order, made as they are asked for (a plan may hold millions)."""
         if self.shard_seed is not None:
-            return [ShardTask(0, self.shard_seed, self.edges, self.config, self.engine)]
-        sizes = shard_sizes(self.edges, self.shards)
-        return [
-            ShardTask(index, shard_seed(self.seed, index), size, self.config, self.engine)
-            for index, size in enumerate(sizes)
-        ]
+            yield ShardTask(0, self.shard_seed, self.edges, self.config, self.engine)
+            return
+        for index in range(self.shards):
+            size = shard_size(self.edges, self.shards, index)
+            yield ShardTask(index, shard_seed(self.seed, index), size, self.config, self.engine)
 
     def manifest(self) -> dict:
         """Everything that decides the shards' edges and checks (not the workers)."""
@@ -334,7 +339,7 @@ def crash_result(task: ShardTask, error: BaseException) -> dict:
 def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = None) -> dict:
     """Run the shards `store` has not finished; return the merged summary. `progress(done,
     total, stage)` is called with edges (finished ones included) after each shard."""
-    tasks = [task for task in plan.tasks() if task.index not in store.finished]
+    tasks = (task for task in plan.tasks() if task.index not in store.finished)
     resumed = len(store.finished)
     fresh: list[dict] = []  # this session's shards, crashed ones included
     done = sum(record["edges"] for record in store.finished.values())
@@ -384,7 +389,7 @@ def summarize(plan: Plan, records: list[dict], fresh: list[dict], resumed: int, 
     mismatches = [m for record in records for m in record["mismatches"]]
     edges_run = sum(record["edges"] for record in fresh)
     return {
-        "passed": not mismatches and len(records) == len(plan.tasks()),
+        "passed": not mismatches and len(records) == plan.count,
         **plan.manifest(),
         "shards_done": len(records),
         "shards_resumed": resumed,

@@ -69,10 +69,10 @@ def default_shards(edges: int) -> int:
     return max(1, math.ceil(edges / SHARD_EDGES))
 
 
-def shard_sizes(edges: int, shards: int) -> list[int]:
-    """`edges` split into `shards` sizes that differ by at most one."""
+def shard_size(edges: int, shards: int, index: int) -> int:
+    """Edges of shard `index` when `edges` are split into `shards` that differ by at most one."""
     base, extra = divmod(edges, shards)
-    return [base + (index < extra) for index in range(shards)]
+    return base + (index < extra)
 
 
 @dataclass(frozen=True)
