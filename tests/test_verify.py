@@ -301,15 +301,15 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
         "edgeaa",
         "verify",
         "--edges",
-        "12000",
+        "40000",
         "--shards",
-        "120",
+        "400",
         "--workers",
         "1",
         "--out",
         str(tmp_path),
         "--quiet",
-    ]
+    ]  # several seconds of shards after the first two: the interrupt lands mid-run
     env = {k: v for k, v in os.environ.items() if k != regress.ADDRESS_VARIABLE}
     proc = subprocess.Popen(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
@@ -323,14 +323,14 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
     assert proc.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     kept = records(tmp_path)
-    assert 2 <= len(kept) < 120
+    assert 2 <= len(kept) < 400
     rerun = subprocess.run(
         [*command, "--json"], capture_output=True, text=True, check=False, env=env, timeout=600
     )
     assert rerun.returncode == 0, rerun.stderr
     summary = json.loads(rerun.stdout)
     assert summary["passed"] and summary["shards_resumed"] == len(kept)
-    assert summary["shards_run"] == 120 - len(kept) and summary["edges_checked"] == 12000
+    assert summary["shards_run"] == 400 - len(kept) and summary["edges_checked"] == 40000
     assert records(tmp_path)[: len(kept)] == kept
 
 
