@@ -197,12 +197,16 @@ def run(
     seed: int = 0,
     idle: float = 0.0,
     stall: float = 0.0,
+    exe: Path | None = None,
 ) -> FastRun:
-    """Simulate the core on `edges`; `idle`/`stall` are probabilities per clock."""
+    """Simulate the core on `edges`; `idle`/`stall` are probabilities per clock. `exe` is the
+    harness `build(config)` made, if the caller has it already (a worker with a shipped
+    build)."""
     for name, value in (("idle", idle), ("stall", stall)):
         if not 0 <= value < 1:
             raise ValueError(f"{name} must be a probability in [0, 1), not {value!r}")
-    exe = build(config)
+    if exe is None:
+        exe = build(config)
     with tempfile.TemporaryDirectory(prefix="edgeaa-fast-") as tmp:
         commands, beats = Path(tmp) / "commands.bin", Path(tmp) / "beats.bin"
         edge_commands(config, edges).tofile(commands)

@@ -23,7 +23,6 @@ import hashlib
 import math
 import os
 import shlex
-import subprocess
 import tempfile
 import time
 from dataclasses import dataclass, field
@@ -36,7 +35,7 @@ from ...model.beat import BEAT_COLUMNS, COLUMN, LANES, PIXEL_FIELDS, beats_from_
 from ...model.timing import write_cycles
 from ...model.vector import run_edges
 from ..simulators import verilator_harness
-from ..simulators.verilator_harness import BEAT_FIELDS, FastRun, drain_clocks, edge_commands
+from ..simulators.verilator_harness import FastRun
 from .workloads import random_sim_edges
 
 ENGINES = ("verilator", "amaranth")
@@ -146,26 +145,6 @@ class CompiledCore:
         return local
 
 
-def run_harness(
-    exe: Path, config: EdgeConfig, edges: list[Edge], *, seed: int, idle: float, stall: float
-) -> FastRun:
-    """`verilator_harness.run` on an executable built already: its `build` elaborates the
-    core to Verilog on every call (1 to 2 s, more than a shard's simulation)."""
-    with tempfile.TemporaryDirectory(prefix="edgeaa-verify-") as tmp:
-        commands, beats = Path(tmp) / "commands.bin", Path(tmp) / "beats.bin"
-        edge_commands(config, edges).tofile(commands)
-        argv = [exe, commands, beats, seed, round(idle * 1000), round(stall * 1000)]
-        argv.append(drain_clocks(config))
-        start = time.perf_counter()
-        proc = subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=False)
-        seconds = time.perf_counter() - start
-        if proc.returncode != 0:
-            raise RuntimeError(f"harness failed ({proc.returncode}): {proc.stderr[-2000:]}")
-        clocks, errors = (int(v) for v in proc.stdout.split())
-        rows = np.fromfile(beats, dtype=np.int64).reshape(-1, BEAT_FIELDS)
-    return FastRun(rows, clocks, errors, seconds)
-
-
 def simulate(task: ShardTask, core: CompiledCore | None, stream: str, edges: list[Edge]) -> FastRun:
     """The simulated core's view of one command stream: its beats, clocks and error count."""
     if task.engine == "amaranth":
@@ -173,8 +152,8 @@ def simulate(task: ShardTask, core: CompiledCore | None, stream: str, edges: lis
 
         return amaranth_sim.run(task.config, edges)
     idle, stall = (IDLE, STALL) if stream == "stalled" else (0.0, 0.0)
-    return run_harness(
-        core.executable(), task.config, edges, seed=task.seed, idle=idle, stall=stall
+    return verilator_harness.run(
+        task.config, edges, seed=task.seed, idle=idle, stall=stall, exe=core.executable()
     )
 
 
