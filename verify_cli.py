@@ -12,9 +12,18 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
 
-from .command import Command, ProgressBar, add_config_options, config_from_args, usage_error
+from .command import (
+    Command,
+    ProgressBar,
+    add_config_options,
+    config_from_args,
+    integer_type,
+    shown,
+    usage_error,
+)
 
 EXIT_MISMATCH = 1
 EXIT_INTERRUPTED = 130  # the shell's status for Ctrl-C
@@ -23,6 +32,14 @@ DEFAULT_SEED = 1
 MAX_EDGES = 10**12  # a thousand times the issue's 10^9: weeks on a large cluster
 # Processes on one machine: more only add memory (a cluster scales further, --cluster).
 MAX_WORKERS = 256
+
+
+def shard_seed(text: str) -> int:
+    """An argparse type: a shard seed, a whole number below 2**64 (read only when short)."""
+    text = text.strip()
+    if not re.fullmatch(r"\d{1,20}", text) or int(text) >= 1 << 64:
+        raise argparse.ArgumentTypeError(f"must be a whole number below 2**64, not {shown(text)}")
+    return int(text)
 
 
 class VerifyCommand(Command):
@@ -49,27 +66,27 @@ class VerifyCommand(Command):
 
         parser.add_argument(
             "--edges",
-            type=int,
+            type=integer_type(),
             default=DEFAULT_EDGES,
             help=f"random edges in all (default {DEFAULT_EDGES:,}); with --shard-seed, the "
             "shard's edges",
         )
         parser.add_argument(
             "--seed",
-            type=int,
+            type=integer_type(),
             default=None,
             help=f"seed of the run: shard i's seed derives from it (default {DEFAULT_SEED})",
         )
         parser.add_argument(
             "--shards",
-            type=int,
+            type=integer_type(),
             default=None,
             help=f"shards, 1 to N (default: one per {SHARD_EDGES:,} edges; it depends on N only, "
             "so a rerun with other --workers resumes the same shards)",
         )
         parser.add_argument(
             "--shard-seed",
-            type=int,
+            type=shard_seed,
             default=None,
             metavar="SEED",
             help="run the one shard with this seed (as printed with a mismatch) instead of "
@@ -77,7 +94,7 @@ class VerifyCommand(Command):
         )
         parser.add_argument(
             "--workers",
-            type=int,
+            type=integer_type(),
             default=None,
             help="worker processes: of the local pool (default: all cores, "
             f"{os.cpu_count()} here) or of --cluster local, at most {MAX_WORKERS}; 0 runs the "
