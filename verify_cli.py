@@ -170,10 +170,6 @@ class VerifyCommand(Command):
                 raise usage_error(
                     self.prog, "--shard-seed runs one shard: give it without --seed and --shards"
                 )
-            if not 0 <= args.shard_seed < 2**64:
-                raise usage_error(
-                    self.prog, f"--shard-seed must be in [0, 2**64), not {args.shard_seed}"
-                )
         shards = default_shards(args.edges) if args.shards is None else args.shards
         if args.shard_seed is not None:
             shards = 1
