@@ -165,11 +165,10 @@ class VerifyCommand(Command):
 
         if not 1 <= args.edges <= MAX_EDGES:
             raise usage_error(self.prog, f"--edges must be in [1, 10**12], not {args.edges}")
-        if args.shard_seed is not None:
-            if args.seed is not None or args.shards is not None:
-                raise usage_error(
-                    self.prog, "--shard-seed runs one shard: give it without --seed and --shards"
-                )
+        if args.shard_seed is not None and (args.seed is not None or args.shards is not None):
+            raise usage_error(
+                self.prog, "--shard-seed runs one shard: give it without --seed and --shards"
+            )
         shards = default_shards(args.edges) if args.shards is None else args.shards
         if args.shard_seed is not None:
             shards = 1
