@@ -152,8 +152,22 @@ class FastRun:
         return beats_from_array(self.beats)
 
 
+# Executables built (or found in the cache) by this process: elaborating the core to Verilog
+# for the cache key takes a second or two, longer than many runs' simulation.
+_BUILT: dict[tuple[EdgeConfig, str], Path] = {}
+
+
 def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
     """Compile core + harness once per (Verilog, harness, flags); returns the executable."""
+    known = _BUILT.get((config, optimize))
+    if known is not None and known.exists():
+        return known
+    exe = _build(config, optimize)
+    _BUILT[(config, optimize)] = exe
+    return exe
+
+
+def _build(config: EdgeConfig, optimize: str) -> Path:
     source, harness = verilog(config, name=TOP), _harness_source(config)
     key = hashlib.sha256((source + harness + optimize).encode()).hexdigest()[:16]
     final = cache_dir() / f"fast-{key}"
