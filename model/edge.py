@@ -8,6 +8,7 @@ sub-pixel units: a vertex coordinate X means X / 2**subpixel_bits pixels.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, NamedTuple
@@ -16,6 +17,7 @@ from .column import IntArith
 from .config import EdgeConfig
 
 INSIDE_SIDES = ("left", "right")
+_LONG_EXPONENT = re.compile(r"[eE][+-]?0*[1-9]\d{2,}")
 
 
 class EdgeError(ValueError):
@@ -64,6 +66,11 @@ class Edge:
         scale = config.subpixel_scale
         fixed = []
         for name, value in zip(("X0", "Y0", "X1", "Y1"), (x0, y0, x1, y1), strict=True):
+            # Fraction('1e1000000000') would compute a billion-digit power: refuse long text
+            # and exponents of three digits or more first (no coordinate needs them).
+            if isinstance(value, str) and (len(value) > 64 or _LONG_EXPONENT.search(value)):
+                shown = value if len(value) <= 40 else value[:40] + "..."
+                raise EdgeError(f"{name} must be a plain decimal number, not {shown!r}")
             try:
                 exact = Fraction(value) * scale
             except (ValueError, TypeError, ZeroDivisionError):
