@@ -311,8 +311,15 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
         "--quiet",
     ]  # several seconds of shards after the first two: the interrupt lands mid-run
     env = {k: v for k, v in os.environ.items() if k != regress.ADDRESS_VARIABLE}
+    # A shell's background job (CI may run in one) starts with SIGINT ignored, and Python then
+    # keeps ignoring it: give the run the default disposition, as a terminal's Ctrl-C finds.
     proc = subprocess.Popen(
-        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env
+        command,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     deadline = time.monotonic() + 120
     while not (tmp_path / regress.RECORDS).exists() or len(records(tmp_path)) < 2:
