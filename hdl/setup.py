@@ -67,7 +67,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed, unsigned
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, signed, unsigned
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -183,13 +183,11 @@ class EdgeSetupUnit(wiring.Component):
         )
         W, s, F = config.coord_bits, config.subpixel_bits, config.F
         I = config.intensity_bits  # noqa: E741
-        coord = W + s
         self.cmd = Signal(edge_layout(config), name="cmd")
         self.clip_r = Signal(clip_layout(config), name="clip_r")
-        shapes = {"bad": 1, "dx_le0": 1, "dy_le0": 1}
-        self.accepted = {
-            name: Signal(shapes.get(name, signed(coord + 1)), name=name)
-            for name in ("bad", "dx_r", "ndx_r", "dy_r", "ndy_r", "dx_le0", "dy_le0")
+        self.accepted = {  # one register per `accept_values` entry, shaped like its value
+            name: Signal(Value.cast(value).shape(), name=name)
+            for name, value in accept_values(config, self.cmd).items()
         }
         self.regs = _registers(config)
         # The lane pass lengths (structure; their total is the timing model's RUN length).
