@@ -20,10 +20,10 @@ import sys
 import tempfile
 import threading
 import time
-from fractions import Fraction
 
 from .model import ACCUMULATORS, MODES, EdgeConfig
 from .model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
+from .model.numbers import decimal, shown
 
 PROG = "edgeaa"
 EXIT_BAD_INPUT = 2
@@ -67,44 +67,6 @@ class StoreOnce(argparse.Action):
 
 
 # -- numbers and values in messages ----------------------------------------------------------
-
-MAX_SHOWN = 40  # characters of a bad value quoted in a message
-MAX_NUMBER_TEXT = 60  # characters of a number on the command line
-DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
-MAX_EXPONENT = 60  # |exponent| of a decimal: far past any coordinate, cheap to evaluate
-
-
-def shown(value) -> str:
-    """A value for a message: its repr, cut short (a number may have thousands of digits)."""
-    text = repr(value)
-    if len(text) > MAX_SHOWN:
-        text = f"{text[: MAX_SHOWN - 12]}... ({len(text)} characters)"
-    return text
-
-
-def decimal(text: str) -> Fraction:
-    """A decimal number exactly, without the unbounded work of `Fraction('0e1000000000')`.
-
-    Raises ValueError (the message says what is allowed) for anything that is not a plain
-    decimal (`inf`, `nan`, `1/3`, `0x10`), longer than MAX_NUMBER_TEXT characters, or with an
-    exponent beyond +-MAX_EXPONENT (zero excepted: `0e1000000000` is 0).
-    """
-    text = text.strip()
-    match = DECIMAL.fullmatch(text) if len(text) <= MAX_NUMBER_TEXT else None
-    if match is None:
-        raise ValueError(
-            f"must be a decimal number such as 10.25 (at most {MAX_NUMBER_TEXT} characters), "
-            f"not {shown(text)}"
-        )
-    mantissa, exponent = match.group(1), match.group(2)
-    if not exponent:
-        return Fraction(text)
-    if not mantissa.strip("0."):
-        return Fraction(0)
-    power = int(exponent[1:])
-    if abs(power) > MAX_EXPONENT:
-        raise ValueError(f"= {shown(text)} is out of range (exponents up to +-{MAX_EXPONENT})")
-    return Fraction(text)
 
 
 def integer_type(lo: int | None = None, hi: int | None = None):

@@ -18,12 +18,11 @@ from .command import (
     atomic_output,
     check_output,
     config_from_args,
-    decimal,
     integer_type,
     shown,
     usage_error,
 )
-from .model import MODES, Clip, Edge, EdgeConfig, EdgeError, run_edge
+from .model import MODES, Clip, Edge, EdgeConfig, run_edge
 from .model.reference import error_bound, exact_coverage_array
 
 
@@ -67,7 +66,10 @@ class EdgeCommand(Command):
         config = config_from_args(args)
         edge = Edge.from_pixels(
             config,
-            *(_coordinate(name, getattr(args, name.lower())) for name in ("X0", "Y0", "X1", "Y1")),
+            args.x0,
+            args.y0,
+            args.x1,
+            args.y1,
             inside=args.inside,
             i_in=args.i_in,
             i_out=args.i_out,
@@ -87,16 +89,6 @@ class EdgeCommand(Command):
             for w in result.writes:
                 print(f"{w.x} {w.y} {w.value} {result.coverage(w):.6f}")
         return 0
-
-
-def _coordinate(name: str, text: str) -> str:
-    """The coordinate argument, once it is known to be a decimal that is cheap to read
-    (`Fraction('0e1000000000')` would take hours)."""
-    try:
-        value = decimal(text)
-    except ValueError as error:
-        raise EdgeError(f"{name} {error}") from None
-    return text.strip() if value else "0"  # the model quotes the text in its messages
 
 
 # -- edgeaa demo ---------------------------------------------------------------------------

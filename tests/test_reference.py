@@ -209,16 +209,16 @@ def test_named_values(coords, inside, x, y, expected):
     assert exact_coverage_array(config, edge, [x], [y])[0] == pytest.approx(float(expected))
 
 
-@pytest.mark.parametrize("text", ["0e1000000000", "1e-999", "1e100", "9" * 65, "inf", "nan"])
+@pytest.mark.parametrize("text", ["1e1000000000", "1e-999", "1e100", "9" * 65, "inf", "nan"])
 def test_from_pixels_refuses_numbers_it_cannot_read_cheaply(text):
     """Huge exponents and long text are refused at once (Fraction would build the power)."""
-    with pytest.raises(EdgeError, match="X0 must be"):
+    with pytest.raises(EdgeError, match=r"^X0 (must be a decimal number|= .* out of range)"):
         Edge.from_pixels(GEOMETRY_CONFIGS["default"], text, 0, 1, 1)
 
 
 def test_from_pixels_reads_plain_decimals_and_small_exponents():
     config = GEOMETRY_CONFIGS["default"]
-    edge = Edge.from_pixels(config, "2.5e1", "0e0001", "5e-001", 1)
+    edge = Edge.from_pixels(config, "2.5e1", "0e1000000000", "5e-001", 1)
     assert (edge.x0, edge.y0, edge.x1) == tuple(
         int(v * config.subpixel_scale) for v in (25, 0, Fraction(1, 2))
     )
