@@ -254,6 +254,17 @@ def config_from_args(args: argparse.Namespace) -> EdgeConfig:
     )
 
 
+def config_arguments(config: EdgeConfig) -> list[str]:
+    """The options `add_config_options` reads back as `config` (every one spelled out): the
+    inverse of `config_from_args`, for printed reproducers."""
+    argv = ["--mode", config.mode, "--accumulator", config.accumulator]
+    argv += ["--coord-bits", str(config.coord_bits), "--subpixel-bits", str(config.subpixel_bits)]
+    argv += ["--intensity-bits", str(config.intensity_bits)]
+    if config.frac_bits is not None:
+        argv += ["--frac-bits", str(config.frac_bits)]
+    return argv
+
+
 # -- progress --------------------------------------------------------------------------------
 
 DELAY = 0.5  # seconds before the bar first appears: short jobs print nothing

@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from ..command import PROG as COMMAND_PROG
 from ..command import (
     Command,
     ProgressBar,
@@ -25,7 +26,7 @@ from ..command import (
 )
 from .builtin import BUILTINS
 
-PROG = "edgeaa render"
+PROG = f"{COMMAND_PROG} render"  # RenderCommand.prog, for the helpers below
 # The side-by-side figure supersamples 16 x 16 and the exact reference cuts one shapely box
 # per pixel: both need far more memory per pixel than a render (docs/scenes.md).
 MAX_COMPARE_PIXELS = 1 << 16  # 65,536 (256 x 256)

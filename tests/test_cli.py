@@ -1,5 +1,6 @@
 """The command line: output formats, and one-line errors with exit status 2 for bad input."""
 
+import argparse
 import json
 import subprocess
 import sys
@@ -7,6 +8,7 @@ import sys
 import pytest
 
 from edgeaa.cli import main
+from edgeaa.command import add_config_options, config_arguments, config_from_args
 from edgeaa.model import Clip, Edge, EdgeConfig, run_edge
 
 
@@ -340,3 +342,20 @@ def test_a_ticking_bar_shows_a_step_without_counts(monkeypatch):
         time.sleep(0.3)  # a tool that reports nothing: the bar still moves (not a tty: 0.1 s)
     lines = stream.getvalue().splitlines()
     assert len(lines) >= 2 and all("ice40 edgeaa" in line and "(0/2, " in line for line in lines)
+
+
+@pytest.mark.parametrize(
+    "config",
+    [
+        EdgeConfig(),
+        EdgeConfig(coord_bits=15, subpixel_bits=8, intensity_bits=12, mode="seg4"),
+        EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4, accumulator="truncated"),
+        EdgeConfig(mode="pw", frac_bits=30),
+    ],
+)
+def test_config_arguments_read_back_as_the_config(config):
+    """The reproducers' options (`config_arguments`) are the inverse of the parser's."""
+    parser = argparse.ArgumentParser()
+    add_config_options(parser)
+    parsed = config_from_args(parser.parse_args(config_arguments(config)))
+    assert parsed == config and parsed.frac_bits == config.frac_bits

@@ -26,7 +26,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from concurrent import futures
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -90,11 +90,7 @@ class Plan:
 
     def manifest(self) -> dict:
         """Everything that decides the shards' edges and checks (not the workers)."""
-        config = {
-            name: getattr(self.config, name)
-            for name in ("coord_bits", "subpixel_bits", "intensity_bits", "frac_bits", "mode")
-        }
-        config["accumulator"] = self.config.accumulator
+        config = {f.name: getattr(self.config, f.name) for f in fields(self.config) if f.init}
         workload = {"idle": IDLE, "stall": STALL, "bad_fraction": BAD_FRACTION}
         workload.update(clip_fraction=CLIP_FRACTION, max_pixels=list(MAX_PIXELS))
         return {

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...command import config_arguments
 from ...model import Edge, EdgeConfig, EdgeError, validate
 from ...model.beat import BEAT_COLUMNS, COLUMN, LANES, PIXEL_FIELDS, beats_from_array
 from ...model.timing import write_cycles
@@ -300,16 +301,6 @@ def check_shard(task: ShardTask, core: CompiledCore | None = None) -> dict:
 
 
 # -- reproducers -----------------------------------------------------------------------------
-
-
-def config_arguments(config: EdgeConfig) -> list[str]:
-    """The `edgeaa` configuration options that give `config` (every one spelled out)."""
-    argv = ["--mode", config.mode, "--accumulator", config.accumulator]
-    argv += ["--coord-bits", str(config.coord_bits), "--subpixel-bits", str(config.subpixel_bits)]
-    argv += ["--intensity-bits", str(config.intensity_bits)]
-    if config.frac_bits is not None:
-        argv += ["--frac-bits", str(config.frac_bits)]
-    return argv
 
 
 def pixels(value: int, config: EdgeConfig) -> str:
