@@ -26,7 +26,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from ..command import shown
+from ..model.numbers import shown
 
 DEFAULT_TOLERANCE = 1.0 / 16  # px: max distance between a curve and its chords
 MIN_TOLERANCE = 1.0 / 1024  # px: finer than the finest sub-pixel grid (1/256 px)
