@@ -53,8 +53,10 @@ def pick_by_select(select, index, values):
 class IntArith:
     """Python ints and bools; `check` raises `WidthError` for a value that does not fit."""
 
-    def __init__(self, config: EdgeConfig):
-        self.widths = config.register_widths()
+    def __init__(self, config: EdgeConfig | None = None):
+        # Without a config there are no registers to check: selects only (the setup's fold,
+        # once per edge, where building the width table would cost more than the fold).
+        self.widths = {} if config is None else config.register_widths()
         # (min, max) per register: the check runs a dozen times per column.
         self.bounds = {name: (w.min, w.max) for name, w in self.widths.items()}
 

@@ -290,11 +290,14 @@ def window(a, folded: Fold, clip) -> Window:
     return Window(lo=lo, hi=hi, start_clip=start_clip, first=first, last=last)
 
 
+_SELECTS = IntArith()
+
+
 def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     """Fold the edge into the first octant and compute the loop's constants and start state."""
     validate(config, edge)
     s, F, S = config.subpixel_bits, config.F, config.subpixel_scale
-    a = IntArith(config)
+    a = _SELECTS  # fold and window only select: no register is checked here
     i_in, i_out = edge.intensities(config)
     f = fold(a, config, edge.x0, edge.y0, edge.x1, edge.y1, i_in, i_out, edge.inside == "left")
     w = window(a, f, edge.window(config))
