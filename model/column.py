@@ -242,3 +242,131 @@ def advance(a, st, x, y, jq, jr) -> Advance:
     x_next = a.check("x", x + st.col_dx + a.select(row_step, st.row_dx, 0))
     y_next = a.check("y", y + st.col_dy + a.select(row_step, st.row_dy, 0))
     return Advance(x_next, y_next, jq_next, jr_next, jsum, row_step)
+
+
+# -- accumulation deltas (docs/algorithm.md section 8) -----------------------------------------
+
+
+@dataclass(slots=True)
+class ColumnDeltas:
+    """One column's signed-area deltas before the winding sign, in the folded frame.
+
+    The edge's piece in the column runs from height ``hs`` to ``he`` (units of ifix per
+    pixel, from the top of the loop's row r). ``up`` says it starts above row r: its two
+    rows are then r - 1 and r, else r and r + 1. x-major: ``cells`` are (R_a, cov_a - R_a,
+    R_b, cov_b - R_b): the piece's area on the +u side of the line in column c of the upper
+    and the lower row, and the rest of each row's cover, which the next column along +u
+    gets. y-major: (band - P0, P0 - P1, P1, 0) along +v from row r - up: differences of
+    P0, P1, the piece's areas on the smaller-v side in those two cells."""
+
+    up: Any
+    cells: tuple[Any, Any, Any, Any]
+    he: Any  # where the piece ends: the next column starts there (one row less on a step)
+    t: Any = 0  # the clamped triangle estimate used
+
+
+def piece_end(a, st, last, jq, jr, row):
+    """The height where a column's piece ends: floor(J + K/2), or P1's height in the last
+    partial column (P1's row is within one of the loop's row r)."""
+    p = st.pieces
+    carry = (jr + st.khr) >= st.du
+    full = jq + st.khq + carry
+    adj = p.end_row - row  # -1, 0 or +1
+    at_end = p.end_height + a.select(adj > 0, st.ifix, a.select(adj < 0, -st.ifix, 0))
+    return a.check("height", a.select(last, at_end, full)), adj
+
+
+def _clamp(a, value, hi):
+    """value clamped to [0, hi]."""
+    return a.select(value < 0, 0, a.select(value > hi, hi, value))
+
+
+def column_deltas(a, config: EdgeConfig, st, first, last, hs, he, adj, jq) -> ColumnDeltas:
+    """The signed-area deltas of one column's piece from hs to he (docs/algorithm.md s. 8).
+
+    first / last: the column is the edge's partial first / last column (it holds a vertex);
+    adj: P1's row minus the loop's row. Adds, compares and selects of per-edge constants,
+    and the add-only triangle estimate of the crossing part's depth."""
+    p, ifix = st.pieces, st.ifix
+    up, low = hs < 0, he > ifix
+    depth = a.check("height", a.select(low, he - ifix, -hs))
+    if config.segments:
+        t = triangle_estimate(a, config, st, depth, up | low)
+        t = a.select(t > 0, t, 0)
+    else:  # pw: no estimate of the split
+        t = 0
+    x_major = st.x_major
+    interior_total = a.select(x_major, st.khq, jq)
+    band1 = a.select(adj > 0, p.band1, a.select(adj < 0, -p.band1, 0))
+    total = a.select(first, p.total0, a.select(last, p.total1 + band1, interior_total))
+    band = a.select(first, p.band0, a.select(last, p.band1, ifix))
+    cells_x = _deltas_x_major(a, p, first, last, hs, he, ifix, t, total)
+    cells_y = _deltas_y_major(a, hs, he, ifix, t, total, band)
+    cells = tuple(
+        a.check("delta", a.select(x_major, cx, cy)) for cx, cy in zip(cells_x, cells_y, strict=True)
+    )
+    return ColumnDeltas(up, cells, he, t)
+
+
+def _deltas_x_major(a, p, first, last, hs, he, ifix, t, total):
+    """Areas on the +u side of the line, row by row (the upper row r - 1 only when up)."""
+    cov_up = a.select(he < 0, he, 0) - a.select(hs < 0, hs, 0)
+    cov_mid = _clamp(a, he, ifix) - _clamp(a, hs, ifix)
+    cov_low = a.select(he > ifix, he, ifix) - a.select(hs > ifix, hs, ifix)
+    rect_up = a.select(first, p.rect0, 0)
+    rect_low = a.select(last, p.rect1, 0)
+    r_low = a.select(
+        hs >= ifix, total, a.select(he > ifix, _clamp(a, t + rect_low, cov_low), 0)
+    )
+    r_up = a.select(he <= 0, total, a.select(hs < 0, _clamp(a, cov_up - t - rect_up, cov_up), 0))
+    r_mid = _clamp(a, total - r_low - r_up, cov_mid)
+    up = hs < 0
+    r_a, cov_a = a.select(up, r_up, r_mid), a.select(up, cov_up, cov_mid)
+    r_b, cov_b = a.select(up, r_mid, r_low), a.select(up, cov_mid, cov_low)
+    return r_a, cov_a - r_a, r_b, cov_b - r_b
+
+
+def _deltas_y_major(a, hs, he, ifix, t, total, band):
+    """Areas on the smaller-v side in cells r - 1, r, r + 1, differenced along +v."""
+    a_low = a.select(hs >= ifix, total - band, a.select(he > ifix, t, 0))
+    a_up = a.select(he <= 0, total + band, a.select(hs < 0, band - t, band))
+    a_low, a_up = _clamp(a, a_low, band), _clamp(a, a_up, band)
+    a_mid = _clamp(a, total + band - a_up - a_low, band)
+    up = hs < 0
+    p0, p1 = a.select(up, a_up, a_mid), a.select(up, a_mid, a_low)
+    return band - p0, p0 - p1, p1, 0 * p1
+
+
+def delta_cells(a, st, x, y, d: ColumnDeltas):
+    """The four cells of a column's deltas in screen pixels, signed by the winding: a list of
+    (x, y, delta). (x, y) is the loop's pixel of column c, row r (docs/algorithm.md s. 8).
+
+    x-major: a 2 x 2 block, columns x and x + 1 (screen), rows r - up and r - up + 1 (each
+    folded row one ``row_dy`` on screen); the column pair's values swap when the major axis
+    steps down (u = -x). y-major: three cells along the row, v = r - up .. r - up + 2 on
+    +v; along -v (the minor axis steps down) the same values one cell lower in v."""
+    sigma = st.pieces.sigma
+    up = a.select(d.up, 1, 0)
+    ra, rest_a, rb, rest_b = d.cells
+    neg = st.major_neg_x  # x-major edge stepping left
+    xm = st.x_major
+    cells = []
+    # x-major: (x, row a), (x + 1, row a), (x, row b), (x + 1, row b)
+    for k, (left, right) in enumerate(((ra, rest_a), (rb, rest_b))):
+        yk = y + (k - up) * st.row_dy
+        cells.append((x, yk, a.select(neg, right, left)))
+        cells.append((x + 1, yk, a.select(neg, left, right)))
+    # y-major: v offsets (0, 1, 2) - up, one less along -v
+    shift = a.select(st.row_dx < 0, 1, 0)
+    out = []
+    for k in range(4):
+        xx_y = x + (k - up - shift) * st.row_dx
+        cx, cy, cv = cells[k]
+        out.append(
+            (
+                a.select(xm, cx, xx_y),
+                a.select(xm, cy, y),
+                sigma * a.select(xm, cv, d.cells[k]),
+            )
+        )
+    return out

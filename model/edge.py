@@ -175,6 +175,12 @@ class EdgeSetup:
     inside_is_a: bool  # the A side (towards smaller minor coordinate) is inside
     seg_thresholds: tuple[int, ...]  # segment j starts at d >= seg_thresholds[j - 1]
     seg_intercepts: tuple[int, ...]  # subtracted from the slope term on segment j
+    pieces: EndPieces | None = None  # the accumulation constants (`end_pieces`)
+
+    @property
+    def major_neg_x(self) -> bool:
+        """An x-major edge that steps left (its column pair's values swap on screen)."""
+        return self.x_major and self.col_dx < 0
 
     @property
     def k(self) -> Fraction:
@@ -290,6 +296,81 @@ def window(a, folded: Fold, clip) -> Window:
     return Window(lo=lo, hi=hi, start_clip=start_clip, first=first, last=last)
 
 
+@dataclass(frozen=True)
+class EndPieces:
+    """What the accumulation deltas (`edgeaa.model.column.column_deltas`) need beyond the
+    stepping constants: the edge's own piece in its first and last column, cut at the
+    vertices, and its winding sign. Heights are in units of ifix per pixel, measured from
+    the top (smaller v) of the stepping loop's row; docs/algorithm.md section 8 derives each.
+
+    An end column is *partial* when it holds a vertex (not cut away by the clip window);
+    a one-column edge is partial at both ends and ``total0``, ``band0`` describe its whole
+    piece. x-major edges use total (the piece's area on the +u side of the line) and rect
+    (the rectangle between the crossing part and the column's far side); y-major edges use
+    total (the piece's integral of height) and band (ifix times the piece's width)."""
+
+    sigma: int  # +1: the cells on the +x side of the edge gain coverage; -1: they lose it
+    row0: int  # folded row of the first column (the loop's row register starts here)
+    first_partial: bool
+    last_partial: bool
+    hs0: int  # height where the first column's piece starts
+    end_row: int  # folded row holding P1
+    end_height: int  # P1's height above its row's top, in [0, ifix)
+    total0: int
+    total1: int
+    rect0: int
+    rect1: int
+    band0: int
+    band1: int
+
+
+def end_pieces(config: EdgeConfig, f: Fold, w: Window, st_values: dict, inside_left) -> EndPieces:
+    """The per-edge constants of `EndPieces` (divisions and small products: setup only).
+
+    st_values holds the setup's columns, row0 (folded), jq, jr, khq, khr, du, dv, i_d and
+    the edge's screen dy."""
+    s, F, S = config.subpixel_bits, config.F, config.subpixel_scale
+    v = st_values
+    columns, row0, i_d, du, dv = v["columns"], v["row0"], v["i_d"], v["du"], v["dv"]
+    jq, jr, khq, khr = v["jq"], v["jr"], v["khq"], v["khr"]
+    ifix, unit = i_d << F, i_d << (F - s)  # unit: ifix per sub-pixel step
+    first_partial = columns > 0 and not w.start_clip
+    last_partial = columns > 0 and w.last == f.c1
+    single = columns == 1 and first_partial and last_partial
+    mg = f.u0 - w.first * S + S // 2 if first_partial else 0  # S * (u0 - column start)
+    me = w.last * S + S // 2 - f.u1 if last_partial else 0  # S * (column end - u1)
+    v1 = f.v0 + f.dv  # folded, both axes increase from P0 to P1
+    if first_partial:
+        hs0 = unit * (f.v0 - row0 * S + S // 2)
+    else:  # a whole column: floor(J - K/2)
+        hs0 = jq - khq - (1 if jr < khr else 0)
+    end_row = (v1 + S // 2) >> s
+    end_height = unit * (v1 - end_row * S + S // 2)
+    kx, den = (i_d * dv) << F, 2 * du * S * S  # K = kx / du
+    he_first = jq + khq + (1 if jr + khr >= du else 0)  # floor(J + K/2) of the first column
+    if single:
+        he_first = end_height + (end_row - row0) * ifix
+    w0 = S - mg - (me if single else 0)  # S times the first piece's width
+    w1 = S - me
+    if f.x_major:
+        total0 = (kx * ((S - mg) ** 2 - (me**2 if single else 0))) // den
+        total1 = (kx * (S * S - me * me)) // den
+        rect0 = (max(-hs0, 0) * mg) >> s
+        rect1 = (end_height * me) >> s
+        band0 = band1 = 0
+    else:
+        total0 = ((hs0 + he_first) * w0) >> (s + 1)
+        total1 = (end_height * w1 * 2 * du * S - kx * w1 * w1) // den
+        rect0 = rect1 = 0
+        band0, band1 = unit * w0, unit * w1
+    # Travelling down the screen with the inside on the left puts the inside on the +x side.
+    sigma = 1 if (v["dy"] > 0) == bool(inside_left) else -1
+    return EndPieces(
+        sigma, row0, first_partial, last_partial, hs0, end_row, end_height,
+        total0, total1, rect0, rect1, band0, band1,
+    )  # fmt: skip
+
+
 _SELECTS = IntArith()
 
 
@@ -327,6 +408,11 @@ def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     x, y = screen(step_major * c0, step_minor * row0)
     col_dx, col_dy = screen(step_major, 0)
     row_dx, row_dy = screen(0, step_minor)
+    values = dict(
+        columns=columns, row0=row0, jq=jq, jr=jr, khq=khq, khr=khr, du=du, dv=f.dv, i_d=i_d,
+        dy=edge.y1 - edge.y0,
+    )
+    pieces = end_pieces(config, f, w, values, edge.inside == "left")
     return EdgeSetup(
         x_major=f.x_major,
         columns=columns,
@@ -351,4 +437,5 @@ def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
         inside_is_a=f.inside_is_a,
         seg_thresholds=thresholds,
         seg_intercepts=intercepts,
+        pieces=pieces,
     )

@@ -11,11 +11,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from .column import IntArith, WidthError, advance, column_areas, neighbour_offset, output_value
+from .column import (
+    IntArith,
+    WidthError,
+    advance,
+    column_areas,
+    column_deltas,
+    delta_cells,
+    neighbour_offset,
+    output_value,
+    piece_end,
+)
 from .config import EdgeConfig
 from .edge import Edge, EdgeSetup, setup
 
-__all__ = ["EdgeResult", "StepState", "WidthError", "Write", "column_writes", "run_edge"]
+__all__ = ["Delta", "EdgeResult", "StepState", "WidthError", "Write", "column_writes", "run_edge"]
 
 
 class Write(NamedTuple):
@@ -93,3 +103,37 @@ def column_writes(
         wy = a.check("y", y + row_offset * st.row_dy)
         writes.append(Write(wx, wy, output_value(a, config, st, area), area))
     return tuple(writes)
+
+
+class Delta(NamedTuple):
+    """One cell's signed-area delta: the accumulation buffer's cell (x, y) gains `delta`
+    (units of 2**-F intensity LSB times the winding sign)."""
+
+    x: int
+    y: int
+    delta: int
+
+
+def run_edge_deltas(config: EdgeConfig, edge: Edge) -> list[tuple[Delta, ...]]:
+    """The accumulation deltas of one edge, column by column (four cells each, zeros
+    included): the stepping loop of `run_edge` with `column_deltas` in place of the
+    two-pixel writes. Each column's cells add up to the edge's signed cover of that column."""
+    st = setup(config, edge)
+    p = st.pieces
+    a = IntArith(config)
+    for name in ("hs0", "end_height", "total0", "total1", "rect0", "rect1", "band0", "band1"):
+        a.check("height", getattr(p, name))
+    x, y, jq, jr, row = st.x, st.y, st.jq, st.jr, p.row0
+    hs = p.hs0
+    columns = []
+    for column in range(st.columns):
+        first = column == 0 and p.first_partial
+        last = column == st.columns - 1 and p.last_partial
+        he, adj = piece_end(a, st, last, jq, jr, row)
+        d = column_deltas(a, config, st, first, last, hs, he, adj, jq)
+        columns.append(tuple(Delta(*cell) for cell in delta_cells(a, st, x, y, d)))
+        step = advance(a, st, x, y, jq, jr)
+        hs = a.check("height", he - (st.ifix if step.row_step else 0))
+        row += 1 if step.row_step else 0
+        x, y, jq, jr = step.x, step.y, step.jq, step.jr
+    return columns
