@@ -327,42 +327,45 @@ class EndPieces:
 def end_pieces(config: EdgeConfig, f: Fold, w: Window, st_values: dict, inside_left) -> EndPieces:
     """The per-edge constants of `EndPieces` (divisions and small products: setup only).
 
-    st_values holds the setup's columns, row0 (folded), jq, jr, khq, khr, du, dv, i_d and
+    st_values holds the setup's columns, row0 (folded), jq, jr, kq, khq, khr, du, i_d and
     the edge's screen dy."""
     s, F, S = config.subpixel_bits, config.F, config.subpixel_scale
     v = st_values
-    columns, row0, i_d, du, dv = v["columns"], v["row0"], v["i_d"], v["du"], v["dv"]
+    columns, row0, i_d, du = v["columns"], v["row0"], v["i_d"], v["du"]
     jq, jr, khq, khr = v["jq"], v["jr"], v["khq"], v["khr"]
-    ifix, unit = i_d << F, i_d << (F - s)  # unit: ifix per sub-pixel step
+    ifix = i_d << F
+    half = i_d << (F - s - 1)  # ifix per half sub-pixel step (F > s: exact)
     first_partial = columns > 0 and not w.start_clip
     last_partial = columns > 0 and w.last == f.c1
     single = columns == 1 and first_partial and last_partial
-    mg = f.u0 - w.first * S + S // 2 if first_partial else 0  # S * (u0 - column start)
-    me = w.last * S + S // 2 - f.u1 if last_partial else 0  # S * (column end - u1)
+    # In half sub-pixel steps (2 S per pixel, so that a pixel's edges are whole numbers):
+    mg = 2 * f.u0 - (2 * w.first - 1) * S if first_partial else 0  # from column start to u0
+    me = (2 * w.last + 1) * S - 2 * f.u1 if last_partial else 0  # from u1 to column end
     v1 = f.v0 + f.dv  # folded, both axes increase from P0 to P1
     if first_partial:
-        hs0 = unit * (f.v0 - row0 * S + S // 2)
+        hs0 = half * (2 * f.v0 - (2 * row0 - 1) * S)
     else:  # a whole column: floor(J - K/2)
         hs0 = jq - khq - (1 if jr < khr else 0)
-    end_row = (v1 + S // 2) >> s
-    end_height = unit * (v1 - end_row * S + S // 2)
-    kx, den = (i_d * dv) << F, 2 * du * S * S  # K = kx / du
+    end_row = (2 * v1 + S) >> (s + 1)
+    end_height = half * (2 * v1 - (2 * end_row - 1) * S)
+    # Areas of partial pieces use K's quotient kq: within one unit, and no new division.
+    kq, sq = v["kq"], 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
     he_first = jq + khq + (1 if jr + khr >= du else 0)  # floor(J + K/2) of the first column
     if single:
         he_first = end_height + (end_row - row0) * ifix
-    w0 = S - mg - (me if single else 0)  # S times the first piece's width
-    w1 = S - me
+    w0 = 2 * S - mg - (me if single else 0)  # the first piece's width, 2 S per pixel
+    w1 = 2 * S - me
     if f.x_major:
-        total0 = (kx * ((S - mg) ** 2 - (me**2 if single else 0))) // den
-        total1 = (kx * (S * S - me * me)) // den
-        rect0 = (max(-hs0, 0) * mg) >> s
-        rect1 = (end_height * me) >> s
+        total0 = (kq * ((2 * S - mg) ** 2 - (me**2 if single else 0))) >> sq
+        total1 = (kq * (4 * S * S - me * me)) >> sq
+        rect0 = (max(-hs0, 0) * mg) >> (s + 1)
+        rect1 = (end_height * me) >> (s + 1)
         band0 = band1 = 0
     else:
-        total0 = ((hs0 + he_first) * w0) >> (s + 1)
-        total1 = (end_height * w1 * 2 * du * S - kx * w1 * w1) // den
+        total0 = ((hs0 + he_first) * w0) >> (s + 2)
+        total1 = ((end_height * w1) >> (s + 1)) - ((kq * w1 * w1) >> sq)
         rect0 = rect1 = 0
-        band0, band1 = unit * w0, unit * w1
+        band0, band1 = half * w0, half * w1
     # Travelling down the screen with the inside on the left puts the inside on the +x side.
     sigma = 1 if (v["dy"] > 0) == bool(inside_left) else -1
     return EndPieces(
@@ -409,7 +412,7 @@ def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     col_dx, col_dy = screen(step_major, 0)
     row_dx, row_dy = screen(0, step_minor)
     values = dict(
-        columns=columns, row0=row0, jq=jq, jr=jr, khq=khq, khr=khr, du=du, dv=f.dv, i_d=i_d,
+        columns=columns, row0=row0, jq=jq, jr=jr, kq=kq, khq=khq, khr=khr, du=du, i_d=i_d,
         dy=edge.y1 - edge.y0,
     )
     pieces = end_pieces(config, f, w, values, edge.inside == "left")
