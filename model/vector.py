@@ -51,7 +51,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .column import ArrayArith, IntArith, column_areas, neighbour_offset, output_value
+from .column import (
+    ArrayArith,
+    IntArith,
+    column_areas,
+    column_deltas,
+    delta_cells,
+    neighbour_offset,
+    output_value,
+    piece_end,
+)
 from .config import EdgeConfig
 from .edge import Edge, EdgeSetup, setup
 from .step import Write
@@ -258,10 +267,15 @@ class _PerEdge:
 
     def _column(self, values) -> np.ndarray:
         # An object array must hold Python ints (not numpy scalars) so nothing wraps.
-        return np.array([int(v) for v in values], dtype=self._dtype)[self._index]
+        values = [int(v) for v in values]
+        if all(isinstance(v, bool) for v in values):
+            return np.array(values, dtype=bool)[self._index]
+        return np.array(values, dtype=self._dtype)[self._index]
 
     def __getattr__(self, name: str) -> np.ndarray:
-        if name in ("seg_thresholds", "seg_intercepts"):
+        if name == "pieces":
+            value = _PerEdge([st.pieces for st in self._sts], self._dtype, self._index)
+        elif name in ("seg_thresholds", "seg_intercepts"):
             count = len(getattr(self._sts[0], name)) if self._sts else 0
             value = tuple(
                 self._column([getattr(st, name)[m] for st in self._sts]) for m in range(count)
@@ -300,7 +314,15 @@ def _column_states(a: ArrayArith, sts: Sequence[EdgeSetup], dtype) -> dict[str, 
     is_col = i < columns[e]
     nxt = np.flatnonzero(is_col) + 1
     a.check("jsum", unreduced[nxt] - rows[is_col] * st.ifix[is_col])
-    return {"e": e[is_col], "jq": jq[is_col], "jr": jr[is_col], "x": x[is_col], "y": y[is_col]}
+    return {
+        "e": e[is_col],
+        "jq": jq[is_col],
+        "jr": jr[is_col],
+        "x": x[is_col],
+        "y": y[is_col],
+        "i": i[is_col],
+        "rows": rows[is_col],
+    }
 
 
 def _interleave(count: np.ndarray, has: np.ndarray, pairs, dtype) -> list[np.ndarray]:
@@ -346,3 +368,88 @@ def _run_group(
     value = output_value(a, config, _PerEdge(sts, dtype, e_out), area_out)
     edge_index = np.asarray(group, dtype=np.int64)[e_out]
     return [edge_index, x_out, y_out, value, area_out]
+
+
+# -- accumulation deltas -----------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class DeltaBatch:
+    """The accumulation deltas of a batch of edges: four cells per column, in the order of
+    `step.run_edge_deltas` (zeros included). delta is int64, or an object array of Python
+    ints when the delta register is wider than int64."""
+
+    edge_index: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    delta: np.ndarray
+    setups: tuple[EdgeSetup, ...]
+
+    def __len__(self) -> int:
+        return len(self.edge_index)
+
+
+def run_edges_deltas(
+    config: EdgeConfig, edges: Iterable[Edge], *, force_object: bool = False
+) -> DeltaBatch:
+    """The deltas of all edges, bit-identical to `run_edge_deltas` on each edge."""
+    setups = tuple(setup(config, edge) for edge in edges)  # validates: raises EdgeError
+    constants = IntArith(config)
+    for st in setups:
+        _check_constants(constants, st)
+        _check_invariants(st)
+    fits = [not force_object and _fits_int64(st) for st in setups]
+    fast = [k for k, ok in enumerate(fits) if ok]
+    slow = [k for k, ok in enumerate(fits) if not ok]
+    parts = [
+        _deltas_group(config, setups, chunk, dtype)
+        for group, dtype in ((fast, np.int64), (slow, object))
+        for chunk in _chunks(setups, group)
+    ]
+    delta_dtype = np.int64 if config.register_widths()["delta"].bits <= 63 else object
+    if not parts:
+        empty = np.zeros(0, dtype=np.int64)
+        return DeltaBatch(empty, empty, empty, empty.astype(delta_dtype), setups)
+    columns = [np.concatenate([part[name] for part in parts]) for name in range(4)]
+    if fast and slow:  # each group is in order; a stable sort on the edge interleaves them
+        order = np.argsort(columns[0], kind="stable")
+        columns = [column[order] for column in columns]
+    edge_index, x, y, delta = columns
+    return DeltaBatch(
+        edge_index.astype(np.int64),
+        x.astype(np.int64),
+        y.astype(np.int64),
+        delta.astype(delta_dtype),
+        setups,
+    )
+
+
+def _deltas_group(
+    config: EdgeConfig, setups: Sequence[EdgeSetup], group: list[int], dtype
+) -> list[np.ndarray]:
+    """Deltas of the edges `group` (ascending), computed in `dtype` (int64 or object)."""
+    sts = [setups[k] for k in group]
+    a = ArrayArith(config, dtype)
+    s = _column_states(a, sts, dtype)
+    e, i = s["e"], s["i"]
+    st = _PerEdge(sts, dtype, e)
+    p = st.pieces
+    first = (i == 0) & p.first_partial
+    last = (i == st.columns - 1) & p.last_partial
+    he, adj = piece_end(a, st, last, s["jq"], s["jr"], p.row0 + s["rows"])
+    # hs: the first column's from setup, then where the previous column's piece ended.
+    hs = np.array(he, copy=True)
+    later = np.flatnonzero(i > 0)
+    hs[later] = he[later - 1] - (s["rows"][later] - s["rows"][later - 1]) * st.ifix[later]
+    start = i == 0
+    hs[start] = p.hs0[start]
+    a.check("height", hs)
+    d = column_deltas(a, config, st, first, last, hs, he, adj, s["jq"])
+    cells = delta_cells(a, st, s["x"], s["y"], d)
+    count = len(e)
+    out = [np.empty(4 * count, dtype=dtype) for _ in range(3)]
+    for k, cell in enumerate(cells):
+        for column, values in zip(out, cell, strict=True):
+            column[k::4] = np.broadcast_to(np.asarray(values, dtype=dtype), (count,))
+    edge_index = np.repeat(np.asarray(group, dtype=np.int64)[e], 4)
+    return [edge_index, *out]
