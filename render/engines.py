@@ -1,4 +1,9 @@
-"""The three engines a scene's edges can run through, all giving the same ordered writes.
+"""The engines a scene's edges can run through.
+
+Line mode (`run_engine`'s writes, used by `edgeaa edge` comparisons and the simulators'
+tests) has three engines giving the same ordered writes; the polygon renderer takes the
+accumulation deltas (`run_deltas`), which the model gives today and the core will give when
+its stepper emits them (issue "The core emits the same deltas").
 
 - ``model``: `edgeaa.model.vector.run_edges`, the vectorized bit-accurate model, in chunks
   of edges (for the progress bar; the writes do not depend on the chunking).
@@ -100,6 +105,68 @@ def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
         column[first] = lane0
         column[first[two] + 1] = lane1[two]
     return tuple(out)
+
+
+@dataclass(frozen=True)
+class DeltaRun:
+    """Accumulation deltas: edge (index into the edges sent, or a scene edge after
+    `in_image`), cell x, y and the signed delta; zeros left out after `in_image`."""
+
+    engine: str
+    edge: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    delta: np.ndarray
+    seconds: float  # engine wall time
+    clocks: int | None = None  # simulated clocks (simulators only)
+
+    def __len__(self) -> int:
+        return len(self.edge)
+
+    def take(self, rows) -> DeltaRun:
+        return DeltaRun(
+            self.engine, self.edge[rows], self.x[rows], self.y[rows], self.delta[rows],
+            self.seconds, self.clocks,
+        )  # fmt: skip
+
+    def in_image(self, sent: np.ndarray, offset: tuple[int, int]) -> DeltaRun:
+        """The nonzero deltas, with scene edge ids and image pixel coordinates."""
+        rows = np.flatnonzero(self.delta != 0)
+        run = self.take(rows)
+        return DeltaRun(
+            run.engine, np.asarray(sent, dtype=np.int64)[run.edge], run.x - offset[0],
+            run.y - offset[1], run.delta, run.seconds, run.clocks,
+        )  # fmt: skip
+
+
+def run_deltas(config: EdgeConfig, edges: list[Edge], engine: str, progress=None) -> DeltaRun:
+    """The accumulation deltas of `edges` (all valid) through an engine. progress(done,
+    total) is called as edges complete."""
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    if engine != "model":
+        raise EngineUnavailable(
+            f"the {engine} core does not emit accumulation deltas yet; polygons render "
+            "through the model (--engine model) until it does"
+        )
+    from ..model.vector import run_edges_deltas
+
+    start = time.perf_counter()
+    parts = []
+    for lo in range(0, len(edges), MODEL_CHUNK):
+        batch = run_edges_deltas(config, edges[lo : lo + MODEL_CHUNK])
+        parts.append((batch.edge_index + lo, batch.x, batch.y, batch.delta))
+        if progress is not None:
+            progress(min(lo + MODEL_CHUNK, len(edges)), len(edges))
+    if parts:
+        columns = [np.concatenate([part[i] for part in parts]) for i in range(4)]
+    else:
+        columns = [np.zeros(0, dtype=np.int64) for _ in range(4)]
+    return DeltaRun("model", *columns, seconds=time.perf_counter() - start)
+
+
+class EngineUnavailable(RuntimeError):
+    """An engine that cannot do what was asked (one line for the user)."""
 
 
 def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None) -> EngineRun:

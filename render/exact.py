@@ -6,7 +6,7 @@ number at a point inside it passes the rule. Each pixel's exact coverage is the 
 unit square centred on the pixel intersected with the region. The reference image
 composites the polygons in order with that coverage, in floating point, with the same
 operator as the renderer (I <- I + a (I_p - I)); so the error measures the antialiasing and
-its combination at vertices, not the compositing model. The reference uses the quantized
+its accumulation at vertices, not the compositing model. The reference uses the quantized
 vertices (what the renderer draws): quantization itself moves a vertex by at most 1/32 px
 at the default 1/16 px grid.
 """
@@ -103,26 +103,56 @@ class ErrorRow:
         return self.rms / self.full_scale
 
 
-def writers_per_pixel(result: Render) -> np.ndarray:
-    """How many distinct edges wrote each pixel (all polygons)."""
+def crossed_cells(plan: Plan, edge: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Which of the cells (x, y) (image pixels) the scene edge `edge` passes through the
+    interior of, decided exactly in doubled sub-pixel integers: the segment's box meets the
+    open pixel square and the square's corners lie strictly on both sides of its line."""
+    S = plan.config.subpixel_scale
+    ox, oy = plan.offset
+    ax, ay, bx, by = (2 * plan.coords[edge, i] for i in range(4))
+    cx, cy = 2 * (x + ox) * S, 2 * (y + oy) * S  # pixel centre, doubled
+    inside_box = (
+        (np.minimum(ax, bx) < cx + S)
+        & (np.maximum(ax, bx) > cx - S)
+        & (np.minimum(ay, by) < cy + S)
+        & (np.maximum(ay, by) > cy - S)
+    )
+    sides = [
+        (bx - ax) * (cy + sy - ay) - (by - ay) * (cx + sx - ax)
+        for sx in (-S, S)
+        for sy in (-S, S)
+    ]
+    low, high = np.minimum.reduce(sides), np.maximum.reduce(sides)
+    return inside_box & (low < 0) & (high > 0)
+
+
+def edges_per_pixel(result: Render) -> np.ndarray:
+    """How many sent edges pass through each pixel's interior (all polygons)."""
     scene = result.plan.scene
-    w = result.writes
+    d = result.deltas
+    cells = np.unique(np.stack([d.edge, d.y, d.x]), axis=1) if len(d) else np.zeros((3, 0), int)
+    edge, y, x = cells
+    onscreen = (x >= 0) & (x < scene.width) & (y >= 0) & (y < scene.height)
+    edge, y, x = edge[onscreen], y[onscreen], x[onscreen]
+    crossed = crossed_cells(result.plan, edge, x, y)
     count = np.zeros((scene.height, scene.width), dtype=np.int64)
-    np.add.at(count, (w.y, w.x), 1)  # an edge writes a pixel at most once
+    np.add.at(count, (y[crossed], x[crossed]), 1)
     return count
 
 
 def error_rows(result: Render, exact: np.ndarray) -> list[ErrorRow]:
-    """Max and RMS error against the reference: all pixels, then split by writers."""
+    """Max and RMS error against the reference: all pixels, then by the number of edges
+    passing through the pixel (0: wholly inside or outside every polygon)."""
     full = result.plan.config.full_scale
     err = np.abs(result.image.astype(np.float64) - exact)
-    writers = writers_per_pixel(result)
+    crossers = edges_per_pixel(result)
     rows = []
     for label, mask in (
-        ("all pixels", np.ones_like(writers, dtype=bool)),
-        ("one edge", writers == 1),
-        ("several edges", writers >= 2),
-        ("fill only", writers == 0),
+        ("all pixels", np.ones_like(crossers, dtype=bool)),
+        ("no edge", crossers == 0),
+        ("one edge", crossers == 1),
+        ("two edges", crossers == 2),
+        ("three or more", crossers >= 3),
     ):
         e = err[mask]
         rows.append(
