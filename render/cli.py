@@ -8,6 +8,7 @@ one line with exit status 1.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 
@@ -130,6 +131,14 @@ class RenderCommand(Command):
             "supersampling, Skia and AGG side by side, with error heat maps",
         )
         parser.add_argument("--crop", help="with --compare: the pixels X0,Y0,X1,Y1 to show")
+        parser.add_argument(
+            "--json",
+            action="store_true",
+            help="print one JSON object instead of text: the render's figures (edges, columns, "
+            "cycles, writes, ...), with --error max_abs_lsb, rms_lsb, pixels and the split "
+            "by edges per pixel, with --stats the render without skipping and each rule's "
+            "saving",
+        )
         parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
         add_config_options(parser)
 
@@ -157,7 +166,8 @@ class RenderCommand(Command):
                 PROG, f"--crop {args.crop} is outside the {scene.width} x {scene.height} image"
             )
         boundary = int(plan.boundary.sum())
-        print(
+        print_text = print if not args.json else (lambda *a, **k: None)
+        print_text(
             f"{PROG}: {scene.name}, {scene.width} x {scene.height} px, "
             f"{len(scene.polygons)} polygons, {plan.edge_count} edges ({boundary} boundary); "
             f"engine {args.engine}; {config}"
@@ -173,6 +183,7 @@ CONFLICTS = (
     ("compare", "stats", "--compare renders with the model in two modes, not one engine"),
     ("compare", "no_skip", "--compare renders with the model in two modes, not one engine"),
     ("stats", "no_skip", "--stats renders both with and without skipping"),
+    ("compare", "json", "--compare writes a figure and prints a table of every method"),
 )
 
 
@@ -242,31 +253,70 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
         print(f"{PROG}: error: the {args.engine} engine failed: {_cause(error)}", file=sys.stderr)
         return 1
     bar.close()
-    run = result.engine_run
+    run = result.deltas
     measured = f", {run.clocks:,} clocks simulated" if run.clocks is not None else ""
-    print(
-        f"engine: {len(result.sent)} edges, {result.cycles:,} cycles (timing model){measured}, "
-        f"{result.engine_writes:,} writes; fill path: {len(result.fill_path)} edges, "
-        f"{result.fill_path_writes:,} writes; {result.seconds:.3f} s "
-        f"(engine {run.seconds:.3f} s)"
-    )
+    if not args.json:
+        print(
+            f"engine: {len(result.sent)} edges, {result.cycles:,} cycles (timing model)"
+            f"{measured}, {len(run):,} nonzero deltas; accumulation: {result.rows_scanned:,} "
+            f"rows, {result.cells_scanned:,} cells scanned; {result.seconds:.3f} s "
+            f"(engine {run.seconds:.3f} s)"
+        )
+    say = print if not args.json else (lambda *a, **k: None)
     if args.output is not None:
         with atomic_output(PROG, args.output) as temporary:
             kind = write_png(result.image, config.full_scale, config.intensity_bits, temporary)
-        print(f"wrote {args.output} ({kind})")
+        say(f"wrote {args.output} ({kind})")
+    figures = _figures(result) if args.json else {}
     if baseline is not None:
-        from .stats import stats_report
+        from .stats import rule_savings, stats_numbers, stats_report
 
-        print(stats_report(baseline, result))
+        say(stats_report(baseline, result))
+        figures["without_skipping"] = stats_numbers(baseline)
+        figures["savings"] = [vars(saving) for saving in rule_savings(baseline, result)]
     if args.error:
-        from .exact import error_rows, error_table, exact_image
-
-        start = time.perf_counter()
-        exact = exact_image(plan, progress=bar)
-        bar.close()
-        print(
-            f"error against the exact area (shapely, {time.perf_counter() - start:.1f} s); "
-            "pixels by the edges that wrote them:"
-        )
-        print(error_table(error_rows(result, exact)))
+        figures.update(_error(result, plan, bar, say))
+    if args.json:
+        print(json.dumps(figures, indent=1))
     return 0
+
+
+def _figures(result) -> dict:
+    from .stats import stats_numbers
+
+    plan = result.plan
+    numbers = stats_numbers(result)
+    return {
+        "scene": plan.scene.name,
+        "width": plan.scene.width,
+        "height": plan.scene.height,
+        "engine": result.engine,
+        "config": str(plan.config),
+        **numbers,
+        "writes": numbers["deltas"],  # the accumulation buffer's writes
+    }
+
+
+def _error(result, plan, bar: ProgressBar, say) -> dict:
+    """Measure against the exact area; print the table (text mode) and return the figures."""
+    from .exact import error_rows, error_table, exact_image
+
+    start = time.perf_counter()
+    exact = exact_image(plan, progress=bar)
+    bar.close()
+    rows = error_rows(result, exact)
+    say(
+        f"error against the exact area (shapely, {time.perf_counter() - start:.1f} s); "
+        "pixels by the number of edges passing through them:"
+    )
+    say(error_table(rows))
+    every = rows[0]
+    return {
+        "max_abs_lsb": every.max_abs,
+        "rms_lsb": every.rms,
+        "pixels": every.pixels,
+        "by_edges_per_pixel": [
+            {"pixels": r.label, "count": r.pixels, "max_abs_lsb": r.max_abs, "rms_lsb": r.rms}
+            for r in rows
+        ],
+    }

@@ -118,9 +118,7 @@ def crossed_cells(plan: Plan, edge: np.ndarray, x: np.ndarray, y: np.ndarray) ->
         & (np.maximum(ay, by) > cy - S)
     )
     sides = [
-        (bx - ax) * (cy + sy - ay) - (by - ay) * (cx + sx - ax)
-        for sx in (-S, S)
-        for sy in (-S, S)
+        (bx - ax) * (cy + sy - ay) - (by - ay) * (cx + sx - ax) for sx in (-S, S) for sy in (-S, S)
     ]
     low, high = np.minimum.reduce(sides), np.maximum.reduce(sides)
     return inside_box & (low < 0) & (high > 0)

@@ -1,10 +1,10 @@
 """What skipping saves: a render without skipping beside one with it (`edgeaa render --stats`).
 
-Cycles are the timing model's (first command to last write, back-to-back source, ready
+Cycles are the timing model's (first command to last beat, back-to-back source, ready
 sink) for every engine, so the model engine reports them too; the saving of each rule is
 measured alone, as the cycles of the full edge list minus the cycles without that rule's
-edges, or (clipping) with every edge clipped to the image (the saves do not add up exactly:
-short edges are setup-bound and long ones stepping-bound).
+edges, or (clipping, projection) with only that change made (the savings do not add up
+exactly: short edges are setup-bound and long ones stepping-bound).
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model import setup
 from .engines import cycles
 from .render import Render
 
@@ -23,59 +22,70 @@ class RuleSaving:
     rule: str
     edges: int
     cycles: int  # saved, alone
-    engine_writes: int  # engine writes not produced
-
-
-def _writes_per_edge(result: Render, count: int) -> np.ndarray:
-    run = result.engine_run
-    return np.bincount(result.sent[run.edge_index], minlength=count)
+    deltas: int  # nonzero deltas not produced
 
 
 def rule_savings(baseline: Render, skipping: Render) -> list[RuleSaving]:
+    """Each skipping rule's saving on its own, against the render without skipping."""
     plan = baseline.plan
     config = plan.config
-    per_edge = _writes_per_edge(baseline, plan.edge_count)
+    per_edge = np.bincount(baseline.deltas.edge, minlength=plan.edge_count)
     everything = [int(e) for e in baseline.sent]
     total = cycles(config, [plan.edge(e) for e in everything])
-    groups = (
-        ("polygons equal to the background (I_in = I_out)", skipping.skipped_equal),
-        ("edges wholly outside the viewport (culled)", skipping.culled),
-        ("horizontal / vertical edges (fill path)", skipping.fill_path),
-    )
     out = []
-    for label, ids in groups:
+    for label, ids in (
+        ("polygons equal to the background (I_in = I_out)", skipping.skipped_equal),
+        ("edges above, below or right of the viewport (culled)", skipping.culled),
+        ("horizontal edges (add nothing)", skipping.horizontal),
+    ):
         drop = set(int(e) for e in ids)
         rest = [plan.edge(e) for e in everything if e not in drop]
-        out.append(
-            RuleSaving(label, len(drop), total - cycles(config, rest), int(per_edge[ids].sum()))
+        saved = int(per_edge[np.asarray(ids, dtype=np.int64)].sum())
+        out.append(RuleSaving(label, len(drop), total - cycles(config, rest), saved))
+    projected = set(int(e) for e in skipping.projected)
+    moved = [plan.edge(e, clip=e in projected) for e in everything]
+    out.append(
+        RuleSaving(
+            "edges left of the viewport (projected to its edge)",
+            len(projected),
+            total - cycles(config, moved),
+            0,
         )
-    clipped = [plan.edge(e, clip=True) for e in everything]
-    cut_edges, cut_writes = _clipped_writes(baseline)
+    )
+    clipped = [plan.edge(e, clip=True) for e in everything if e not in projected]
+    kept = [plan.edge(e) for e in everything if e not in projected]
     out.append(
         RuleSaving(
             "edges partly outside (clipped in setup)",
-            cut_edges,
-            total - cycles(config, clipped),
-            cut_writes,
+            len(kept),
+            cycles(config, kept) - cycles(config, clipped),
+            0,
         )
     )
     return out
 
 
-def _clipped_writes(baseline: Render) -> tuple[int, int]:
-    """Edges of an unclipped render with writes in columns the viewport clip removes, and
-    how many such writes (the major-axis coordinate of the write outside the image)."""
-    plan, run = baseline.plan, baseline.engine_run
-    clip = plan.viewport
-    x_major = np.array([setup(plan.config, plan.edge(int(e))).x_major for e in baseline.sent])
-    if not len(run):
-        return 0, 0
-    xm = x_major[run.edge_index]
-    major = np.where(xm, run.x, run.y)
-    lo = np.where(xm, clip.x_min, clip.y_min)
-    hi = np.where(xm, clip.x_max, clip.y_max)
-    cut = (major < lo) | (major > hi)
-    return len(np.unique(run.edge_index[cut])), int(cut.sum())
+def stats_numbers(result: Render) -> dict:
+    """The figures of one render, for --stats and --json."""
+    return {
+        "edges": len(result.sent),
+        "columns": _columns(result),
+        "cycles": result.cycles,
+        "deltas": len(result.deltas),
+        "rows_scanned": result.rows_scanned,
+        "cells_scanned": result.cells_scanned,
+        "pixel_stores": result.pixel_stores,
+        "seconds": round(result.seconds, 6),
+    }
+
+
+def _columns(result: Render) -> int:
+    """Columns stepped: each sent edge's visible columns (the timing model's count)."""
+    from ..model.timing import write_cycles
+
+    plan = result.plan
+    edges = [plan.edge(int(e), clip=result.skip) for e in result.sent]
+    return sum(len(t.beats) for t in write_cycles(plan.config, edges))
 
 
 def _ratio(a: float, b: float) -> str:
@@ -88,55 +98,31 @@ def stats_report(baseline: Render, skipping: Render) -> str:
     lines = [
         "",
         f"skipping: {plan.scene.name}, {baseline.engine} engine (without = every boundary edge "
-        "to the engine, every write applied, each polygon composited over the whole image)",
+        "to the engine unclipped, each polygon accumulated over the whole image)",
         f"{'':34} {'without':>11} {'with':>11} {'with/without':>12}",
     ]
 
     def row(label, a, b, fmt="{:11,d}"):
         lines.append(f"{label:34} {fmt.format(a)} {fmt.format(b)} {_ratio(a, b):>12}")
 
-    row("edges to the engine", len(baseline.sent), len(skipping.sent))
-    row("cycles (timing model)", baseline.cycles, skipping.cycles)
-    if baseline.engine_run.clocks is not None:
-        row("clocks simulated (with drain)", baseline.engine_run.clocks, skipping.engine_run.clocks)
-    row("engine writes", baseline.engine_writes, skipping.engine_writes)
-    row("fill-path writes", baseline.fill_path_writes, skipping.fill_path_writes)
-    applied_b = len(baseline.writes) - baseline.not_applied
-    applied_s = len(skipping.writes) - skipping.not_applied
-    row("writes applied to the image", applied_b, applied_s)
-    row("pixel stores", baseline.pixel_stores, skipping.pixel_stores)
-    row("pixels touched", baseline.pixels_touched, skipping.pixels_touched)
-    row("engine time (s)", baseline.engine_run.seconds, skipping.engine_run.seconds, "{:11.3f}")
+    without, with_ = stats_numbers(baseline), stats_numbers(skipping)
+    row("edges to the engine", without["edges"], with_["edges"])
+    row("columns stepped", without["columns"], with_["columns"])
+    row("cycles (timing model)", without["cycles"], with_["cycles"])
+    if baseline.deltas.clocks is not None:
+        row("clocks simulated (with drain)", baseline.deltas.clocks, skipping.deltas.clocks)
+    row("nonzero deltas", without["deltas"], with_["deltas"])
+    row("buffer rows scanned", without["rows_scanned"], with_["rows_scanned"])
+    row("buffer cells scanned", without["cells_scanned"], with_["cells_scanned"])
+    row("pixel stores", without["pixel_stores"], with_["pixel_stores"])
+    row("engine time (s)", baseline.deltas.seconds, skipping.deltas.seconds, "{:11.3f}")
     row("render time (s)", baseline.seconds, skipping.seconds, "{:11.3f}")
     lines.append(f"images identical: {'yes' if same else 'NO'}")
     lines.append("")
-    lines.append(f"{'saving of each rule alone':50} {'edges':>6} {'cycles':>8} {'writes':>8}")
+    lines.append(f"{'saving of each rule alone':54} {'edges':>6} {'cycles':>8} {'deltas':>8}")
     for saving in rule_savings(baseline, skipping):
-        lines.append(
-            f"{saving.rule:50} {saving.edges:6d} {saving.cycles:8,d} {saving.engine_writes:8,d}"
-        )
-    boundary_axis = int((plan.pixel_boundary & plan.boundary)[skipping.fill_path].sum())
-    lines.append(f"  of the fill-path edges, on pixel boundaries: {boundary_axis}")
-    zero = skipping.zero_writes
+        lines.append(f"{saving.rule:54} {saving.edges:6d} {saving.cycles:8,d} {saving.deltas:8,d}")
     lines.append(
-        f"{'writes equal to the fill (not applied)':50} {'':6} {'':8} {skipping.not_applied:8,d}"
-    )
-    lines.append(f"  of all {len(skipping.writes):,} writes in the image; coverage 0: {zero:,}")
-    lines.append(
-        f"{'not a boundary by the fill rule (never sent)':50} {int((~plan.boundary).sum()):6d}"
-    )
-    partly = _partly_outside(skipping)
-    lines.append(
-        f"left: {partly[1]:,} writes of {partly[0]} clipped edges land off the image on their "
-        "minor axis (the core clips the major axis only; the renderer drops them)"
+        f"{'not a boundary by the fill rule (never sent)':54} {int((~plan.boundary).sum()):6d}"
     )
     return "\n".join(lines)
-
-
-def _partly_outside(result: Render) -> tuple[int, int]:
-    """Edges sent that still write off the image, and how many such writes."""
-    plan, run = result.plan, result.engine_run
-    ox, oy = plan.offset
-    x, y = run.x - ox, run.y - oy
-    off = (x < 0) | (x >= plan.scene.width) | (y < 0) | (y >= plan.scene.height)
-    return len(np.unique(run.edge_index[off])), int(off.sum())
