@@ -8,7 +8,8 @@ It prints the figures the two documents quote and exits with status 1 if any che
 Part A checks the real-valued geometry by dense sampling (numpy) and exact rationals; part B
 runs the bit-accurate model (edgeaa.model.run_edge) against the exact reference
 (edgeaa.model.exact_coverage*); part C checks the register widths and the rules of
-docs/model.md. Everything is seeded and deterministic; it takes well under a minute.
+docs/model.md; part D the accumulation of docs/algorithm.md section 13. Everything is
+seeded and deterministic; it takes well under a minute.
 """
 
 from __future__ import annotations
@@ -793,12 +794,174 @@ def part_c() -> None:
     check("truncated: the restart changes values by at most 1 LSB", worst <= 1, f"max {worst}")
 
 
+# -- part D: accumulation (docs/algorithm.md section 13) ---------------------------------------
+
+
+def piece_area_right(k: float, hs: float, he: float, lo: float, hi: float, n: int = 4000):
+    """Area on the +u side of a straight piece over one column (u in [0, 1]) from height hs
+    to he, inside the height band [lo, hi], by dense sampling of the band."""
+    v = lo + (np.arange(n) + 0.5) * (hi - lo) / n
+    v = v[(v > hs) & (v < he)]
+    u = (v - hs) / k  # the piece's u at height v (u from 0)
+    return float(np.sum(1.0 - u) * (hi - lo) / n)
+
+
+def part_d_split_tables() -> None:
+    section("D1. x-major and y-major splits of a whole column (13.2, 13.3)")
+    rng = np.random.default_rng(13)
+    worst = 0.0
+    for _ in range(300):
+        k = float(rng.uniform(0.05, 1.0))
+        j = float(rng.uniform(0, 1))  # centre height in row r (units of a pixel)
+        hs, he = j - k / 2, j + k / 2
+        if he > 1:  # exit above
+            d = he - 1
+            t = d * d / (2 * k)
+            want = {"r": k / 2 - t, "r+1": t}
+            got = {
+                "r": piece_area_right(k, hs, he, 0, 1),
+                "r+1": piece_area_right(k, hs, he, 1, 2),
+            }
+        elif hs < 0:  # exit below
+            d = -hs
+            t = d * d / (2 * k)
+            want = {"r-1": d - t, "r": k / 2 - d + t}
+            got = {
+                "r-1": piece_area_right(k, hs, he, -1, 0),
+                "r": piece_area_right(k, hs, he, 0, 1),
+            }
+        else:
+            want = {"r": k / 2}
+            got = {"r": piece_area_right(k, hs, he, 0, 1)}
+        worst = max(worst, max(abs(got[key] - want[key]) for key in want))
+    check("x-major table: row areas on the +u side (300 columns)", worst < 2e-3, f"{worst:.1e}")
+    # y-major: A areas per cell are section 3.3's table, differenced: the deltas sum to band.
+    ok = all(
+        sum((1 - a_up, a_up - a_mid, a_mid - a_low, a_low)) == 1
+        for a_up, a_mid, a_low in ((1, Fraction(3, 8), 0), (Fraction(7, 8), Fraction(1, 2), 0))
+    )
+    check("y-major deltas (band - A(r-1), A(r-1) - A(r), A(r) - A(r+1), A(r+1)) sum to band", ok)
+
+
+def _random_polygon(rng: random.Random, config: EdgeConfig, n: int) -> list[tuple[int, int]]:
+    hi = min(config.max_vertex, 40 * config.subpixel_scale)
+    return [(rng.randint(0, hi), rng.randint(0, hi)) for _ in range(n)]
+
+
+def part_d_no_leak() -> None:
+    section("D2. covers telescope: every row of a closed polygon sums to zero (13.4)")
+    from edgeaa.model.vector import run_edges_deltas
+
+    rng = random.Random(21)
+    configs = [
+        EdgeConfig(coord_bits=6, mode=m, subpixel_bits=s, accumulator=a)
+        for m in MODES
+        for s in (0, 2, 4)
+        for a in ("exact", "truncated")
+    ]
+    leaks = polygons = 0
+    for config in configs:
+        for _ in range(12):
+            pts = _random_polygon(rng, config, rng.randint(3, 9))
+            edges = [
+                Edge(*p, *q, "left", config.full_scale, 0)
+                for p, q in zip(pts, pts[1:] + pts[:1], strict=True)
+                if p != q
+            ]
+            if not edges:
+                continue
+            batch = run_edges_deltas(config, edges)
+            rows: dict[int, int] = {}
+            for y, delta in zip(batch.y.tolist(), batch.delta.tolist(), strict=True):
+                rows[y] = rows.get(y, 0) + delta
+            leaks += any(rows.values())
+            polygons += 1
+    check(f"no row leaks: {polygons} random polygons, {len(configs)} configurations", leaks == 0)
+
+
+def part_d_end_totals() -> None:
+    section("D3. end pieces: totals of partial columns within 3/2 units (13.5)")
+    rng = random.Random(5)
+    config = EdgeConfig(coord_bits=6, mode="paper")
+    S, worst = config.subpixel_scale, Fraction(0)
+    for _ in range(500):
+        x0, x1 = sorted(rng.sample(range(S, 60 * S), 2))
+        y0 = rng.randint(S, 30 * S)
+        y1 = y0 + rng.randint(0, min(x1 - x0, 30 * S))
+        st = setup(config, Edge(x0, y0, x1, y1, "left", 255, 0))
+        p = st.pieces
+        if st.columns < 2:
+            continue
+        K = Fraction(st.kq * st.du + st.kr, st.du)
+        g = Fraction(x0, S) - (math.floor(Fraction(x0 * 2 + S, 2 * S)) - Fraction(1, 2))
+        e = (math.ceil(Fraction(x1 * 2 - S, 2 * S)) + Fraction(1, 2)) - Fraction(x1, S)
+        worst = max(
+            worst, abs(p.total0 - K * (1 - g) ** 2 / 2), abs(p.total1 - K * (1 - e * e) / 2)
+        )
+    check(
+        "x-major totals K(1-g)^2/2 and K(1-e^2)/2 within one unit",
+        worst <= 1,
+        f"{float(worst):.3f}",
+    )
+
+
+def part_d_pixel_bound() -> None:
+    section("D4. every pixel within the sum of its edges' bounds (13.6)")
+    from edgeaa.render import Polygon, Scene, render_scene
+    from edgeaa.render.exact import edges_per_pixel, exact_image
+
+    rng = random.Random(8)
+    worst_ratio, pixels = 0.0, 0
+    for mode in ("paper", "seg4"):
+        config = EdgeConfig(mode=mode)
+        for trial in range(12):
+            n = 3 if trial % 2 else rng.randint(5, 9)
+            pts = tuple((rng.uniform(1, 30), rng.uniform(1, 30)) for _ in range(n))
+            scene = Scene(32, 32, (Polygon((pts,), 255, "evenodd"),), background=0)
+            result = render_scene(scene, config)
+            err = np.abs(result.image - exact_image(result.plan))
+            crossers = edges_per_pixel(result)
+            # c_N k <= c_N per edge; a few units of fixed point, half an LSB of rounding
+            bound = crossers * float(C_N[mode]) * 255 + 0.5 + 0.01
+            worst_ratio = max(worst_ratio, float((err / bound).max()))
+            pixels += err.size
+    check(
+        "|error| <= sum of c_N |I_d| over crossing edges + 1/2 LSB",
+        worst_ratio <= 1,
+        f"max ratio {worst_ratio:.3f} over {pixels} pixels",
+    )
+
+
+def part_d_fill() -> None:
+    section("D5. fill rules on sums (13.7)")
+    from edgeaa.model.accumulate import fill
+
+    sums = np.array([0, 5, 10, -10, 15, 20, 25, -25, 30])
+    check(
+        "non-zero: min(|S|, ifix)",
+        fill(sums, "nonzero", 10).tolist() == [0, 5, 10, 10, 10, 10, 10, 10, 10],
+    )
+    check(
+        "even-odd: folded with period 2 ifix",
+        fill(sums, "evenodd", 10).tolist() == [0, 5, 10, 10, 5, 0, 5, 5, 10],
+    )
+
+
+def part_d() -> None:
+    part_d_split_tables()
+    part_d_no_leak()
+    part_d_end_totals()
+    part_d_pixel_bound()
+    part_d_fill()
+
+
 def main() -> int:
     start = time.time()
     np.seterr(divide="ignore", invalid="ignore")
     part_a()
     part_b()
     part_c()
+    part_d()
     print(f"\n{len(FAILED)} failed checks; {time.time() - start:.1f} s")
     for name in FAILED:
         print(f"  FAILED: {name}")

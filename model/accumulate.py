@@ -3,7 +3,7 @@
 Every edge of a polygon adds its deltas (`step.run_edge_deltas`, `vector.run_edges_deltas`)
 into the cells of a buffer; the prefix sum of a row along +x is then, in every cell, the
 polygon's coverage times the winding, scaled by ifix = |I_d| << F (docs/algorithm.md
-section 8). The fill rule turns the sum into a coverage in [0, ifix] and the coverage rounds
+section 13). The fill rule turns the sum into a coverage in [0, ifix] and the coverage rounds
 to an intensity offset in [0, |I_d|] with a shift: no multiply.
 
 A buffer covers a window of the image. A delta left of the window belongs to every cell of

@@ -244,7 +244,7 @@ def advance(a, st, x, y, jq, jr) -> Advance:
     return Advance(x_next, y_next, jq_next, jr_next, jsum, row_step)
 
 
-# -- accumulation deltas (docs/algorithm.md section 8) -----------------------------------------
+# -- accumulation deltas (docs/algorithm.md section 13) -----------------------------------------
 
 
 @dataclass(slots=True)
@@ -282,7 +282,7 @@ def _clamp(a, value, hi):
 
 
 def column_deltas(a, config: EdgeConfig, st, first, last, hs, he, adj, jq) -> ColumnDeltas:
-    """The signed-area deltas of one column's piece from hs to he (docs/algorithm.md s. 8).
+    """The signed-area deltas of one column's piece from hs to he (docs/algorithm.md s. 13).
 
     first / last: the column is the edge's partial first / last column (it holds a vertex);
     adj: P1's row minus the loop's row. Adds, compares and selects of per-edge constants,
@@ -337,7 +337,7 @@ def _deltas_y_major(a, hs, he, ifix, t, total, band):
 
 def delta_cells(a, st, x, y, d: ColumnDeltas):
     """The four cells of a column's deltas in screen pixels, signed by the winding: a list of
-    (x, y, delta). (x, y) is the loop's pixel of column c, row r (docs/algorithm.md s. 8).
+    (x, y, delta). (x, y) is the loop's pixel of column c, row r (docs/algorithm.md s. 13).
 
     x-major: a 2 x 2 block, columns x and x + 1 (screen), rows r - up and r - up + 1 (each
     folded row one ``row_dy`` on screen); the column pair's values swap when the major axis

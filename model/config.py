@@ -155,7 +155,7 @@ class EdgeConfig:
             "area": RegisterWidth(acc + 1),  # a pixel's scaled area, [0, ifix]
             "seg_const": RegisterWidth(acc),  # per-edge thresholds and intercepts
             "value": RegisterWidth(self.intensity_bits),  # output intensity
-            # accumulation (docs/algorithm.md s. 8): a piece's heights lie in
+            # accumulation (docs/algorithm.md s. 13): a piece's heights lie in
             # (-ifix, 2 ifix); a cell's delta in [-ifix, ifix]
             "height": RegisterWidth(acc + 2, signed=True),
             "delta": RegisterWidth(acc + 2, signed=True),

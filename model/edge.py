@@ -301,7 +301,7 @@ class EndPieces:
     """What the accumulation deltas (`edgeaa.model.column.column_deltas`) need beyond the
     stepping constants: the edge's own piece in its first and last column, cut at the
     vertices, and its winding sign. Heights are in units of ifix per pixel, measured from
-    the top (smaller v) of the stepping loop's row; docs/algorithm.md section 8 derives each.
+    the top (smaller v) of the stepping loop's row; docs/algorithm.md section 13 derives each.
 
     An end column is *partial* when it holds a vertex (not cut away by the clip window);
     a one-column edge is partial at both ends and ``total0``, ``band0`` describe its whole
