@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model import setup
 from .engines import cycles
 from .render import Render
 
@@ -52,13 +53,18 @@ def rule_savings(baseline: Render, skipping: Render) -> list[RuleSaving]:
             0,
         )
     )
-    clipped = [plan.edge(e, clip=True) for e in everything if e not in projected]
-    kept = [plan.edge(e) for e in everything if e not in projected]
+    kept = [e for e in everything if e not in projected]
+    clipped = [plan.edge(e, clip=True) for e in kept]
+    whole = [plan.edge(e) for e in kept]
+    cut = sum(
+        setup(config, a).columns != setup(config, b).columns
+        for a, b in zip(clipped, whole, strict=True)
+    )
     out.append(
         RuleSaving(
             "edges partly outside (clipped in setup)",
-            len(kept),
-            cycles(config, kept) - cycles(config, clipped),
+            cut,
+            cycles(config, whole) - cycles(config, clipped),
             0,
         )
     )
