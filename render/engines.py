@@ -33,6 +33,7 @@ from ..model.timing import write_cycles
 from ..sim.verification.scoreboard import edge_columns
 
 ENGINES = ("model", "amaranth", "verilator")
+DELTA_ENGINES = ("model",)  # the engines that emit accumulation deltas (polygons)
 MODEL_CHUNK = 512  # edges per run_edges call
 AMARANTH_CLOCKS_PER_SECOND = 1000.0  # rough rate of the Python simulator, for the warning
 AMARANTH_WARN_SECONDS = 60.0
@@ -144,11 +145,8 @@ def run_deltas(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
     total) is called as edges complete."""
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
-    if engine != "model":
-        raise EngineUnavailable(
-            f"the {engine} core does not emit accumulation deltas yet; polygons render "
-            "through the model (--engine model) until it does"
-        )
+    if engine not in DELTA_ENGINES:
+        raise EngineUnavailable(unavailable(engine))
     from ..model.vector import run_edges_deltas
 
     start = time.perf_counter()
@@ -167,6 +165,13 @@ def run_deltas(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
 
 class EngineUnavailable(RuntimeError):
     """An engine that cannot do what was asked (one line for the user)."""
+
+
+def unavailable(engine: str) -> str:
+    return (
+        f"the {engine} core does not emit accumulation deltas yet, so it cannot render "
+        f"polygons; use --engine model (engines that can: {', '.join(DELTA_ENGINES)})"
+    )
 
 
 def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None) -> EngineRun:
