@@ -327,7 +327,7 @@ def _check_range(config, scene, contours, owners, offset) -> None:
 
 @dataclass
 class Render:
-    image: np.ndarray  # (height, width) int64 intensities
+    image: np.ndarray  # (height, width) intensities, the narrowest unsigned type
     plan: Plan
     engine: str
     skip: bool
@@ -399,7 +399,9 @@ def render_scene(
     timings["engine"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, dtype=np.int64)
+    # The narrowest unsigned type that holds full scale: a 16384 x 16384 image is 256 MiB.
+    dtype = np.min_scalar_type(config.full_scale)
+    image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, dtype=dtype)
     counts = {"rows": 0, "cells": 0, "stores": 0}
     polygon_of = plan.polygon[deltas.edge]
     order = np.argsort(polygon_of, kind="stable")
@@ -444,7 +446,7 @@ def _draw_polygon(plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: 
         counts["rows"] += len(block.rows)
         counts["cells"] += block.cells_scanned
         q = intensity_offset(block.coverage, config.F).astype(np.int64)
-        view = image[block.rows, x0:x1]
+        view = image[block.rows, x0:x1].astype(np.int64)
         covered = q > 0
         new = np.where(covered, composite(view, q, poly.intensity, d), view)
         changed = new != view
