@@ -203,6 +203,9 @@ def _round_div(num: int, den: int) -> int:
     return (2 * num + den) // (2 * den)
 
 
+SAFE = 1 << 30  # |coordinate| below this keeps _may_split's products inside int64
+
+
 def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
     """Insert a vertex wherever an edge of these contours crosses or touches another edge's
     interior (and at the ends of collinear overlaps), so that every edge lies on one side of
@@ -211,41 +214,31 @@ def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
     Contours are (n, 2) int64 arrays of closed polygons. A crossing point is rounded half up
     to the integer grid, the same for both edges. Returns the new contours and the number of
     vertices inserted.
+
+    The pairs to test come from a sweep (`_candidate_pairs`): O(n log n + B) numpy work for
+    n edges and B pairs whose bounding boxes overlap, and Python work only for the pairs that
+    do split (k). Quadratic only when B is, as for random vertex soups, where k is too.
     """
-    segs, owner = [], []
-    for c, pts in enumerate(contours):
-        nxt = np.roll(pts, -1, axis=0)
-        segs.append(np.concatenate([pts, nxt], axis=1))
-        owner.extend((c, k) for k in range(len(pts)))
-    if not segs:
+    if not contours:
         return contours, 0
-    seg = np.concatenate(segs)
-    lo_x, hi_x = np.minimum(seg[:, 0], seg[:, 2]), np.maximum(seg[:, 0], seg[:, 2])
-    lo_y, hi_y = np.minimum(seg[:, 1], seg[:, 3]), np.maximum(seg[:, 1], seg[:, 3])
-    n = len(seg)
-    splits: dict[int, list] = {}
-    step = max(1, CHUNK // max(1, n))
+    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
     rows = seg.tolist()
-    for lo in range(0, n, step):
-        i = np.arange(lo, min(n, lo + step))[:, None]
-        meet = (
-            (lo_x[i] <= hi_x[None, :])
-            & (lo_x[None, :] <= hi_x[i])
-            & (lo_y[i] <= hi_y[None, :])
-            & (lo_y[None, :] <= hi_y[i])
-            & (np.arange(n)[None, :] > i)
-        )
-        for a, b in np.argwhere(meet).tolist():
-            _intersect(a + lo, b, rows, splits)
+    splits: dict[int, list] = {}
+    for i, j in _candidate_pairs(seg):
+        _intersect(i, j, rows, splits)
     if not splits:
         return contours, 0
-    out, inserted = [], 0
-    base = 0
+    return _insert_splits(contours, splits)
+
+
+def _insert_splits(contours: list[np.ndarray], splits: dict) -> tuple[list[np.ndarray], int]:
+    """The contours with each edge's split points inserted in order along it."""
+    out, inserted, base = [], 0, 0
     for pts in contours:
         points = []
-        for k in range(len(pts)):
-            points.append(tuple(int(v) for v in pts[k]))
-            for _, p in sorted(splits.get(base + k, ())):
+        for k, row in enumerate(pts.tolist()):
+            points.append(tuple(map(int, row)))
+            for *_, p in sorted(splits.get(base + k, ())):
                 if p != points[-1]:
                     points.append(p)
                     inserted += 1
@@ -255,9 +248,77 @@ def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
     return out, inserted
 
 
-def _intersect(i: int, j: int, rows: list, splits: dict) -> None:
+def _candidate_pairs(seg: np.ndarray):
+    """Yield (i, j), i < j, for every edge pair that may split (a superset of those that do).
+
+    A sweep along the axis whose intervals overlap least: with the edges sorted by their low
+    end, edge p's partners are the edges after it whose low end is at most p's high end, one
+    searchsorted. The other axis and the exact test (`_may_split`) filter them in numpy, in
+    chunks of about CHUNK pairs.
+    """
+    n = len(seg)
+    lo = np.minimum(seg[:, 0:2], seg[:, 2:4])
+    hi = np.maximum(seg[:, 0:2], seg[:, 2:4])
+    best = None
+    for axis in (0, 1):
+        order = np.argsort(lo[:, axis], kind="stable")
+        ends = np.searchsorted(lo[order, axis], hi[order, axis], side="right")
+        counts = ends - np.arange(1, n + 1)
+        if best is None or counts.sum() < best[0]:
+            best = (counts.sum(), axis, order, counts)
+    _, axis, order, counts = best
+    other = 1 - axis
+    exact = seg.dtype.kind in "iu" and n and seg.min() > -SAFE and seg.max() < SAFE
+    seg64 = seg.astype(np.int64) if exact else None
+    cum = np.cumsum(counts)
+    p0 = 0
+    while p0 < n:
+        p1 = max(p0 + 1, int(np.searchsorted(cum, cum[p0] - counts[p0] + CHUNK, side="right")))
+        c = counts[p0:p1]
+        a = np.repeat(np.arange(p0, p1), c)
+        b = a + 1 + np.arange(len(a)) - np.repeat(np.cumsum(c) - c, c)
+        i, j = order[a], order[b]
+        keep = (lo[i, other] <= hi[j, other]) & (lo[j, other] <= hi[i, other])
+        i, j = i[keep], j[keep]
+        if exact:
+            keep = _may_split(seg64[i], seg64[j])
+            i, j = i[keep], j[keep]
+        yield from zip(np.minimum(i, j).tolist(), np.maximum(i, j).tolist(), strict=True)
+        p0 = p1
+
+
+def _may_split(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Whether `_intersect` adds a split point for edges a[m] and b[m] ((m, 4) int64): its
+    tests, exact in int64 while every |coordinate| < SAFE."""
+    r, s = a[:, 2:4] - a[:, 0:2], b[:, 2:4] - b[:, 0:2]
+    w = b[:, 0:2] - a[:, 0:2]  # c - a
+    den = r[:, 0] * s[:, 1] - r[:, 1] * s[:, 0]
+    tn = w[:, 0] * s[:, 1] - w[:, 1] * s[:, 0]
+    un = w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
+    sign = np.where(den < 0, -1, 1)
+    den, tn, un = den * sign, tn * sign, un * sign
+    inner = ((tn > 0) & (tn < den)) | ((un > 0) & (un < den))
+    crossing = (den != 0) & (tn >= 0) & (tn <= den) & (un >= 0) & (un <= den) & inner
+    # collinear: some end of one edge strictly inside the other
+    rr, ss = (r * r).sum(axis=1), (s * s).sum(axis=1)
+    along_r = (w * r).sum(axis=1), ((b[:, 2:4] - a[:, 0:2]) * r).sum(axis=1)
+    along_s = (-w * s).sum(axis=1), ((a[:, 2:4] - b[:, 0:2]) * s).sum(axis=1)
+    overlap = np.zeros(len(a), dtype=bool)
+    for t, length in ((along_r[0], rr), (along_r[1], rr), (along_s[0], ss), (along_s[1], ss)):
+        overlap |= (t > 0) & (t < length)
+    collinear = (den == 0) & (un == 0) & overlap
+    return r.any(axis=1) & s.any(axis=1) & (crossing | collinear)
+
+
+def _add_split(splits: dict, k: int, num: int, den: int, point: tuple[int, int]) -> None:
+    """Record a split of edge k at t = num / den. The float t sorts first (rounding is
+    monotone, so it never reverses an order); the exact t settles its ties."""
     from fractions import Fraction
 
+    splits.setdefault(k, []).append((num / den, Fraction(num, den), point))
+
+
+def _intersect(i: int, j: int, rows: list, splits: dict) -> None:
     ax, ay, bx, by = rows[i]
     cx, cy, dx, dy = rows[j]
     rx, ry, sx, sy = bx - ax, by - ay, dx - cx, dy - cy
@@ -272,9 +333,9 @@ def _intersect(i: int, j: int, rows: list, splits: dict) -> None:
             return
         point = (_round_div(ax * den + tn * rx, den), _round_div(ay * den + tn * ry, den))
         if 0 < tn < den:
-            splits.setdefault(i, []).append((Fraction(tn, den), point))
+            _add_split(splits, i, tn, den, point)
         if 0 < un < den:
-            splits.setdefault(j, []).append((Fraction(un, den), point))
+            _add_split(splits, j, un, den, point)
         return
     if _cross(cx - ax, cy - ay, rx, ry):
         return  # parallel, not collinear
@@ -284,6 +345,6 @@ def _intersect(i: int, j: int, rows: list, splits: dict) -> None:
         ((ax, ay), j, (cx, cy, sx, sy)),
         ((bx, by), j, (cx, cy, sx, sy)),
     ):
-        t = Fraction((px - ox) * ux + (py - oy) * uy, ux * ux + uy * uy)
-        if 0 < t < 1:
-            splits.setdefault(k, []).append((t, (px, py)))
+        num, length = (px - ox) * ux + (py - oy) * uy, ux * ux + uy * uy
+        if 0 < num < length:
+            _add_split(splits, k, num, length, (px, py))
