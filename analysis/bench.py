@@ -19,6 +19,8 @@ What is timed:
   pixels; a real supersampler would also have to find them).
 - peers: building the path, rasterizing into a fresh mask the size of the edge's writes
   plus one pixel, and reading the mask back into numpy, per edge.
+- the seeds' image methods (`aa_methods`: MLAA, FXAA, TAA): point sampling each edge's image
+  and post-processing it; they take seconds, so they run once, not `repeats` times.
 
 A second table compares lines (1 px wide, integer endpoints: the edges rounded to pixel
 centres) where scikit-image's `draw.line_aa` makes sense, against Skia's and AGG's
@@ -34,21 +36,14 @@ import numpy as np
 from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.vector import run_edges
-from . import peers, sampling
-from .evaluate import (
-    EDGEAA_METHODS,
-    SAMPLE_METHODS,
-    MethodRun,
-    mode_of,
-    pixel_set,
-    run_method,
-    timed,
-)
+from . import aa_methods, msaa, peers, sampling
+from .aa_methods import run_method
+from .evaluate import EDGEAA_METHODS, SAMPLE_METHODS, MethodRun, mode_of, pixel_set, timed
 from .geometry import random_image_edges
 from .hardware import hardware_figures
 from .report import fmt_float, pyplot, save, table
 
-FILL_METHODS = EDGEAA_METHODS + SAMPLE_METHODS + peers.FILL_PEERS
+FILL_METHODS = EDGEAA_METHODS + SAMPLE_METHODS + aa_methods.METHODS + peers.FILL_PEERS
 DEFAULT_EDGES, QUICK_EDGES = 1000, 60
 DEFAULT_REPEATS, QUICK_REPEATS = 5, 2
 
@@ -59,9 +54,21 @@ def output_kind(config: EdgeConfig, name: str) -> str:
     if name in sampling.PATTERNS:
         count = len(sampling.PATTERNS[name])
         return f"{count} sample" + ("s" if count > 1 else "")
+    if name in msaa.PATTERNS:
+        return f"{len(msaa.PATTERNS[name].units)} taps"
+    if name in aa_methods.IMAGE_METHODS:
+        return "image post-pass" if name != "taa" else "1 sample/frame"
     if name == "skimage-line_aa":
         return "float"
     return "8-bit mask"
+
+
+def values_per_pixel(name: str) -> float:
+    """Values a pixel holds before it is resolved: samples stored (after sharing), the
+    frame and history of TAA, 1 for a method that writes the pixel once."""
+    if name in sampling.PATTERNS:
+        return len(sampling.PATTERNS[name])
+    return aa_methods.VALUES_PER_PIXEL.get(name, 1)
 
 
 @dataclass
@@ -124,8 +131,11 @@ def run_bench(
     line_best: dict[str, tuple[float, list]] = {}
     steps = repeats * (len(methods) + (len(peers.LINE_PEERS) + 1 if line_list else 0))
     bar = ProgressBar("bench", steps, enabled=progress)
-    for _ in range(repeats):
+    for round_ in range(repeats):
         for name in methods:
+            if round_ and name in aa_methods.IMAGE_METHODS:
+                bar.step(name)  # seconds per run, 100 times edgeaa's: once is enough
+                continue
             run = run_method(config, edges, pixels, name, coverage="output", jobs=jobs)
             if name not in best or run.seconds < best[name].seconds:
                 best[name] = run
@@ -205,6 +215,7 @@ def bench_tables(result: BenchResult) -> str:
         "time ms",
         "ns/px out",
         "x edgeaa",
+        "values/px",
         "cycles/col",
         "LUTs",
         "Fmax MHz",
@@ -220,15 +231,18 @@ def bench_tables(result: BenchResult) -> str:
                 f"{row.seconds * 1e3:.2f}",
                 f"{row.seconds / max(row.outputs, 1) * 1e9:.0f}",
                 f"{row.ratio:.3f}",
+                f"{values_per_pixel(row.name):g}",
                 _hw(row, "cycles_per_column", 2),
                 _hw(row, "luts", 0),
                 _hw(row, "fmax_mhz", 1),
             ]
         )
-    lines.append(table(headers, rows, align="llrrrrrrrr"))
+    lines.append(table(headers, rows, align="llrrrrrrrrr"))
     lines.append(
         "ns/px out: time per pixel the method produced (edgeaa: its writes; sample methods: "
-        "the compared pixels; peers: mask pixels). Hardware: cycles/column measured on "
+        "the compared pixels; image methods: the pixels of their images; peers: mask pixels). "
+        "values/px: values a pixel holds before it is resolved (samples stored after "
+        "sharing; TAA: frame and history). Hardware: cycles/column measured on "
         "the compiled core with these edges; LUT4 and Fmax for iCE40 HX8K (edgeaa synth)."
     )
     if result.line_rows:
@@ -270,6 +284,14 @@ def pareto_front(points: list[tuple[float, float]]) -> list[int]:
     return front
 
 
+def _colour(name: str) -> str:
+    if mode_of(name):
+        return "tab:red"
+    if name in sampling.PATTERNS:
+        return "tab:blue"
+    return "tab:purple" if name in aa_methods.METHODS else "tab:green"
+
+
 def plot_pareto(result: BenchResult, path: str) -> None:
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(10, 6.5))
@@ -277,14 +299,7 @@ def plot_pareto(result: BenchResult, path: str) -> None:
     xs = [row.ratio for row in rows]
     for attr, marker, label in (("max_err", "o", "max |err|"), ("rms_err", "s", "RMS err")):
         ys = [getattr(row, attr) for row in rows]
-        colours = [
-            "tab:red"
-            if mode_of(r.name)
-            else "tab:blue"
-            if r.name in sampling.PATTERNS
-            else "tab:green"
-            for r in rows
-        ]
+        colours = [_colour(r.name) for r in rows]
         ax.scatter(
             xs,
             ys,
@@ -321,9 +336,14 @@ def plot_pareto(result: BenchResult, path: str) -> None:
     labels += ["max |err| (circles, labelled)", "RMS err (squares)"]
     handles += [
         Line2D([], [], color=c, marker="o", linestyle="")
-        for c in ("tab:red", "tab:blue", "tab:green")
+        for c in ("tab:red", "tab:blue", "tab:purple", "tab:green")
     ]
-    labels += ["edgeaa model", "sample patterns (numpy)", "peers (Skia, AGG)"]
+    labels += [
+        "edgeaa model",
+        "sample patterns (numpy)",
+        "MSAA patterns, MLAA, FXAA, TAA (numpy)",
+        "peers (Skia, AGG)",
+    ]
     ax.legend(handles, labels, fontsize=8, loc="lower left")
     ax.grid(True, which="both", alpha=0.3)
     cfg = result.config

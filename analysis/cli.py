@@ -69,7 +69,9 @@ class PlotCommand(Command):
             description="Sweep the edge angle from 0 to 90 degrees over sub-pixel offsets and "
             "plot the maximum and RMS coverage error against the exact area of edgeaa's modes "
             "(with their bounds k/8, k/64, k/256, k/1024), the sample-based baselines (point, "
-            "ordered grids 2x2..16x16, rotated grid, 8-rooks) and the peers (Skia, AGG).",
+            "ordered grids 2x2..16x16, rotated grid, 8-rooks), the seeds' methods (MSAA 2x, "
+            "quincunx, FLIPQUAD, MLAA with and without slope prediction, FXAA with luma or "
+            "geometry edges, TAA) and the peers (Skia, AGG).",
         )
         slope.add_argument(
             "-o",

@@ -25,11 +25,13 @@ import numpy as np
 
 from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
-from . import peers
-from .evaluate import BOUND_PER_K, EDGEAA_METHODS, SAMPLE_METHODS, mode_of, pixel_set, run_method
+from . import aa_methods, peers
+from .aa_methods import run_method
+from .evaluate import BOUND_PER_K, EDGEAA_METHODS, SAMPLE_METHODS, mode_of, pixel_set
 from .report import fmt_float, pyplot, save, table
 
-DEFAULT_METHODS = EDGEAA_METHODS + SAMPLE_METHODS + ("skia", "agg")
+# The peers stay last: `edgeaa plot error-vs-slope --no-peers` drops the last two.
+DEFAULT_METHODS = EDGEAA_METHODS + SAMPLE_METHODS + aa_methods.METHODS + ("skia", "agg")
 
 
 def slope_edges(
@@ -151,6 +153,14 @@ STYLE = {
     "skia": ("darkgoldenrod", "--"),
     "agg": ("navy", "--"),
     "agg-default": ("slategray", "--"),
+    "msaa2": ("yellowgreen", "-."),
+    "quincunx": ("teal", "-."),
+    "flipquad": ("crimson", "-."),
+    "mlaa": ("darkviolet", (0, (1, 1))),
+    "mlaa-slope": ("magenta", (0, (3, 1, 1, 1))),
+    "fxaa": ("sienna", (0, (1, 1))),
+    "fxaa-geom": ("peru", (0, (3, 1, 1, 1))),
+    "taa": ("lime", (0, (5, 1))),
 }
 FLOOR = 1e-5
 
