@@ -7,7 +7,13 @@
   field wider than the image, as in a text box scrolled to its start: the glyph outlines come
   from the font's quadratic curves through fontTools' pen, flattened within the tolerance.
 
-Both include what a real scene has and the renderer can skip: polygons equal to the
+- ``hatch``: three shapes with slanted edges (a tilted square, a triangle, a disc), each filled
+  with a pixel-aligned pattern drawn as polygons inside it (1 px stripes across, 1 px stripes
+  down, a 2 px checker): luma structure that point sampling already renders exactly, the
+  test of FXAA with geometry edges (docs/aa_methods.md). A pattern's polygons are named
+  "shape K/...": they belong to the shape's object, not to the geometry.
+
+The first two include what a real scene has and the renderer can skip: polygons equal to the
 background, edges off the image, horizontal and vertical edges, edges on pixel boundaries.
 """
 
@@ -19,7 +25,7 @@ from functools import lru_cache
 from ..model import EdgeConfig
 from .scene import DEFAULT_TOLERANCE, Contour, Polygon, Scene, flatten_quadratic
 
-BUILTINS = ("starburst", "text")
+BUILTINS = ("starburst", "text", "hatch")
 TEXT = "edgeaa renders polygons and text"
 
 
@@ -35,6 +41,8 @@ def builtin(name: str, config: EdgeConfig | None = None) -> Scene:
         return starburst(config.full_scale)
     if name == "text":
         return text_scene(config.full_scale)
+    if name == "hatch":
+        return hatch_scene(config.full_scale)
     from .scene import SceneError
 
     raise SceneError(f"unknown built-in scene {name!r} (built-ins: {', '.join(BUILTINS)})")
@@ -168,3 +176,50 @@ def text_scene(
     return Scene(
         width, height, (field, frame, *glyphs), background=full, name="text", tolerance=tolerance
     )
+
+
+def _regular(cx: float, cy: float, r: float, n: int, turn: float) -> list[tuple[float, float]]:
+    return [
+        (
+            cx + r * math.cos(turn + 2 * math.pi * i / n),
+            cy + r * math.sin(turn + 2 * math.pi * i / n),
+        )
+        for i in range(n)
+    ]
+
+
+def _pattern_cells(kind: str, x0: int, y0: int, x1: int, y1: int):
+    """Pixel-aligned rectangles of a pattern over pixels x0..x1, y0..y1 (pixel centres on
+    integers, so a 1 px stripe over row r spans r - 1/2 .. r + 1/2)."""
+    if kind == "rows":
+        return [(x0 - 0.5, r - 0.5, x1 + 0.5, r + 0.5) for r in range(y0, y1 + 1, 2)]
+    if kind == "columns":
+        return [(c - 0.5, y0 - 0.5, c + 0.5, y1 + 0.5) for c in range(x0, x1 + 1, 2)]
+    return [
+        (c - 0.5, r - 0.5, c + 1.5, r + 1.5)
+        for r in range(y0, y1 + 1, 2)
+        for c in range(x0, x1 + 1, 2)
+        if ((r - y0) // 2 + (c - x0) // 2) % 2 == 0
+    ]
+
+
+def hatch_scene(full: int = 255, width: int = 256, height: int = 128) -> Scene:
+    """Three shapes with slanted edges, each with a pixel-aligned pattern inside it."""
+    import shapely
+
+    shapes = (
+        (_regular(48, 64, 52, 4, 0.2), "rows", round(full * 0.35), round(full * 0.75)),
+        ([(104.3, 112.6), (152.8, 14.2), (170.1, 108.4)], "columns", round(full * 0.2), full),
+        (_regular(212, 62, 38, 48, 0.1), "checker", round(full * 0.5), round(full * 0.1)),
+    )
+    polygons = []
+    for k, (points, kind, base, ink) in enumerate(shapes, start=1):
+        outline = shapely.Polygon(points)
+        polygons.append(Polygon((tuple(map(_snap, points)),), base, "nonzero", f"shape {k}"))
+        x0, y0, x1, y1 = (math.floor(v) for v in outline.bounds)
+        for j, cell in enumerate(_pattern_cells(kind, x0, y0, x1 + 1, y1 + 1)):
+            piece = outline.intersection(shapely.box(*cell))
+            if piece.area > 1e-3 and piece.geom_type == "Polygon":
+                ring = tuple(_snap(p) for p in piece.exterior.coords[:-1])
+                polygons.append(Polygon((ring,), ink, "nonzero", f"shape {k}/{kind} {j}"))
+    return Scene(width, height, tuple(polygons), background=full, name="hatch")

@@ -11,6 +11,9 @@ Methods, each drawing the whole scene polygon by polygon over the background:
 - ``AGG``: aggdraw's path fill (AGG's exact-area scanline rasterizer), with the pen-width-0
   setting of `edgeaa.analysis.peers` so that AGG does not widen the polygons by 1/4 px.
   aggdraw fills non-zero only: even-odd polygons are drawn non-zero (noted in the panel).
+- the seeds' methods (`edgeaa.analysis.aa_scenes`): MSAA 2x, 4x and 8x with the standard
+  positions, quincunx and FLIPQUAD resolved per sample; MLAA, MLAA with slope prediction,
+  FXAA and FXAA with geometry edges on the point-sampled image; TAA of the still scene.
 
 Skia's and AGG's pixel i covers [i, i + 1); edgeaa's is centred on i: the peers get every
 vertex shifted by +1/2 px (the convention of `edgeaa.analysis.peers`). The peers composite
@@ -144,7 +147,26 @@ def compare_images(scene: Scene, config: EdgeConfig) -> tuple[dict[str, np.ndarr
     images["Skia"] = skia_scene(plan)
     label = "AGG" if all(p.fill_rule == "nonzero" for p in scene.polygons) else "AGG (non-zero)"
     images[label] = agg_scene(plan)
+    from ..analysis.aa_scenes import method_image
+
+    for name, title in SEED_METHODS.items():
+        images[title] = method_image(plan, name)
     return images, exact_image(plan)
+
+
+SEED_METHODS = {
+    "msaa2": "MSAA 2x",
+    "rgss4": "MSAA 4x",
+    "rooks8": "MSAA 8x",
+    "quincunx": "quincunx",
+    "flipquad": "FLIPQUAD",
+    "mlaa": "MLAA",
+    "mlaa-slope": "MLAA slope-predicted",
+    "fxaa": "FXAA",
+    "fxaa-geom": "FXAA geometry edges",
+    "taa": "TAA (32 frames)",
+}
+COLUMNS = 6  # methods per row of the figure when the crop is not wide
 
 
 def plot_compare(
@@ -166,8 +188,18 @@ def plot_compare(
     if vertical:
         fig, grid = plt.subplots(n, 2, figsize=(2 * 4.2, n * (4.2 * h / w + 0.45) + 0.5))
         axes = grid.T
-    else:
-        fig, axes = plt.subplots(2, n, figsize=(2.2 * n, 2 * 2.2 * h / w + 0.9))
+    else:  # rows of COLUMNS methods, each an image row above an error row
+        cols, groups = min(n, COLUMNS), -(-n // COLUMNS)
+        fig, grid = plt.subplots(
+            2 * groups, cols, figsize=(2.2 * cols, groups * (4.4 * h / w + 0.9))
+        )
+        grid = np.asarray(grid).reshape(2 * groups, cols)
+        for ax in grid.ravel()[n:]:
+            ax.axis("off")
+        cells = [(2 * (k // cols), k % cols) for k in range(groups * cols)]
+        axes = np.array([[grid[r, c] for r, c in cells], [grid[r + 1, c] for r, c in cells]])
+        for ax in (*axes[0, n:], *axes[1, n:]):
+            ax.axis("off")
     errors = [np.abs(img[y0:y1, x0:x1] - exact_crop) for img in images.values()]
     # One colour scale for the antialiased methods; the unantialiased panel saturates.
     top = max(1.0, max(float(e.max()) for e in errors[1:]))

@@ -224,3 +224,27 @@ def test_image_methods_on_edges_beat_point_sampling(name):
     rms_point = np.sqrt(np.mean((point.coverage - pixels.exact) ** 2))
     assert rms < 0.6 * rms_point, (name, rms, rms_point)
     assert run.outputs > len(pixels)  # whole images were processed
+
+
+# -- scenes ---------------------------------------------------------------------------------------
+
+
+def test_hatch_scene_luma_fxaa_blurs_the_pattern_and_geometry_fxaa_does_not():
+    from edgeaa.analysis import aa_scenes
+    from edgeaa.render.builtin import builtin
+    from edgeaa.render.exact import exact_image
+    from edgeaa.render.render import plan_scene
+
+    plan = plan_scene(builtin("hatch", CONFIG), CONFIG)
+    ids = aa_scenes.object_ids(plan)
+    assert set(np.unique(ids)) == {0, 1, 2, 3}  # background and three shapes, stripes included
+    exact = exact_image(plan)
+
+    def rms(name):
+        return float(np.sqrt(np.mean((aa_scenes.method_image(plan, name) - exact) ** 2)))
+
+    point, luma, geom = rms("point"), rms("fxaa"), rms("fxaa-geom")
+    assert luma > 2 * point  # luma FXAA blurs the pixel-aligned pattern point sampling has right
+    assert geom < point and geom < 0.3 * luma
+    # MSAA resolved per sample: the 4x pattern is exact on the pattern, better on the edges
+    assert rms("rgss4") < point
