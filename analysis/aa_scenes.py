@@ -105,10 +105,14 @@ def method_image(plan, name: str) -> np.ndarray:
     return np.floor(out + 0.5).astype(np.int64)
 
 
-def taa_frames(plans, alpha: float = temporal.ALPHA):
-    """TAA over a sequence of planned frames (one jitter each): the resolved images."""
+def taa_frames(plans, alpha: float = temporal.ALPHA, previous=None):
+    """TAA over a sequence of planned frames (one jitter each): the resolved images.
+    previous(frame) gives (ys, xs), where each pixel was in the frame before (reprojection);
+    None: the history is read in place."""
     history = None
     for frame, plan in enumerate(plans):
         current = jittered(plan)(*temporal.jitter(frame))
+        if history is not None and previous is not None:
+            history = temporal.reproject(history, *previous(frame))
         history = temporal.blend(history, current, alpha)
         yield history * plan.config.full_scale

@@ -99,9 +99,39 @@ class PlotCommand(Command):
         )
         slope.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
         add_config_options(slope)
+        methods = figures.add_parser(
+            "aa-methods",
+            help="one table of every method: error on edges, text, starburst, hatch; time",
+            description="Max and RMS error of edgeaa, the seeds' methods (MSAA patterns, "
+            "MLAA, FXAA, TAA) and the peers on seeded random edges and on the built-in text, "
+            "starburst and hatch scenes, time per pixel and values per pixel; a bar chart.",
+        )
+        methods.add_argument("-o", "--output", default="aa_methods.png", help="bar chart file")
+        methods.add_argument(
+            "--edges", type=integer_type(1, MAX_EDGES), default=1000, help="random edges (1000)"
+        )
+        methods.add_argument("--seed", type=SEED, default=1, help="random seed (1)")
+        methods.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+        taa = figures.add_parser(
+            "taa",
+            help="temporal AA on the turning starburst: strip of frames, error and flicker",
+            description="Render the starburst turning a fraction of a degree per frame with "
+            "point sampling, MSAA 4x, TAA and edgeaa; print the error and flicker per frame and "
+            "draw a strip of frames.",
+        )
+        taa.add_argument("-o", "--output", default="aa_taa.png", help="figure file")
+        taa.add_argument("--frames", type=integer_type(2, 256), default=32, help="frames (32)")
+        taa.add_argument(
+            "--step", type=number_type(0.0, 45), default=0.2, help="degrees per frame (0.2)"
+        )
+        taa.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
     def run(self, args: argparse.Namespace) -> int:
-        figures = {"error-vs-slope": _plot_error_vs_slope}
+        figures = {
+            "error-vs-slope": _plot_error_vs_slope,
+            "aa-methods": _plot_aa_methods,
+            "taa": _plot_taa,
+        }
         return figures[args.figure](args)
 
 
@@ -135,6 +165,48 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
     print(slope.sweep_table(sweep))
     with atomic_output(SLOPE_PROG, args.output) as temporary:
         slope.plot_sweep(sweep, temporary)
+    return 0
+
+
+def _progress(args: argparse.Namespace, prog: str):
+    import sys
+
+    return None if args.quiet else (lambda what: print(f"{prog}: {what}", file=sys.stderr))
+
+
+def _plot_aa_methods(args: argparse.Namespace) -> int:
+    from ..model import EdgeConfig
+    from . import aa_report
+    from .report import machine_line
+
+    prog = "edgeaa plot aa-methods"
+    _check_output(prog, args.output)
+    config = EdgeConfig()
+    rows = aa_report.method_table(config, args.edges, args.seed, _progress(args, prog))
+    print(machine_line())
+    print(
+        f"edges: {args.edges} random (seed {args.seed}), output values, fraction of a pixel; "
+        "scenes: |image - exact composite| in intensity LSB of 255; ns/px: time to draw the "
+        "starburst per image pixel in this run; values/px: held per pixel before resolve"
+    )
+    print(aa_report.table_text(rows))
+    with atomic_output(prog, args.output) as temporary:
+        aa_report.plot_table(rows, temporary)
+    return 0
+
+
+def _plot_taa(args: argparse.Namespace) -> int:
+    from ..model import EdgeConfig
+    from . import aa_report
+    from .report import machine_line
+
+    prog = "edgeaa plot taa"
+    _check_output(prog, args.output)
+    seq = aa_report.taa_sequence(EdgeConfig(), args.frames, args.step, _progress(args, prog))
+    print(machine_line())
+    print(aa_report.sequence_text(seq))
+    with atomic_output(prog, args.output) as temporary:
+        aa_report.plot_sequence(seq, temporary)
     return 0
 
 

@@ -5,8 +5,10 @@ every frame: the Halton sequence in bases 2 and 3 (Karis found it better than th
 MSAA patterns, the chapter notes), points 1 .. JITTER_CYCLE, then repeating. The history is
 blended exponentially, history <- history + ALPHA (current - history), after clamping it to
 the minimum and maximum of the current frame's 3 x 3 neighbourhood (neighbourhood clamping,
-which keeps a moved edge from leaving a ghost behind). There is no reprojection: the scenes
-measured here move by a fraction of a pixel per frame at most.
+which keeps a moved edge from leaving a ghost behind). When the scene moves, the history is
+first reprojected (`reproject`): each pixel reads it, bilinearly, where its surface was in the
+previous frame (the motion vectors the chapter's velocity buffer holds; here the scene's
+motion is known exactly).
 """
 
 from __future__ import annotations
@@ -53,6 +55,21 @@ def blend(history: np.ndarray | None, current: np.ndarray, alpha: float = ALPHA)
     lo, hi = neighbourhood(current)
     clamped = np.clip(history, lo, hi)
     return clamped + alpha * (current - clamped)
+
+
+def reproject(history: np.ndarray, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
+    """The history read bilinearly at (ys, xs) (each pixel's position in the previous frame),
+    clamped at the border."""
+    h, w = history.shape[-2:]
+    ys, xs = np.clip(ys, 0, h - 1), np.clip(xs, 0, w - 1)
+    y0, x0 = (
+        np.minimum(np.floor(ys).astype(np.int64), h - 2),
+        np.minimum(np.floor(xs).astype(np.int64), w - 2),
+    )
+    fy, fx = ys - y0, xs - x0
+    top = history[..., y0, x0] * (1 - fx) + history[..., y0, x0 + 1] * fx
+    bottom = history[..., y0 + 1, x0] * (1 - fx) + history[..., y0 + 1, x0 + 1] * fx
+    return top * (1 - fy) + bottom * fy
 
 
 def resolve(frames: Iterable[np.ndarray], alpha: float = ALPHA) -> Iterator[np.ndarray]:

@@ -248,3 +248,32 @@ def test_hatch_scene_luma_fxaa_blurs_the_pattern_and_geometry_fxaa_does_not():
     assert geom < point and geom < 0.3 * luma
     # MSAA resolved per sample: the 4x pattern is exact on the pattern, better on the edges
     assert rms("rgss4") < point
+
+
+def test_reproject_reads_the_history_where_each_pixel_was():
+    history = np.arange(30.0).reshape(5, 6)
+    ys, xs = np.indices(history.shape, dtype=float)
+    assert np.array_equal(temporal.reproject(history, ys, xs), history)
+    moved = temporal.reproject(history, ys, xs - 1)  # everything moved one pixel right
+    assert np.array_equal(moved[:, 1:], history[:, :-1])
+    half = temporal.reproject(history, ys + 0.5, xs)
+    assert np.allclose(half[:-1], (history[:-1] + history[1:]) / 2)
+
+
+def test_plot_taa_command_prints_error_and_flicker(tmp_path, capsys):
+    from edgeaa.cli import main
+
+    out = tmp_path / "taa.png"
+    assert main(["plot", "taa", "--frames", "4", "--quiet", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert out.stat().st_size > 10_000
+    rows = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 5 and cells[0] and cells[1][:1].isdigit():
+            rows[cells[0]] = [float(c) for c in cells[1:]]
+    point, reprojected = rows["point"], rows["TAA, reprojected"]
+    in_place = rows["TAA, no reprojection"]
+    assert rows["edgeaa-paper"][2] < 1 < reprojected[2]  # mean RMS error, LSB
+    assert reprojected[1] < point[1] and reprojected[1] < in_place[1]  # by the last frame
+    assert reprojected[3] < point[3]  # flicker
