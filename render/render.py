@@ -240,18 +240,24 @@ def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
         a, b = starts[i], starts[i + 1]
         if b > a:
             inside[a:b] = inside_sides(coords[a:b], poly.fill_rule)
-            # Coincident boundary edges (shared by two contours, or overlapping) have the
-            # same filled side: the first one draws it.
-            seen = set()
-            for e in range(a, b):
-                x0, y0, x1, y1 = coords[e].tolist()
-                key = (min((x0, y0), (x1, y1)), max((x0, y0), (x1, y1)))
-                if inside[e] and key in seen:
-                    inside[e] = ""
-                    duplicates += 1
-                elif inside[e]:
-                    seen.add(key)
+            duplicates += _drop_coincident(coords, inside, a, b)
     return inside, duplicates
+
+
+def _drop_coincident(coords: np.ndarray, inside: np.ndarray, a: int, b: int) -> int:
+    """Coincident boundary edges of edges a .. b - 1 (shared by two contours, or overlapping)
+    have the same filled side: the first one draws it, the others become interior (their
+    deltas would count the winding twice). Returns how many were dropped."""
+    edges = np.flatnonzero(inside[a:b] != "") + a
+    if len(edges) < 2:
+        return 0
+    p0, p1 = coords[edges, 0:2], coords[edges, 2:4]
+    swap = (p0[:, 0] > p1[:, 0]) | ((p0[:, 0] == p1[:, 0]) & (p0[:, 1] > p1[:, 1]))
+    keys = np.where(swap[:, None], np.hstack([p1, p0]), np.hstack([p0, p1]))
+    _, first = np.unique(keys, axis=0, return_index=True)
+    later = np.setdiff1d(np.arange(len(edges)), first)
+    inside[edges[later]] = ""
+    return len(later)
 
 
 def _write_boxes(coords: np.ndarray, offset, S: int) -> tuple[np.ndarray, ...]:
@@ -445,10 +451,13 @@ def _draw_polygon(plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: 
     for block in resolve_rows(window, deltas.x, deltas.y, deltas.delta, poly.rule, ifix):
         counts["rows"] += len(block.rows)
         counts["cells"] += block.cells_scanned
-        q = intensity_offset(block.coverage, config.F).astype(np.int64)
-        view = image[block.rows, x0:x1].astype(np.int64)
-        covered = q > 0
-        new = np.where(covered, composite(view, q, poly.intensity, d), view)
-        changed = new != view
+        q = intensity_offset(block.coverage, config.F)
+        rows, cols = np.nonzero(q)  # only covered pixels change
+        rows, cols = block.rows[rows], cols + x0
+        below = image[rows, cols].astype(np.int64)
+        qq = q[q != 0].astype(np.int64)
+        full = qq == d  # whole pixels take the intensity, no division
+        new = np.where(full, poly.intensity, composite(below, qq, poly.intensity, d))
+        changed = new != below
         counts["stores"] += int(np.count_nonzero(changed))
-        image[block.rows, x0:x1] = new
+        image[rows[changed], cols[changed]] = new[changed]
