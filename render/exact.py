@@ -124,15 +124,52 @@ def crossed_cells(plan: Plan, edge: np.ndarray, x: np.ndarray, y: np.ndarray) ->
     return inside_box & (low < 0) & (high > 0)
 
 
+def candidate_cells(plan: Plan, edges: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Image pixels along each edge, a superset of those it passes through: per pixel column
+    (row, for a y-major edge) the three pixels from the one holding the segment's low end
+    in it. Returns (edge, x, y) arrays."""
+    S = plan.config.subpixel_scale
+    c = plan.coords[edges]
+    x_major = np.abs(c[:, 2] - c[:, 0]) >= np.abs(c[:, 3] - c[:, 1])
+    # along the major axis (p) and the minor (q), in sub-pixel units
+    p0 = np.where(x_major, c[:, 0], c[:, 1])
+    q0 = np.where(x_major, c[:, 1], c[:, 0])
+    p1 = np.where(x_major, c[:, 2], c[:, 3])
+    q1 = np.where(x_major, c[:, 3], c[:, 2])
+    lo, hi = np.minimum(p0, p1), np.maximum(p0, p1)
+    first = (2 * lo + S) // (2 * S)  # pixel holding lo
+    count = (2 * hi + S) // (2 * S) - first + 1
+    edge = np.repeat(np.arange(len(edges)), count)
+    column = (
+        np.repeat(first, count)
+        + np.arange(count.sum())
+        - np.repeat(np.cumsum(count) - count, count)
+    )
+    # the segment's lower minor coordinate over the column's span, as a float (candidates only)
+    a0, b0, a1, b1 = p0[edge], q0[edge], p1[edge], q1[edge]
+    left = np.clip((2 * column - 1) * S / 2, np.minimum(a0, a1), np.maximum(a0, a1))
+    right = np.clip((2 * column + 1) * S / 2, np.minimum(a0, a1), np.maximum(a0, a1))
+    span = np.where(a1 != a0, a1 - a0, 1)
+    qa = b0 + (b1 - b0) * (left - a0) / span
+    qb = b0 + (b1 - b0) * (right - a0) / span
+    row = np.floor(np.minimum(qa, qb) / S + 0.5).astype(np.int64) - 1
+    out_edge = np.repeat(edges[edge], 3)
+    major = np.repeat(column, 3)
+    minor = np.repeat(row, 3) + np.tile(np.arange(3), len(row))
+    xm = np.repeat(x_major[edge], 3)
+    ox, oy = plan.offset
+    return out_edge, np.where(xm, major, minor) - ox, np.where(xm, minor, major) - oy
+
+
 def edges_per_pixel(result: Render) -> np.ndarray:
-    """How many sent edges pass through each pixel's interior (all polygons)."""
-    scene = result.plan.scene
-    d = result.deltas
-    cells = np.unique(np.stack([d.edge, d.y, d.x]), axis=1) if len(d) else np.zeros((3, 0), int)
-    edge, y, x = cells
+    """How many boundary edges pass through each pixel's interior (all polygons)."""
+    plan = result.plan
+    scene = plan.scene
+    edge, x, y = candidate_cells(plan, np.flatnonzero(plan.boundary))
     onscreen = (x >= 0) & (x < scene.width) & (y >= 0) & (y < scene.height)
-    edge, y, x = edge[onscreen], y[onscreen], x[onscreen]
-    crossed = crossed_cells(result.plan, edge, x, y)
+    cells = np.unique(np.stack([edge[onscreen], y[onscreen], x[onscreen]]), axis=1)
+    edge, y, x = cells
+    crossed = crossed_cells(plan, edge, x, y)
     count = np.zeros((scene.height, scene.width), dtype=np.int64)
     np.add.at(count, (y[crossed], x[crossed]), 1)
     return count
