@@ -49,12 +49,8 @@ TABLE_METHODS = (
     "skia",
     "agg",
 )
-LABELS = {
-    "rgss4": "rgss4 (MSAA 4x)",
-    "rooks8": "rooks8 (MSAA 8x)",
-    "taa": "TAA, reprojected",
-    "taa-in-place": "TAA, no reprojection",
-}
+LABELS = {"rgss4": "rgss4 (MSAA 4x)", "rooks8": "rooks8 (MSAA 8x)", "taa": "taa (still)"}
+SEQUENCE_LABELS = {**LABELS, "taa": "TAA, reprojected", "taa-in-place": "TAA, no reprojection"}
 SCENES = ("text", "starburst", "hatch")
 
 
@@ -218,7 +214,8 @@ def sequence_text(seq: Sequence) -> str:
     rows = []
     for name in SEQUENCE_METHODS:
         rms, flicker = seq.rms(name), seq.flicker(name)
-        cells = [LABELS.get(name, name), f"{rms[0]:.2f}", f"{rms[-1]:.2f}", f"{rms.mean():.2f}"]
+        label = SEQUENCE_LABELS.get(name, name)
+        cells = [label, f"{rms[0]:.2f}", f"{rms[-1]:.2f}", f"{rms.mean():.2f}"]
         rows.append([*cells, f"{flicker.mean():.2f}"])
     per_frame = ["frame " + " ".join(f"{f:5d}" for f in range(seq.frames))]
     for name in SEQUENCE_METHODS:
@@ -252,12 +249,13 @@ def plot_sequence(seq: Sequence, path: str) -> None:
             if r == 0:
                 ax.set_title(f"frame {f}", fontsize=9)
             if c == 0:
-                ax.set_ylabel(LABELS.get(name, name), fontsize=9)
+                ax.set_ylabel(SEQUENCE_LABELS.get(name, name), fontsize=9)
     ax_err = fig.add_subplot(grid[len(rows) :, : len(shown) // 2])
     ax_fl = fig.add_subplot(grid[len(rows) :, len(shown) // 2 :])
     for name in SEQUENCE_METHODS:
-        ax_err.plot(seq.rms(name), label=LABELS.get(name, name))
-        ax_fl.plot(range(1, seq.frames), seq.flicker(name), label=LABELS.get(name, name))
+        label = SEQUENCE_LABELS.get(name, name)
+        ax_err.plot(seq.rms(name), label=label)
+        ax_fl.plot(range(1, seq.frames), seq.flicker(name), label=label)
     ax_err.set(xlabel="frame", ylabel="RMS error (LSB)", yscale="log")
     ax_fl.set(xlabel="frame", ylabel="flicker (LSB)", yscale="log")
     ax_err.legend(fontsize=8)
