@@ -17,6 +17,9 @@ answer from every test that uses the same perturbation.
 
 from __future__ import annotations
 
+from itertools import groupby
+from operator import itemgetter
+
 import numpy as np
 
 CHUNK = 1 << 22  # point x edge pairs per numpy pass
@@ -204,6 +207,7 @@ def _round_div(num: int, den: int) -> int:
 
 
 SAFE = 1 << 30  # |coordinate| below this keeps _may_split's products inside int64
+PAIRS = 1 << 16  # edge pairs per numpy pass of _candidate_pairs (fits in the caches)
 
 
 def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
@@ -238,7 +242,7 @@ def _insert_splits(contours: list[np.ndarray], splits: dict) -> tuple[list[np.nd
         points = []
         for k, row in enumerate(pts.tolist()):
             points.append(tuple(map(int, row)))
-            for *_, p in sorted(splits.get(base + k, ())):
+            for p in _along(splits.get(base + k, ())):
                 if p != points[-1]:
                     points.append(p)
                     inserted += 1
@@ -248,74 +252,89 @@ def _insert_splits(contours: list[np.ndarray], splits: dict) -> tuple[list[np.nd
     return out, inserted
 
 
+def _along(entries) -> list[tuple[int, int]]:
+    """The points of (float t, numerator, denominator, point) entries by exact t, then point.
+    Sorted by the float first (rounding is monotone, so it never reverses two t); a run of
+    equal floats is sorted again exactly."""
+    from fractions import Fraction
+
+    points = []
+    for _, run in groupby(sorted(entries, key=itemgetter(0)), key=itemgetter(0)):
+        run = list(run)
+        if len(run) > 1:
+            run.sort(key=lambda e: (Fraction(e[1], e[2]), e[3]))
+        points.extend(e[3] for e in run)
+    return points
+
+
 def _candidate_pairs(seg: np.ndarray):
     """Yield (i, j), i < j, for every edge pair that may split (a superset of those that do).
 
     A sweep along the axis whose intervals overlap least: with the edges sorted by their low
     end, edge p's partners are the edges after it whose low end is at most p's high end, one
     searchsorted. The other axis and the exact test (`_may_split`) filter them in numpy, in
-    chunks of about CHUNK pairs.
+    chunks of about PAIRS pairs.
     """
     n = len(seg)
-    lo = np.minimum(seg[:, 0:2], seg[:, 2:4])
-    hi = np.maximum(seg[:, 0:2], seg[:, 2:4])
+    lo = np.minimum(seg[:, 0:2], seg[:, 2:4]).T.copy()  # rows: x, y
+    hi = np.maximum(seg[:, 0:2], seg[:, 2:4]).T.copy()
     best = None
     for axis in (0, 1):
-        order = np.argsort(lo[:, axis], kind="stable")
-        ends = np.searchsorted(lo[order, axis], hi[order, axis], side="right")
+        order = np.argsort(lo[axis], kind="stable")
+        ends = np.searchsorted(lo[axis][order], hi[axis][order], side="right")
         counts = ends - np.arange(1, n + 1)
         if best is None or counts.sum() < best[0]:
             best = (counts.sum(), axis, order, counts)
     _, axis, order, counts = best
-    other = 1 - axis
+    lo_o, hi_o = lo[1 - axis], hi[1 - axis]
     exact = seg.dtype.kind in "iu" and n and seg.min() > -SAFE and seg.max() < SAFE
-    seg64 = seg.astype(np.int64) if exact else None
+    cols = seg.T.astype(np.int64) if exact else None  # rows: x0, y0, x1, y1
     cum = np.cumsum(counts)
     p0 = 0
     while p0 < n:
-        p1 = max(p0 + 1, int(np.searchsorted(cum, cum[p0] - counts[p0] + CHUNK, side="right")))
+        p1 = max(p0 + 1, int(np.searchsorted(cum, cum[p0] - counts[p0] + PAIRS, side="right")))
         c = counts[p0:p1]
         a = np.repeat(np.arange(p0, p1), c)
         b = a + 1 + np.arange(len(a)) - np.repeat(np.cumsum(c) - c, c)
         i, j = order[a], order[b]
-        keep = (lo[i, other] <= hi[j, other]) & (lo[j, other] <= hi[i, other])
+        keep = (lo_o[i] <= hi_o[j]) & (lo_o[j] <= hi_o[i])
         i, j = i[keep], j[keep]
         if exact:
-            keep = _may_split(seg64[i], seg64[j])
+            keep = _may_split(cols, i, j)
             i, j = i[keep], j[keep]
         yield from zip(np.minimum(i, j).tolist(), np.maximum(i, j).tolist(), strict=True)
         p0 = p1
 
 
-def _may_split(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Whether `_intersect` adds a split point for edges a[m] and b[m] ((m, 4) int64): its
-    tests, exact in int64 while every |coordinate| < SAFE."""
-    r, s = a[:, 2:4] - a[:, 0:2], b[:, 2:4] - b[:, 0:2]
-    w = b[:, 0:2] - a[:, 0:2]  # c - a
-    den = r[:, 0] * s[:, 1] - r[:, 1] * s[:, 0]
-    tn = w[:, 0] * s[:, 1] - w[:, 1] * s[:, 0]
-    un = w[:, 0] * r[:, 1] - w[:, 1] * r[:, 0]
-    sign = np.where(den < 0, -1, 1)
-    den, tn, un = den * sign, tn * sign, un * sign
+def _may_split(cols: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Whether `_intersect` adds a split point for edges i[m] and j[m]: its tests in int64
+    numpy, exact while every |coordinate| < SAFE. cols: (4, n) x0, y0, x1, y1."""
+    ax, ay, bx, by = (c[i] for c in cols)
+    cx, cy, dx, dy = (c[j] for c in cols)
+    rx, ry, sx, sy, wx, wy = bx - ax, by - ay, dx - cx, dy - cy, cx - ax, cy - ay
+    den = rx * sy - ry * sx
+    tn = wx * sy - wy * sx
+    un = wx * ry - wy * rx
+    flip = den < 0
+    den, tn, un = np.abs(den), np.where(flip, -tn, tn), np.where(flip, -un, un)
     inner = ((tn > 0) & (tn < den)) | ((un > 0) & (un < den))
-    crossing = (den != 0) & (tn >= 0) & (tn <= den) & (un >= 0) & (un <= den) & inner
-    # collinear: some end of one edge strictly inside the other
-    rr, ss = (r * r).sum(axis=1), (s * s).sum(axis=1)
-    along_r = (w * r).sum(axis=1), ((b[:, 2:4] - a[:, 0:2]) * r).sum(axis=1)
-    along_s = (-w * s).sum(axis=1), ((a[:, 2:4] - b[:, 0:2]) * s).sum(axis=1)
-    overlap = np.zeros(len(a), dtype=bool)
-    for t, length in ((along_r[0], rr), (along_r[1], rr), (along_s[0], ss), (along_s[1], ss)):
-        overlap |= (t > 0) & (t < length)
-    collinear = (den == 0) & (un == 0) & overlap
-    return r.any(axis=1) & s.any(axis=1) & (crossing | collinear)
+    keep = (den != 0) & (tn >= 0) & (tn <= den) & (un >= 0) & (un <= den) & inner
+    k = np.flatnonzero((den == 0) & (un == 0) & ((rx != 0) | (ry != 0)) & ((sx != 0) | (sy != 0)))
+    if len(k):  # collinear: an end of one edge strictly inside the other
+        rr, ss = rx[k] ** 2 + ry[k] ** 2, sx[k] ** 2 + sy[k] ** 2
+        ends = (
+            (wx[k] * rx[k] + wy[k] * ry[k], rr),
+            ((dx - ax)[k] * rx[k] + (dy - ay)[k] * ry[k], rr),
+            (-(wx[k] * sx[k] + wy[k] * sy[k]), ss),
+            ((bx - cx)[k] * sx[k] + (by - cy)[k] * sy[k], ss),
+        )
+        keep[k] = np.any([(t > 0) & (t < length) for t, length in ends], axis=0)
+    return keep
 
 
 def _add_split(splits: dict, k: int, num: int, den: int, point: tuple[int, int]) -> None:
-    """Record a split of edge k at t = num / den. The float t sorts first (rounding is
-    monotone, so it never reverses an order); the exact t settles its ties."""
-    from fractions import Fraction
-
-    splits.setdefault(k, []).append((num / den, Fraction(num, den), point))
+    """Record a split of edge k at t = num / den (sorted by `_along`)."""
+    splits.setdefault(k, []).append((num / den, num, den, point))
 
 
 def _intersect(i: int, j: int, rows: list, splits: dict) -> None:

@@ -211,7 +211,7 @@ def test_split_crossings_matches_the_reference(seed, family, n, parts):
 @pytest.mark.parametrize("seed", range(3))
 def test_larger_polygons_match_in_small_chunks(monkeypatch, family, seed):
     """Up to 300 vertices, with the sweep's pairs cut into chunks of 97 (many blocks)."""
-    monkeypatch.setattr(geometry, "CHUNK", 97)
+    monkeypatch.setattr(geometry, "PAIRS", 97)
     assert_same(polygon(seed, family, 100 + 100 * seed, parts=1 + seed % 2))
 
 
@@ -259,3 +259,18 @@ def test_a_long_outline_and_a_comb_are_not_quadratic():
     comb = np.concatenate([comb, [[-10, ys[-1]], [-10, 0]]]).astype(np.int64)
     (out,), inserted = split_crossings([comb])
     assert inserted == 0
+
+
+def test_split_points_closer_than_a_float_keep_their_exact_order():
+    """Two crossings of one edge whose t differ by about 2**-57 (the same float): the exact t
+    orders them, and they round to different points (k + 1/2 - 2**-29 and k + 1/2)."""
+    L, k, M = 1 << 28, 1 << 27, 1 << 27
+    contours = [
+        np.array([[L, 0], [0, 0]], np.int64),  # the split edge runs towards -x
+        np.array([[k, -M], [k + 1, M + 1]], np.int64),  # crosses y = 0 just left of k + 1/2
+        np.array([[k, -1], [k + 1, 1]], np.int64),  # crosses at k + 1/2, rounded up to k + 1
+    ]
+    assert (L - k - 0.5) / L == (L - k - 0.5 + 1 / (4 * M + 2)) / L  # a float tie
+    assert_same(contours)
+    (first, *_), _ = split_crossings(contours)
+    assert first.tolist()[:3] == [[L, 0], [k + 1, 0], [k, 0]]
