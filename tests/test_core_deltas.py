@@ -368,3 +368,19 @@ def test_python_and_compiled_simulators_agree_clock_for_clock():
     fast = verilator_harness.run(config, edges, output=OUTPUT)
     assert slow.beats.tolist() == fast.beats.tolist()
     assert slow.as_beats() == _flat(config, edges)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+def test_long_edges_compiled_slow(name):
+    """Edges over the whole coordinate range (the longest of the corpus among them), with and
+    without back-pressure, in the compiled core."""
+    config = CORE_CONFIGS[name]
+    edges = [edge for _, edge in corpus(config)]
+    edges += random_sim_edges(config, 200, 40, max_pixels=1 << config.coord_bits, clip_fraction=0.3)
+    want = _flat(config, edges)
+    run = verilator_harness.run(config, edges, output=OUTPUT)
+    assert run.as_beats() == want
+    assert run.beats[:, 0].tolist() == timing_model.beat_cycles(config, edges, output=OUTPUT)
+    stalled = verilator_harness.run(config, edges, seed=41, idle=0.3, stall=0.5, output=OUTPUT)
+    assert stalled.as_beats() == want
