@@ -30,8 +30,8 @@ _EARLY = ("end_row", "end_height", "total1", "rect0", "rect1", "band0", "band1")
 
 def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
     """The setup's registers of the end pieces: ``cut_end`` (WINDOW: the window cut the last
-    column), the `_EARLY` bank fields and the operands FINAL needs (``mg``-free: ``single``,
-    ``w0``, ``hs0_fp``, ``total0_x``)."""
+    column), the `_EARLY` bank fields and the operands FINAL needs (``single``, ``w0``,
+    ``hs0_fp`` and ``square0``, the x-major first piece's squared width)."""
     widths = config.register_widths()
     s = config.subpixel_bits
     height = register_shape(widths["height"])
@@ -42,17 +42,19 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         single=Signal(name="pc_single"),  # one partial column holds both vertices
         w0=Signal(unsigned(s + 2), name="pc_w0"),  # the first piece's width (2 S per pixel)
         hs0_fp=Signal(height, name="pc_hs0_fp"),  # hs0 of a partial first column
-        total0_x=Signal(height, name="pc_total0_x"),
+        square0=Signal(unsigned(2 * s + 3), name="pc_square0"),  # <= (2 S)**2
     )
     return types.SimpleNamespace(**regs)
 
 
 def run_end_loads(unit) -> list:
     """The loads of RUN's last clock: the pieces that need no lane result (`unit` is the
-    `EdgeSetupUnit`; its regs, command and ``pieces`` registers)."""
+    `EdgeSetupUnit`; its regs, command and ``pieces`` registers). x-major edges use rect
+    and y-major ones band, so one product serves both where the shift allows; the products
+    by ``|I_d|`` multiply the sub-pixel factors first (``half`` is ``|I_d|`` shifted)."""
     config = unit.config
     s, F = config.subpixel_bits, config.F
-    S = 1 << s
+    S, k = 1 << s, F - s - 1  # half = |I_d| << k: ifix per half sub-pixel step
     r, cmd, pc = unit.regs, unit.cmd, unit.pieces
     fp, lp = ~r.start_clip, ~pc.cut_end  # the first and last columns hold the vertices
     p0, p1 = Mux(r.x_major, cmd.x0, cmd.y0), Mux(r.x_major, cmd.x1, cmd.y1)
@@ -60,36 +62,37 @@ def run_end_loads(unit) -> list:
     me = Mux(lp, Mux(r.major_neg, S + (p1 << 1), S - (p1 << 1))[: s + 1], 0)
     single = (r.columns == 1) & fp & lp
     v1_2 = ((r.v0_r + r.dv) << 1) + S  # 2 v1 + S
-    end_height = (r.i_d * v1_2[: s + 1]) << (F - s - 1)
+    e1 = v1_2[: s + 1]  # P1's height in its row, half sub-pixel steps
     h0 = (r.v0_r << 1) + S - (r.row0 << (s + 1))  # 2 v0 - (2 row0 - 1) S
-    hs0_fp = (r.i_d * h0) << (F - s - 1)
-    half = r.i_d << (F - s - 1)  # ifix per half sub-pixel step
     w0 = 2 * S - mg - Mux(single, me, 0)
     w1 = 2 * S - me
-    sq = 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
-    square0 = (2 * S - mg) * (2 * S - mg) - Mux(single, me * me, 0)
-    rect0 = (Mux(hs0_fp < 0, -hs0_fp, 0) * mg) >> (s + 1)
-    total1_y = ((end_height * w1) >> (s + 1)) - ((r.kq * (w1 * w1)) >> sq)
-    total1_x = (r.kq * (4 * S * S - me * me)) >> sq
     xm = r.x_major
+    # x: rect0 = (max(-hs0, 0) mg) >> (s + 1) (mg = 0 unless hs0 = half h0); y: band0.
+    first_rect = (r.i_d * Mux(xm, Mux(h0 < 0, -h0, 0) * mg, w0)) << k
+    # x: rect1 = (end_height me) >> (s + 1); y: the first term of total1.
+    end_rect = ((r.i_d * (e1 * Mux(xm, me, w1))) << k) >> (s + 1)
+    sq = 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
+    slope_area = (r.kq * Mux(xm, 4 * S * S - me * me, w1 * w1)) >> sq
     return [
         pc.single.eq(single),
         pc.w0.eq(w0),
-        pc.hs0_fp.eq(hs0_fp),
-        pc.total0_x.eq((r.kq * square0) >> sq),
+        pc.hs0_fp.eq((r.i_d * h0) << k),
+        pc.square0.eq((2 * S - mg) * (2 * S - mg) - Mux(single, me * me, 0)),
         pc.end_row.eq(v1_2 >> (s + 1)),
-        pc.end_height.eq(end_height),
-        pc.total1.eq(Mux(xm, total1_x, total1_y)),
-        pc.rect0.eq(Mux(xm, rect0, 0)),
-        pc.rect1.eq(Mux(xm, (end_height * me) >> (s + 1), 0)),
-        pc.band0.eq(Mux(xm, 0, half * w0)),
-        pc.band1.eq(Mux(xm, 0, half * w1)),
+        pc.end_height.eq((r.i_d * e1) << k),
+        pc.total1.eq(Mux(xm, slope_area, end_rect - slope_area)),
+        pc.rect0.eq(Mux(xm, first_rect >> (s + 1), 0)),
+        pc.rect1.eq(Mux(xm, end_rect, 0)),
+        pc.band0.eq(Mux(xm, 0, first_rect)),
+        pc.band1.eq(Mux(xm, 0, (r.i_d * w1) << k)),
     ]
 
 
 def final_pieces(m, unit) -> None:
     """The end pieces of ``next_bank`` (combinational, FINAL): the registered ones, the
-    flags, the winding sign, and ``hs0``, ``total0``, which need ``jq`` (lane A's result)."""
+    flags, the winding sign, and ``hs0``, ``total0``, which need ``jq`` (lane A's result;
+    one product: ``kq`` by the squared width for x-major, the height sum by the width for
+    y-major)."""
     s = unit.config.subpixel_bits
     r, cmd, pc, nb = unit.regs, unit.cmd, unit.pieces, unit.next_bank
     fp = ~r.start_clip
@@ -99,7 +102,8 @@ def final_pieces(m, unit) -> None:
     adj = pc.end_row - r.row0  # P1's row from the first column's: -1, 0 or +1 when single
     at_end = pc.end_height + Mux(adj > 0, nb.ifix, Mux(adj < 0, -nb.ifix, 0))
     he_first = Mux(pc.single, at_end, nb.jq + nb.khq + carry)
-    total0_y = ((hs0 + he_first) * pc.w0) >> (s + 2)
+    xm = r.x_major
+    area0 = Mux(xm, nb.kq, hs0 + he_first) * Mux(xm, pc.square0, pc.w0)
     # Travelling down the screen with the inside on the left puts the inside on the +x side.
     dy_pos, inside_left = ~unit.accepted["dy_le0"], cmd.inside == 0
     plus, minus = Const(1, signed(2)), Const(-1, signed(2))
@@ -109,6 +113,6 @@ def final_pieces(m, unit) -> None:
         nb.first_partial.eq(fp),
         nb.last_partial.eq(~pc.cut_end),
         nb.hs0.eq(hs0),
-        nb.total0.eq(Mux(r.x_major, pc.total0_x, total0_y)),
+        nb.total0.eq(Mux(xm, area0 >> (2 * s + 3), area0 >> (s + 2))),
         *(nb[name].eq(getattr(pc, name)) for name in _EARLY),
     ]
