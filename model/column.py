@@ -315,9 +315,7 @@ def _deltas_x_major(a, p, first, last, hs, he, ifix, t, total):
     cov_low = a.select(he > ifix, he, ifix) - a.select(hs > ifix, hs, ifix)
     rect_up = a.select(first, p.rect0, 0)
     rect_low = a.select(last, p.rect1, 0)
-    r_low = a.select(
-        hs >= ifix, total, a.select(he > ifix, _clamp(a, t + rect_low, cov_low), 0)
-    )
+    r_low = a.select(hs >= ifix, total, a.select(he > ifix, _clamp(a, t + rect_low, cov_low), 0))
     r_up = a.select(he <= 0, total, a.select(hs < 0, _clamp(a, cov_up - t - rect_up, cov_up), 0))
     r_mid = _clamp(a, total - r_low - r_up, cov_mid)
     up = hs < 0

@@ -412,7 +412,15 @@ def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     col_dx, col_dy = screen(step_major, 0)
     row_dx, row_dy = screen(0, step_minor)
     values = dict(
-        columns=columns, row0=row0, jq=jq, jr=jr, kq=kq, khq=khq, khr=khr, du=du, i_d=i_d,
+        columns=columns,
+        row0=row0,
+        jq=jq,
+        jr=jr,
+        kq=kq,
+        khq=khq,
+        khr=khr,
+        du=du,
+        i_d=i_d,
         dy=edge.y1 - edge.y0,
     )
     pieces = end_pieces(config, f, w, values, edge.inside == "left")
