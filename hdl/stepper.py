@@ -43,7 +43,10 @@ class EdgeStepper(wiring.Component):
 
     ``setup`` (in stream, `setup_layout`): the per-edge constants and start state; taken when
     the stepper is idle or in the clock it steps the current edge's last column.
-    ``writes`` (out stream, `write_layout`): one registered beat per column.
+    ``writes`` (out stream, `write_layout`): one registered beat per column. With ``output =
+    "deltas"`` the out stream is ``deltas`` (`delta_layout`, the column's accumulation
+    deltas) and the column pipeline is `edgeaa.hdl.deltas`'s; ``out`` is the stream either
+    way. The rest of this docstring describes the writes pipeline.
 
     Structure: the loop registers (``x, y, jq, jr, remaining``) step one column per clock;
     the column's writes are computed by a pipeline behind them, ``latency`` clocks deep
