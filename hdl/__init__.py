@@ -2,7 +2,14 @@
 stepper (`stepper`), and the payload layouts (`layouts`)."""
 
 from .core import EdgeAntialiaser, verilog
-from .layouts import clip_layout, edge_layout, pixel_layout, setup_layout, write_layout
+from .layouts import (
+    clip_layout,
+    delta_layout,
+    edge_layout,
+    pixel_layout,
+    setup_layout,
+    write_layout,
+)
 from .setup import EdgeSetupUnit
 from .stepper import EdgeStepper
 
@@ -11,6 +18,7 @@ __all__ = [
     "EdgeSetupUnit",
     "EdgeStepper",
     "clip_layout",
+    "delta_layout",
     "edge_layout",
     "pixel_layout",
     "setup_layout",

@@ -32,6 +32,12 @@ Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
   ``W + 2`` and ``value`` unsigned ``I``; ``lane1_valid``; ``last`` (the edge's last column).
   Lane order is the model's write order: the primary pixel, then its neighbour. The fields of
   ``lane1`` are don't-care (but deterministic) when ``lane1_valid`` is 0.
+* ``deltas`` (out stream, instead of ``writes`` when the core is built with ``output =
+  "deltas"``; one beat per column, `edgeaa.model.beat.DeltaBeat`): ``cell0`` .. ``cell3``,
+  each ``x, y`` signed ``W + 2`` and ``delta`` signed ``I + F + 2``, and ``last``: the
+  accumulation deltas of `edgeaa.model.step.run_edge_deltas`, zeros included, in its
+  order. Same setup (it also computes the end pieces, in the same clocks) and loop; the
+  column pipeline is 3 registers deep in every mode (`edgeaa.hdl.deltas`).
 * ``errors`` (out, ``errors_bits`` = 16 bits by default): bad commands dropped so far,
   saturating at ``2**errors_bits - 1``.
 * ``error`` (out): high for one clock when a bad command is dropped.
@@ -46,13 +52,15 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model import timing
+from ..model.bank import check_output
+from ..model.beat import BEAT_FORMATS
 from ..model.config import EdgeConfig
 from .layouts import (
     check_config,
     clip_layout,
     edge_layout,
     full_clip,
-    write_layout,
+    output_layout,
 )
 from .setup import ERRORS_BITS, EdgeSetupUnit
 from .stepper import EdgeStepper
@@ -68,19 +76,24 @@ class EdgeAntialiaser(wiring.Component):
     timing model's (`edgeaa.model.timing`), which the tests check against simulated clocks.
     """
 
-    def __init__(self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS):
+    def __init__(
+        self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS, output: str = "writes"
+    ):
         self._config = check_config(config)
-        self.setup = EdgeSetupUnit(config, errors_bits=errors_bits)
+        self._output = check_output(output)
+        self.setup = EdgeSetupUnit(config, errors_bits=errors_bits, output=output)
+        stream_name = BEAT_FORMATS[output].stream
         super().__init__(
             {
                 "edges": In(stream.Signature(edge_layout(config))),
                 "clip": In(clip_layout(config), init=full_clip(config)),
-                "writes": Out(stream.Signature(write_layout(config))),
+                stream_name: Out(stream.Signature(output_layout(config, output))),
                 "errors": Out(unsigned(errors_bits)),
                 "error": Out(unsigned(1)),
             }
         )
-        self.stepper = EdgeStepper(config)
+        self.out = getattr(self, stream_name)  # the output stream: writes or deltas
+        self.stepper = EdgeStepper(config, output)
 
     @property
     def errors_bits(self) -> int:
@@ -89,6 +102,11 @@ class EdgeAntialiaser(wiring.Component):
     @property
     def config(self) -> EdgeConfig:
         return self._config
+
+    @property
+    def output(self) -> str:
+        """``"writes"`` (line-mode pixel writes) or ``"deltas"`` (accumulation deltas)."""
+        return self._output
 
     @property
     def run_cycles(self) -> int:
@@ -105,7 +123,7 @@ class EdgeAntialiaser(wiring.Component):
     def setup_latency(self) -> int:
         """`edgeaa.model.timing.setup_latency`: clocks from accepting an edge (idle core, not
         clipped at its start) to its first beat."""
-        return timing.setup_latency(self._config)
+        return timing.setup_latency(self._config, self._output)
 
     @property
     def setup_interval(self) -> int:
@@ -119,7 +137,7 @@ class EdgeAntialiaser(wiring.Component):
         m.submodules.stepper = stepper = self.stepper
         wiring.connect(m, wiring.flipped(self.edges), setup.edges)
         wiring.connect(m, setup.bank, stepper.setup)
-        wiring.connect(m, stepper.writes, wiring.flipped(self.writes))
+        wiring.connect(m, stepper.out, wiring.flipped(self.out))
         m.d.comb += [
             setup.clip.eq(self.clip),
             self.errors.eq(setup.errors),
@@ -141,7 +159,9 @@ def _leaves(value, path):
         yield path, value
 
 
-def verilog(config: EdgeConfig, *, name: str = "edgeaa_core", flat: bool = True) -> str:
+def verilog(
+    config: EdgeConfig, *, name: str = "edgeaa_core", flat: bool = True, output: str = "writes"
+) -> str:
     """The core as Verilog (`amaranth.back.verilog.convert`, ``emit_src=False``).
 
     Port names are the signature paths joined by ``__``. With `flat` (the default) every
@@ -157,7 +177,7 @@ def verilog(config: EdgeConfig, *, name: str = "edgeaa_core", flat: bool = True)
     """
     from amaranth.back import verilog as back_verilog
 
-    core = EdgeAntialiaser(config)
+    core = EdgeAntialiaser(config, output=output)
     if not flat:
         return back_verilog.convert(core, name=name, emit_src=False)
     m = Module()

@@ -4,7 +4,8 @@
 * `clip_layout`: the clip window (`edgeaa.model.Clip`), the ``clip`` port;
 * `setup_layout`: the register bank from the setup to the stepper, one field per
   `edgeaa.model.bank.bank_fields` entry, sized by its register in the width table;
-* `write_layout`: one output beat, the lanes and flags of `edgeaa.model.beat`.
+* `write_layout`: one output beat, the lanes and flags of `edgeaa.model.beat`;
+* `delta_layout`: one beat of the accumulation-delta core, the cells of `edgeaa.model.beat`.
 """
 
 from __future__ import annotations
@@ -12,17 +13,19 @@ from __future__ import annotations
 from amaranth.hdl import Const, signed, unsigned
 from amaranth.lib import data
 
-from ..model.bank import bank_fields
-from ..model.beat import LANES, PAYLOAD_PATHS, PIXEL_FIELDS
+from ..model.bank import bank_fields, check_output
+from ..model.beat import CELL_FIELDS, CELLS, DELTA_PAYLOAD_PATHS, LANES, PAYLOAD_PATHS, PIXEL_FIELDS
 from ..model.config import EdgeConfig, RegisterWidth
 
 __all__ = [
     "check_config",
     "clip_layout",
     "const_mul",
+    "delta_layout",
     "edge_layout",
     "full_clip",
     "log2",
+    "output_layout",
     "pixel_layout",
     "register_shape",
     "setup_layout",
@@ -101,11 +104,26 @@ def write_layout(config: EdgeConfig) -> data.StructLayout:
     return data.StructLayout(fields)
 
 
-def setup_layout(config: EdgeConfig) -> data.StructLayout:
+def delta_layout(config: EdgeConfig) -> data.StructLayout:
+    """One beat of the deltas core: the `CELLS` (each `CELL_FIELDS`, sized by the register of
+    the same name), then the one-bit flag of `DELTA_PAYLOAD_PATHS` (``last``)."""
+    widths = config.register_widths()
+    cell = data.StructLayout({name: register_shape(widths[name]) for name in CELL_FIELDS})
+    fields = {name: cell for name in CELLS}
+    fields.update({path[0]: unsigned(1) for path in DELTA_PAYLOAD_PATHS if len(path) == 1})
+    return data.StructLayout(fields)
+
+
+def output_layout(config: EdgeConfig, output: str) -> data.StructLayout:
+    """The payload of the core's output stream for `output` (``"writes"`` or ``"deltas"``)."""
+    return delta_layout(config) if check_output(output) == "deltas" else write_layout(config)
+
+
+def setup_layout(config: EdgeConfig, output: str = "writes") -> data.StructLayout:
     """The register bank handed from the setup to the stepper (the model's `EdgeSetup`): one
-    field per `bank_fields` entry, arrays of ``length`` registers."""
+    field per `bank_fields` entry for `output`, arrays of ``length`` registers."""
     fields = {}
-    for field in bank_fields(config):
+    for field in bank_fields(config, output):
         shape = register_shape(field.width(config))
         fields[field.name] = data.ArrayLayout(shape, field.length(config)) if field.array else shape
     return data.StructLayout(fields)

@@ -72,6 +72,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model import timing
+from ..model.bank import check_output
 from ..model.config import EdgeConfig
 from .layouts import (
     check_config,
@@ -83,6 +84,7 @@ from .layouts import (
     register_shape,
     setup_layout,
 )
+from .pieces import final_pieces, pieces_registers, run_end_loads
 
 __all__ = ["ERRORS_BITS", "EdgeSetupUnit", "accept_values"]
 
@@ -167,8 +169,11 @@ class EdgeSetupUnit(wiring.Component):
     * ``next_bank`` (`setup_layout`): the value FINAL writes into the bank, combinational.
     """
 
-    def __init__(self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS):
+    def __init__(
+        self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS, output: str = "writes"
+    ):
         self._config = check_config(config)
+        self._output = check_output(output)
         if isinstance(errors_bits, bool) or not isinstance(errors_bits, int) or errors_bits < 1:
             raise TypeError(f"errors_bits must be a positive integer, not {errors_bits!r}")
         self._errors_bits = errors_bits
@@ -176,7 +181,7 @@ class EdgeSetupUnit(wiring.Component):
             {
                 "edges": In(stream.Signature(edge_layout(config))),
                 "clip": In(clip_layout(config), init=full_clip(config)),
-                "bank": Out(stream.Signature(setup_layout(config))),
+                "bank": Out(stream.Signature(setup_layout(config, output))),
                 "errors": Out(unsigned(errors_bits)),
                 "error": Out(unsigned(1)),
             }
@@ -204,7 +209,9 @@ class EdgeSetupUnit(wiring.Component):
         self.lane_b = _MulDivLane("lane_b", config, I + F - 1, 0)  # |I_d| << (F - 1)
         for state in STATES:
             setattr(self, f"in_{state.lower()}", Signal(name=f"in_{state.lower()}"))
-        self.next_bank = Signal(setup_layout(config), name="next_bank")
+        self.next_bank = Signal(setup_layout(config, output), name="next_bank")
+        # The end pieces of the deltas core (`edgeaa.hdl.pieces`); None for line writes.
+        self.pieces = pieces_registers(config) if output == "deltas" else None
 
     @property
     def config(self) -> EdgeConfig:
@@ -214,6 +221,11 @@ class EdgeSetupUnit(wiring.Component):
     def errors_bits(self) -> int:
         return self._errors_bits
 
+    @property
+    def output(self) -> str:
+        """The core's output this setup serves: ``"writes"`` or ``"deltas"`` (end pieces)."""
+        return self._output
+
     def elaborate(self, platform):
         m = Module()
         accept = self._accept()
@@ -221,6 +233,9 @@ class EdgeSetupUnit(wiring.Component):
         window = self._window(m)
         lanes = self._lanes(m)
         self._final(m)
+        if self.pieces is not None:
+            window.append(self.pieces.cut_end.eq(r_cut_end(self.regs)))
+            final_pieces(m, self)
         self._fsm(m, accept, fold, window, lanes)
         return m
 
@@ -415,7 +430,7 @@ class EdgeSetupUnit(wiring.Component):
         r_v0 = Signal(signed(W + s + 1), name="v0")
         m.d.comb += [
             w_start_clip.eq(r.first < r.lo),
-            w_cut_end.eq(r.last > r.hi),
+            w_cut_end.eq(r_cut_end(r)),
             offset.eq(Mux(r.major_neg, (r.lo << s) + w_p0, (r.lo << s) - w_p0)),
             r_v0.eq(Mux(r.minor_neg, -r_q0, r_q0)),
         ]
@@ -586,9 +601,16 @@ class EdgeSetupUnit(wiring.Component):
             m.d.sync += lanes.k_loads
         with m.If(lanes.done):
             m.next = "FINAL"
+            if self.pieces is not None:  # kq, row0 and the column count are known
+                m.d.sync += run_end_loads(self)
         # No column inside the window: the edge ends here, nothing is written.
         with m.If((counter == 1) & (r.columns[-1] | (r.columns == 0))):
             m.next = "IDLE"
+
+
+def r_cut_end(r):
+    """WINDOW's test that the window cuts the edge's end (c1 > hi), from FOLD's registers."""
+    return r.last > r.hi
 
 
 class _MulDivLane:

@@ -11,9 +11,11 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model import timing
-from ..model.bank import bank_fields
+from ..model.bank import bank_fields, check_output
+from ..model.beat import DELTA_STREAM
 from ..model.config import EdgeConfig
-from .layouts import check_config, const_mul, log2, register_shape, setup_layout, write_layout
+from .deltas import delta_pipeline, delta_registers
+from .layouts import check_config, const_mul, log2, output_layout, register_shape, setup_layout
 
 __all__ = ["EdgeStepper"]
 
@@ -41,7 +43,10 @@ class EdgeStepper(wiring.Component):
 
     ``setup`` (in stream, `setup_layout`): the per-edge constants and start state; taken when
     the stepper is idle or in the clock it steps the current edge's last column.
-    ``writes`` (out stream, `write_layout`): one registered beat per column.
+    ``writes`` (out stream, `write_layout`): one registered beat per column. With ``output =
+    "deltas"`` the out stream is ``deltas`` (`delta_layout`, the column's accumulation
+    deltas) and the column pipeline is `edgeaa.hdl.deltas`'s; ``out`` is the stream either
+    way. The rest of this docstring describes the writes pipeline.
 
     Structure: the loop registers (``x, y, jq, jr, remaining``) step one column per clock;
     the column's writes are computed by a pipeline behind them, ``latency`` clocks deep
@@ -88,16 +93,19 @@ class EdgeStepper(wiring.Component):
     per-edge constant, bits ``F .. F + I - 1`` of the sum.
     """
 
-    def __init__(self, config: EdgeConfig):
+    def __init__(self, config: EdgeConfig, output: str = "writes"):
         self._config = check_config(config)
+        self._output_name = check_output(output)
+        stream_name = DELTA_STREAM if output == "deltas" else "writes"
         super().__init__(
             {
-                "setup": In(stream.Signature(setup_layout(config))),
-                "writes": Out(stream.Signature(write_layout(config))),
+                "setup": In(stream.Signature(setup_layout(config, output))),
+                stream_name: Out(stream.Signature(output_layout(config, output))),
             }
         )
+        self.out = getattr(self, stream_name)  # the output stream, writes or deltas
         widths = config.register_widths()
-        for field in bank_fields(config):
+        for field in bank_fields(config, output):
             shape = register_shape(field.width(config))
             if field.array is None:
                 setattr(self, field.name, Signal(shape, name=field.name))
@@ -114,7 +122,9 @@ class EdgeStepper(wiring.Component):
             self.seg_intercepts = []
         self.active = Signal()
         self.step = Signal()
-        self.latency = timing.pipeline_depth(config)
+        self.latency = timing.pipeline_depth(config, output)
+        # The deltas loop's own registers (`edgeaa.hdl.deltas`); empty for line writes.
+        self.delta_regs = delta_registers(config) if output == "deltas" else {}
         self.jsum = Signal(register_shape(widths["jsum"]), name="jsum")
         self.dq = Signal(register_shape(widths["dq"]), name="dq") if config.segments else None
         self.stages = [
@@ -137,6 +147,10 @@ class EdgeStepper(wiring.Component):
     def config(self) -> EdgeConfig:
         return self._config
 
+    @property
+    def output(self) -> str:
+        return self._output_name
+
     def derive(self, regs) -> dict:
         """The derived per-edge constants as expressions of `regs` (the bank payload, or the
         stepper itself): the fields ``du, ifix, kq, kr, khq, khr, col_dx, col_dy, row_dx,
@@ -147,6 +161,11 @@ class EdgeStepper(wiring.Component):
         m = Module()
         en, last = self._control(m)
         advance = self._advance(m)
+        if self._output_name == "deltas":
+            delta_pipeline(m, self, en, last, advance)
+            self._loop(m, advance, last)
+            self._load(m)
+            return m
         col = self._column(m)
         self._stage(m, 1, en, {"valid": self.active, "last": last, **col.consts, **col.p1})
         for index in range(2, self.latency):
@@ -164,7 +183,7 @@ class EdgeStepper(wiring.Component):
     def _control(self, m):
         en = Signal()  # the output register is empty or taken: everything advances
         last = Signal()
-        setup, writes = self.setup, self.writes
+        setup, writes = self.setup, self.out
         m.d.comb += [
             en.eq(~writes.valid | writes.ready),
             last.eq(self.remaining == 0),
@@ -406,7 +425,7 @@ class EdgeStepper(wiring.Component):
         bank = self.setup.payload
         with m.If(self.setup.valid & self.setup.ready):
             m.d.sync += self.active.eq(1)
-            for field in bank_fields(self._config):
+            for field in bank_fields(self._config, self._output_name):
                 reg = getattr(self, field.name)
                 if field.array is None:
                     m.d.sync += reg.eq(bank[field.name])

@@ -4,6 +4,10 @@ The model's `EdgeSetup` computes them, the hardware's register bank (`edgeaa.hdl
 declares one field per entry with the width of its register, the stepper loads them, and
 every harness that compares the core's bank with the model (`bank_values`) walks the same
 list, so a field added here reaches all of them.
+
+The accumulation-delta core (output ``"deltas"``) also needs the end pieces
+(`edgeaa.model.edge.EndPieces`, the `EdgeSetup.pieces` fields): they are in its bank only, so
+the line-mode core (output ``"writes"``) keeps its bank.
 """
 
 from __future__ import annotations
@@ -12,14 +16,28 @@ from typing import NamedTuple
 
 from .config import EdgeConfig, RegisterWidth
 
+OUTPUTS = ("writes", "deltas")  # the core's outputs: line-mode writes, accumulation deltas
+
+
+def check_output(output) -> str:
+    if output not in OUTPUTS:
+        raise ValueError(f"output must be one of {', '.join(OUTPUTS)}, not {output!r}")
+    return output
+
 
 class BankField(NamedTuple):
-    """One field of the bank: its name (an `EdgeSetup` attribute), the entry of
-    `EdgeConfig.register_widths` that sizes it, and whether it is a per-segment array."""
+    """One field of the bank: its name (an `EdgeSetup` attribute, or an `EndPieces` one for
+    ``pieces``), the entry of `EdgeConfig.register_widths` that sizes it, and whether it is a
+    per-segment array."""
 
     name: str
     register: str
     array: str | None = None  # None: a scalar; "thresholds" (N - 1) or "intercepts" (N)
+    pieces: bool = False  # an `EdgeSetup.pieces` field: in the deltas core's bank only
+
+    def value(self, setup):
+        """The field's value in an `EdgeSetup`."""
+        return getattr(setup.pieces if self.pieces else setup, self.name)
 
     def length(self, config: EdgeConfig) -> int | None:
         """Elements of an array field (None for a scalar)."""
@@ -52,19 +70,34 @@ BANK_FIELDS = (
     BankField("seg_intercepts", "seg_const", "intercepts"),
     BankField("value_base", "value"),
     BankField("value_sign", "unit"),
+    # the end pieces (`EndPieces`): heights in units of ifix per pixel, folded rows
+    BankField("sigma", "unit", pieces=True),
+    BankField("row0", "y", pieces=True),
+    BankField("first_partial", "flag", pieces=True),
+    BankField("last_partial", "flag", pieces=True),
+    BankField("hs0", "height", pieces=True),
+    BankField("end_row", "y", pieces=True),
+    *(
+        BankField(name, "height", pieces=True)
+        for name in ("end_height", "total0", "total1", "rect0", "rect1", "band0", "band1")
+    ),
 )
 
 
-def bank_fields(config: EdgeConfig) -> tuple[BankField, ...]:
-    """The fields present in `config`'s bank (array fields of length 0 left out)."""
-    return tuple(f for f in BANK_FIELDS if f.length(config) != 0)
+def bank_fields(config: EdgeConfig, output: str = "writes") -> tuple[BankField, ...]:
+    """The fields present in `config`'s bank for `output` (array fields of length 0 left
+    out; the end pieces only for ``"deltas"``)."""
+    pieces = check_output(output) == "deltas"
+    return tuple(f for f in BANK_FIELDS if f.length(config) != 0 and (pieces or not f.pieces))
 
 
-def bank_values(config: EdgeConfig, setup) -> dict[str, int | tuple[int, ...]]:
+def bank_values(
+    config: EdgeConfig, setup, output: str = "writes"
+) -> dict[str, int | tuple[int, ...]]:
     """The bank contents of an `EdgeSetup` (or any object with the fields): name -> value,
-    arrays as tuples."""
+    arrays as tuples, flags as 0 or 1."""
     out = {}
-    for f in bank_fields(config):
-        value = getattr(setup, f.name)
-        out[f.name] = tuple(value) if f.array else value
+    for f in bank_fields(config, output):
+        value = f.value(setup)
+        out[f.name] = tuple(value) if f.array else int(value)
     return out

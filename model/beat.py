@@ -12,6 +12,9 @@ and ``last`` on the edge's last column. Everything else is derived from the name
   `PAYLOAD_PATHS` entry;
 * the array encoding: int64 rows of `BEAT_COLUMNS` (`beats_to_array`, `beats_from_array`); a
   simulation run records the clock of each beat in front (`RUN_COLUMNS`).
+
+The accumulation-delta core (output ``"deltas"``) has its own beat, declared the same way
+below (`DeltaBeat`, `DELTA_PAYLOAD_PATHS`); `BEAT_FORMATS` names both for the harnesses.
 """
 
 from __future__ import annotations
@@ -107,3 +110,107 @@ def beats_from_array(rows: np.ndarray) -> list[Beat]:
         )
         for r in rows.astype(np.int64).tolist()
     ]
+
+
+# -- the accumulation-delta beat (the core with output "deltas") ------------------------------
+#
+# One beat per stepped column: the four cells of `edgeaa.model.step.run_edge_deltas`, in the
+# order `edgeaa.model.column.delta_cells` gives them (zeros included), and ``last`` on the
+# edge's last column. The core's payload (`edgeaa.hdl.delta_layout`) is the struct
+# ``cell0 {x, y, delta}`` .. ``cell3 {...}``, ``last``; its Verilog ports are
+# ``port_name(path, DELTA_STREAM)``. Array rows: `DELTA_BEAT_COLUMNS` (`DELTA_RUN_COLUMNS` with
+# the clock in front).
+
+DELTA_STREAM = "deltas"
+CELLS = ("cell0", "cell1", "cell2", "cell3")
+CELL_FIELDS = ("x", "y", "delta")  # each signed, sized by the register of the same name
+DELTA_PAYLOAD_PATHS: tuple[tuple[str, ...], ...] = (
+    *((cell, name) for cell in CELLS for name in CELL_FIELDS),
+    ("last",),
+)
+DELTA_BEAT_COLUMNS = tuple("_".join(path) for path in DELTA_PAYLOAD_PATHS)
+DELTA_RUN_COLUMNS = ("clock", *DELTA_BEAT_COLUMNS)
+
+Cell = tuple[int, int, int]  # x, y, delta
+
+
+class DeltaBeat(NamedTuple):
+    cells: tuple[Cell, Cell, Cell, Cell]
+    last: bool  # the edge's last column
+
+
+def delta_column_beats(columns: Sequence[Sequence]) -> list[DeltaBeat]:
+    """One edge's columns of `run_edge_deltas` (tuples of four `Delta`) as beats."""
+    return [
+        DeltaBeat(tuple((d.x, d.y, d.delta) for d in column), index == len(columns) - 1)
+        for index, column in enumerate(columns)
+    ]
+
+
+def delta_beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> DeltaBeat:
+    """A delta beat from its payload leaves (`get(path)` of a `DELTA_PAYLOAD_PATHS` entry)."""
+    cells = tuple(tuple(int(get((cell, name))) for name in CELL_FIELDS) for cell in CELLS)
+    return DeltaBeat(cells, bool(get(("last",))))
+
+
+def delta_payload_row(get: Callable[[tuple[str, ...]], int]) -> list[int]:
+    """The delta payload's leaves as one row of `DELTA_BEAT_COLUMNS`."""
+    return [int(get(path)) for path in DELTA_PAYLOAD_PATHS]
+
+
+def delta_beat_row(beat: DeltaBeat) -> list[int]:
+    return [value for cell in beat.cells for value in cell] + [int(beat.last)]
+
+
+def delta_beats_to_array(beats: Iterable[DeltaBeat]) -> np.ndarray:
+    rows = [delta_beat_row(beat) for beat in beats]
+    return np.array(rows, dtype=np.int64).reshape(-1, len(DELTA_BEAT_COLUMNS))
+
+
+def delta_beats_from_array(rows: np.ndarray) -> list[DeltaBeat]:
+    """Rows of `DELTA_BEAT_COLUMNS` (or `DELTA_RUN_COLUMNS`, the clock dropped) as beats."""
+    rows = np.asarray(rows)
+    if rows.ndim == 2 and rows.shape[1] == len(DELTA_RUN_COLUMNS):
+        rows = rows[:, 1:]
+    width = len(CELL_FIELDS)
+    return [
+        DeltaBeat(
+            tuple(tuple(r[k * width : (k + 1) * width]) for k in range(len(CELLS))),
+            bool(r[-1]),
+        )
+        for r in rows.astype(np.int64).tolist()
+    ]
+
+
+class BeatFormat(NamedTuple):
+    """What a harness needs to know of one output of the core: its stream's name, payload
+    leaves in array order, the register sizing each leaf (None: a one-bit flag), and the
+    decoders to Python beats."""
+
+    stream: str
+    paths: tuple[tuple[str, ...], ...]
+    registers: dict[str, str | None]  # leaf name -> width-table register
+    from_fields: Callable
+    from_array: Callable
+
+    @property
+    def run_columns(self) -> tuple[str, ...]:
+        return ("clock", *("_".join(path) for path in self.paths))
+
+
+BEAT_FORMATS = {
+    "writes": BeatFormat(
+        "writes",
+        PAYLOAD_PATHS,
+        {"x": "x", "y": "y", "value": "value", "lane1_valid": None, "last": None},
+        beat_from_fields,
+        beats_from_array,
+    ),
+    DELTA_STREAM: BeatFormat(
+        DELTA_STREAM,
+        DELTA_PAYLOAD_PATHS,
+        {"x": "x", "y": "y", "delta": "delta", "last": None},
+        delta_beat_from_fields,
+        delta_beats_from_array,
+    ),
+}

@@ -160,6 +160,7 @@ class EdgeConfig:
             "height": RegisterWidth(acc + 2, signed=True),
             "delta": RegisterWidth(acc + 2, signed=True),
             "unit": RegisterWidth(2, signed=True),  # a unit step or a sign: -1, 0 or +1
+            "flag": RegisterWidth(1),  # a per-edge condition: 0 or 1
         }
 
     def with_(self, **changes) -> EdgeConfig:

@@ -27,8 +27,10 @@ stepper, joined by a one-edge register bank:
   stepper is idle or stepping the previous edge's last column (the handover has no bubble).
   Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
   pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
-  register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4): the
-  beat is valid in clock ``t + 1 + D + c``.
+  register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
+  every mode for the accumulation-delta core, output ``"deltas"``): the beat is valid in
+  clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
+  clocks: only D differs between the two outputs.
 
 With ``L = setup_latency = R + 5 + D`` (R of an edge not clipped at its start): an edge
 accepted in clock ``a`` by an idle core has its first beat in clock ``a + L`` (``a + L + W +
@@ -65,6 +67,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .bank import check_output
 from .config import EdgeConfig
 from .edge import Edge, EdgeError, setup
 
@@ -83,6 +86,7 @@ __all__ = [
 
 BAD_COMMAND_CYCLES = 2  # accept + FOLD: a dropped command occupies the setup two clocks
 EMPTY_EDGE_CYCLES = 5  # accept, FOLD, WINDOW, two RUN clocks: an edge with no visible column
+DELTAS_PIPELINE_DEPTH = 3  # the deltas stepper: p1 (depth), p2 (estimate), output register
 
 
 def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:
@@ -98,17 +102,20 @@ def start_clip_cycles(config: EdgeConfig) -> int:
     return config.coord_bits + 1
 
 
-def pipeline_depth(config: EdgeConfig) -> int:
+def pipeline_depth(config: EdgeConfig, output: str = "writes") -> int:
     """Clocks from a column's step to its beat: the stepper's output pipeline, counting the
-    output register (2 with at most one segment, 3 with two or more)."""
+    output register (2 with at most one segment, 3 with two or more; the deltas core's is 3
+    in every mode: the piece's depth and estimate, then the cells)."""
+    if check_output(output) == "deltas":
+        return DELTAS_PIPELINE_DEPTH
     return 2 if config.segments <= 1 else 3
 
 
-def setup_latency(config: EdgeConfig) -> int:
+def setup_latency(config: EdgeConfig, output: str = "writes") -> int:
     """Clocks from accepting an edge (idle core, not clipped at its start) to its first beat:
     accept, FOLD, WINDOW, RUN, FINAL, bank, stepper load, the step of column 0, then the
     output pipeline."""
-    return run_cycles(config) + 5 + pipeline_depth(config)
+    return run_cycles(config) + 5 + pipeline_depth(config, output)
 
 
 def setup_interval(config: EdgeConfig) -> int:
@@ -134,17 +141,20 @@ class EdgeTiming:
         return self.load is None
 
 
-def write_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -> list[EdgeTiming]:
+def write_cycles(
+    config: EdgeConfig, edges, setup_latency_: int | None = None, output: str = "writes"
+) -> list[EdgeTiming]:
     """Predict the clock of every beat for an always-ready sink and a back-to-back source.
 
     `edges` are `Edge` commands offered in order from clock 0, each as soon as the previous
     one is accepted. Commands the model rejects (`EdgeError`) are dropped by the core and
     get no beats; so are edges with no column in their clip window. `setup_latency_`
-    defaults to `setup_latency(config)`; pass the core's ``setup_latency`` to check the two
-    agree.
+    defaults to `setup_latency(config, output)`; pass the core's ``setup_latency`` to check
+    the two agree. `output` is the core's (``"writes"`` or ``"deltas"``): one beat per
+    column either way, only the pipeline depth differs.
     """
-    latency = setup_latency(config) if setup_latency_ is None else setup_latency_
-    depth = pipeline_depth(config)
+    latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
+    depth = pipeline_depth(config, output)
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     accept = 0
@@ -174,18 +184,23 @@ def write_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -
     return out
 
 
-def beat_cycles(config: EdgeConfig, edges, setup_latency_: int | None = None) -> list[int]:
+def beat_cycles(
+    config: EdgeConfig, edges, setup_latency_: int | None = None, output: str = "writes"
+) -> list[int]:
     """The clock of every beat of the stream, in order (`write_cycles` flattened)."""
-    return [beat for timing in write_cycles(config, edges, setup_latency_) for beat in timing.beats]
+    timings = write_cycles(config, edges, setup_latency_, output)
+    return [beat for timing in timings for beat in timing.beats]
 
 
-def sustained_rate(config: EdgeConfig, columns: int, setup_latency_: int | None = None) -> float:
+def sustained_rate(
+    config: EdgeConfig, columns: int, setup_latency_: int | None = None, output: str = "writes"
+) -> float:
     """Steady-state columns per clock of an endless stream of edges of `columns` columns
     (`setup_latency_`, if given, is the core's: the interval is ``L - D - 1``)."""
     if setup_latency_ is None:
         interval = setup_interval(config)
     else:
-        interval = setup_latency_ - pipeline_depth(config) - 1
+        interval = setup_latency_ - pipeline_depth(config, output) - 1
     return columns / max(columns, interval)
 
 

@@ -10,36 +10,38 @@ the commands back to back and the sink is always ready, so beat clocks follow
 from __future__ import annotations
 
 import time
-from functools import partial
 
 import numpy as np
 from amaranth.sim import Simulator
 
 from ...hdl import EdgeAntialiaser
 from ...model import Edge, EdgeConfig
-from ...model.beat import payload_row
+from ...model.beat import BEAT_FORMATS
 from ..verification.commands import edge_command
-from .verilator_harness import BEAT_FIELDS, FastRun, drain_clocks
+from .verilator_harness import FastRun, drain_clocks
 
 
 def payload_leaf(payload, path: tuple[str, ...]) -> int:
-    """A leaf of the sampled ``writes.payload`` (a `data.Const` of `write_layout`)."""
+    """A leaf of the sampled output payload (a `data.Const` of `write_layout` or
+    `delta_layout`)."""
     for name in path:
         payload = payload[name]
     return int(payload)
 
 
-def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:
-    """Simulate the core on `edges`; `progress(done, total)` is called as commands go in."""
-    dut = EdgeAntialiaser(config)
+def run(config: EdgeConfig, edges: list[Edge], *, progress=None, output: str = "writes") -> FastRun:
+    """Simulate the core (with `output`: ``"writes"`` or ``"deltas"``) on `edges`;
+    `progress(done, total)` is called as commands go in."""
+    dut = EdgeAntialiaser(config, output=output)
+    paths = BEAT_FORMATS[output].paths
     commands = [edge_command(config, edge) for edge in edges]
-    drain = drain_clocks(config)  # clocks with no beat before the run may end
+    drain = drain_clocks(config, output)  # clocks with no beat before the run may end
     rows: list[list[int]] = []
     clocks = errors = 0
 
     async def bench(ctx):
         nonlocal clocks, errors
-        ctx.set(dut.writes.ready, 1)
+        ctx.set(dut.out.ready, 1)
         index, quiet = 0, 0
         while index < len(commands) or quiet < drain:
             offering = index < len(commands)
@@ -48,14 +50,14 @@ def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:
                 ctx.set(dut.edges.payload, commands[index].payload)
                 ctx.set(dut.clip, commands[index].clip)
             _, _, taken, valid, beat = await ctx.tick().sample(  # clk, rst first
-                dut.edges.ready, dut.writes.valid, dut.writes.payload
+                dut.edges.ready, dut.out.valid, dut.out.payload
             )
             if offering and taken:
                 index += 1
                 if progress is not None:
                     progress(index, len(commands))
             if valid:
-                rows.append([clocks, *payload_row(partial(payload_leaf, beat))])
+                rows.append([clocks, *(payload_leaf(beat, path) for path in paths)])
             quiet = 0 if (valid or index < len(commands)) else quiet + 1
             clocks += 1
         ctx.set(dut.edges.valid, 0)
@@ -67,5 +69,5 @@ def run(config: EdgeConfig, edges: list[Edge], *, progress=None) -> FastRun:
     start = time.perf_counter()
     sim.run()
     seconds = time.perf_counter() - start
-    beats = np.array(rows, dtype=np.int64).reshape(-1, BEAT_FIELDS)
-    return FastRun(beats, clocks, errors, seconds)
+    beats = np.array(rows, dtype=np.int64).reshape(-1, len(paths) + 1)
+    return FastRun(beats, clocks, errors, seconds, output)

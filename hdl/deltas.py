@@ -1,0 +1,218 @@
+"""The deltas stepper's column pipeline: `edgeaa.model.step.run_edge_deltas` in hardware.
+
+`EdgeStepper` with output ``"deltas"`` steps the same loop (``x, y, jq, jr``) and adds three
+loop registers: ``hs`` (where the column's piece starts, the model's hs), ``adj`` (P1's
+folded row minus the loop's row, one less per row step) and ``first_col`` (column 0).
+The column's piece end ``he`` (`piece_end`) is formed in the stepping clock; then, one
+column per clock:
+
+* p1: the piece's heights, the depth of its crossing part, the column's total, band and
+  rectangles (selects of per-edge constants by first / last column), and the per-edge values
+  the later stages need (a new edge may be loaded while its predecessor's last column is
+  still in the pipeline, so nothing after the stepping clock reads the bank registers);
+* p2: the clamped triangle estimate of the depth (`triangle_estimate`, shift-adds by the
+  small odd constants) and the piece's cover in each row;
+* the output register: the cells of `column_deltas` and their screen cells (`delta_cells`).
+
+Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
+intermediate wraps; only the payload's fields are cut to the width table's ``x``, ``y`` and
+``delta``, which the model checks. No multiplier: adds, compares, selects and fixed shifts.
+"""
+
+from __future__ import annotations
+
+import types
+
+from amaranth.hdl import Mux, Signal, Value, signed
+
+from ..model.config import EdgeConfig
+from .layouts import const_mul, log2, register_shape
+
+__all__ = ["delta_pipeline", "delta_registers"]
+
+
+def delta_registers(config: EdgeConfig) -> dict[str, Signal]:
+    """The deltas stepper's loop registers besides the bank's: name -> register."""
+    widths = config.register_widths()
+    return {
+        "hs": Signal(register_shape(widths["height"]), name="hs"),
+        # P1's row minus the loop's: end_row - row0 at load, -1 per row step
+        "adj": Signal(signed(widths["x"].bits + 2), name="adj"),
+        "first_col": Signal(name="first_col"),
+    }
+
+
+def _clamp(value, hi):
+    """value clamped to [0, hi] (the model's `_clamp`, same order of tests)."""
+    return Mux(value < 0, 0, Mux(value > hi, hi, value))
+
+
+def _stage(m, en, prefix: str, values: dict) -> types.SimpleNamespace:
+    """Registers of one pipeline stage, each shaped like its value, loaded when `en`."""
+    regs = {}
+    for name, value in values.items():
+        value = Value.cast(value)
+        reg = Signal(value.shape(), name=f"{prefix}_{name}")
+        with m.If(en):
+            m.d.sync += reg.eq(value)
+        regs[name] = reg
+    return types.SimpleNamespace(**regs)
+
+
+def delta_pipeline(m, st, en, last, advance) -> None:
+    """Add the deltas stepper's loop registers' updates and its pipeline to `m` (`st` the
+    `EdgeStepper`, `en` its enable, `last` its last-column flag, `advance` the loop step)."""
+    he = _piece_end(m, st, last)
+    _loop(m, st, he, advance.row_step)
+    p1 = _stage(m, en, "d1", _stage0(st, last, he))
+    p2 = _stage(m, en, "d2", _covers(st.config, p1))
+    _output(m, st, en, p2)
+
+
+def _piece_end(m, st, last):
+    """`piece_end`: floor(J + K/2), or P1's height in a partial last column."""
+    regs = st.delta_regs
+    carry = (st.jr + st.khr) >= st.du
+    full = st.jq + st.khq + carry
+    adj = regs["adj"]
+    at_end = st.end_height + Mux(adj > 0, st.ifix, Mux(adj < 0, -st.ifix, 0))
+    he = Signal(register_shape(st.config.register_widths()["height"]), name="he")
+    m.d.comb += he.eq(Mux(last & st.last_partial, at_end, full))
+    return he
+
+
+def _loop(m, st, he, row_step):
+    """The piece starts where the previous ended (one row less on a row step); the bank load
+    (in the same clock as the last column's step) wins."""
+    regs = st.delta_regs
+    with m.If(st.step):
+        m.d.sync += [
+            regs["hs"].eq(Mux(row_step, he - st.ifix, he)),
+            regs["adj"].eq(regs["adj"] - row_step),
+            regs["first_col"].eq(0),
+        ]
+    bank = st.setup.payload
+    with m.If(st.setup.valid & st.setup.ready):
+        m.d.sync += [
+            regs["hs"].eq(bank.hs0),
+            regs["adj"].eq(bank.end_row - bank.row0),
+            regs["first_col"].eq(1),
+        ]
+
+
+def _stage0(st, last, he) -> dict:
+    """What p1 loads in the stepping clock: the piece and the column's per-edge selects."""
+    n = st.config.segments
+    regs = st.delta_regs
+    hs, adj, ifix = regs["hs"], regs["adj"], st.ifix
+    first = regs["first_col"] & st.first_partial
+    end = last & st.last_partial
+    x_major = st.col_dx != 0
+    total1 = Mux(adj > 0, st.total1 + st.band1, Mux(adj < 0, st.total1 - st.band1, st.total1))
+    interior = Mux(x_major, st.khq, st.jq)
+    low = he > ifix
+    values = dict(
+        valid=st.active,
+        last=last,
+        x=st.x,
+        y=st.y,
+        x_major=x_major,
+        neg=x_major & (st.col_dx < 0),  # the column pair's values swap on screen
+        minor_neg=Mux(x_major, st.row_dy < 0, st.row_dx < 0),
+        sigma_neg=st.sigma < 0,
+        hs=hs,
+        he=he,
+        ifix=ifix,
+        low=low,
+        depth=Mux(low, he - ifix, -hs),
+        total=Mux(first, st.total0, Mux(end, total1, interior)),
+        band=Mux(first, st.band0, Mux(end, st.band1, ifix)),
+        rect_up=Mux(first, st.rect0, 0),
+        rect_low=Mux(end, st.rect1, 0),
+    )
+    values.update({f"thr{j}": thr for j, thr in enumerate(st.seg_thresholds, start=1)})
+    values.update({f"icpt{j}": icpt for j, icpt in enumerate(st.seg_intercepts)})
+    assert len(st.seg_intercepts) == n
+    return values
+
+
+def _estimate(config: EdgeConfig, p1):
+    """`triangle_estimate` of p1's depth, clamped at 0 (0 without segments)."""
+    n = config.segments
+    if n == 0:
+        return 0
+    shift = 2 + log2(n)
+    segment = sum(p1.depth >= getattr(p1, f"thr{j}") for j in range(1, n))
+    t = (const_mul(p1.depth, 1) >> shift) - p1.icpt0
+    for j in range(1, n):
+        line = (const_mul(p1.depth, 2 * j + 1) >> shift) - getattr(p1, f"icpt{j}")
+        t = Mux(segment == j, line, t)
+    return Mux(t > 0, t, 0)
+
+
+def _covers(config: EdgeConfig, p1) -> dict:
+    """What p2 loads: the estimate and the piece's cover of rows r - 1, r and r + 1."""
+    hs, he, ifix = p1.hs, p1.he, p1.ifix
+    carried = ("valid", "last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg")
+    carried += ("low", "total", "band", "rect_up", "rect_low")
+    return dict(
+        {name: getattr(p1, name) for name in carried},
+        t=_estimate(config, p1),
+        up=hs < 0,
+        hs_ge=hs >= ifix,
+        he_le0=he <= 0,
+        cov_up=Mux(he < 0, he, 0) - Mux(hs < 0, hs, 0),
+        cov_mid=_clamp(he, ifix) - _clamp(hs, ifix),
+        cov_low=Mux(he > ifix, he, ifix) - Mux(hs > ifix, hs, ifix),
+    )
+
+
+def _cells_x_major(p2):
+    """`_deltas_x_major`: areas on the +u side, row by row."""
+    total, t = p2.total, p2.t
+    r_low = Mux(p2.hs_ge, total, Mux(p2.low, _clamp(t + p2.rect_low, p2.cov_low), 0))
+    r_up = Mux(p2.he_le0, total, Mux(p2.up, _clamp(p2.cov_up - t - p2.rect_up, p2.cov_up), 0))
+    r_mid = _clamp(total - r_low - r_up, p2.cov_mid)
+    r_a, cov_a = Mux(p2.up, r_up, r_mid), Mux(p2.up, p2.cov_up, p2.cov_mid)
+    r_b, cov_b = Mux(p2.up, r_mid, r_low), Mux(p2.up, p2.cov_mid, p2.cov_low)
+    return r_a, cov_a - r_a, r_b, cov_b - r_b
+
+
+def _cells_y_major(p2):
+    """`_deltas_y_major`: areas on the smaller-v side, differenced along +v."""
+    total, band, t = p2.total, p2.band, p2.t
+    a_low = _clamp(Mux(p2.hs_ge, total - band, Mux(p2.low, t, 0)), band)
+    a_up = _clamp(Mux(p2.he_le0, total + band, Mux(p2.up, band - t, band)), band)
+    a_mid = _clamp(total + band - a_up - a_low, band)
+    q0, q1 = Mux(p2.up, a_up, a_mid), Mux(p2.up, a_mid, a_low)
+    return band - q0, q0 - q1, q1, 0
+
+
+def _output(m, st, en, p2) -> None:
+    """`delta_cells`: the four cells on screen, signed by the winding, into the payload."""
+    widths = st.config.register_widths()
+    cx, cy = _cells_x_major(p2), _cells_y_major(p2)
+    up = p2.up
+    beat = st.out.payload
+    cells = []
+    for k in range(4):
+        pair, right = divmod(k, 2)  # x-major: row a or b, column x or x + 1
+        value_x = Mux(p2.neg, cx[2 * pair + 1 - right], cx[k])
+        row = pair - up  # -1, 0 or +1 rows along +v
+        y_x = Mux(p2.minor_neg, p2.y - row, p2.y + row)
+        # y-major: v offset k - up, one cell lower along -v
+        x_y = Mux(p2.minor_neg, p2.x + 1 + up - k, p2.x + k - up)
+        value = Mux(p2.x_major, value_x, cy[k])
+        cells.append(
+            (
+                Mux(p2.x_major, p2.x + right, x_y),
+                Mux(p2.x_major, y_x, p2.y),
+                Mux(p2.sigma_neg, -value, value),
+            )
+        )
+    with m.If(en):
+        m.d.sync += [st.out.valid.eq(p2.valid), beat.last.eq(p2.last)]
+        for k, (x, y, delta) in enumerate(cells):
+            cell = beat[f"cell{k}"]
+            m.d.sync += [cell.x.eq(x), cell.y.eq(y), cell.delta.eq(delta)]
+    assert len(cell.delta) == widths["delta"].bits

@@ -1,0 +1,386 @@
+# amaranth: UnusedElaboratable=no
+"""The deltas core (``EdgeAntialiaser(config, output="deltas")``) against the model's
+`run_edge_deltas`, beat for beat: the four cells of every column and the last flags, the bank
+(the end pieces included) against `setup()`, bad commands dropped and counted, and with an
+eager source and an always-ready sink every beat's clock against `edgeaa.model.timing`
+(output ``"deltas"``). In Amaranth's simulator (`simulate`, here) and in the compiled
+Verilator harness, with random source idles and sink stalls (a stalled beat must hold).
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, field
+
+import pytest
+from amaranth.hdl import Value
+from amaranth.sim import Simulator
+from core_bench import corpus, decoder, first_difference, is_good, run_of, sim_settings
+from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
+from hypothesis import given
+from hypothesis import strategies as st
+
+from edgeaa.hdl import EdgeAntialiaser, EdgeStepper, delta_layout, setup_layout, verilog
+from edgeaa.hdl.core import ERRORS_BITS
+from edgeaa.model import Edge, EdgeConfig, setup
+from edgeaa.model import timing as timing_model
+from edgeaa.model.bank import bank_fields, bank_values
+from edgeaa.model.beat import CELLS, DeltaBeat, delta_column_beats
+from edgeaa.model.step import run_edge_deltas
+from edgeaa.sim.simulators import amaranth_sim, verilator_harness
+from edgeaa.sim.synthesis import muldiv_cells
+from edgeaa.sim.verification.commands import edge_clip, edge_payload
+from edgeaa.sim.verification.workloads import random_sim_edges
+
+OUTPUT = "deltas"
+
+
+def expected_deltas(config: EdgeConfig, edges) -> list[list[DeltaBeat]]:
+    """The model's delta beats of each good edge (bad commands have none)."""
+    return [
+        delta_column_beats(run_edge_deltas(config, edge)) for edge in edges if is_good(config, edge)
+    ]
+
+
+def expected_bank(config: EdgeConfig, edge: Edge) -> dict[str, int]:
+    """The deltas bank of `setup()`, keyed like `decoder` keys the core's (``name.j``)."""
+    bank = {}
+    for name, value in bank_values(config, setup(config, edge), OUTPUT).items():
+        if isinstance(value, tuple):
+            bank.update({f"{name}.{j}": item for j, item in enumerate(value)})
+        else:
+            bank[name] = value
+    return bank
+
+
+# -- the Amaranth runner ---------------------------------------------------------------------
+
+
+@dataclass
+class DeltaRun:
+    config: EdgeConfig
+    edges: list
+    tag: str
+    accepts: list = field(default_factory=list)  # clock of each accepted command
+    beats: list = field(default_factory=list)  # (clock, DeltaBeat)
+    banks: list = field(default_factory=list)  # (clock, decoded bank) the stepper took
+    error_pulses: list = field(default_factory=list)
+    errors: int = 0
+    final_idle: tuple = ()  # deltas.valid, bank valid, stepper active, edges.ready
+
+
+def _as_beat(beat: dict) -> DeltaBeat:
+    cells = tuple(tuple(beat[f"{cell}.{name}"] for name in ("x", "y", "delta")) for cell in CELLS)
+    return DeltaBeat(cells, bool(beat["last"]))
+
+
+def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="") -> DeltaRun:
+    """Offer `edges` in order (each with its window on ``clip``) and drain the deltas; with
+    `seed`, random idle source clocks and sink stalls."""
+    dut = EdgeAntialiaser(config, output=OUTPUT)
+    stepper = dut.stepper
+    rng = random.Random(seed) if seed is not None else None
+    run = DeltaRun(config, list(edges), f"[{label} seed={seed} idle={idle} stall={stall} {config}]")
+    commands = [(edge_payload(config, e), edge_clip(config, e)) for e in edges]
+    want = sum(setup(config, e).columns for e in edges if is_good(config, e))
+    max_clocks = 200 + (len(edges) + 2) * 4 * (dut.setup_latency + config.coord_bits + 8)
+    max_clocks = int((max_clocks + 4 * want) / (1 - max(idle, stall)))
+    decode_beat, decode_bank = decoder(delta_layout(config)), decoder(setup_layout(config, OUTPUT))
+    beat_bits, bank_bits = Value.cast(dut.deltas.payload), Value.cast(stepper.setup.payload)
+
+    async def bench(ctx):
+        index, offering, held, clock, quiet = 0, False, None, 0, 0
+        while quiet <= dut.setup_latency + 8 and clock <= max_clocks:
+            if index < len(commands) and not offering and (rng is None or rng.random() >= idle):
+                ctx.set(dut.edges.payload, commands[index][0])
+                ctx.set(dut.clip, commands[index][1])
+                ctx.set(dut.edges.valid, 1)
+                offering = True
+            ready = rng is None or rng.random() >= stall
+            ctx.set(dut.deltas.ready, ready)
+            *_, e_ready, valid, raw, error, b_valid, b_ready, b_raw = await ctx.tick().sample(
+                dut.edges.ready,
+                dut.deltas.valid,
+                beat_bits,
+                dut.error,
+                stepper.setup.valid,
+                stepper.setup.ready,
+                bank_bits,
+            )
+            if offering and e_ready:
+                run.accepts.append(clock)
+                index, offering = index + 1, False
+                ctx.set(dut.edges.valid, 0)
+            if held is not None:
+                assert valid and raw == held, f"{run.tag} clock {clock}: a stalled beat changed"
+            held = raw if valid and not ready else None
+            if valid and ready:
+                run.beats.append((clock, _as_beat(decode_beat(raw))))
+            if b_valid and b_ready:
+                run.banks.append((clock, decode_bank(b_raw)))
+            if error:
+                run.error_pulses.append(clock)
+            clock += 1
+            done = index == len(commands) and len(run.beats) >= want
+            quiet = quiet + 1 if done else 0
+        run.errors = ctx.get(dut.errors)
+        run.final_idle = tuple(
+            ctx.get(s) for s in (dut.deltas.valid, stepper.setup.valid, stepper.active)
+        ) + (ctx.get(dut.edges.ready),)
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+    return run
+
+
+def check_run(run: DeltaRun, *, exact_timing: bool) -> None:
+    config, tag = run.config, run.tag
+    good = [edge for edge in run.edges if is_good(config, edge)]
+    got = [beat for _, beat in run.beats]
+    position = 0
+    for n, (edge, want) in enumerate(zip(good, expected_deltas(config, run.edges), strict=True)):
+        edge_got = got[position : position + len(want)]
+        assert edge_got == want, (
+            f"{tag} good edge {n} {edge}: deltas differ from run_edge_deltas at column "
+            f"{first_difference(edge_got, want)}"
+        )
+        position += len(want)
+    assert len(got) == position, f"{tag} {len(got)} beats, the model has {position}"
+    visible = [edge for edge in good if setup(config, edge).columns]
+    assert len(run.banks) == len(visible), f"{tag} {len(run.banks)} banks for {len(visible)}"
+    for edge, (_, bank) in zip(visible, run.banks, strict=True):
+        want_bank = expected_bank(config, edge)
+        diff = {k: (bank[k], want_bank[k]) for k in bank if bank[k] != want_bank[k]}
+        assert not diff, f"{tag} {edge}: bank differs from setup() (core, model): {diff}"
+    bad = len(run.edges) - len(good)
+    assert run.errors == min(bad, (1 << ERRORS_BITS) - 1), f"{tag} errors={run.errors}"
+    assert len(run.error_pulses) == bad and len(run.accepts) == len(run.edges), tag
+    assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
+    if not exact_timing:
+        return
+    timings = timing_model.write_cycles(config, run.edges, output=OUTPUT)
+    assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
+    want_clocks = [clock for t in timings for clock in t.beats]
+    got_clocks = [clock for clock, _ in run.beats]
+    assert got_clocks == want_clocks, (
+        f"{tag} beat clocks differ from the timing model at beat "
+        f"{first_difference(got_clocks, want_clocks)}"
+    )
+    assert [clock for clock, _ in run.banks] == [t.load for t in timings if not t.dropped]
+
+
+def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label=""):
+    run = simulate(config, edges, seed=seed, idle=idle, stall=stall, label=label)
+    check_run(run, exact_timing=seed is None)
+    return run
+
+
+# -- edge sets ---------------------------------------------------------------------------------
+
+
+def kinds(config: EdgeConfig, edges) -> set[str]:
+    """What the edges exercise: octants, partial and cut end columns, single columns."""
+    out = set()
+    for edge in edges:
+        if not is_good(config, edge):
+            out.add("bad")
+            continue
+        st_ = setup(config, edge)
+        p = st_.pieces
+        if not st_.columns:
+            out.add("empty window")
+            continue
+        out.add(f"octant {st_.x_major:d}{st_.col_dx + st_.col_dy:+d}{st_.row_dx + st_.row_dy:+d}")
+        out.add("start cut" if not p.first_partial else "first partial")
+        out.add("end cut" if not p.last_partial else "last partial")
+        if st_.columns == 1 and p.first_partial and p.last_partial:
+            out.add("single column")
+        out.add(f"sigma {p.sigma:+d}")
+    return out
+
+
+def mixed_edges(config: EdgeConfig, seed: int, count: int = 24) -> list[Edge]:
+    """The corner corpus (every octant, sub-pixel starts and ends, image corners) and random
+    edges with clip windows near them, short and longer, with a bad command among them."""
+    rng = random.Random(seed)
+    edges = [edge for _, edge in corpus(config, longest=False)]
+    edges += random_edge_commands(config, rng, count, 3, clip=True)
+    edges += random_edge_commands(config, rng, count // 2, 20, clip=True)
+    edges.insert(7, Edge(4, 4, 4, 4))  # a bad command: dropped and counted
+    return edges
+
+
+# -- Amaranth simulator ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+def test_corpus_and_clipped_edges(name):
+    """Every octant, sub-pixel ends, clip windows: the model's deltas, bank and clocks."""
+    config = CORE_CONFIGS[name]
+    edges = mixed_edges(config, seed=1)
+    octants = {kind for kind in kinds(config, edges) if kind.startswith("octant")}
+    assert len(octants) == 8, octants
+    want = {"start cut", "end cut", "first partial", "last partial", "sigma +1", "sigma -1"}
+    assert want | {"bad", "empty window"} <= kinds(config, edges)
+    run_and_check(config, edges, label=f"corpus {name}")
+
+
+BACKPRESSURE = [
+    ("default", 1, 0.5, 0.5),
+    ("default", 2, 0.0, 0.8),
+    ("pw", 3, 0.3, 0.6),
+    ("seg4", 4, 0.3, 0.6),
+    ("truncated", 5, 0.5, 0.5),
+    ("small", 6, 0.5, 0.5),
+    ("wide", 7, 0.3, 0.3),
+    ("lowfrac", 8, 0.2, 0.7),
+]
+
+
+@pytest.mark.parametrize(("name", "seed", "idle", "stall"), BACKPRESSURE)
+def test_backpressure(name, seed, idle, stall):
+    """Random source idles and sink stalls: the same deltas, none lost or duplicated."""
+    config = CORE_CONFIGS[name]
+    edges = mixed_edges(config, seed=seed, count=16)
+    run_and_check(config, edges, seed=seed, idle=idle, stall=stall, label=f"stalls {name}")
+
+
+@pytest.mark.parametrize("name", ["default", "seg2", "small", "lowfrac"])
+def test_hypothesis_edges(name):
+    config = CORE_CONFIGS[name]
+
+    @sim_settings(5)
+    @given(st.lists(edge_commands(config, 6, clip=True), min_size=4, max_size=12))
+    def check(edges):
+        run_and_check(config, edges, label=f"hypothesis {name}")
+
+    check()
+
+
+def test_single_columns():
+    """Edges inside one column (both vertices in it): P1's row one above, on or below the
+    first column's, and the one-column total of both end pieces."""
+    config = CORE_CONFIGS["default"]
+    rng = random.Random(5)
+    S, hi = config.subpixel_scale, config.max_vertex
+    edges = []
+    while len(edges) < 40:
+        x0, y0 = rng.randint(S, hi - S), rng.randint(S, hi - S)
+        dx, dy = rng.randint(-S + 1, S - 1), rng.randint(-S + 1, S - 1)
+        edge = Edge(x0, y0, x0 + dx, y0 + dy, rng.choice(("left", "right")), None, 0)
+        if is_good(config, edge) and setup(config, edge).columns == 1:
+            edges.append(edge)
+    assert "single column" in kinds(config, edges)
+    run_and_check(config, edges, label="single columns")
+    run_and_check(config, edges, seed=9, idle=0.3, stall=0.5, label="single columns")
+
+
+def test_handover():
+    """Edge lengths around the setup interval: the bank is loaded in the clock the previous
+    edge's last column is stepped, whose pieces are still in the pipeline."""
+    config = CORE_CONFIGS["seg4"]
+    interval = timing_model.setup_interval(config)
+    lengths = [60, 1, 2, 1, interval, interval - 1, 1, interval + 1, 1, 1, 3]
+    edges = [
+        run_of(config, 10 + n, 20 + 3 * n, c, inside="right" if n % 3 else "left")
+        for n, c in enumerate(lengths)
+    ]
+    run_and_check(config, edges, label="handover")
+    run_and_check(config, edges, seed=3, idle=0.2, stall=0.3, label="handover")
+
+
+def test_a_wrong_model_is_caught(monkeypatch):
+    """The comparison can fail: with one cell of the model's deltas changed, it does."""
+    import edgeaa.model.step as step
+
+    config = CORE_CONFIGS["default"]
+    edges = mixed_edges(config, seed=2, count=4)
+    run = simulate(config, edges)
+    original = step.delta_cells
+
+    def shifted(a, st_, x, y, d):
+        cells = original(a, st_, x, y, d)
+        return [(cx, cy + 1, v) if k == 3 else (cx, cy, v) for k, (cx, cy, v) in enumerate(cells)]
+
+    monkeypatch.setattr(step, "delta_cells", shifted)
+    with pytest.raises(AssertionError, match="deltas differ from run_edge_deltas"):
+        check_run(run, exact_timing=True)
+
+
+# -- structure ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+def test_deltas_stepper_has_no_multiplier(name):
+    assert muldiv_cells(EdgeStepper(CORE_CONFIGS[name], OUTPUT)) == {}
+
+
+def test_the_writes_core_keeps_its_bank():
+    config = CORE_CONFIGS["default"]
+    writes = {f.name for f in bank_fields(config)}
+    deltas = {f.name for f in bank_fields(config, OUTPUT)}
+    assert writes < deltas and not writes & {"hs0", "sigma", "total0"}
+    with pytest.raises(ValueError, match="output must be one of writes, deltas"):
+        EdgeAntialiaser(config, output="pixels")
+
+
+@pytest.mark.parametrize("name", ["default", "seg4", "small"])
+def test_verilog_lints(name):
+    """verilator --lint-only -Wall with the documented waivers, like the writes core."""
+    from edgeaa.sim.simulators.verilator import lint
+
+    text = verilog(CORE_CONFIGS[name], output=OUTPUT)
+    assert "deltas__payload__cell3__delta" in text and "writes__valid" not in text
+    proc = lint(text)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+# -- the compiled Verilator harness and the Python simulator ------------------------------------
+
+
+def _flat(config, edges):
+    return [beat for beats in expected_deltas(config, edges) for beat in beats]
+
+
+@pytest.mark.parametrize("name", ["default", "pw", "seg4", "wide", "lowfrac"])
+def test_compiled_harness(name):
+    """The compiled core: the model's deltas with stalls and idles, and without them every
+    beat in the clock the timing model predicts."""
+    config = CORE_CONFIGS[name]
+    seed = 30
+    edges = random_sim_edges(config, 300, seed, max_pixels=40, bad_fraction=0.02, clip_fraction=0.4)
+    want = _flat(config, edges)
+    run = verilator_harness.run(config, edges, output=OUTPUT)
+    assert run.as_beats() == want, f"seed {seed}: beat {first_difference(run.as_beats(), want)}"
+    predicted = timing_model.beat_cycles(config, edges, output=OUTPUT)
+    assert run.beats[:, 0].tolist() == predicted
+    stalled = verilator_harness.run(config, edges, seed=seed, idle=0.2, stall=0.4, output=OUTPUT)
+    assert stalled.as_beats() == want, f"seed {seed}: lost, duplicated or wrong beats"
+    assert stalled.errors == run.errors == len(edges) - sum(is_good(config, e) for e in edges)
+
+
+def test_python_and_compiled_simulators_agree_clock_for_clock():
+    config = CORE_CONFIGS["seg2"]
+    edges = random_sim_edges(config, 20, 31, max_pixels=24, bad_fraction=0.1, clip_fraction=0.5)
+    slow = amaranth_sim.run(config, edges, output=OUTPUT)
+    fast = verilator_harness.run(config, edges, output=OUTPUT)
+    assert slow.beats.tolist() == fast.beats.tolist()
+    assert slow.as_beats() == _flat(config, edges)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+def test_long_edges_compiled_slow(name):
+    """Edges over the whole coordinate range (the longest of the corpus among them), with and
+    without back-pressure, in the compiled core."""
+    config = CORE_CONFIGS[name]
+    edges = [edge for _, edge in corpus(config)]
+    edges += random_sim_edges(config, 200, 40, max_pixels=1 << config.coord_bits, clip_fraction=0.3)
+    want = _flat(config, edges)
+    run = verilator_harness.run(config, edges, output=OUTPUT)
+    assert run.as_beats() == want
+    assert run.beats[:, 0].tolist() == timing_model.beat_cycles(config, edges, output=OUTPUT)
+    stalled = verilator_harness.run(config, edges, seed=41, idle=0.3, stall=0.5, output=OUTPUT)
+    assert stalled.as_beats() == want
