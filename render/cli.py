@@ -237,7 +237,7 @@ def _build_engine(engine: str, config, bar: ProgressBar) -> None:
         from ..sim.simulators import verilator_harness
 
         with bar.ticking("verilator build (first time only, then cached)"):
-            verilator_harness.build(config)
+            verilator_harness.build(config, output="deltas")
         bar.close()
 
 

@@ -1,9 +1,9 @@
 """The engines a scene's edges can run through.
 
-Line mode (`run_engine`'s writes, used by `edgeaa edge` comparisons and the simulators'
-tests) has three engines giving the same ordered writes; the polygon renderer takes the
-accumulation deltas (`run_deltas`), which the model gives today and the core will give when
-its stepper emits them (issue "The core emits the same deltas").
+Line mode (`run_engine`'s writes) and the polygon renderer's accumulation deltas
+(`run_deltas`) each run through three engines giving the same ordered output: the model,
+and the core (built with ``output="writes"`` or ``output="deltas"``) in Verilator or in
+Amaranth's simulator.
 
 - ``model``: `edgeaa.model.vector.run_edges`, the vectorized bit-accurate model, in chunks
   of edges (for the progress bar; the writes do not depend on the chunking).
@@ -28,12 +28,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Edge, EdgeConfig
-from ..model.beat import LANES, PIXEL_FIELDS, RUN_COLUMNS
+from ..model.beat import CELLS, DELTA_RUN_COLUMNS, LANES, PIXEL_FIELDS, RUN_COLUMNS
 from ..model.timing import write_cycles
 from ..sim.verification.scoreboard import edge_columns
 
 ENGINES = ("model", "amaranth", "verilator")
-DELTA_ENGINES = ("model",)  # the engines that emit accumulation deltas (polygons)
+DELTA_ENGINES = ENGINES  # the engines that emit accumulation deltas (polygons)
 MODEL_CHUNK = 512  # edges per run_edges call
 AMARANTH_CLOCKS_PER_SECOND = 1000.0  # rough rate of the Python simulator, for the warning
 AMARANTH_WARN_SECONDS = 60.0
@@ -56,19 +56,20 @@ class EngineRun:
         return len(self.edge_index)
 
 
-def cycles(config: EdgeConfig, edges: list[Edge]) -> int:
-    """Clocks from the first command to the last write, inclusive, by the timing model
-    (back-to-back source, always-ready sink): the last beat's clock + 1; 0 for no edges."""
+def cycles(config: EdgeConfig, edges: list[Edge], output: str = "writes") -> int:
+    """Clocks from the first command to the last beat, inclusive, by the timing model
+    (back-to-back source, always-ready sink) of the core built with `output`: the last
+    beat's clock + 1; 0 for no edges."""
     last = -1
-    for timing in write_cycles(config, edges):
+    for timing in write_cycles(config, edges, output=output):
         if timing.beats:
             last = max(last, timing.beats[-1])
     return last + 1
 
 
-def beat_clocks(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:
+def beat_clocks(config: EdgeConfig, edges: list[Edge], output: str = "writes") -> np.ndarray:
     return np.array(
-        [clock for timing in write_cycles(config, edges) for clock in timing.beats],
+        [clock for timing in write_cycles(config, edges, output=output) for clock in timing.beats],
         dtype=np.int64,
     )
 
@@ -85,16 +86,7 @@ def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
     beats = np.asarray(beats, dtype=np.int64).reshape(-1, len(RUN_COLUMNS))
     field = {name: beats[:, index] for index, name in enumerate(RUN_COLUMNS)}
     columns = np.asarray(columns, dtype=np.int64).reshape(-1)
-    last = field["last"].astype(bool)
-    visible = int(np.count_nonzero(columns))
-    if int(last.sum()) != visible or len(beats) != int(columns.sum()):
-        raise RuntimeError(
-            f"the core ended {int(last.sum())} edges in {len(beats)} beats; {len(columns)} were "
-            f"sent, {visible} with columns in their window ({int(columns.sum())} columns)"
-        )
-    ends = np.cumsum(columns[columns > 0]) - 1
-    if not np.array_equal(np.flatnonzero(last), ends):
-        raise RuntimeError("the core's `last` beats do not end the edges after their columns")
+    _check_lasts(field["last"].astype(bool), columns)
     edge_of_beat = np.repeat(np.arange(len(columns), dtype=np.int64), columns)
     two = field["lane1_valid"].astype(bool)
     count = 1 + two.astype(np.int64)
@@ -118,8 +110,9 @@ class DeltaRun:
     x: np.ndarray
     y: np.ndarray
     delta: np.ndarray
-    seconds: float  # engine wall time
-    clocks: int | None = None  # simulated clocks (simulators only)
+    seconds: float  # engine wall time (the Verilator build excluded)
+    clocks: int | None = None  # simulated clocks, including the drain (simulators only)
+    beat_clocks: np.ndarray | None = None  # clock of every beat (simulators only)
 
     def __len__(self) -> int:
         return len(self.edge)
@@ -127,7 +120,7 @@ class DeltaRun:
     def take(self, rows) -> DeltaRun:
         return DeltaRun(
             self.engine, self.edge[rows], self.x[rows], self.y[rows], self.delta[rows],
-            self.seconds, self.clocks,
+            self.seconds, self.clocks, self.beat_clocks,
         )  # fmt: skip
 
     def in_image(self, sent: np.ndarray, offset: tuple[int, int]) -> DeltaRun:
@@ -136,17 +129,35 @@ class DeltaRun:
         run = self.take(rows)
         return DeltaRun(
             run.engine, np.asarray(sent, dtype=np.int64)[run.edge], run.x - offset[0],
-            run.y - offset[1], run.delta, run.seconds, run.clocks,
+            run.y - offset[1], run.delta, run.seconds, run.clocks, run.beat_clocks,
         )  # fmt: skip
 
 
 def run_deltas(config: EdgeConfig, edges: list[Edge], engine: str, progress=None) -> DeltaRun:
-    """The accumulation deltas of `edges` (all valid) through an engine. progress(done,
-    total) is called as edges complete."""
-    if engine not in ENGINES:
-        raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    """The accumulation deltas of `edges` (all valid) through an engine, in order: four cells
+    per stepped column. progress(done, total) is called as edges complete."""
     if engine not in DELTA_ENGINES:
         raise EngineUnavailable(unavailable(engine))
+    if engine == "model":
+        return _model_deltas(config, edges, progress)
+    if not edges:
+        empty = np.zeros(0, dtype=np.int64)
+        return DeltaRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
+    run = _simulate(config, edges, engine, progress, "deltas")
+    if run.errors:
+        raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
+    beats = np.asarray(run.beats, dtype=np.int64).reshape(-1, len(DELTA_RUN_COLUMNS))
+    columns = edge_columns(config, edges)
+    _check_lasts(beats[:, DELTA_RUN_COLUMNS.index("last")].astype(bool), columns)
+    edge = np.repeat(np.repeat(np.arange(len(columns), dtype=np.int64), columns), len(CELLS))
+    x, y, delta = (
+        beats[:, [DELTA_RUN_COLUMNS.index(f"{cell}_{name}") for cell in CELLS]].reshape(-1)
+        for name in ("x", "y", "delta")
+    )
+    return DeltaRun(engine, edge, x, y, delta, run.seconds, run.clocks, beats[:, 0])
+
+
+def _model_deltas(config: EdgeConfig, edges: list[Edge], progress) -> DeltaRun:
     from ..model.vector import run_edges_deltas
 
     start = time.perf_counter()
@@ -161,6 +172,47 @@ def run_deltas(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
     else:
         columns = [np.zeros(0, dtype=np.int64) for _ in range(4)]
     return DeltaRun("model", *columns, seconds=time.perf_counter() - start)
+
+
+def _simulate(config: EdgeConfig, edges: list[Edge], engine: str, progress, output: str):
+    """Run the core built with `output` in a simulator (the Verilator build is cached and not
+    timed)."""
+    if engine == "verilator":
+        from ..sim.simulators import verilator_harness
+
+        if progress is not None:
+            progress(0, len(edges))
+        run = verilator_harness.run(config, edges, output=output)
+        if progress is not None:
+            progress(len(edges), len(edges))
+        return run
+    from ..sim.simulators import amaranth_sim
+
+    expected = cycles(config, edges, output)
+    if expected / AMARANTH_CLOCKS_PER_SECOND > AMARANTH_WARN_SECONDS:
+        minutes = expected / AMARANTH_CLOCKS_PER_SECOND / 60
+        print(
+            f"edgeaa render: warning: the amaranth engine simulates about "
+            f"{AMARANTH_CLOCKS_PER_SECOND:,.0f} clocks/s and this scene needs "
+            f"{expected:,} clocks (about {minutes:.0f} min); --engine verilator gives "
+            "the same image",
+            file=sys.stderr,
+            flush=True,
+        )
+    return amaranth_sim.run(config, edges, progress=progress, output=output)
+
+
+def _check_lasts(last: np.ndarray, columns: np.ndarray) -> None:
+    """Raise unless the beats and their `last` flags fit the edges' column counts exactly."""
+    visible = int(np.count_nonzero(columns))
+    if int(last.sum()) != visible or len(last) != int(columns.sum()):
+        raise RuntimeError(
+            f"the core ended {int(last.sum())} edges in {len(last)} beats; {len(columns)} were "
+            f"sent, {visible} with columns in their window ({int(columns.sum())} columns)"
+        )
+    ends = np.cumsum(columns[columns > 0]) - 1
+    if not np.array_equal(np.flatnonzero(last), ends):
+        raise RuntimeError("the core's `last` beats do not end the edges after their columns")
 
 
 class EngineUnavailable(RuntimeError):
@@ -184,29 +236,7 @@ def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
     if not edges:
         empty = np.zeros(0, dtype=np.int64)
         return EngineRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
-    if engine == "verilator":
-        from ..sim.simulators import verilator_harness
-
-        if progress is not None:
-            progress(0, len(edges))
-        run = verilator_harness.run(config, edges)  # builds once per core (cached), not timed
-        if progress is not None:
-            progress(len(edges), len(edges))
-    else:
-        from ..sim.simulators import amaranth_sim
-
-        expected = cycles(config, edges)
-        if expected / AMARANTH_CLOCKS_PER_SECOND > AMARANTH_WARN_SECONDS:
-            minutes = expected / AMARANTH_CLOCKS_PER_SECOND / 60
-            print(
-                f"edgeaa render: warning: the amaranth engine simulates about "
-                f"{AMARANTH_CLOCKS_PER_SECOND:,.0f} clocks/s and this scene needs "
-                f"{expected:,} clocks (about {minutes:.0f} min); --engine verilator gives "
-                "the same image",
-                file=sys.stderr,
-                flush=True,
-            )
-        run = amaranth_sim.run(config, edges, progress=progress)
+    run = _simulate(config, edges, engine, progress, "writes")
     if run.errors:
         raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
     edge_index, x, y, value = beats_to_writes(run.beats, edge_columns(config, edges))

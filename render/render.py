@@ -432,7 +432,7 @@ def render_scene(
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
         deltas=deltas,
-        cycles=cycles(config, edges),
+        cycles=cycles(config, edges, "deltas"),
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],

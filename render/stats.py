@@ -18,6 +18,11 @@ from .engines import cycles
 from .render import Render
 
 
+def _cycles(config, edges) -> int:
+    """Cycles of the polygon renderer's core (the one emitting deltas)."""
+    return cycles(config, edges, "deltas")
+
+
 @dataclass(frozen=True)
 class RuleSaving:
     rule: str
@@ -32,7 +37,7 @@ def rule_savings(baseline: Render, skipping: Render) -> list[RuleSaving]:
     config = plan.config
     per_edge = np.bincount(baseline.deltas.edge, minlength=plan.edge_count)
     everything = [int(e) for e in baseline.sent]
-    total = cycles(config, [plan.edge(e) for e in everything])
+    total = _cycles(config, [plan.edge(e) for e in everything])
     out = []
     for label, ids in (
         ("polygons equal to the background (I_in = I_out)", skipping.skipped_equal),
@@ -42,14 +47,14 @@ def rule_savings(baseline: Render, skipping: Render) -> list[RuleSaving]:
         drop = set(int(e) for e in ids)
         rest = [plan.edge(e) for e in everything if e not in drop]
         saved = int(per_edge[np.asarray(ids, dtype=np.int64)].sum())
-        out.append(RuleSaving(label, len(drop), total - cycles(config, rest), saved))
+        out.append(RuleSaving(label, len(drop), total - _cycles(config, rest), saved))
     projected = set(int(e) for e in skipping.projected)
     moved = [plan.edge(e, clip=e in projected) for e in everything]
     out.append(
         RuleSaving(
             "edges left of the viewport (projected to its edge)",
             len(projected),
-            total - cycles(config, moved),
+            total - _cycles(config, moved),
             0,
         )
     )
@@ -64,7 +69,7 @@ def rule_savings(baseline: Render, skipping: Render) -> list[RuleSaving]:
         RuleSaving(
             "edges partly outside (clipped in setup)",
             cut,
-            cycles(config, whole) - cycles(config, clipped),
+            _cycles(config, whole) - _cycles(config, clipped),
             0,
         )
     )
