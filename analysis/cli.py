@@ -165,6 +165,7 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
     print(slope.sweep_table(sweep))
     with atomic_output(SLOPE_PROG, args.output) as temporary:
         slope.plot_sweep(sweep, temporary)
+    print(f"wrote {args.output}")
     return 0
 
 
@@ -192,6 +193,7 @@ def _plot_aa_methods(args: argparse.Namespace) -> int:
     print(aa_report.table_text(rows))
     with atomic_output(prog, args.output) as temporary:
         aa_report.plot_table(rows, temporary)
+    print(f"wrote {args.output}")
     return 0
 
 
@@ -207,6 +209,7 @@ def _plot_taa(args: argparse.Namespace) -> int:
     print(aa_report.sequence_text(seq))
     with atomic_output(prog, args.output) as temporary:
         aa_report.plot_sequence(seq, temporary)
+    print(f"wrote {args.output}")
     return 0
 
 
@@ -291,6 +294,7 @@ class BenchCommand(Command):
         print(bench.bench_tables(result))
         with atomic_output(self.prog, args.output) as temporary:
             bench.plot_pareto(result, temporary)
+        print(f"wrote {args.output}")
         return 0
 
 
@@ -370,6 +374,7 @@ class StressCommand(Command):
         shallow = stress.length_curves(args.plot_coord_bits, s, plot_i)
         with atomic_output(self.prog, args.output) as temporary:
             stress.plot_stress(curves, shallow, safe, plot_config, temporary)
+        print(f"wrote {args.output}")
         return 0
 
     def _check(self, args: argparse.Namespace) -> tuple[tuple[int, ...], tuple[int, ...]]:

@@ -81,5 +81,4 @@ def save(fig, path: str) -> None:
     directory = os.path.dirname(path)
     if directory:
         os.makedirs(directory, exist_ok=True)
-    fig.savefig(path, dpi=130)
-    print(f"wrote {path}")
+    fig.savefig(path, dpi=130)  # the caller names the final file (this may be a temporary)
