@@ -97,6 +97,13 @@ class PlotCommand(Command):
         slope.add_argument(
             "--no-peers", dest="peers", action="store_false", help="leave out Skia and AGG"
         )
+        slope.add_argument(
+            "--no-post",
+            dest="post",
+            action="store_false",
+            help="leave out the image post-process methods (MLAA, FXAA, TAA), which take most "
+            "of the time (about 3 minutes with them, seconds without, at the defaults)",
+        )
         slope.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
         add_config_options(slope)
         methods = figures.add_parser(
@@ -148,7 +155,11 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
             f"--length {args.length} px: must be at least 4 and fit the coordinate range "
             f"[0, {(1 << config.coord_bits) - 1}] px with 3 px to spare",
         )
+    from .aa_methods import IMAGE_METHODS
+
     methods = slope.DEFAULT_METHODS if args.peers else slope.DEFAULT_METHODS[:-2]
+    if not args.post:
+        methods = tuple(m for m in methods if m not in IMAGE_METHODS)
     sweep = slope.error_vs_slope(
         config,
         step=args.step,
