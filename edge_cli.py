@@ -206,6 +206,17 @@ def _plot_demo(per_mode, path: str) -> None:
 # -- edgeaa verilog and synth --------------------------------------------------------------
 
 
+def _add_core_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--core",
+        choices=("writes", "deltas"),
+        default="writes",
+        help="the core's output: writes (line mode: antialiased pixels of single edges, "
+        "the default) or deltas (the polygon renderer's signed-area deltas, four cells per "
+        "column; docs/hardware.md)",
+    )
+
+
 class VerilogCommand(Command):
     name = "verilog"
     help = "write the hardware core as Verilog"
@@ -222,6 +233,7 @@ class VerilogCommand(Command):
             "-o", "--output", help="output file, .v or .sv (default: standard output)"
         )
         parser.add_argument("--name", default="edgeaa_core", help="top module name")
+        _add_core_option(parser)
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
@@ -236,13 +248,16 @@ class VerilogCommand(Command):
             )
         if args.output not in (None, "-"):
             check_output(self.prog, args.output, VERILOG_SUFFIXES)
-        source = verilog(config, name=args.name)
+        source = verilog(config, name=args.name, output=args.core)
         if args.output in (None, "-"):
             sys.stdout.write(source)
         else:
             with atomic_output(self.prog, args.output) as temporary:
                 Path(temporary).write_text(source)
-            print(f"wrote {args.output}: module {args.name}, {config}", file=sys.stderr)
+            print(
+                f"wrote {args.output}: module {args.name} ({args.core} core), {config}",
+                file=sys.stderr,
+            )
         return 0
 
 
@@ -271,6 +286,7 @@ class SynthCommand(Command):
             default=1,
             help="nextpnr placement seed (default 1)",
         )
+        _add_core_option(parser)
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
@@ -281,10 +297,10 @@ class SynthCommand(Command):
 
         config = config_from_args(args)
         designs = {
-            "edgeaa": lambda: EdgeAntialiaser(config),
+            "edgeaa": lambda: EdgeAntialiaser(config, output=args.core),
             "bresenham": lambda: BresenhamLine(config=config),
         }
-        print(f"edgeaa synth: {config}")
+        print(f"edgeaa synth: {args.core} core, {config}")
         print("both cores inside the same I/O harness; figures are the core's (harness subtracted)")
         print(f"{'target':7} {'design':10} {'LUT4':>6} {'FF':>6} {'Fmax MHz':>9}")
         results = {}
