@@ -1,27 +1,34 @@
-"""Scenes: parsing, fill rules, the renderer's image against shapely's exact areas, the three
-engines bit for bit, and the skipping rules (savings, and the same image)."""
+"""Scenes: parsing, fill rules, the renderer's image against shapely's exact areas, the
+skipping rules (savings, and the same image), the engines and the command line.
+
+The renderer accumulates signed-area deltas (docs/algorithm.md section 13); the deltas
+themselves, pixel-by-pixel bounds on random shapes and the fill rules are tested in
+tests/test_accumulation.py."""
 
 import json
 import math
 import random
+from dataclasses import replace
 from fractions import Fraction
 
 import numpy as np
 import pytest
 
 from edgeaa.cli import main
-from edgeaa.model import Edge, EdgeConfig, exact_coverage, run_edge
-from edgeaa.model.vector import run_edges
+from edgeaa.model import Edge, EdgeConfig, exact_coverage
+from edgeaa.model.reference import error_bound
+from edgeaa.model.vector import run_edges_deltas
 from edgeaa.render import Polygon, Scene, SceneError, builtin, parse_path, parse_scene, render_scene
 from edgeaa.render import plan_scene as plan
+from edgeaa.render.compare import agg_scene
 from edgeaa.render.engines import beat_clocks
-from edgeaa.render.exact import error_rows, exact_image, writers_per_pixel
+from edgeaa.render.exact import crossed_cells, edges_per_pixel, error_rows, exact_image
 from edgeaa.render.geometry import halfplane_coverage, split_crossings
-from edgeaa.render.render import axis_writes
 from edgeaa.render.scene import flatten_cubic, flatten_quadratic
 from edgeaa.render.stats import rule_savings, stats_report
 
 DEFAULT = EdgeConfig()
+SEG4 = EdgeConfig(mode="seg4")
 BUILTINS = ("starburst", "text")
 
 
@@ -33,6 +40,12 @@ def plans():
 @pytest.fixture(scope="module")
 def model_renders(plans):
     return {name: render_scene(p, engine="model") for name, p in plans.items()}
+
+
+@pytest.fixture(scope="module")
+def exact_images(plans):
+    """Each built-in's exact reference (the same for every mode: one sub-pixel grid)."""
+    return {name: exact_image(p) for name, p in plans.items()}
 
 
 def star(rule: str, intensity: int = 255) -> Scene:
@@ -196,9 +209,11 @@ def test_the_fill_rule_decides_a_self_overlapping_star():
         assert result.image[centre[1], centre[0]] == (255 if centre_filled else 0), rule
         assert result.image[tip[1], tip[0]] == 255, rule
         rows = {r.label: r for r in error_rows(result, exact_image(result.plan))}
-        assert rows["one edge"].max_abs <= 5, rule  # k/64 of 255 plus rounding
-        assert rows["several edges"].max_abs <= 32, rule  # vertices and crossings
-        assert rows["fill only"].max_abs == 0, rule
+        # k/64 of 255 per edge through the pixel, plus rounding
+        assert rows["one edge"].pixels > 100 and rows["one edge"].max_abs <= 255 / 64 + 0.5, rule
+        assert rows["two edges"].max_abs <= 2 * 255 / 64 + 0.5, rule
+        assert rows["three or more"].max_abs <= 5 * 255 / 64 + 0.5, rule
+        assert rows["no edge"].pixels > 2000 and rows["no edge"].max_abs < 1e-9, rule
 
 
 def test_inside_sides_follow_the_fill_rule():
@@ -244,6 +259,71 @@ def test_crossing_edges_are_split_on_the_grid():
     assert out.tolist()[1] == [2, 1], "the crossing (1.5, 0.5) is rounded half up"
 
 
+def _unnoded(contours: list[np.ndarray]) -> list[tuple]:
+    """Where the contours' edges are not noded (exact integers): two edges crossing at a
+    point inside both ("X"), or a vertex inside another edge ("T", collinear or not)."""
+    edges = [
+        (tuple(p), tuple(q))
+        for contour in contours
+        for p, q in zip(contour.tolist(), np.roll(contour, -1, axis=0).tolist(), strict=True)
+    ]
+
+    def orient(a, b, c):
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+
+    def inside(a, b, v):
+        return (
+            v not in (a, b)
+            and orient(a, b, v) == 0
+            and min(a[0], b[0]) <= v[0] <= max(a[0], b[0])
+            and min(a[1], b[1]) <= v[1] <= max(a[1], b[1])
+        )
+
+    found = []
+    for i, (a, b) in enumerate(edges):
+        for j, (c, d) in enumerate(edges):
+            crossing = orient(a, b, c) * orient(a, b, d) < 0
+            if i < j and crossing and orient(c, d, a) * orient(c, d, b) < 0:
+                found.append(("X", (a, b), (c, d)))
+            found += [("T", (a, b), v) for v in (c, d) if i != j and inside(a, b, v)]
+    return found
+
+
+# Self-intersecting contours (sub-pixel units) that split_crossings leaves unnoded: a pentagon
+# on the default 1/16 px grid (two split edges cross again; rendered, 64 LSB off the exact
+# area) and a {9/2} star on the 1/4 px grid (a vertex inside an edge; even-odd, 64 LSB off).
+# tests/test_accumulation.py renders both.
+UNNODED = {
+    "pentagon s=4": [(117, 46), (170, 66), (124, 179), (120, 136), (125, 200)],
+    "star s=2": [
+        (28, 15),
+        (5, 19),
+        (25, 7),
+        (10, 25),
+        (18, 3),
+        (18, 26),
+        (10, 4),
+        (25, 22),
+        (5, 10),
+    ],
+}
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="split_crossings rounds each crossing to the grid and does not look again: the "
+    "moved vertices can make the split edges cross or touch other edges (inside_sides then "
+    "gives an edge the wrong side over part of its length and a row of the image is streaked)",
+)
+@pytest.mark.parametrize("contour", list(UNNODED.values()), ids=list(UNNODED))
+def test_split_crossings_leaves_every_edge_noded(contour):
+    contour = np.array(contour, dtype=np.int64)
+    assert _unnoded([contour]), "the contour crosses itself"
+    (out,), inserted = split_crossings([contour])
+    assert inserted > 0
+    assert _unnoded([out]) == []
+
+
 def test_exact_integer_halfplane_coverage_matches_the_rational_reference():
     rng = random.Random(7)
     for bits in (0, 2, 4):
@@ -263,38 +343,77 @@ def test_exact_integer_halfplane_coverage_matches_the_rational_reference():
 # -- the image against the exact area -----------------------------------------------------------
 
 
-def test_single_edge_pixels_are_within_the_estimate_bound():
-    """Away from vertices a pixel written by one edge has the model's error: k/64 of the
-    intensity step (paper) plus output rounding; vertex pixels are reported."""
+def test_every_pixel_is_within_the_bounds_of_the_edges_through_it():
+    """A pixel's error is at most k/64 of the intensity step (paper) for each edge passing
+    through it, plus output rounding: at the vertices too, where the edges' pieces meet."""
     quad = ((4.3125, 3.75), (57.5, 9.125), (50.0625, 44.6875), (9.25, 37.5))
     scene = Scene(64, 48, (Polygon((quad,), 230),), background=20, name="quad")
     result = render_scene(scene, DEFAULT)
-    exact = exact_image(result.plan)
-    err = np.abs(result.image - exact)
-    writers = writers_per_pixel(result)
-    w, coords = result.writes, result.plan.coords / 16
-    checked = 0
-    for e in np.unique(w.edge):
-        x0, y0, x1, y1 = coords[e]
+    p = result.plan
+    err = np.abs(result.image - exact_image(p))
+    ys, xs = (v.ravel() for v in np.mgrid[0:48, 0:64])
+    bound = np.full(err.shape, 0.5 + 1e-6)
+    units = 8 / (1 << DEFAULT.F)  # the fixed-point floors: a few units of 2**-F LSB
+    for e in np.flatnonzero(p.boundary):
+        x0, y0, x1, y1 = (int(v) for v in p.coords[e])
         k = min(abs(x1 - x0), abs(y1 - y0)) / max(abs(x1 - x0), abs(y1 - y0))
-        bound = k / 64 * 210 + 0.5 + 0.01
-        for x, y in zip(w.x[w.edge == e], w.y[w.edge == e], strict=True):
-            far = min(max(abs(x - vx), abs(y - vy)) for vx, vy in quad) > 2
-            if writers[y, x] == 1 and far:
-                assert err[y, x] <= bound, (e, x, y, err[y, x], bound)
-                checked += 1
-    assert checked > 100
-    rows = {r.label: r for r in error_rows(result, exact)}
-    assert rows["several edges"].pixels > 0 and rows["several edges"].max_abs < 40
-    assert rows["fill only"].max_abs == 0
+        hit = crossed_cells(p, np.full(len(xs), e), xs, ys)
+        bound[ys[hit], xs[hit]] += error_bound("paper", k) * 210 + units
+    worst = np.unravel_index(np.argmax(err - bound), err.shape)
+    assert (err <= bound).all(), (worst, err[worst], bound[worst])
+    rows = {r.label: r for r in error_rows(result, exact_image(p))}
+    assert rows["one edge"].pixels > 100 and rows["two edges"].pixels > 0
+    assert rows["no edge"].max_abs < 1e-9  # a pixel no edge passes through is exact
 
 
-def test_error_on_the_builtins_is_small(plans, model_renders):
+def test_error_on_the_builtins_is_small(plans, model_renders, exact_images, capsys):
+    """seg4: at most 1 LSB on pixels one or two edges pass through, 3 LSB anywhere but the
+    starburst's centre (32 wedges meet there; reported), and a lower RMS than AGG's exact-
+    area scanline fill; paper: at most 5 LSB on pixels one edge passes through."""
     for name in BUILTINS:
-        rows = {r.label: r for r in error_rows(model_renders[name], exact_image(plans[name]))}
-        assert rows["one edge"].max_abs <= 8, name
-        assert rows["all pixels"].rms <= 1.5, name
-        assert rows["several edges"].max_abs <= 32, name
+        exact = exact_images[name]
+        paper = {r.label: r for r in error_rows(model_renders[name], exact)}
+        assert paper["one edge"].max_abs <= 5, (name, paper["one edge"])
+        assert paper["no edge"].max_abs < 1e-9, (name, paper["no edge"])  # exact
+
+        seg4_plan = plan(builtin(name, SEG4), SEG4)
+        assert np.array_equal(seg4_plan.coords, plans[name].coords)  # the same reference
+        seg4 = render_scene(seg4_plan)
+        rows = {r.label: r for r in error_rows(seg4, exact)}
+        assert rows["one edge"].max_abs <= 1, (name, rows["one edge"])
+        assert rows["two edges"].max_abs <= 1, (name, rows["two edges"])
+        assert rows["no edge"].max_abs < 1e-9, (name, rows["no edge"])
+        err = np.abs(seg4.image - exact)
+        centre = np.zeros(err.shape, dtype=bool)
+        if name == "starburst":
+            centre[125:131, 125:131] = True  # the centre (127.5, 127.5) and 2 px around it
+            count = edges_per_pixel(seg4)[centre]
+            with capsys.disabled():
+                print(
+                    f"\nstarburst centre (seg4): max |error| {err[centre].max():.3f} LSB, "
+                    f"RMS {np.sqrt(np.mean(err[centre] ** 2)):.3f}, up to {count.max()} edges "
+                    "through a pixel"
+                )
+            assert err[centre].max() <= count.max() * 255 / 1024 + 0.5 + 1e-6
+        assert err[~centre].max() <= 3, (name, np.unravel_index(np.argmax(err), err.shape))
+
+        agg = agg_scene(seg4_plan)
+        agg_rms = float(np.sqrt(np.mean((agg - exact) ** 2)))
+        assert rows["all pixels"].rms < agg_rms, (name, rows["all pixels"].rms, agg_rms)
+
+
+def test_pixels_crossed_only_by_a_horizontal_edge_are_not_filed_under_no_edge():
+    """edges_per_pixel counts every boundary edge through a pixel, geometrically: a
+    horizontal one (never sent) too, and one whose delta there rounds to 0."""
+    # the top edge y = 2.25 crosses row 2 (1.5 .. 2.5, a quarter covered); the other edges
+    # lie on pixel borders
+    rect = ((2.5, 2.25), (10.5, 2.25), (10.5, 8.5), (2.5, 8.5))
+    result = render_scene(Scene(14, 12, (Polygon((rect,), 255),), 0, "rect"), DEFAULT)
+    exact = exact_image(result.plan)
+    assert exact[2, 3] == pytest.approx(255 / 4) and result.image[2, 3] == 64
+    assert edges_per_pixel(result)[2, 3:11].tolist() == [1] * 8
+    rows = {r.label: r for r in error_rows(result, exact)}
+    assert rows["no edge"].max_abs < 1e-9 and rows["one edge"].pixels == 8
 
 
 def test_a_whole_pixel_shift_of_the_scene_shifts_the_image():
@@ -309,37 +428,36 @@ def test_a_whole_pixel_shift_of_the_scene_shifts_the_image():
 
 # -- engines ------------------------------------------------------------------------------------
 
-
-def test_model_and_verilator_give_the_same_image_on_the_builtins(plans, model_renders):
-    for name in BUILTINS:
-        fast = render_scene(plans[name], engine="verilator")
-        model = model_renders[name]
-        assert np.array_equal(fast.image, model.image), name
-        for field in ("edge", "x", "y", "value"):
-            assert np.array_equal(getattr(fast.writes, field), getattr(model.writes, field))
-        edges = [plans[name].edge(int(e), clip=True) for e in fast.sent]
-        # cycles: the measured beats leave in the clocks the timing model predicts
-        assert np.array_equal(fast.engine_run.beat_clocks, beat_clocks(DEFAULT, edges)), name
-        assert fast.cycles == model.cycles == int(fast.engine_run.beat_clocks[-1]) + 1
+TINY = {
+    "width": 20,
+    "height": 14,
+    "background": 40,
+    "polygons": [
+        {"points": [[1.5, 1.25], [17.75, 3.5], [8.0625, 12.5]], "intensity": 220},
+        {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
+    ],
+}
 
 
-def test_amaranth_gives_the_model_image_on_a_tiny_scene():
-    scene = parse_scene(
-        {
-            "width": 20,
-            "height": 14,
-            "background": 40,
-            "polygons": [
-                {"points": [[1.5, 1.25], [17.75, 3.5], [8.0625, 12.5]], "intensity": 220},
-                {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
-            ],
-        }
-    )
-    slow = render_scene(scene, DEFAULT, engine="amaranth")
-    model = render_scene(scene, DEFAULT, engine="model")
-    assert np.array_equal(slow.image, model.image)
-    edges = [slow.plan.edge(int(e), clip=True) for e in slow.sent]
-    assert np.array_equal(slow.engine_run.beat_clocks, beat_clocks(DEFAULT, edges))
+@pytest.mark.parametrize("engine", ["verilator", "amaranth"])
+def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, model_renders):
+    """The core built with output="deltas": the model's nonzero deltas in order, the same
+    image, and its beats in the clocks the timing model predicts (Amaranth: a tiny scene)."""
+    tiny = plan(parse_scene(TINY), DEFAULT)
+    cases = [(tiny, render_scene(tiny))]
+    if engine == "verilator":
+        cases += [(plans[name], model_renders[name]) for name in BUILTINS]
+    for p, model in cases:
+        fast = render_scene(p, engine=engine)
+        name = p.scene.name
+        assert fast.engine == engine and np.array_equal(fast.image, model.image), name
+        for field in ("edge", "x", "y", "delta"):
+            assert np.array_equal(getattr(fast.deltas, field), getattr(model.deltas, field))
+        edges = [p.edge(int(e), clip=True) for e in fast.sent]
+        clocks = fast.deltas.beat_clocks
+        assert np.array_equal(clocks, beat_clocks(DEFAULT, edges, "deltas")), name
+        assert fast.cycles == model.cycles == int(clocks[-1]) + 1, name
+        assert fast.deltas.clocks >= fast.cycles, name  # the drain after the last beat
 
 
 # -- skipping -----------------------------------------------------------------------------------
@@ -351,99 +469,91 @@ def test_every_skipping_rule_saves_work_and_leaves_the_image_unchanged(plans, mo
         skipping, full = model_renders[name], render_scene(plans[name], skip=False)
         assert np.array_equal(skipping.image, full.image), name
         assert skipping.cycles < full.cycles and len(skipping.sent) < len(full.sent), name
-        assert skipping.pixels_touched < full.pixels_touched, name
+        assert skipping.cells_scanned < full.cells_scanned, name
+        assert len(skipping.deltas) <= len(full.deltas), name
         for saving in rule_savings(full, skipping):
             got = totals.setdefault(saving.rule, [0, 0, 0])
             got[0] += saving.edges
             got[1] += saving.cycles
-            got[2] += saving.engine_writes
-        assert skipping.not_applied > 0, name
+            got[2] += saving.deltas
         report = stats_report(full, skipping)
-        assert "images identical: yes" in report and "partly outside" in report
-    for rule, (edges, cycles, writes) in totals.items():
-        assert edges > 0 and cycles > 0 and writes > 0, rule
-    # each rule on its own leaves the image unchanged: turn them off one at a time
-    for name, attr in (("starburst", "culled"), ("text", "axis"), ("starburst", "axis")):
-        plan = plans[name]
-        saved = getattr(plan, attr).copy()
-        assert saved.any(), (name, attr)
+        assert "images identical: yes" in report and "partly outside" in report, report
+        assert "projected" in report and "culled" in report and "horizontal" in report
+    assert len(totals) == 5, totals
+    for rule, (edges, cycles, deltas) in totals.items():
+        assert edges > 0 and (cycles > 0 or deltas > 0), (rule, edges, cycles, deltas)
+    assert all(cycles > 0 for _, cycles, _ in totals.values()), totals
+
+
+@pytest.mark.parametrize(
+    ("name", "rule"),
+    [
+        ("starburst", "culled"),
+        ("starburst", "left"),
+        ("starburst", "horizontal"),
+        ("text", "horizontal"),
+        ("text", "equal"),
+    ],
+)
+def test_turning_one_skipping_rule_off_leaves_the_image_unchanged(plans, model_renders, name, rule):
+    """Each rule on its own: culled (above, below, right), left (projected), horizontal
+    edges, and a polygon equal to the background overlapping nothing."""
+    p = plans[name]
+    kept = model_renders[name]
+    if rule == "equal":
+        saved = list(p.polygons)
+        assert any(poly.equal and not poly.overlaps for poly in saved)
+        p.polygons[:] = [replace(poly, equal=False) for poly in saved]
         try:
-            getattr(plan, attr)[:] = False
-            alone = render_scene(plan)
+            alone = render_scene(p)
         finally:
-            getattr(plan, attr)[:] = saved
-        assert np.array_equal(alone.image, model_renders[name].image), (name, attr)
+            p.polygons[:] = saved
+        assert len(alone.skipped_equal) == 0 and len(alone.sent) > len(kept.sent)
+    else:
+        saved = getattr(p, rule).copy()
+        assert (saved & p.boundary).any(), (name, rule)
+        try:
+            getattr(p, rule)[:] = False
+            alone = render_scene(p)
+        finally:
+            getattr(p, rule)[:] = saved
+        field = {"culled": "culled", "left": "projected", "horizontal": "horizontal"}[rule]
+        assert len(getattr(alone, field)) == 0 and len(getattr(kept, field)) > 0
+    assert np.array_equal(alone.image, kept.image), (name, rule)
 
 
-def test_the_fill_path_writes_what_the_model_writes(plans):
-    configs = [DEFAULT, EdgeConfig(mode="seg4"), EdgeConfig(mode="pw", accumulator="truncated")]
-    configs.append(EdgeConfig(coord_bits=9, subpixel_bits=2, intensity_bits=5))
-    rng = random.Random(3)
-    for config in configs:
-        edges = []
-        for name in BUILTINS:
-            p = plans[name]
-            edges += [p.edge(int(e)) for e in np.flatnonzero(p.axis & p.boundary)]
-        for _ in range(60):
-            a, b = rng.randint(0, config.max_vertex), rng.randint(0, config.max_vertex)
-            c = rng.randint(0, config.max_vertex)
-            if a == b:
-                continue
-            i_in, i_out = rng.sample(range(config.full_scale + 1), 2)
-            side = rng.choice(["left", "right"])
-            edges.append(Edge(a, c, b, c, side, i_in, i_out))
-            edges.append(Edge(c, a, c, b, side, i_in, i_out))
-        if config is not DEFAULT:
-            edges = [_fit(edge, config) for edge in edges]
-        batch = run_edges(config, edges)
-        for k, edge in enumerate(edges):
-            x, y, v = axis_writes(config, edge)
-            rows = batch.edge_slice(k)
-            for got, want in zip((x, y, v), (batch.x, batch.y, batch.value), strict=True):
-                assert np.array_equal(got, want[rows]), edge
-        for edge in edges[:: max(1, len(edges) // 20)]:  # and the step model itself
-            x, y, v = axis_writes(config, edge)
-            want = run_edge(config, edge).writes
-            assert [(w.x, w.y, w.value) for w in want] == list(zip(x, y, v, strict=True)), edge
-
-
-def _fit(edge: Edge, config: EdgeConfig) -> Edge:
-    hi = config.max_vertex
-    i_in = None if edge.i_in is None else min(edge.i_in, config.full_scale)
-    i_out = min(edge.i_out, config.full_scale)
-    value_in = config.full_scale if i_in is None else i_in
-    if i_out == value_in:
-        i_out = 0 if value_in else config.full_scale
-    x0, y0, x1, y1 = (min(v, hi) for v in (edge.x0, edge.y0, edge.x1, edge.y1))
-    if (x0, y0) == (x1, y1):
-        x1 = x0 - 1 if x0 else x0 + 1
-    return Edge(x0, y0, x1, y1, edge.inside, i_in, i_out)
-
-
-def test_culled_edges_write_nothing_inside_the_image(plans):
+def test_culled_edges_put_no_delta_where_it_reaches_the_image(plans):
+    """An edge above, below or right of the image: none of its deltas lies in an image row
+    at or left of the image's last column (where a prefix sum would carry it)."""
     p = plans["starburst"]  # the text is wholly inside its image
     culled = np.flatnonzero(p.culled & p.boundary)
     assert len(culled) > 0
-    batch = run_edges(DEFAULT, [p.edge(int(e)) for e in culled])
+    batch = run_edges_deltas(DEFAULT, [p.edge(int(e)) for e in culled])
     x, y = batch.x - p.offset[0], batch.y - p.offset[1]
-    inside = (x >= 0) & (x < p.scene.width) & (y >= 0) & (y < p.scene.height)
-    assert not inside.any()
+    reaches = (y >= 0) & (y < p.scene.height) & (x < p.scene.width) & (batch.delta != 0)
+    assert not reaches.any()
 
 
-def test_clipping_to_the_viewport_keeps_every_write_inside_the_image(plans):
-    """The viewport clip drops only writes off the image, and it does drop some."""
+def _prefix_sums(p, batch, edges: int) -> np.ndarray:
+    """Each edge's deltas summed along +x over the image (a delta left of it carried into
+    its first column, one right of it, above or below dropped): (edges, height, width)."""
+    height, width = p.scene.height, p.scene.width
+    x, y = batch.x - p.offset[0], batch.y - p.offset[1]
+    keep = (y >= 0) & (y < height) & (x < width)
+    buffer = np.zeros((edges, height, width), dtype=np.int64)
+    np.add.at(buffer, (batch.edge_index[keep], y[keep], np.maximum(x[keep], 0)), batch.delta[keep])
+    return np.cumsum(buffer, axis=2)
+
+
+def test_clipping_to_the_viewport_changes_no_sum_inside_the_image(plans):
+    """The clip (the viewport without its left bound) drops only columns whose deltas cannot
+    reach the image, and it does drop some; an edge wholly left, projected, too."""
     p = plans["starburst"]
-    sent = np.flatnonzero(p.boundary & ~p.culled & ~p.axis)
-    whole = run_edges(DEFAULT, [p.edge(int(e)) for e in sent])
-    cut = run_edges(DEFAULT, [p.edge(int(e), clip=True) for e in sent])
-
-    def in_image(batch):
-        x, y = batch.x - p.offset[0], batch.y - p.offset[1]
-        keep = (x >= 0) & (x < p.scene.width) & (y >= 0) & (y < p.scene.height)
-        return sorted(zip(batch.edge_index[keep], x[keep], y[keep], batch.value[keep], strict=True))
-
-    assert in_image(cut) == in_image(whole)
-    assert len(cut) < len(whole)
+    sent = np.flatnonzero(p.boundary & ~p.culled & ~p.horizontal)
+    whole = run_edges_deltas(DEFAULT, [p.edge(int(e)) for e in sent])
+    cut = run_edges_deltas(DEFAULT, [p.edge(int(e), clip=True) for e in sent])
+    assert np.array_equal(_prefix_sums(p, cut, len(sent)), _prefix_sums(p, whole, len(sent)))
+    assert len(cut) < len(whole) and p.left[sent].any()
 
 
 # -- command line -------------------------------------------------------------------------------
@@ -478,10 +588,58 @@ def test_render_stats_and_error_and_16_bit_output(tmp_path, capsys):
     args = ["render", str(scene), "-o", str(out), "--stats", "--error", "--intensity-bits", "10"]
     assert main([*args, "--quiet"]) == 0
     text = capsys.readouterr().out
-    assert "images identical: yes" in text and "several edges" in text and "16-bit" in text
+    assert "images identical: yes" in text and "one edge" in text and "16-bit" in text
     with Image.open(out) as image:
         assert image.mode.startswith("I;16")
         assert np.asarray(image).max() == round(1000 * 65535 / 1023)
+
+
+def _json_run(capsys, *argv) -> dict:
+    assert main(["render", *argv, "--json", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    return json.loads(out)  # the whole of stdout is one JSON object
+
+
+def test_render_json_figures_with_error_and_stats(tmp_path, capsys):
+    plain = _json_run(capsys, "--builtin", "starburst")
+    for key in ("edges", "columns", "cycles", "writes", "deltas", "cells_scanned"):
+        assert isinstance(plain[key], int) and plain[key] > 0, key
+    assert plain["writes"] == plain["deltas"] and plain["scene"] == "starburst"
+    assert "max_abs_lsb" not in plain and "savings" not in plain
+
+    error = _json_run(capsys, "--builtin", "starburst", "--error", "--mode", "seg4")
+    assert error["pixels"] == 256 * 256
+    assert 0 < error["rms_lsb"] < error["max_abs_lsb"] <= 3
+    labels = [row["pixels"] for row in error["by_edges_per_pixel"]]
+    assert labels == ["all pixels", "no edge", "one edge", "two edges", "three or more"]
+    assert sum(row["count"] for row in error["by_edges_per_pixel"][1:]) == error["pixels"]
+
+    out = tmp_path / "s.png"
+    stats = _json_run(capsys, "--builtin", "starburst", "--stats", "-o", str(out))
+    assert out.exists()
+    without = stats["without_skipping"]
+    for key in ("edges", "columns", "cycles"):
+        assert stats[key] < without[key], key
+    assert stats["writes"] <= without["deltas"]
+    rules = {saving["rule"]: saving for saving in stats["savings"]}
+    assert len(rules) == 5 and all(
+        set(r) == {"rule", "edges", "cycles", "deltas"} for r in rules.values()
+    )
+    assert sum(r["cycles"] for r in rules.values()) > 0
+
+
+@pytest.mark.parametrize("engine", ["verilator", "amaranth"])
+def test_render_through_a_simulated_core_writes_the_models_png(engine, tmp_path, capsys):
+    from PIL import Image
+
+    scene = tmp_path / "tiny.json"
+    scene.write_text(json.dumps(TINY))
+    out = tmp_path / f"{engine}.png"
+    assert main(["render", str(scene), "--engine", engine, "-o", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert f"engine {engine}" in text and "clocks simulated" in text, text
+    with Image.open(out) as image:
+        assert np.array_equal(np.asarray(image), render_scene(parse_scene(TINY)).image)
 
 
 def test_progress_goes_to_stderr(tmp_path, capsys, monkeypatch):
@@ -537,7 +695,7 @@ def test_the_example_in_the_docs_renders(tmp_path):
     result = render_scene(scene, DEFAULT)
     assert result.image.shape == (40, 64) and len(result.sent) > 0
     rows = {r.label: r for r in error_rows(result, exact_image(result.plan))}
-    assert rows["one edge"].max_abs <= 8 and rows["fill only"].max_abs == 0
+    assert rows["one edge"].max_abs <= 255 / 64 + 0.5 and rows["no edge"].max_abs < 1e-9
 
 
 # -- errors and limits (docs/scenes.md) ------------------------------------------------------
