@@ -206,6 +206,19 @@ def _plot_demo(per_mode, path: str) -> None:
 # -- edgeaa verilog and synth --------------------------------------------------------------
 
 
+def _synthesize(make, target: str, seed: int):
+    """Synthesise, place and route; when place and route fails (a design that does not fit
+    the device), the synthesis figures alone and the failure's first error line."""
+    from .sim.synthesis import ToolError, synthesize
+
+    try:
+        return synthesize(make(), target, wrap=True, seed=seed), None
+    except ToolError as error:
+        lines = [line for line in str(error).splitlines() if "ERROR" in line.upper()]
+        cause = (lines or str(error).splitlines()[:1])[0].strip()
+        return synthesize(make(), target, wrap=True, place_and_route=False), cause
+
+
 def _add_core_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--core",
@@ -293,7 +306,6 @@ class SynthCommand(Command):
         """Synthesise, place and route the core and the Bresenham baseline side by side."""
         from .hdl import EdgeAntialiaser
         from .hdl.bresenham import BresenhamLine
-        from .sim.synthesis import synthesize
 
         config = config_from_args(args)
         designs = {
@@ -309,17 +321,22 @@ class SynthCommand(Command):
         for target in targets:
             for name, make in designs.items():
                 with bar.ticking(f"{target} {name}"):
-                    result = synthesize(make(), target, wrap=True, seed=args.seed)
+                    result, failure = _synthesize(make, target, args.seed)
                 bar.step()
                 bar.close()  # the row goes to stdout on a line of its own
                 results[target, name] = result
-                print(
-                    f"{target:7} {name:10} {result.core_luts:6d} {result.core_ffs:6d} "
-                    f"{result.fmax_mhz:9.1f}"
-                )
+                fmax = "-" if result.fmax_mhz is None else f"{result.fmax_mhz:.1f}"
+                print(f"{target:7} {name:10} {result.core_luts:6d} {result.core_ffs:6d} {fmax:>9}")
+                if failure:
+                    print(f"        place and route failed ({failure}): LUT4 and FF from synthesis")
             ours, base = results[target, "edgeaa"], results[target, "bresenham"]
+            speed = (
+                "-"
+                if None in (ours.fmax_mhz, base.fmax_mhz)
+                else f"{ours.fmax_mhz / base.fmax_mhz:.2f}"
+            )
             print(
                 f"{target:7} {'ratio':10} {ours.core_luts / base.core_luts:6.2f} "
-                f"{ours.core_ffs / base.core_ffs:6.2f} {ours.fmax_mhz / base.fmax_mhz:9.2f}"
+                f"{ours.core_ffs / base.core_ffs:6.2f} {speed:>9}"
             )
         return 0
