@@ -44,7 +44,7 @@ def examples(n: int):
 
 # -- configurations -----------------------------------------------------------------------------
 
-# Every mode at every sub-pixel width the brief names (coordinates of 8 bits keep the step
+# Every mode at sub-pixel widths 0, 2 and 4 (coordinates of 8 bits keep the step
 # model fast), then the special ones: truncated accumulator, 1- and 16-bit intensities, the
 # smallest fraction bits, a 4-bit and a 16-bit coordinate range.
 MODE_CONFIGS = {
@@ -325,7 +325,8 @@ def leak_case(name, data):
 
 # -- (c) the image pixel by pixel against the exact area ---------------------------------------
 
-# (mode, sub-pixel bits, intensity bits, frac bits or None, accumulator); 6-bit coordinates
+# Every mode, sub-pixel widths 0 to 4, 1- to 16-bit intensities, the smallest fraction bits
+# (where the fixed-point allowance shows) and the truncated accumulator; 6-bit coordinates
 # for scenes of 40 x 40 px.
 RENDER_CONFIGS = [
     EdgeConfig(coord_bits=6),
@@ -390,9 +391,9 @@ def unnoded(plan) -> bool:
 
     for i, row in enumerate(coords):
         a, b = tuple(row[:2]), tuple(row[2:])
-        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        (xl, xh), (yl, yh) = sorted((a[0], b[0])), sorted((a[1], b[1]))
         for v in vertices:
-            if v not in (a, b) and orient(a, b, v) == 0 and (lo <= v).all() and (v <= hi).all():
+            if v not in (a, b) and xl <= v[0] <= xh and yl <= v[1] <= yh and not orient(a, b, v):
                 return True
         for other in coords[i + 1 :]:
             c, d = other[:2], other[2:]
@@ -552,9 +553,8 @@ def strokes(draw):
     assume(line.length > 1)
     outline = line.buffer(0.5, cap_style="flat", join_style="mitre", mitre_limit=2.0)
     assume(outline.geom_type == "Polygon" and not outline.is_empty)
-    outline = shapely.geometry.polygon.orient(
-        outline
-    )  # holes turn the other way: holes by both rules
+    # the outline one way round, the holes the other: holes by both fill rules
+    outline = shapely.geometry.polygon.orient(outline)
     rings = [outline.exterior, *outline.interiors]
     return [tuple(tuple(p) for p in ring.coords[:-1]) for ring in rings]
 
@@ -633,7 +633,7 @@ UNNODED = {
             (6.25, 5.5),
             (1.25, 2.5),
         ),
-    ),  # fmt: skip
+    ),
 }
 
 
@@ -757,5 +757,5 @@ def projection_case(case):
         edge, original = plan.edge(e, clip=True), plan.edge(e)
         assert edge.x0 == edge.x1 == (plan.offset[0] - 1) * config.subpixel_scale
         assert (edge.y0, edge.y1) == (original.y0, original.y1)
-        moved, whole = row_sums(config, [edge]), row_sums(config, [original])
-        assert [moved.get(r, 0) for r in rows] == [whole.get(r, 0) for r in rows], e
+        moved, kept = row_sums(config, [edge]), row_sums(config, [original])
+        assert [moved.get(r, 0) for r in rows] == [kept.get(r, 0) for r in rows], e
