@@ -211,7 +211,7 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
             for (k, _, _), pts in zip(owners, contours, strict=True)
             if k == i
         ]
-        mine, inserted = split_crossings(mine)
+        mine, inserted = _node(mine)
         crossings += inserted
         for q in mine:
             n = len(q)
@@ -223,6 +223,25 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
             count += n
         starts[i + 1] = count
     return _joined(coords, 4), _joined(polygon), _joined(contour), starts, crossings
+
+
+NODING_ROUNDS = 16  # rounds of re-splitting before the plan gives up (none seen past 3)
+
+
+def _node(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
+    """Split the contours where they cross, again until nothing crosses: a crossing point
+    rounded to the grid can move an edge across another or onto it, and an edge left crossing
+    would get the wrong inside side for part of its length (a streak along its row)."""
+    total = 0
+    for _ in range(NODING_ROUNDS):
+        contours, inserted = split_crossings(contours)
+        total += inserted
+        if not inserted:
+            return contours, total
+    raise SceneError(
+        f"a polygon's edges still cross after {NODING_ROUNDS} rounds of splitting at the "
+        "rounded crossing points; refine or simplify its outline"
+    )
 
 
 def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:

@@ -402,14 +402,14 @@ def unnoded(plan) -> bool:
     return False
 
 
-def check_against_exact(scene: Scene, config: EdgeConfig, *, allow_unnoded=False):
+def check_against_exact(scene: Scene, config: EdgeConfig):
     """Render `scene` (one polygon over the background) and check every pixel:
     |image - exact| <= sum over the edges through it of (error_bound(mode, k) |I_d| +
-    allowance / 2**F) + 1/2 LSB output rounding; a pixel no edge passes through is exact."""
+    allowance / 2**F) + 1/2 LSB output rounding; a pixel no edge passes through is exact.
+    The plan's edges must be noded (no two cross)."""
     result = render_scene(scene, config)
     plan = result.plan
-    if not allow_unnoded:
-        assume(not unnoded(plan))
+    assert not unnoded(plan), "the plan left crossing edges"
     exact = exact_image(plan)
     err = np.abs(result.image - exact)
     bound, crossers = pixel_bounds(plan)
@@ -598,16 +598,16 @@ def test_the_pentagram_and_its_inner_pentagon_by_both_fill_rules():
     for config in (EdgeConfig(coord_bits=6), EdgeConfig(coord_bits=6, mode="seg4")):
         for rule, centre in (("nonzero", 255), ("evenodd", 0)):
             scene = Scene(SIZE, SIZE, (Polygon((points,), 255, rule),), 0, "pentagram")
-            result, err, bound = check_against_exact(scene, config, allow_unnoded=True)
+            result, err, bound = check_against_exact(scene, config)
             assert result.image[20, 20] == centre, (config.mode, rule)
             assert (bound > 0).sum() > 100
 
 
-# Self-intersecting polygons that the plan leaves unnoded (render/geometry.py
-# split_crossings rounds each crossing to the sub-pixel grid and does not look again): a
-# pentagon at the default 1/16 px grid whose split edges cross again (the fill-rule sides are
-# wrong along part of an edge: a row of the window streaked 64 LSB), and a {9/2} star at the
-# 1/4 px grid with a vertex left inside an edge (even-odd: 64 LSB off, found by the slow sweep).
+# Self-intersecting polygons that one round of noding left unnoded (split_crossings rounds
+# each crossing to the sub-pixel grid): a pentagon at the default 1/16 px grid whose split
+# edges crossed again (a row of the window streaked 64 LSB), and a {9/2} star at the 1/4 px
+# grid with a vertex left inside an edge (even-odd: 64 LSB off, found by the slow sweep).
+# The plan now splits until nothing crosses (render/render.py _node).
 UNNODED = {
     "pentagon s=4": (
         EdgeConfig(),
@@ -637,17 +637,13 @@ UNNODED = {
 }
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="split_crossings rounds a crossing to the sub-pixel grid, which can leave split "
-    "edges crossing or touching again; the fill-rule sides are then wrong and a row leaks "
-    "(render/geometry.py)",
-)
 @pytest.mark.parametrize("case", list(UNNODED))
-def test_self_intersecting_polygons_the_plan_leaves_unnoded(case):
+def test_self_intersecting_polygons_one_round_of_noding_leaves_unnoded(case):
+    """These left a crossing after one round of split_crossings and streaked a row; the
+    plan now splits until nothing crosses, and every pixel is within its bound."""
     config, rule, points = UNNODED[case]
     scene = Scene(SIZE, SIZE, (Polygon((points,), config.full_scale, rule),), 0, case)
-    check_against_exact(scene, config, allow_unnoded=True)
+    check_against_exact(scene, config)
 
 
 # -- (d) the fill rules and the resolve on known sums -------------------------------------------
