@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
         extra = OPTIONAL_MODULES[top]
         print(
             f"{PROG}: error: this needs the optional package {top!r}: pip install -e "
-            f"\".[{extra}]\" (or \".[dev]\" for every extra)",
+            f'".[{extra}]" (or ".[dev]" for every extra)',
             file=sys.stderr,
         )
         return EXIT_MISSING
