@@ -2,17 +2,23 @@
 
 Everything here runs once per edge; it may multiply and divide (the hardware uses a
 sequential divider). The per-column loop in `step.py` uses only what `setup` returns.
+The arithmetic after validation is written once (`setup_fields`, on an arithmetic like
+`edgeaa.model.column`'s): `setup` runs it on one edge's ints, `setup_batch` on numpy arrays
+of many edges (a `SetupBatch`, equal to `setup` of each).
 Coordinates are image coordinates (x right, y down, pixel (x, y) centred on integers) in
 sub-pixel units: a vertex coordinate X means X / 2**subpixel_bits pixels.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, fields
 from fractions import Fraction
 from typing import Any, NamedTuple
 
-from .column import IntArith
+import numpy as np
+
+from .column import ArrayArith, IntArith
 from .config import EdgeConfig
 from .numbers import decimal
 
@@ -324,54 +330,75 @@ class EndPieces:
     band1: int
 
 
-def end_pieces(config: EdgeConfig, f: Fold, w: Window, st_values: dict, inside_left) -> EndPieces:
+def end_pieces(
+    config: EdgeConfig, f: Fold, w: Window, st_values: dict, inside_left, a=None
+) -> EndPieces:
     """The per-edge constants of `EndPieces` (divisions and small products: setup only).
 
     st_values holds the setup's columns, row0 (folded), jq, jr, kq, khq, khr, du, i_d and
-    the edge's screen dy."""
+    the edge's screen dy. `a` is the arithmetic (`edgeaa.model.column`): ints by default,
+    or `ArrayArith` for a batch (every branch is computed, then selected)."""
+    a = _SELECTS if a is None else a
     s, F, S = config.subpixel_bits, config.F, config.subpixel_scale
     v = st_values
     columns, row0, i_d, du = v["columns"], v["row0"], v["i_d"], v["du"]
     jq, jr, khq, khr = v["jq"], v["jr"], v["khq"], v["khr"]
     ifix = i_d << F
     half = i_d << (F - s - 1)  # ifix per half sub-pixel step (F > s: exact)
-    first_partial = columns > 0 and not w.start_clip
-    last_partial = columns > 0 and w.last == f.c1
-    single = columns == 1 and first_partial and last_partial
+    first_partial = (columns > 0) & a.not_(w.start_clip)
+    last_partial = (columns > 0) & (w.last == f.c1)
+    single = (columns == 1) & first_partial & last_partial
     # In half sub-pixel steps (2 S per pixel, so that a pixel's edges are whole numbers):
-    mg = 2 * f.u0 - (2 * w.first - 1) * S if first_partial else 0  # from column start to u0
-    me = (2 * w.last + 1) * S - 2 * f.u1 if last_partial else 0  # from u1 to column end
+    mg = a.select(first_partial, 2 * f.u0 - (2 * w.first - 1) * S, 0)  # column start to u0
+    me = a.select(last_partial, (2 * w.last + 1) * S - 2 * f.u1, 0)  # from u1 to column end
     v1 = f.v0 + f.dv  # folded, both axes increase from P0 to P1
-    if first_partial:
-        hs0 = half * (2 * f.v0 - (2 * row0 - 1) * S)
-    else:  # a whole column: floor(J - K/2)
-        hs0 = jq - khq - (1 if jr < khr else 0)
+    hs0 = a.select(
+        first_partial,
+        half * (2 * f.v0 - (2 * row0 - 1) * S),
+        jq - khq - a.select(jr < khr, 1, 0),  # a whole column: floor(J - K/2)
+    )
     end_row = (2 * v1 + S) >> (s + 1)
     end_height = half * (2 * v1 - (2 * end_row - 1) * S)
-    # Areas of partial pieces use K's quotient kq: within one unit, and no new division.
-    kq, sq = v["kq"], 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
-    he_first = jq + khq + (1 if jr + khr >= du else 0)  # floor(J + K/2) of the first column
-    if single:
-        he_first = end_height + (end_row - row0) * ifix
-    w0 = 2 * S - mg - (me if single else 0)  # the first piece's width, 2 S per pixel
-    w1 = 2 * S - me
-    if f.x_major:
-        total0 = (kq * ((2 * S - mg) ** 2 - (me**2 if single else 0))) >> sq
-        total1 = (kq * (4 * S * S - me * me)) >> sq
-        rect0 = (max(-hs0, 0) * mg) >> (s + 1)
-        rect1 = (end_height * me) >> (s + 1)
-        band0 = band1 = 0
-    else:
-        total0 = ((hs0 + he_first) * w0) >> (s + 2)
-        total1 = ((end_height * w1) >> (s + 1)) - ((kq * w1 * w1) >> sq)
-        rect0 = rect1 = 0
-        band0, band1 = half * w0, half * w1
+    he_first = a.select(  # floor(J + K/2) of the first column, or P1's height in it
+        single,
+        end_height + (end_row - row0) * ifix,
+        jq + khq + a.select(jr + khr >= du, 1, 0),
+    )
+    ends = dict(mg=mg, me=me, single=single, hs0=hs0, he_first=he_first, end_height=end_height)
+    areas = _piece_areas(a, config, f.x_major, v["kq"], half, ends)
     # Travelling down the screen with the inside on the left puts the inside on the +x side.
-    sigma = 1 if (v["dy"] > 0) == bool(inside_left) else -1
+    sigma = a.select((v["dy"] > 0) == inside_left, 1, -1)
     return EndPieces(
-        sigma, row0, first_partial, last_partial, hs0, end_row, end_height,
-        total0, total1, rect0, rect1, band0, band1,
+        sigma, row0, first_partial, last_partial, hs0, end_row, end_height, **areas
     )  # fmt: skip
+
+
+def _piece_areas(a, config: EdgeConfig, x_major, kq, half, e: dict) -> dict:
+    """total, rect and band of the end pieces (`EndPieces`), both axes computed and the
+    edge's selected. Areas of partial pieces use K's quotient kq: within one unit, and no new
+    division."""
+    s, S = config.subpixel_bits, config.subpixel_scale
+    mg, me, single, hs0, end_height = e["mg"], e["me"], e["single"], e["hs0"], e["end_height"]
+    sq = 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
+    me_single = a.select(single, me, 0)
+    w0 = 2 * S - mg - me_single  # the first piece's width, 2 S per pixel
+    w1 = 2 * S - me
+    # x-major: the piece's area on the +u side, and the rectangles beyond the crossing part
+    total0_x = (kq * ((2 * S - mg) ** 2 - me_single * me_single)) >> sq
+    total1_x = (kq * (4 * S * S - me * me)) >> sq
+    rect0 = (a.select(hs0 < 0, -hs0, 0) * mg) >> (s + 1)
+    rect1 = (end_height * me) >> (s + 1)
+    # y-major: the piece's integral of height, and ifix times its width
+    total0_y = ((hs0 + e["he_first"]) * w0) >> (s + 2)
+    total1_y = ((end_height * w1) >> (s + 1)) - ((kq * w1 * w1) >> sq)
+    return dict(
+        total0=a.select(x_major, total0_x, total0_y),
+        total1=a.select(x_major, total1_x, total1_y),
+        rect0=a.select(x_major, rect0, 0),
+        rect1=a.select(x_major, rect1, 0),
+        band0=a.select(x_major, 0, half * w0),
+        band1=a.select(x_major, 0, half * w1),
+    )
 
 
 _SELECTS = IntArith()
@@ -380,73 +407,298 @@ _SELECTS = IntArith()
 def setup(config: EdgeConfig, edge: Edge) -> EdgeSetup:
     """Fold the edge into the first octant and compute the loop's constants and start state."""
     validate(config, edge)
-    s, F, S = config.subpixel_bits, config.F, config.subpixel_scale
-    a = _SELECTS  # fold and window only select: no register is checked here
     i_in, i_out = edge.intensities(config)
-    f = fold(a, config, edge.x0, edge.y0, edge.x1, edge.y1, i_in, i_out, edge.inside == "left")
-    w = window(a, f, edge.window(config))
-    columns = max(w.last - w.first + 1, 0)
-    clipped_start = columns > 0 and w.start_clip
-    c0 = w.first if columns else f.c0  # an empty cut keeps c0
+    values = setup_fields(
+        _SELECTS,  # ints: fold and window only select, no register is checked here
+        config,
+        edge.x0,
+        edge.y0,
+        edge.x1,
+        edge.y1,
+        edge.inside == "left",
+        i_in,
+        i_out,
+        edge.window(config),
+    )
+    return EdgeSetup(**values)
 
+
+def setup_fields(a, config: EdgeConfig, x0, y0, x1, y1, inside_left, i_in, i_out, clip) -> dict:
+    """`EdgeSetup`'s fields by name, written once for `setup` (`a` on ints, one edge) and
+    `setup_batch` (`ArrayArith`, one element per edge): every branch is a select."""
+    F = config.F
+    f = fold(a, config, x0, y0, x1, y1, i_in, i_out, inside_left)
+    w = window(a, f, clip)
+    start = _start(a, config, f, w)
+    inc = _increments(config, f, start["mf"])
+    thresholds, intercepts = segment_constants(config, inc["kq"])
+    x_major = f.x_major
+    step_major, step_minor = a.select(f.major_neg, -1, 1), a.select(f.minor_neg, -1, 1)
+    c0, row0 = start["c0"], start["row0"]
+    values = dict(columns=start["columns"], row0=row0, du=f.du, i_d=f.i_d, dy=y1 - y0, **inc)
+    return dict(
+        x_major=x_major,
+        columns=start["columns"],
+        clipped_start=start["clipped_start"],
+        x=a.select(x_major, step_major * c0, step_minor * row0),
+        y=a.select(x_major, step_minor * row0, step_major * c0),
+        col_dx=a.select(x_major, step_major, 0),
+        col_dy=a.select(x_major, 0, step_major),
+        row_dx=a.select(x_major, 0, step_minor),
+        row_dy=a.select(x_major, step_minor, 0),
+        du=f.du,
+        dv=f.dv,
+        ifix=f.i_d << F,
+        **inc,
+        value_base=f.value_base,
+        value_sign=a.select(f.value_neg, -1, 1),
+        inside_is_a=f.inside_is_a,
+        seg_thresholds=thresholds,
+        seg_intercepts=intercepts,
+        pieces=end_pieces(config, f, w, values, inside_left, a),
+    )
+
+
+def _start(a, config: EdgeConfig, f: Fold, w: Window) -> dict:
+    """The columns to step and the first column's row: row0, and mf, where the line crosses
+    that column's centre within the row."""
+    S = config.subpixel_scale
+    span = w.last - w.first + 1
+    columns = a.select(span > 0, span, 0)
+    clipped_start = (columns > 0) & w.start_clip
+    c0 = a.select(columns > 0, w.first, f.c0)  # an empty cut keeps c0
     # Line height at the centre of column c0: vc = num / den pixels.
     num = f.v0 * f.du + f.dv * (c0 * S - f.u0)
     den = S * f.du
     row0 = floor_div(2 * num + den, 2 * den)  # row whose span [y - 1/2, y + 1/2) holds vc
     mf = 2 * num + den - 2 * row0 * den  # f = vc - (row0 - 1/2) = mf / (2 den), in [0, 1)
+    return dict(columns=columns, clipped_start=clipped_start, c0=c0, row0=row0, mf=mf)
 
+
+def _increments(config: EdgeConfig, f: Fold, mf) -> dict:
+    """The accumulator's start J, increment K and half increment K/2, each a quotient and a
+    remainder over du (remainders dropped by the truncated accumulator)."""
+    s, F = config.subpixel_bits, config.F
     i_d, du = f.i_d, f.du
-    jq, jr = divmod(i_d * mf << (F - s - 1), du)
-    kq, kr = divmod(i_d * f.dv << F, du)
-    khq, khr = divmod(i_d * f.dv << (F - 1), du)
+    jq, jr = _divmod(i_d * mf << (F - s - 1), du)
+    kq, kr = _divmod(i_d * f.dv << F, du)
+    khq, khr = _divmod(i_d * f.dv << (F - 1), du)
     if config.accumulator == "truncated":
-        jr = kr = khr = 0  # the paper's fixed point: remainders dropped
-    thresholds, intercepts = segment_constants(config, kq)
+        jr, kr, khr = 0 * jr, 0 * kr, 0 * khr  # the paper's fixed point; zeros of jr's kind
+    return dict(jq=jq, jr=jr, kq=kq, kr=kr, khq=khq, khr=khr)
 
-    step_major, step_minor = -1 if f.major_neg else 1, -1 if f.minor_neg else 1
 
-    def screen(major: int, minor: int) -> tuple[int, int]:
-        return (major, minor) if f.x_major else (minor, major)
+def _divmod(n, d):
+    """Floor quotient and remainder of ints, int64 arrays or object arrays alike (np.divmod
+    has no object-array loop)."""
+    q = n // d
+    return q, n - q * d
 
-    x, y = screen(step_major * c0, step_minor * row0)
-    col_dx, col_dy = screen(step_major, 0)
-    row_dx, row_dy = screen(0, step_minor)
-    values = dict(
-        columns=columns,
-        row0=row0,
-        jq=jq,
-        jr=jr,
-        kq=kq,
-        khq=khq,
-        khr=khr,
-        du=du,
-        i_d=i_d,
-        dy=edge.y1 - edge.y0,
+
+# -- many edges at once ------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class SetupBatch:
+    """`EdgeSetup` of a batch of edges as a struct of arrays, one element per edge
+    (`setup_batch`): the flags as bool arrays, the rest int64 arrays, or object arrays of
+    Python ints where int64 could overflow; `seg_thresholds` and `seg_intercepts` tuples of
+    arrays (one per segment); `pieces` an `EndPieces` whose fields are such arrays.
+    ``batch[k]`` is edge k's `EdgeSetup`, equal to `setup` of it."""
+
+    x_major: np.ndarray
+    columns: np.ndarray
+    clipped_start: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    col_dx: np.ndarray
+    col_dy: np.ndarray
+    row_dx: np.ndarray
+    row_dy: np.ndarray
+    du: np.ndarray
+    dv: np.ndarray
+    ifix: np.ndarray
+    jq: np.ndarray
+    jr: np.ndarray
+    kq: np.ndarray
+    kr: np.ndarray
+    khq: np.ndarray
+    khr: np.ndarray
+    value_base: np.ndarray
+    value_sign: np.ndarray
+    inside_is_a: np.ndarray
+    seg_thresholds: tuple[np.ndarray, ...]
+    seg_intercepts: tuple[np.ndarray, ...]
+    pieces: EndPieces
+
+    def __len__(self) -> int:
+        return len(self.columns)
+
+    def __getitem__(self, k: int) -> EdgeSetup:
+        values = {
+            f.name: _scalar(getattr(self, f.name), k)
+            for f in fields(EdgeSetup)
+            if f.name != "pieces"
+        }
+        values["pieces"] = EndPieces(
+            *(_scalar(getattr(self.pieces, f.name), k) for f in fields(EndPieces))
+        )
+        return EdgeSetup(**values)
+
+    def __iter__(self) -> Iterator[EdgeSetup]:
+        return (self[k] for k in range(len(self)))
+
+    @property
+    def major_neg_x(self) -> np.ndarray:
+        """x-major edges that step left (`EdgeSetup.major_neg_x`)."""
+        return self.x_major & (self.col_dx < 0)
+
+    @classmethod
+    def from_setups(cls, config: EdgeConfig, setups: Sequence[EdgeSetup]) -> SetupBatch:
+        """The struct of arrays of `setup`'s results (one list per field)."""
+        values = {
+            f.name: _stack([getattr(st, f.name) for st in setups])
+            for f in fields(EdgeSetup)
+            if f.name not in ("seg_thresholds", "seg_intercepts", "pieces")
+        }
+        n = config.segments
+        for name, count in (("seg_thresholds", max(n - 1, 0)), ("seg_intercepts", n)):
+            values[name] = tuple(
+                _stack([getattr(st, name)[m] for st in setups]) for m in range(count)
+            )
+        pieces = [st.pieces for st in setups]
+        values["pieces"] = EndPieces(
+            *(_stack([getattr(p, f.name) for p in pieces]) for f in fields(EndPieces))
+        )
+        return cls(**values)
+
+
+def _scalar(values, k: int):
+    """Element k as setup gives it: a bool, a Python int, or a tuple of them."""
+    if isinstance(values, tuple):
+        return tuple(_scalar(v, k) for v in values)
+    return bool(values[k]) if values.dtype == bool else int(values[k])
+
+
+def _stack(values: list) -> np.ndarray:
+    """bool array of bools; int64 array of ints that fit, else an object array of them."""
+    if values and all(isinstance(v, bool) for v in values):
+        return np.array(values, dtype=bool)
+    if not values or min(values) >= -(1 << 63) and max(values) < (1 << 63):
+        return np.array(values, dtype=np.int64)
+    return np.array([int(v) for v in values], dtype=object)
+
+
+def setup_int64_bits(config: EdgeConfig, i_d_max: int) -> int:
+    """Bits of the largest intermediate of `setup_fields` on a batch whose largest
+    |I_in - I_out| is i_d_max (the bound is derived in `setup_batch`)."""
+    W, s = config.coord_bits, config.subpixel_bits
+    m = max(W + s, W + 3, 2 * s + 2, s + 3, 7) + 1
+    return max(i_d_max.bit_length() + config.F + m, 2 * (W + s) + 4)
+
+
+def setup_batch(
+    config: EdgeConfig, x0, y0, x1, y1, inside_left, i_in, i_out, clip=None, *,
+    force_object: bool = False,
+) -> SetupBatch:  # fmt: skip
+    """`setup` of many edges at once: arrays in (one element per edge; scalars broadcast),
+    a `SetupBatch` out whose ``[k]`` equals `setup` of edge k, field for field.
+
+    Coordinates are integer arrays in sub-pixel units; inside_left a bool array (or strings
+    'left' / 'right'); i_in (None: full scale) and i_out integers; clip None (`Clip.full`),
+    one `Clip` for every edge, or four arrays (x_min, y_min, x_max, y_max). What `validate`
+    rejects is rejected here, with EdgeError "edge k: <validate's words>" for the first bad
+    edge k. force_object computes with Python ints (the fallback), for tests.
+
+    Overflow: L = 2**(W + s) bounds the coordinates (W coord_bits, s subpixel_bits), and
+    ifix = |I_in - I_out| 2**F. Coordinate terms stay below 2**(2 (W + s) + 4) (num and den of
+    the first row: |v0| du + dv |c0 S - u0| < 4 L**2). Every term scaled by ifix is below
+    ifix 2**(m - 1), m = max(W + s, W + 3, 2 s + 2, s + 3, 7) + 1: the divisions' numerators
+    are below ifix du < ifix L; the unselected start heights half (2 v0 - (2 row0 - 1) S)
+    and (end_row - row0) ifix + end_height below ifix (2**(W + 2) + 1) (rows lie within
+    2**W + 1 of 0); areas kq w**2 with w <= 2 S below ifix 2**(2 s + 2); (hs0 + he) w0 below
+    8 S ifix; segment intercepts below 97 ifix. Sums of two such terms stay below ifix 2**m.
+    So int64 holds every intermediate when `setup_int64_bits` <= 63; otherwise the batch is
+    computed on object arrays of Python ints (exact, slower): never wrapped."""
+    e = _batch_inputs(config, x0, y0, x1, y1, inside_left, i_in, i_out, clip)
+    i_d_max = int(np.abs(e["i_in"] - e["i_out"]).max(initial=0))
+    fits = not force_object and setup_int64_bits(config, i_d_max) <= 63
+    dtype = np.int64 if fits else object
+    v = {name: value if value.dtype == bool else value.astype(dtype) for name, value in e.items()}
+    a = ArrayArith(config, dtype)
+    clip_arrays = Clip(v["x_min"], v["y_min"], v["x_max"], v["y_max"])
+    names = ("x0", "y0", "x1", "y1", "inside_left", "i_in", "i_out")
+    return SetupBatch(**setup_fields(a, config, *(v[n] for n in names), clip_arrays))
+
+
+def _batch_inputs(config: EdgeConfig, x0, y0, x1, y1, inside, i_in, i_out, clip) -> dict:
+    """The inputs of `setup_batch` as validated one-dimensional arrays of equal length:
+    int64, and inside_left bool."""
+    if clip is not None and not (isinstance(clip, tuple) and len(clip) == 4):
+        validate_clip(config, clip)  # raises: not four bounds
+    window = Clip.full(config) if clip is None else clip
+    i_in = config.full_scale if i_in is None else i_in
+    values = (x0, y0, x1, y1, inside, i_in, i_out, *window)
+    arrays = np.broadcast_arrays(*(np.asarray(value) for value in values))
+    if arrays[0].ndim != 1:
+        raise ValueError(f"setup_batch takes one-dimensional arrays, not shape {arrays[0].shape}")
+    names = ("x0", "y0", "x1", "y1", "inside", "i_in", "i_out", *Clip._fields)
+    e = dict(zip(names, arrays, strict=True))
+    first = _first_bad(config, e, clip is not None)
+    if first is not None:
+        _raise_for(config, e, first, clip is not None)
+    out = {name: e[name].astype(np.int64) for name in names if name != "inside"}
+    side = e["inside"]
+    out["inside_left"] = side if side.dtype == bool else side == "left"
+    return out
+
+
+def _first_bad(config: EdgeConfig, e: dict, clipped: bool) -> int | None:
+    """The first edge `validate` rejects (checked on whole arrays), or None."""
+    hi, top, fs = config.max_vertex, 1 << config.coord_bits, config.full_scale
+    bad = np.zeros(len(e["x0"]), dtype=bool)
+    for name in ("x0", "y0", "x1", "y1"):
+        bad |= _bad_ints(e[name], hi)
+    ok = ~bad  # comparing the coordinates needs integers
+    bad[ok] |= ((e["x0"][ok] == e["x1"][ok]) & (e["y0"][ok] == e["y1"][ok])).astype(bool)
+    for name in Clip._fields if clipped else ():
+        bad |= _bad_ints(e[name], top)
+    side = e["inside"]
+    if side.dtype != bool:
+        known = side.dtype.kind in "UO"  # strings; other kinds are neither side
+        bad |= ~((side == "left") | (side == "right")) if known else True
+    bad_i = _bad_ints(e["i_in"], fs) | _bad_ints(e["i_out"], fs)
+    bad |= bad_i
+    ok = ~bad_i
+    bad[ok] |= (e["i_in"][ok] == e["i_out"][ok]).astype(bool)
+    return int(np.argmax(bad)) if bad.any() else None
+
+
+def _bad_ints(values: np.ndarray, hi: int) -> np.ndarray:
+    """Elements `validate` rejects as an integer in [0, hi]: out of range, or not an integer
+    at all (bool, float, str elements; an object array is checked element by element)."""
+    if values.dtype.kind in "iu":
+        return (values < 0) | (values > hi)
+    if values.dtype.kind == "O":
+        return np.array(
+            [isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= hi for v in values],
+            dtype=bool,
+        )
+    return np.ones(values.shape, dtype=bool)
+
+
+def _raise_for(config: EdgeConfig, e: dict, k: int, clipped: bool) -> None:
+    """Raise validate's EdgeError for edge k, prefixed with its index."""
+    item = {name: values[k : k + 1].tolist()[0] for name, values in e.items()}
+    side = item["inside"]
+    if e["inside"].dtype == bool:
+        side = "left" if side else "right"
+    clip = Clip(*(item[name] for name in Clip._fields)) if clipped else None
+    edge = Edge(
+        item["x0"], item["y0"], item["x1"], item["y1"], side, item["i_in"], item["i_out"], clip
     )
-    pieces = end_pieces(config, f, w, values, edge.inside == "left")
-    return EdgeSetup(
-        x_major=f.x_major,
-        columns=columns,
-        clipped_start=clipped_start,
-        x=x,
-        y=y,
-        col_dx=col_dx,
-        col_dy=col_dy,
-        row_dx=row_dx,
-        row_dy=row_dy,
-        du=du,
-        dv=f.dv,
-        ifix=i_d << F,
-        jq=jq,
-        jr=jr,
-        kq=kq,
-        kr=kr,
-        khq=khq,
-        khr=khr,
-        value_base=f.value_base,
-        value_sign=-1 if f.value_neg else 1,
-        inside_is_a=f.inside_is_a,
-        seg_thresholds=thresholds,
-        seg_intercepts=intercepts,
-        pieces=pieces,
-    )
+    try:
+        validate(config, edge)
+    except EdgeError as error:
+        raise EdgeError(f"edge {k}: {error}") from None
+    raise AssertionError(f"setup_batch flagged edge {k}, which validate accepts: {edge}")

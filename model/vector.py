@@ -1,8 +1,11 @@
 """The vectorized model: the step model's writes for whole batches of edges at once, in numpy.
 
 `run_edges` gives bit-identical writes to `step.run_edge` (same pixels, values, areas and
-order) without a Python loop over columns. Only the per-edge setup (`edge.setup`, which also
-validates the edge and raises the same EdgeError) runs in a Python loop.
+order) without a Python loop over columns. Given Edge objects, the per-edge setup
+(`edge.setup`, which also validates the edge and raises the same EdgeError) runs in a Python
+loop; `run_deltas_arrays` takes the edges as arrays and sets them up with `edge.setup_batch`
+(numpy, the same values), and `run_setup_deltas` takes a `SetupBatch`. The column loop reads
+the setup as a `SetupBatch` (one array per field) either way.
 
 Closed form of the stepping loop. Column i = 0 .. columns - 1 of an edge starts with
 
@@ -16,6 +19,7 @@ most once and steps at most one row: jr0 < du and kr < du (divmod remainders), j
 when dv = du, and then kr = 0, so no carry). `_check_invariants` asserts these per edge. The
 exit tests, triangle estimate, segment choice and output rounding are the step model's
 formulas applied to arrays; in truncated mode setup already zeroes jr, kr and khr.
+`_check_invariants` asserts the same on a whole `SetupBatch`.
 
 Overflow bound (why int64 is enough, and when it is not). Let n = columns. The loop's last
 advance (after column n - 1) is width-checked in the step model, so states i = 0 .. n are
@@ -39,9 +43,10 @@ intensity_bits bits); `area` is int64 when its register (intensity_bits + F + 1 
 int64, and an object array of Python ints otherwise.
 
 Register widths are checked on the arrays as in the step model (the same registers, the same
-values), raising WidthError; with a batch the first failing register reported may differ from
-the one the step model would report first, and every edge's setup (so any EdgeError) runs
-before any column.
+values), raising WidthError; with a batch the first failing register reported may differ
+from the one the step model would report first (the per-edge constants are checked register
+by register over the whole batch), and every edge's setup (so any EdgeError) runs before any
+column.
 """
 
 from __future__ import annotations
@@ -53,7 +58,6 @@ import numpy as np
 
 from .column import (
     ArrayArith,
-    IntArith,
     column_areas,
     column_deltas,
     delta_cells,
@@ -62,7 +66,7 @@ from .column import (
     piece_end,
 )
 from .config import EdgeConfig
-from .edge import Edge, EdgeSetup, setup
+from .edge import Edge, EdgeSetup, SetupBatch, setup, setup_batch
 from .step import Write
 
 INT64_U_LIMIT = 1 << 62  # largest U_n an edge may reach on the int64 path
@@ -152,28 +156,14 @@ def run_edges(
     for testing that path against the int64 one.
     """
     setups = tuple(setup(config, edge) for edge in edges)  # validates: raises EdgeError
-    widths = config.register_widths()
-    constants = IntArith(config)
-    for st in setups:
-        _check_constants(constants, st)
-        _check_invariants(st)
-    fits = [not force_object and _fits_int64(st) for st in setups]
-    fast = [k for k, ok in enumerate(fits) if ok]
-    slow = [k for k, ok in enumerate(fits) if not ok]
-    parts = [
-        _run_group(config, setups, chunk, dtype)
-        for group, dtype in ((fast, np.int64), (slow, object))
-        for chunk in _chunks(setups, group)
-    ]
-    area_dtype = np.int64 if widths["area"].bits <= 63 else object
+    batch = SetupBatch.from_setups(config, setups)
+    area_dtype = np.int64 if config.register_widths()["area"].bits <= 63 else object
+    chunks, mixed = _groups(config, batch, force_object)
+    parts = [_run_group(config, batch, chunk, dtype) for chunk, dtype in chunks]
     if not parts:
         empty = np.zeros(0, dtype=np.int64)
         return WriteBatch(empty, empty, empty, empty, empty.astype(area_dtype), setups)
-    columns = [np.concatenate([part[name] for part in parts]) for name in range(5)]
-    if fast and slow:  # each group is in order; a stable sort on the edge interleaves them
-        order = np.argsort(columns[0], kind="stable")
-        columns = [column[order] for column in columns]
-    edge_index, x, y, value, area = columns
+    edge_index, x, y, value, area = _merge(parts, 5, mixed)
     return WriteBatch(
         edge_index.astype(np.int64),
         x.astype(np.int64),
@@ -187,39 +177,63 @@ def run_edges(
 # -- per-edge checks ---------------------------------------------------------------------------
 
 
-def _check_constants(a: IntArith, st: EdgeSetup) -> None:
-    """The per-edge registers run_edge checks before its loop."""
-    values = [
-        ("du", st.du),
-        ("ifix", st.ifix),
-        ("kq", st.kq),
-        ("kr", st.kr),
-        ("khq", st.khq),
-        ("khr", st.khr),
+def _groups(config: EdgeConfig, batch: SetupBatch, force_object: bool):
+    """Check the batch's constants and split it into chunks (ascending edge indices) computed
+    in int64 and in object arrays: a list of (chunk, dtype), and whether both kinds occur."""
+    _check_constants(config, batch)
+    _check_invariants(batch)
+    fits = np.zeros(len(batch), dtype=bool) if force_object else _fits_int64_batch(batch)
+    fast, slow = np.flatnonzero(fits), np.flatnonzero(~fits)
+    weights = batch.columns.astype(np.int64) + 1  # column states per edge
+    chunks = [
+        (chunk, dtype)
+        for group, dtype in ((fast, np.int64), (slow, object))
+        for chunk in _chunks(weights, group)
     ]
-    values += [("seg_const", c) for c in st.seg_thresholds + st.seg_intercepts]
-    values += [("x", st.x), ("y", st.y), ("jq", st.jq), ("jr", st.jr)]
-    if st.columns:
-        values += [("remaining", st.columns - 1)]  # the largest value the loop assigns
-    for name, value in values:
-        a.check(name, value)
+    return chunks, bool(len(fast) and len(slow))
 
 
-def _check_invariants(st: EdgeSetup) -> None:
+def _merge(parts: list[list[np.ndarray]], count: int, mixed: bool) -> list[np.ndarray]:
+    """The chunks' output columns joined in edge order."""
+    columns = [np.concatenate([part[name] for part in parts]) for name in range(count)]
+    if mixed:  # each group is in order; a stable sort on the edge interleaves them
+        order = np.argsort(columns[0], kind="stable")
+        columns = [column[order] for column in columns]
+    return columns
+
+
+def _check_constants(config: EdgeConfig, b: SetupBatch) -> None:
+    """The per-edge registers run_edge checks before its loop, over the whole batch."""
+    a = ArrayArith(config, None)
+    for name in ("du", "ifix", "kq", "kr", "khq", "khr"):
+        a.check(name, getattr(b, name))
+    for values in b.seg_thresholds + b.seg_intercepts:
+        a.check("seg_const", values)
+    for name in ("x", "y", "jq", "jr"):
+        a.check(name, getattr(b, name))
+    a.check("remaining", b.columns - 1, b.columns > 0)  # the largest value the loop assigns
+
+
+def _check_invariants(b: SetupBatch) -> None:
     """What the closed form assumes of setup (see the module docstring)."""
     ok = (
-        st.columns >= 0
-        and st.du >= 1
-        and st.ifix >= 1
-        and 0 <= st.jr < st.du
-        and 0 <= st.kr < st.du
-        and 0 <= st.khr < st.du
-        and 0 <= st.jq < st.ifix
-        and st.kq >= 0
-        and st.kq + (1 if st.kr else 0) <= st.ifix
+        (b.columns >= 0)
+        & (b.du >= 1)
+        & (b.ifix >= 1)
+        & (b.jr >= 0)
+        & (b.jr < b.du)
+        & (b.kr >= 0)
+        & (b.kr < b.du)
+        & (b.khr >= 0)
+        & (b.khr < b.du)
+        & (b.jq >= 0)
+        & (b.jq < b.ifix)
+        & (b.kq >= 0)
+        & (b.kq + np.where(b.kr != 0, 1, 0) <= b.ifix)
     )
-    if not ok:
-        raise VectorInvariantError(f"setup breaks the closed form's assumptions: {st}")
+    if not ok.all():
+        k = int(np.argmin(ok))
+        raise VectorInvariantError(f"setup breaks the closed form's assumptions: {b[k]}")
 
 
 def _fits_int64(st: EdgeSetup) -> bool:
@@ -227,6 +241,17 @@ def _fits_int64(st: EdgeSetup) -> bool:
     n = st.columns
     u_last = st.jq + n * st.kq + (st.jr + n * st.kr) // st.du
     return u_last <= INT64_U_LIMIT and st.ifix <= INT64_IFIX_LIMIT
+
+
+def _fits_int64_batch(b: SetupBatch) -> np.ndarray:
+    """`_fits_int64` of every edge (a bool array), in exact integers."""
+    fits = np.asarray(b.ifix <= INT64_IFIX_LIMIT, dtype=bool)
+    n, top = b.columns, lambda values: int(np.max(values, initial=0))  # all nonnegative
+    if top(b.jq) + top(n) * top(b.kq) + top(b.jr) + top(n) * top(b.kr) <= INT64_U_LIMIT:
+        return fits  # a bound on every U_n already fits
+    jq, jr, kq, kr, du, n = (v.astype(object) for v in (b.jq, b.jr, b.kq, b.kr, b.du, n))
+    u_last = jq + n * kq + (jr + n * kr) // du  # Python ints: exact
+    return fits & np.asarray(u_last <= INT64_U_LIMIT, dtype=bool)
 
 
 def chunked(items: Sequence, weight, limit: int) -> list[list]:
@@ -244,10 +269,18 @@ def chunked(items: Sequence, weight, limit: int) -> list[list]:
     return chunks
 
 
-def _chunks(setups: Sequence[EdgeSetup], group: list[int]) -> list[list[int]]:
+def _chunks(weights: np.ndarray, group: np.ndarray) -> list[np.ndarray]:
     """Split a group of edges into runs of about CHUNK_STATES column states (cache-sized
-    arrays: several times faster than one huge batch)."""
-    return chunked(group, lambda k: setups[k].columns + 1, CHUNK_STATES)
+    arrays: several times faster than one huge batch): `chunked` with weights[k] per edge k,
+    one searchsorted per run."""
+    total = np.cumsum(weights[group])
+    runs, start, base = [], 0, 0
+    while start < len(group):
+        # The first edge that brings the run to the limit closes it (weights are >= 1).
+        stop = min(int(np.searchsorted(total, base + CHUNK_STATES)) + 1, len(group))
+        runs.append(group[start:stop])
+        start, base = stop, int(total[stop - 1])
+    return runs
 
 
 def _divmod(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -259,29 +292,28 @@ def _divmod(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 class _PerEdge:
-    """`EdgeSetup` fields of a group of edges as arrays gathered by an index (one element per
-    column or per write): what the shared column arithmetic reads as ``st``."""
+    """`SetupBatch` fields (or its pieces') gathered by an index (one element per column or per
+    write) in `dtype`: what the shared column arithmetic reads as ``st``."""
 
-    def __init__(self, sts: Sequence[EdgeSetup], dtype, index: np.ndarray):
-        self._sts, self._dtype, self._index = sts, dtype, index
+    def __init__(self, fields, dtype, index: np.ndarray):
+        self._fields, self._dtype, self._index = fields, dtype, index
 
-    def _column(self, values) -> np.ndarray:
-        # An object array must hold Python ints (not numpy scalars) so nothing wraps.
-        values = [int(v) for v in values]
-        if all(isinstance(v, bool) for v in values):
-            return np.array(values, dtype=bool)[self._index]
-        return np.array(values, dtype=self._dtype)[self._index]
+    def _column(self, values: np.ndarray) -> np.ndarray:
+        picked = values[self._index]
+        if picked.dtype == bool:
+            return picked
+        # astype(object) of int64 gives Python ints, so nothing wraps on the object path.
+        return picked.astype(self._dtype, copy=False)
 
-    def __getattr__(self, name: str) -> np.ndarray:
+    def __getattr__(self, name: str):
+        if name.startswith("_"):
+            raise AttributeError(name)
         if name == "pieces":
-            value = _PerEdge([st.pieces for st in self._sts], self._dtype, self._index)
+            value = _PerEdge(self._fields.pieces, self._dtype, self._index)
         elif name in ("seg_thresholds", "seg_intercepts"):
-            count = len(getattr(self._sts[0], name)) if self._sts else 0
-            value = tuple(
-                self._column([getattr(st, name)[m] for st in self._sts]) for m in range(count)
-            )
+            value = tuple(self._column(v) for v in getattr(self._fields, name))
         else:
-            value = self._column([getattr(st, name) for st in self._sts])
+            value = self._column(getattr(self._fields, name))
         setattr(self, name, value)  # gathered once
         return value
 
@@ -289,20 +321,22 @@ class _PerEdge:
 # -- the vectorized loop -----------------------------------------------------------------------
 
 
-def _column_states(a: ArrayArith, sts: Sequence[EdgeSetup], dtype) -> dict[str, np.ndarray]:
-    """The loop registers of every column of the group in closed form (module docstring),
-    width-checked like the step model's, including the advance after each edge's last
-    column."""
-    columns = np.array([st.columns for st in sts], dtype=np.int64)
+def _column_states(
+    a: ArrayArith, batch: SetupBatch, group: np.ndarray, dtype
+) -> dict[str, np.ndarray]:
+    """The loop registers of every column of the edges `group` in closed form (module
+    docstring), width-checked like the step model's, including the advance after each edge's
+    last column."""
+    columns = batch.columns[group].astype(np.int64)
     # States i = 0 .. columns: the last one is the advance after the last column, which the
     # step model also computes and width-checks.
     states = columns + 1
-    e = np.repeat(np.arange(len(sts)), states)  # edge (within the group) of each state
+    e = np.repeat(np.arange(len(group)), states)  # edge (within the group) of each state
     starts = np.cumsum(states) - states
     i = np.arange(int(states.sum()), dtype=np.int64) - np.repeat(starts, states)
     if dtype is object:
         i = i.astype(object)
-    st = _PerEdge(sts, dtype, e)
+    st = _PerEdge(batch, dtype, group[e])
     carries, jr = _divmod(st.jr + i * st.kr, st.du)
     unreduced = st.jq + i * st.kq + carries
     rows, jq = _divmod(unreduced, st.ifix)
@@ -338,15 +372,12 @@ def _interleave(count: np.ndarray, has: np.ndarray, pairs, dtype) -> list[np.nda
     return out
 
 
-def _run_group(
-    config: EdgeConfig, setups: Sequence[EdgeSetup], group: list[int], dtype
-) -> list[np.ndarray]:
+def _run_group(config: EdgeConfig, batch: SetupBatch, group: np.ndarray, dtype) -> list[np.ndarray]:
     """Writes of the edges `group` (ascending), computed in `dtype` (int64 or object)."""
-    sts = [setups[k] for k in group]
     a = ArrayArith(config, dtype)
-    s = _column_states(a, sts, dtype)
+    s = _column_states(a, batch, group, dtype)
     e, x, y = s["e"], s["x"], s["y"]
-    st = _PerEdge(sts, dtype, e)
+    st = _PerEdge(batch, dtype, group[e])
     areas = column_areas(a, config, st, s["jq"], s["jr"])
     has = np.broadcast_to(np.asarray(areas.two, dtype=bool), e.shape)
     offset = np.asarray(neighbour_offset(a, areas)) if config.segments else 1
@@ -365,8 +396,8 @@ def _run_group(
     e_out = e_out.astype(np.int64)
     a.check("x", x_out)
     a.check("y", y_out)
-    value = output_value(a, config, _PerEdge(sts, dtype, e_out), area_out)
-    edge_index = np.asarray(group, dtype=np.int64)[e_out]
+    value = output_value(a, config, _PerEdge(batch, dtype, group[e_out]), area_out)
+    edge_index = group[e_out]
     return [edge_index, x_out, y_out, value, area_out]
 
 
@@ -377,13 +408,15 @@ def _run_group(
 class DeltaBatch:
     """The accumulation deltas of a batch of edges: four cells per column, in the order of
     `step.run_edge_deltas` (zeros included). delta is int64, or an object array of Python
-    ints when the delta register is wider than int64."""
+    ints when the delta register is wider than int64. setups: `run_edges_deltas` gives the
+    EdgeSetup of each edge, `run_deltas_arrays` and `run_setup_deltas` the `SetupBatch`
+    (``setups[k]`` is edge k's EdgeSetup either way)."""
 
     edge_index: np.ndarray
     x: np.ndarray
     y: np.ndarray
     delta: np.ndarray
-    setups: tuple[EdgeSetup, ...]
+    setups: tuple[EdgeSetup, ...] | SetupBatch
 
     def __len__(self) -> int:
         return len(self.edge_index)
@@ -394,45 +427,56 @@ def run_edges_deltas(
 ) -> DeltaBatch:
     """The deltas of all edges, bit-identical to `run_edge_deltas` on each edge."""
     setups = tuple(setup(config, edge) for edge in edges)  # validates: raises EdgeError
-    constants = IntArith(config)
-    for st in setups:
-        _check_constants(constants, st)
-        _check_invariants(st)
-    fits = [not force_object and _fits_int64(st) for st in setups]
-    fast = [k for k, ok in enumerate(fits) if ok]
-    slow = [k for k, ok in enumerate(fits) if not ok]
-    parts = [
-        _deltas_group(config, setups, chunk, dtype)
-        for group, dtype in ((fast, np.int64), (slow, object))
-        for chunk in _chunks(setups, group)
-    ]
+    batch = SetupBatch.from_setups(config, setups)
+    return DeltaBatch(*_batch_deltas(config, batch, force_object), setups)
+
+
+def run_deltas_arrays(
+    config: EdgeConfig, x0, y0, x1, y1, inside_left, i_in, i_out, clip=None, *,
+    force_object: bool = False,
+) -> DeltaBatch:  # fmt: skip
+    """`run_edges_deltas` of edges given as arrays (`edge.setup_batch`'s arguments: sub-pixel
+    coordinates, inside_left bools, intensities, clip None, one Clip or four arrays): the same
+    deltas as for the Edge list, with the setups as a `SetupBatch`. Bad edges raise EdgeError
+    naming the first one's index."""
+    batch = setup_batch(
+        config, x0, y0, x1, y1, inside_left, i_in, i_out, clip, force_object=force_object
+    )
+    return run_setup_deltas(config, batch, force_object=force_object)
+
+
+def run_setup_deltas(
+    config: EdgeConfig, batch: SetupBatch, *, force_object: bool = False
+) -> DeltaBatch:
+    """The deltas of the edges whose setup is `batch` (`edge.setup_batch`)."""
+    return DeltaBatch(*_batch_deltas(config, batch, force_object), batch)
+
+
+def _batch_deltas(config: EdgeConfig, batch: SetupBatch, force_object: bool) -> list[np.ndarray]:
+    """edge_index, x, y (int64) and delta of every column of the batch, in edge order."""
     delta_dtype = np.int64 if config.register_widths()["delta"].bits <= 63 else object
+    chunks, mixed = _groups(config, batch, force_object)
+    parts = [_deltas_group(config, batch, chunk, dtype) for chunk, dtype in chunks]
     if not parts:
         empty = np.zeros(0, dtype=np.int64)
-        return DeltaBatch(empty, empty, empty, empty.astype(delta_dtype), setups)
-    columns = [np.concatenate([part[name] for part in parts]) for name in range(4)]
-    if fast and slow:  # each group is in order; a stable sort on the edge interleaves them
-        order = np.argsort(columns[0], kind="stable")
-        columns = [column[order] for column in columns]
-    edge_index, x, y, delta = columns
-    return DeltaBatch(
+        return [empty, empty, empty, empty.astype(delta_dtype)]
+    edge_index, x, y, delta = _merge(parts, 4, mixed)
+    return [
         edge_index.astype(np.int64),
         x.astype(np.int64),
         y.astype(np.int64),
         delta.astype(delta_dtype),
-        setups,
-    )
+    ]
 
 
 def _deltas_group(
-    config: EdgeConfig, setups: Sequence[EdgeSetup], group: list[int], dtype
+    config: EdgeConfig, batch: SetupBatch, group: np.ndarray, dtype
 ) -> list[np.ndarray]:
     """Deltas of the edges `group` (ascending), computed in `dtype` (int64 or object)."""
-    sts = [setups[k] for k in group]
     a = ArrayArith(config, dtype)
-    s = _column_states(a, sts, dtype)
+    s = _column_states(a, batch, group, dtype)
     e, i = s["e"], s["i"]
-    st = _PerEdge(sts, dtype, e)
+    st = _PerEdge(batch, dtype, group[e])
     p = st.pieces
     first = (i == 0) & p.first_partial
     last = (i == st.columns - 1) & p.last_partial
@@ -451,5 +495,5 @@ def _deltas_group(
     for k, cell in enumerate(cells):
         for column, values in zip(out, cell, strict=True):
             column[k::4] = np.broadcast_to(np.asarray(values, dtype=dtype), (count,))
-    edge_index = np.repeat(np.asarray(group, dtype=np.int64)[e], 4)
+    edge_index = np.repeat(group[e], 4)
     return [edge_index, *out]
