@@ -153,6 +153,23 @@ def write_cycles(
     the two agree. `output` is the core's (``"writes"`` or ``"deltas"``): one beat per
     column either way, only the pipeline depth differs.
     """
+    shapes = []
+    for edge in edges:
+        try:
+            st = setup(config, edge)
+        except EdgeError:
+            shapes.append(None)
+            continue
+        shapes.append((st.columns, st.clipped_start))
+    return schedule(config, shapes, edges, setup_latency_, output)
+
+
+def schedule(
+    config: EdgeConfig, shapes, edges=None, setup_latency_: int | None = None, output="writes"
+) -> list[EdgeTiming]:
+    """`write_cycles` from each edge's (columns, clipped_start) as setup gives them (None for
+    a command the core drops as bad), for callers that hold the setups already
+    (`edgeaa.model.edge.setup_batch`). `edges` only labels the timings."""
     latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, output)
     extra = start_clip_cycles(config)
@@ -160,25 +177,24 @@ def write_cycles(
     accept = 0
     prev_load = None  # load clock of the previous good edge
     prev_columns = 0
-    for edge in edges:
-        try:
-            st = setup(config, edge)
-        except EdgeError:
+    for k, shape in enumerate(shapes):
+        edge = None if edges is None else edges[k]
+        if shape is None:
             out.append(EdgeTiming(edge, accept, None, None, ()))
             accept += BAD_COMMAND_CYCLES
             continue
-        columns = st.columns
+        columns, clipped_start = int(shape[0]), bool(shape[1])
         if not columns:
             out.append(EdgeTiming(edge, accept, None, None, ()))
             accept += EMPTY_EDGE_CYCLES
             continue
-        bank = accept + latency - depth - 2 + (extra if st.clipped_start else 0)
+        bank = accept + latency - depth - 2 + (extra if clipped_start else 0)
         load = bank + 1
         if prev_load is not None:
             bank = max(bank, prev_load)
             load = max(bank + 1, prev_load + prev_columns)
-        beats = tuple(load + 1 + depth + c for c in range(columns))
-        out.append(EdgeTiming(edge, accept, bank, load, beats))
+        beats = range(load + 1 + depth, load + 1 + depth + columns)
+        out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
         accept = bank + 1
         prev_load, prev_columns = load, columns
     return out

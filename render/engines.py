@@ -29,7 +29,7 @@ import numpy as np
 
 from ..model import Edge, EdgeConfig
 from ..model.beat import CELLS, DELTA_RUN_COLUMNS, LANES, PIXEL_FIELDS, RUN_COLUMNS
-from ..model.timing import write_cycles
+from ..model.timing import schedule, write_cycles
 from ..sim.verification.scoreboard import edge_columns
 
 ENGINES = ("model", "amaranth", "verilator")
@@ -133,45 +133,61 @@ class DeltaRun:
         )  # fmt: skip
 
 
-def run_deltas(config: EdgeConfig, edges: list[Edge], engine: str, progress=None) -> DeltaRun:
-    """The accumulation deltas of `edges` (all valid) through an engine, in order: four cells
-    per stepped column. progress(done, total) is called as edges complete."""
+def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
+    """The accumulation deltas of the edges `arrays` (a `render.render.EdgeArrays`, all
+    valid) through an engine, in order: four cells per stepped column. Returns the run and
+    each edge's (columns, clipped_start) from its setup, for the timing model.
+    progress(done, total) is called as edges complete."""
+    from ..model.edge import setup_batch
+
     if engine not in DELTA_ENGINES:
         raise EngineUnavailable(unavailable(engine))
     if engine == "model":
-        return _model_deltas(config, edges, progress)
-    if not edges:
+        return _model_deltas(config, arrays, progress)
+    batch = setup_batch(config, *arrays.args(), arrays.clip)
+    shapes = list(zip(batch.columns.tolist(), batch.clipped_start.tolist(), strict=True))
+    if not len(arrays):
         empty = np.zeros(0, dtype=np.int64)
-        return DeltaRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
+        return DeltaRun(engine, empty, empty, empty, empty, 0.0, 0, empty), shapes
+    edges = arrays.edges()
     run = _simulate(config, edges, engine, progress, "deltas")
     if run.errors:
         raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
     beats = np.asarray(run.beats, dtype=np.int64).reshape(-1, len(DELTA_RUN_COLUMNS))
-    columns = edge_columns(config, edges)
+    columns = batch.columns.astype(np.int64)
     _check_lasts(beats[:, DELTA_RUN_COLUMNS.index("last")].astype(bool), columns)
     edge = np.repeat(np.repeat(np.arange(len(columns), dtype=np.int64), columns), len(CELLS))
     x, y, delta = (
         beats[:, [DELTA_RUN_COLUMNS.index(f"{cell}_{name}") for cell in CELLS]].reshape(-1)
         for name in ("x", "y", "delta")
     )
-    return DeltaRun(engine, edge, x, y, delta, run.seconds, run.clocks, beats[:, 0])
+    run = DeltaRun(engine, edge, x, y, delta, run.seconds, run.clocks, beats[:, 0])
+    return run, shapes
 
 
-def _model_deltas(config: EdgeConfig, edges: list[Edge], progress) -> DeltaRun:
-    from ..model.vector import run_edges_deltas
+def cycles_of(config: EdgeConfig, shapes, output: str = "writes") -> int:
+    """`cycles` from each edge's (columns, clipped_start) (`edgeaa.model.timing.schedule`)."""
+    last = -1
+    for timing in schedule(config, shapes, output=output):
+        if timing.beats:
+            last = max(last, timing.beats[-1])
+    return last + 1
+
+
+def _model_deltas(config: EdgeConfig, arrays, progress):
+    from ..model.vector import run_deltas_arrays
 
     start = time.perf_counter()
-    parts = []
-    for lo in range(0, len(edges), MODEL_CHUNK):
-        batch = run_edges_deltas(config, edges[lo : lo + MODEL_CHUNK])
-        parts.append((batch.edge_index + lo, batch.x, batch.y, batch.delta))
-        if progress is not None:
-            progress(min(lo + MODEL_CHUNK, len(edges)), len(edges))
-    if parts:
-        columns = [np.concatenate([part[i] for part in parts]) for i in range(4)]
-    else:
-        columns = [np.zeros(0, dtype=np.int64) for _ in range(4)]
-    return DeltaRun("model", *columns, seconds=time.perf_counter() - start)
+    if progress is not None:
+        progress(0, len(arrays))
+    batch = run_deltas_arrays(config, *arrays.args(), arrays.clip)
+    if progress is not None:
+        progress(len(arrays), len(arrays))
+    run = DeltaRun(
+        "model", batch.edge_index, batch.x, batch.y, batch.delta, time.perf_counter() - start
+    )
+    setups = batch.setups
+    return run, list(zip(setups.columns.tolist(), setups.clipped_start.tolist(), strict=True))
 
 
 def _simulate(config: EdgeConfig, edges: list[Edge], engine: str, progress, output: str):

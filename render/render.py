@@ -32,7 +32,7 @@ import numpy as np
 
 from ..model import Clip, Edge, EdgeConfig
 from ..model.accumulate import Window, intensity_offset, resolve_rows
-from .engines import DeltaRun, cycles, run_deltas
+from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import inside_sides, split_crossings
 from .scene import Scene, SceneError
 
@@ -108,6 +108,53 @@ class Plan:
             x0 = x1 = (self.offset[0] - 1) * self.config.subpixel_scale
         window = self.accumulation_clip if clip else None
         return Edge(x0, y0, x1, y1, str(self.inside[e]), p.intensity, p.i_out, window)
+
+
+@dataclass(frozen=True)
+class EdgeArrays:
+    """Edge commands as arrays (`edgeaa.model.edge.setup_batch`'s arguments), one element per
+    edge: what `Plan.edge` gives one at a time, without building the objects."""
+
+    x0: np.ndarray
+    y0: np.ndarray
+    x1: np.ndarray
+    y1: np.ndarray
+    inside_left: np.ndarray
+    i_in: np.ndarray
+    i_out: np.ndarray
+    clip: Clip | None
+
+    def __len__(self) -> int:
+        return len(self.x0)
+
+    def args(self) -> tuple:
+        return (self.x0, self.y0, self.x1, self.y1, self.inside_left, self.i_in, self.i_out)
+
+    def edges(self) -> list[Edge]:
+        """The same commands as `Edge` objects (for the simulators' drivers)."""
+        rows = zip(*(a.tolist() for a in self.args()), strict=True)
+        return [
+            Edge(x0, y0, x1, y1, "left" if left else "right", i_in, i_out, self.clip)
+            for x0, y0, x1, y1, left, i_in, i_out in rows
+        ]
+
+
+def edge_arrays(plan: Plan, ids: np.ndarray, clip: bool) -> EdgeArrays:
+    """Edges `ids` of the plan as arrays, exactly as `Plan.edge(e, clip)` gives each."""
+    c = plan.coords[ids]
+    x0, x1 = c[:, 0].copy(), c[:, 2].copy()
+    if clip:
+        left = plan.left[ids]
+        x0[left] = x1[left] = (plan.offset[0] - 1) * plan.config.subpixel_scale
+    owner = plan.polygon[ids]
+    intensity = np.array([p.intensity for p in plan.polygons], dtype=np.int64)
+    i_out = np.array([p.i_out for p in plan.polygons], dtype=np.int64)
+    return EdgeArrays(
+        x0, c[:, 1], x1, c[:, 3], plan.inside[ids] == "left",
+        intensity[owner] if len(owner) else np.zeros(0, np.int64),
+        i_out[owner] if len(owner) else np.zeros(0, np.int64),
+        plan.accumulation_clip if clip else None,
+    )  # fmt: skip
 
 
 def _alternative_out(intensity: int, background: int, full: int) -> int:
@@ -417,9 +464,9 @@ def render_scene(
     timings = {"plan": time.perf_counter() - start}
 
     t = time.perf_counter()
-    edges = [plan.edge(int(e), clip=skip) for e in sent]
+    arrays = edge_arrays(plan, sent, clip=skip)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
-    run = run_deltas(config, edges, engine, progress=report)
+    run, shapes = run_deltas(config, arrays, engine, progress=report)
     deltas = run.in_image(sent, plan.offset)
     timings["engine"] = time.perf_counter() - t
 
@@ -451,7 +498,7 @@ def render_scene(
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
         deltas=deltas,
-        cycles=cycles(config, edges, "deltas"),
+        cycles=cycles_of(config, shapes, "deltas"),
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],
