@@ -320,8 +320,10 @@ def _drop_coincident(coords: np.ndarray, inside: np.ndarray, a: int, b: int) -> 
     p0, p1 = coords[edges, 0:2], coords[edges, 2:4]
     swap = (p0[:, 0] > p1[:, 0]) | ((p0[:, 0] == p1[:, 0]) & (p0[:, 1] > p1[:, 1]))
     keys = np.where(swap[:, None], np.hstack([p1, p0]), np.hstack([p0, p1]))
-    _, first = np.unique(keys, axis=0, return_index=True)
-    later = np.setdiff1d(np.arange(len(edges)), first)
+    order = np.lexsort(keys.T[::-1])  # stable: equal keys keep their edge order
+    ranked = keys[order]
+    repeat = np.all(ranked[1:] == ranked[:-1], axis=1)
+    later = order[1:][repeat]
     inside[edges[later]] = ""
     return len(later)
 
