@@ -147,6 +147,29 @@ def tile_cells(tile: TileConfig, origin, x, y, delta):
     return np.maximum(tx[keep], 0), ty[keep], delta[keep]
 
 
+# A beat's cells, as offsets (x + 4 y) from their least x and y: a 2 x 2 block (x-major) or
+# four cells of a row (y-major), as `edgeaa.model.column.delta_cells` places them. So they lie
+# in distinct banks of (y mod 2, x mod 4), and the cells left of the tile are in one row.
+BEAT_SHAPES = (0b00110011, 0b00001111)
+
+
+def check_beat_shapes(cells: np.ndarray) -> None:
+    """Raise unless every beat of `cells` (n, 4, 3) has a shape of `BEAT_SHAPES`."""
+    if not len(cells):
+        return
+    x, y = cells[:, :, 0], cells[:, :, 1]
+    dx, dy = x - x.min(axis=1, keepdims=True), y - y.min(axis=1, keepdims=True)
+    inside = (dx < 4) & (dy < 2)
+    codes = np.where(inside, 1 << np.minimum(dx + 4 * dy, 7), 256)
+    masks = np.bitwise_or.reduce(codes, axis=1)
+    bad = np.flatnonzero(~np.isin(masks, BEAT_SHAPES))
+    if len(bad):
+        raise ValueError(
+            f"beat {bad[0]}: cells {cells[bad[0], :, :2].tolist()} are neither a 2 x 2 block "
+            "nor four cells of a row"
+        )
+
+
 def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> int:
     """`composite` as the resolve computes it: an unsigned numerator, a `bits`-step
     restoring division by 2 d, the quotient added or subtracted (q in [1, d])."""
@@ -180,7 +203,7 @@ class TileModel:
         if isinstance(op, DeltaBeat):
             op = Beats.of([op])
         if isinstance(op, Beats):
-            self._accumulate(op.cells.reshape(-1, 3))
+            self._accumulate(op.cells)
             return None
         if isinstance(op, PolygonEnd):
             return self._resolve(op)
@@ -199,6 +222,8 @@ class TileModel:
         return [out for op in ops if isinstance(out := self.feed(op), np.ndarray)]
 
     def _accumulate(self, cells: np.ndarray) -> None:
+        check_beat_shapes(cells.reshape(-1, 4, 3))
+        cells = cells.reshape(-1, 3)
         tx, ty, delta = tile_cells(self.tile, self.origin, cells[:, 0], cells[:, 1], cells[:, 2])
         np.add.at(self.cells, (ty, tx), delta.astype(self._dtype))
         self.touched[ty] = True
@@ -226,3 +251,77 @@ class TileModel:
             self.pixels[row] = composite(self.pixels[row], q, end.intensity, d)
         self.touched[:] = False
         return len(rows)
+
+
+# -- cycle model ----------------------------------------------------------------------------
+#
+# Clocks from 0; a transfer happens in a clock where valid and ready are both high. The ops
+# are offered back to back (each from the clock after the previous one was taken) and the
+# pixel sink is always ready. The accumulator takes a beat per clock. An end taken in clock
+# a reads the first touched cell in a + 2 (the last beat's read-modify-write lands in a + 1)
+# and offers it to the resolve in a + 3, then one cell per clock; with no touched row it
+# takes the next op in a + 2. Tile and flush pass through its output register (offered in
+# a + 1). The resolve takes a cell per clock; a cell taken in r writes its pixel in clock
+# r + `resolve_latency`. A polygon's first cell, a tile and a flush wait until no cell is in
+# flight (the pixels they read must be written). A flush taken in f sends pixel k in
+# f + 2 + k (row by row) and the resolve takes its next op in f + width * height + 1.
+
+SCAN_START = 3  # end taken in a: its first cell offered in a + 3
+EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
+FLUSH_START = 2  # flush taken by the resolve in f: pixel 0 out in f + 2
+
+
+def resolve_latency(config: EdgeConfig) -> int:
+    """Clocks from the resolve taking a cell to writing its pixel: prefix sum (with the pixel
+    read), fill, offset and product, one clock per quotient bit."""
+    return config.intensity_bits + 3
+
+
+@dataclass
+class TileTiming:
+    """When each op was taken (a `Beats` op: one clock per beat) and each pixel left."""
+
+    accepts: list[int] = field(default_factory=list)  # accumulator input transfers
+    cells: list[int] = field(default_factory=list)  # resolve input transfers of cells
+    pixels: list[int] = field(default_factory=list)  # pixel output transfers
+    frames: list[np.ndarray] = field(default_factory=list)
+    rows_scanned: int = 0
+
+    @property
+    def clocks(self) -> int:
+        """First op to last transfer, inclusive."""
+        return max([-1, *self.accepts, *self.cells, *self.pixels]) + 1
+
+
+def tile_cycles(tile: TileConfig, ops) -> TileTiming:
+    """The clock of every transfer of the tile stages (and their frames, from `TileModel`)."""
+    model, out = TileModel(tile), TileTiming()
+    latency = resolve_latency(tile.config)
+    a = 0  # clock the accumulator can take the next op
+    quiet = 0  # first clock no cell is in flight in the resolve
+    free = 0  # first clock the resolve is not flushing
+    for op in ops:
+        result = model.feed(op)
+        if isinstance(op, (Beats, DeltaBeat)):
+            n = 1 if isinstance(op, DeltaBeat) else len(op)
+            out.accepts.extend(range(a, a + n))
+            a += n
+            continue
+        out.accepts.append(a)
+        if isinstance(op, PolygonEnd):
+            out.rows_scanned += result
+            n = result * tile.width
+            if not n:
+                a += EMPTY_END
+                continue
+            r = max(a + SCAN_START, free, quiet)
+            out.cells.extend(range(r, r + n))
+            a, quiet = r + n - 1, r + n + latency
+        else:  # tile or flush: through the accumulator's output register
+            r = max(a + 1, free, quiet)
+            a = r
+            if isinstance(op, Flush):
+                out.pixels.extend(range(r + FLUSH_START, r + FLUSH_START + tile.pixels))
+                out.frames.append(result)
+                free = r + tile.pixels + 1
+    return out

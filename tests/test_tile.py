@@ -101,7 +101,9 @@ def _ops(tile: TileConfig, cells, end: PolygonEnd):
 def test_a_cell_left_of_the_tile_goes_into_the_first_column_and_others_are_dropped():
     tile = TileConfig(SMALL, 4, 2)
     ifix = 15 << SMALL.F
-    cells = [(-3, 0, ifix), (9, 0, -ifix), (1, 2, ifix), (1, -1, ifix)]
+    cells = [(-3, 0, ifix), (-2, 0, 0), (-1, 0, 0), (0, 0, 0)]  # a row's four cells
+    cells += [(9, 1, -ifix), (10, 1, -ifix), (9, 2, -ifix), (10, 2, -ifix)]  # right, below
+    cells += [(1, -1, ifix), (2, -1, ifix), (1, 0, 0), (2, 0, 0)]  # above
     (frame,) = TileModel(tile).run(_ops(tile, cells, PolygonEnd(15, 0)))
     assert frame.tolist() == [[15, 15, 15, 15], [0, 0, 0, 0]]
 
@@ -121,3 +123,11 @@ def test_bad_tile_sizes_are_refused():
     for kwargs in ({"width": 6}, {"width": 2}, {"height": 1}, {"headroom_bits": -1}):
         with pytest.raises(ValueError, match="must be"):
             TileConfig(DEFAULT, **kwargs)
+
+
+def test_a_beat_that_is_not_a_block_or_a_row_is_refused():
+    tile = TileConfig(SMALL, 4, 2)
+    with pytest.raises(ValueError, match="neither a 2 x 2 block"):
+        TileModel(tile).run(
+            _ops(tile, [(0, 0, 1), (1, 0, 1), (0, 2, 1), (1, 2, 1)], PolygonEnd(15, 0))
+        )
