@@ -82,7 +82,8 @@ class TileAccumulator(wiring.Component):
         advance = ~o_valid | self.cells.ready
         accept = self.ops.valid & self.ops.ready
         cells = self._route(m, accept)
-        self._rmw(m, ports, cells, accept)
+        # only a beat op adds its cells (another op's beat field is don't-care)
+        self._rmw(m, ports, cells, accept & (self.ops.payload.op == OP["beat"]))
         self._control(m, ports, o_valid, advance, accept)
         return m
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Clip
+from ..model.pipeline import Command
 from ..model.tile import Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
 from .engines import run_deltas
 from .render import Plan, _write_boxes, edges_to_send
@@ -94,11 +95,35 @@ def tile_ops(plan: Plan, tile: TileConfig, job: TileJob, engine: str = "model") 
 
 def render_tiles(plan: Plan, tile: TileConfig, engine: str = "model") -> np.ndarray:
     """The image, tile by tile, through the tile model (deltas from `engine`)."""
-    image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, np.int64)
     model = TileModel(tile)
+    frames = [model.run(tile_ops(plan, tile, job, engine))[0] for job in tile_jobs(plan, tile)]
+    return image_from_frames(plan, tile, frames)
+
+
+def scene_commands(plan: Plan, tile: TileConfig) -> list[Command]:
+    """The scene as pipeline commands (format `COMMAND_VERSION`): per tile, its start, each
+    polygon meeting it (begin, edges, end) and a flush. The top clips each edge to the tile
+    (`tile_clip`); an edge wholly left of the image is sent as its projection."""
+    ox, oy = plan.offset
+    commands = []
     for job in tile_jobs(plan, tile):
-        (frame,) = model.run(tile_ops(plan, tile, job, engine))
+        commands.append(Command.tile(ox + job.x, oy + job.y, plan.scene.background))
+        for i in job.polygons:
+            poly = plan.polygons[i]
+            commands.append(Command.begin(poly.intensity, poly.i_out, poly.rule))
+            for edge, owner in zip(job.edges, job.polygon_of_edge, strict=True):
+                if owner == i:
+                    commands.append(Command.edge(edge.x0, edge.y0, edge.x1, edge.y1, edge.inside))
+            commands.append(Command.end())
+        commands.append(Command.flush())
+    return commands
+
+
+def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
+    """The image from the frames of the tiles of `tile_jobs`, in order."""
+    image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, np.int64)
+    for job, frame in zip(tile_jobs(plan, tile), frames, strict=True):
         h = min(tile.height, plan.scene.height - job.y)
         w = min(tile.width, plan.scene.width - job.x)
-        image[job.y : job.y + h, job.x : job.x + w] = frame[:h, :w]
+        image[job.y : job.y + h, job.x : job.x + w] = np.asarray(frame)[:h, :w]
     return image

@@ -22,11 +22,12 @@ from edgeaa.model.tile import OPS, Beats, Flush, PolygonEnd, TileConfig, TileSta
 def op_payloads(tile: TileConfig, ops) -> list:
     """One `tile_op_layout` constant per transfer (a `Beats` op gives one per beat)."""
     layout = tile_op_layout(tile)
-    zero_beat = {cell: dict.fromkeys(CELL_FIELDS, 0) for cell in CELLS}
+    # Another op's beat field is don't-care: a live-looking beat checks it is ignored.
+    junk = {cell: {"x": 1, "y": 1, "delta": 1 << tile.config.F} for cell in CELLS}
     out = []
 
     def put(op: str, **fields):
-        value = {"op": OPS.index(op), "beat": {**zero_beat, "last": 0}}
+        value = {"op": OPS.index(op), "beat": {**junk, "last": 0}}
         value.update(fields)
         out.append(layout.const(value))
 
