@@ -179,3 +179,14 @@ def test_the_pipeline_verilog_is_lint_clean():
         assert port in source
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
+    from edgeaa.cli import main
+
+    out = tmp_path / "p.v"
+    small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
+    assert main(["verilog", "--top", "pipeline", "--tile", "8x4", *small, "-o", str(out)]) == 0
+    assert "module edgeaa_pipeline" in out.read_text()
+    assert main(["verilog", "--top", "pipeline", "--tile", "6x4"]) == 2
+    assert "power of two" in capsys.readouterr().err
