@@ -238,21 +238,48 @@ class VerilogCommand(Command):
         "with stable port names (docs/hardware.md lists them): clk, rst, the edge command "
         "stream edges__valid/ready/payload__*, the clip window clip__x_min/y_min/x_max/y_max "
         "(sampled with each edge), the pixel write stream "
-        "writes__valid/ready/payload__lane0__*, lane1__*, lane1_valid, last, and errors/error."
+        "writes__valid/ready/payload__lane0__*, lane1__*, lane1_valid, last, and errors/error. "
+        "--top pipeline writes the whole polygon pipeline instead (commands in, a tile's "
+        "pixels out; docs/hardware.md, 'Polygon pipeline')."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
         parser.add_argument(
             "-o", "--output", help="output file, .v or .sv (default: standard output)"
         )
-        parser.add_argument("--name", default="edgeaa_core", help="top module name")
+        parser.add_argument(
+            "--name", help="top module name (default: edgeaa_core, or edgeaa_pipeline)"
+        )
+        parser.add_argument(
+            "--top", choices=("core", "pipeline"), default="core", help="what to write"
+        )
+        parser.add_argument(
+            "--tile", default="64x32", help="pipeline tile WIDTHxHEIGHT, powers of two"
+        )
         _add_core_option(parser)
         add_config_options(parser)
 
-    def run(self, args: argparse.Namespace) -> int:
+    def _source(self, args: argparse.Namespace, config) -> str:
         from .hdl import verilog
 
+        if args.top == "core":
+            return verilog(config, name=args.name, output=args.core)
+        from .hdl.pipeline import pipeline_verilog
+        from .model.tile import TileConfig
+
+        match = re.fullmatch(r"(\d{1,5})x(\d{1,5})", args.tile)
+        try:
+            if not match:
+                raise ValueError("expected WIDTHxHEIGHT, e.g. 64x32")
+            tile = TileConfig(config, int(match[1]), int(match[2]))
+        except ValueError as error:
+            raise usage_error(self.prog, f"--tile {shown(args.tile)}: {error}") from None
+        return pipeline_verilog(tile, name=args.name)
+
+    def run(self, args: argparse.Namespace) -> int:
         config = config_from_args(args)
+        if args.name is None:
+            args.name = f"edgeaa_{args.top}"
         if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_$]{0,63}", args.name):
             raise usage_error(
                 self.prog,
@@ -261,14 +288,15 @@ class VerilogCommand(Command):
             )
         if args.output not in (None, "-"):
             check_output(self.prog, args.output, VERILOG_SUFFIXES)
-        source = verilog(config, name=args.name, output=args.core)
+        source = self._source(args, config)
         if args.output in (None, "-"):
             sys.stdout.write(source)
         else:
             with atomic_output(self.prog, args.output) as temporary:
                 Path(temporary).write_text(source)
             print(
-                f"wrote {args.output}: module {args.name} ({args.core} core), {config}",
+                f"wrote {args.output}: module {args.name} "
+                f"({'pipeline' if args.top == 'pipeline' else args.core + ' core'}), {config}",
                 file=sys.stderr,
             )
         return 0

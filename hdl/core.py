@@ -65,7 +65,7 @@ from .layouts import (
 from .setup import ERRORS_BITS, EdgeSetupUnit
 from .stepper import EdgeStepper
 
-__all__ = ["ERRORS_BITS", "EdgeAntialiaser", "verilog"]
+__all__ = ["ERRORS_BITS", "EdgeAntialiaser", "flat_verilog", "verilog"]
 
 
 class EdgeAntialiaser(wiring.Component):
@@ -94,6 +94,8 @@ class EdgeAntialiaser(wiring.Component):
         )
         self.out = getattr(self, stream_name)  # the output stream: writes or deltas
         self.stepper = EdgeStepper(config, output)
+        # No edge in the setup, the bank or the stepper (not a port: for a parent's control).
+        self.idle = Signal()
 
     @property
     def errors_bits(self) -> int:
@@ -142,6 +144,7 @@ class EdgeAntialiaser(wiring.Component):
             setup.clip.eq(self.clip),
             self.errors.eq(setup.errors),
             self.error.eq(setup.error),
+            self.idle.eq(setup.in_idle & ~setup.bank.valid & stepper.idle),
         ]
         return m
 
@@ -180,10 +183,19 @@ def verilog(
     core = EdgeAntialiaser(config, output=output)
     if not flat:
         return back_verilog.convert(core, name=name, emit_src=False)
+    return flat_verilog(core, name)
+
+
+def flat_verilog(component: wiring.Component, name: str) -> str:
+    """`component` as Verilog under a wrapper module `name` whose ports are the leaves of its
+    signature, named by their paths joined by ``__`` (the component instantiated as
+    ``core``)."""
+    from amaranth.back import verilog as back_verilog
+
     m = Module()
-    m.submodules.core = core
+    m.submodules.core = component
     ports = []  # (name, signal, None): the direction follows from what drives the signal
-    for path, member, value in core.signature.flatten(core):
+    for path, member, value in component.signature.flatten(component):
         for leaf_path, leaf in _leaves(value, tuple(map(str, path))):
             port = Signal(leaf.shape(), name="__".join(leaf_path))
             m.d.comb += leaf.eq(port) if member.flow == In else port.eq(leaf)

@@ -59,14 +59,16 @@ def _stage(m, en, prefix: str, values: dict) -> types.SimpleNamespace:
     return types.SimpleNamespace(**regs)
 
 
-def delta_pipeline(m, st, en, last, advance) -> None:
+def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     """Add the deltas stepper's loop registers' updates and its pipeline to `m` (`st` the
-    `EdgeStepper`, `en` its enable, `last` its last-column flag, `advance` the loop step)."""
+    `EdgeStepper`, `en` its enable, `last` its last-column flag, `advance` the loop step);
+    returns the valid flags of the stages before the output register."""
     he = _piece_end(m, st, last)
     _loop(m, st, he, advance.row_step)
     p1 = _stage(m, en, "d1", _stage0(st, last, he))
     p2 = _stage(m, en, "d2", _covers(st.config, p1))
     _output(m, st, en, p2)
+    return [p1.valid, p2.valid]
 
 
 def _piece_end(m, st, last):

@@ -5,7 +5,9 @@
 * `setup_layout`: the register bank from the setup to the stepper, one field per
   `edgeaa.model.bank.bank_fields` entry, sized by its register in the width table;
 * `write_layout`: one output beat, the lanes and flags of `edgeaa.model.beat`;
-* `delta_layout`: one beat of the accumulation-delta core, the cells of `edgeaa.model.beat`.
+* `delta_layout`: one beat of the accumulation-delta core, the cells of `edgeaa.model.beat`;
+* `tile_op_layout`, `tile_cell_layout`, `tile_pixel_layout`: the tile stages' streams
+  (`edgeaa.model.tile`: its ops, the resolve's cells, the tile's pixels).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from amaranth.lib import data
 from ..model.bank import bank_fields, check_output
 from ..model.beat import CELL_FIELDS, CELLS, DELTA_PAYLOAD_PATHS, LANES, PAYLOAD_PATHS, PIXEL_FIELDS
 from ..model.config import EdgeConfig, RegisterWidth
+from ..model.tile import OPS, RESOLVE_OPS, TileConfig
 
 __all__ = [
     "check_config",
@@ -29,6 +32,9 @@ __all__ = [
     "pixel_layout",
     "register_shape",
     "setup_layout",
+    "tile_cell_layout",
+    "tile_op_layout",
+    "tile_pixel_layout",
     "write_layout",
 ]
 
@@ -127,3 +133,62 @@ def setup_layout(config: EdgeConfig, output: str = "writes") -> data.StructLayou
         shape = register_shape(field.width(config))
         fields[field.name] = data.ArrayLayout(shape, field.length(config)) if field.array else shape
     return data.StructLayout(fields)
+
+
+def _code_bits(names) -> int:
+    return max(1, (len(names) - 1).bit_length())
+
+
+def _polygon_fields(config: EdgeConfig) -> dict:
+    """What a polygon's end carries: its intensity, I_out and fill rule (1: even-odd); and a
+    tile's background."""
+    intensity = unsigned(config.intensity_bits)
+    return {
+        "intensity": intensity,
+        "i_out": intensity,
+        "evenodd": unsigned(1),
+        "background": intensity,
+    }
+
+
+def tile_op_layout(tile: TileConfig) -> data.StructLayout:
+    """The accumulator's input: ``op`` (an index of `edgeaa.model.tile.OPS`), the delta beat
+    (``beat``), the polygon's fields (end) or the background (tile), and the tile's origin
+    ``x0, y0`` in engine pixels (tile)."""
+    origin = unsigned(tile.config.coord_bits + 1)
+    return data.StructLayout(
+        {
+            "op": unsigned(_code_bits(OPS)),
+            "beat": delta_layout(tile.config),
+            **_polygon_fields(tile.config),
+            "x0": origin,
+            "y0": origin,
+        }
+    )
+
+
+def tile_cell_layout(tile: TileConfig) -> data.StructLayout:
+    """The resolve's input: ``op`` (an index of `RESOLVE_OPS`), a cell's tile pixel and sum
+    (``first``: the polygon's first cell), and the polygon's fields or the background."""
+    return data.StructLayout(
+        {
+            "op": unsigned(_code_bits(RESOLVE_OPS)),
+            "x": unsigned(tile.x_bits),
+            "y": unsigned(tile.y_bits),
+            "sum": signed(tile.cell_bits),
+            "first": unsigned(1),
+            **_polygon_fields(tile.config),
+        }
+    )
+
+
+def tile_pixel_layout(tile: TileConfig) -> data.StructLayout:
+    """One pixel of a flushed tile: its tile pixel, value, and ``last`` on the tile's last."""
+    return data.StructLayout(
+        {
+            "x": unsigned(tile.x_bits),
+            "y": unsigned(tile.y_bits),
+            "value": unsigned(tile.config.intensity_bits),
+            "last": unsigned(1),
+        }
+    )

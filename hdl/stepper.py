@@ -121,6 +121,7 @@ class EdgeStepper(wiring.Component):
         if config.segments == 0:
             self.seg_intercepts = []
         self.active = Signal()
+        self.idle = Signal()  # nothing in the loop or the pipeline (for the pipeline's top)
         self.step = Signal()
         self.latency = timing.pipeline_depth(config, output)
         # The deltas loop's own registers (`edgeaa.hdl.deltas`); empty for line writes.
@@ -162,7 +163,8 @@ class EdgeStepper(wiring.Component):
         en, last = self._control(m)
         advance = self._advance(m)
         if self._output_name == "deltas":
-            delta_pipeline(m, self, en, last, advance)
+            valids = delta_pipeline(m, self, en, last, advance)
+            self._idle(m, valids)
             self._loop(m, advance, last)
             self._load(m)
             return m
@@ -174,9 +176,15 @@ class EdgeStepper(wiring.Component):
             self._stage(m, index, en, {**carried, **self._p2(m, prev)})
         t_clamped = self._estimate(m)
         self._output(m, en, t_clamped)
+        self._idle(m, [stage.valid for stage in self.stages])
         self._loop(m, advance, last)
         self._load(m)
         return m
+
+    def _idle(self, m, valids) -> None:
+        """``idle``: no edge stepped, no column in the pipeline or the output register."""
+        busy = Cat(self.active, self.out.valid, *valids).any()
+        m.d.comb += self.idle.eq(~busy)
 
     # -- control: one enable for the loop and the pipeline ----------------------------------
 

@@ -54,6 +54,17 @@ def intensity_offset(coverage, frac_bits: int):
     return (coverage + (1 << (frac_bits - 1))) >> frac_bits
 
 
+def _rdiv(num, den):
+    """num / den rounded half up, den > 0, in integers."""
+    return (2 * num + den) // (2 * den)
+
+
+def composite(below, q, intensity: int, d: int):
+    """Coverage q / d (q in [0, d]) of intensity over `below`: below + round(q (I - below) / d)
+    half up, in integers (the renderer's and the resolve stage's operator)."""
+    return below + _rdiv(q * (intensity - below), d)
+
+
 @dataclass
 class Resolved:
     """Rows of a window with their coverage (units of ifix per pixel)."""

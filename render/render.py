@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import Clip, Edge, EdgeConfig
-from ..model.accumulate import Window, intensity_offset, resolve_rows
+from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import inside_sides, split_crossings
 from .scene import Scene, SceneError
@@ -421,16 +421,6 @@ class Render:
     @property
     def engine_run(self) -> DeltaRun:
         return self.deltas
-
-
-def _rdiv(num: np.ndarray, den: np.ndarray) -> np.ndarray:
-    """num / den rounded half up, den > 0, in integers."""
-    return (2 * num + den) // (2 * den)
-
-
-def composite(below: np.ndarray, q: np.ndarray, intensity: int, d: int) -> np.ndarray:
-    """Coverage q / d of intensity over `below`: below + round(q (I - below) / d)."""
-    return below + _rdiv(q * (intensity - below), d)
 
 
 def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:

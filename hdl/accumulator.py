@@ -1,0 +1,241 @@
+# amaranth: UnusedElaboratable=no
+"""The tile's accumulation memory (`TileAccumulator`): delta beats in, one per clock; on a
+polygon's end, the touched rows' cell sums out to the resolve, each cell cleared as it is
+read. `edgeaa.model.tile` is the model and the cycle model.
+
+Memory. The tile's cells are split over eight banks by ``(y mod 2, x mod 4)``: a beat's cells
+(a 2 x 2 block, or four consecutive cells of a row) fall in distinct banks, except cells left
+of the tile, which all move into the row's first column; those are added together first (the
+lowest-indexed of equal cells takes the others' deltas). Each bank is an
+`amaranth.lib.memory.Memory` with one synchronous read port (not transparent) and one write
+port: a simple dual-port block RAM. A cell holds its sum modulo ``2**cell_bits``.
+
+Read-modify-write, one beat per clock, three stages per bank: A (the beat is taken; read the
+cell), B (add the delta to what was read, or to the sum of an earlier delta to the same cell
+still on its way to memory: C's, being written now, or D's, written last clock, which the
+read did not see), C (write). So back-to-back deltas to one cell are neither lost nor
+doubled; the forwarding compares bank addresses only.
+
+Scan. An end taken in clock a: the last beat's write lands in a + 1 (WAIT); from a + 2 the
+touched rows (a bit per row, set by every nonzero delta kept) are read in ascending order,
+one cell per clock while the output advances, each read clearing its cell through the write
+port (the read returns the old value), so the clear costs no pass. The read port's enable is
+the output's advance: a stalled cell stays in the bank's output register, and the output
+payload's sum is the selected bank's read data. Tile and flush ops go out through the same
+output register, in order. Latency: a cell read in clock s is offered in s + 1.
+"""
+
+from __future__ import annotations
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
+from amaranth.lib import memory, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..model.tile import OPS, RESOLVE_OPS, TileConfig
+from .layouts import tile_cell_layout, tile_op_layout
+
+__all__ = ["BANKS", "TileAccumulator", "lowest_set"]
+
+BANKS = 8  # (y mod 2, x mod 4)
+OP = {name: code for code, name in enumerate(OPS)}
+CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
+
+
+def lowest_set(bits: Signal, width: int):
+    """Index of the lowest set bit of `bits` (0 when none): a priority mux."""
+    index = 0
+    for k in reversed(range(width)):
+        index = Mux(bits[k], k, index)
+    return index
+
+
+class TileAccumulator(wiring.Component):
+    """Accumulation memory of a `TileConfig` tile. ``ops`` (in, `tile_op_layout`), ``cells``
+    (out, `tile_cell_layout`); ``scanning`` is high while a polygon's rows are read."""
+
+    def __init__(self, tile: TileConfig):
+        if not isinstance(tile, TileConfig):
+            raise TypeError(f"tile must be a TileConfig, not {tile!r}")
+        self._tile = tile
+        super().__init__(
+            {
+                "ops": In(stream.Signature(tile_op_layout(tile))),
+                "cells": Out(stream.Signature(tile_cell_layout(tile))),
+                "scanning": Out(1),
+            }
+        )
+
+    @property
+    def tile(self) -> TileConfig:
+        return self._tile
+
+    def elaborate(self, platform):
+        m = Module()
+        tile = self._tile
+        depth = tile.pixels // BANKS
+        ports = []
+        for b in range(BANKS):
+            mem = memory.Memory(shape=signed(tile.cell_bits), depth=depth, init=[])
+            m.submodules[f"bank{b}"] = mem
+            ports.append((mem.read_port(), mem.write_port()))
+        o_valid = Signal()
+        advance = ~o_valid | self.cells.ready
+        accept = self.ops.valid & self.ops.ready
+        cells = self._route(m, accept)
+        # only a beat op adds its cells (another op's beat field is don't-care)
+        self._rmw(m, ports, cells, accept & (self.ops.payload.op == OP["beat"]))
+        self._control(m, ports, o_valid, advance, accept)
+        return m
+
+    def _route(self, m, accept):
+        """Stage A's cells: (valid, bank, address, delta) of each of the beat's four, cells
+        left of the tile moved to column 0 and equal cells merged into the first of them."""
+        tile, p = self._tile, self.ops.payload
+        x0, y0 = Signal.like(p.x0), Signal.like(p.y0)  # the origin, set by a tile op
+        with m.If(accept & (p.op == OP["tile"])):
+            m.d.sync += [x0.eq(p.x0), y0.eq(p.y0)]
+        raw = []
+        for j in range(4):
+            cell = p.beat[f"cell{j}"]
+            tx, ty = cell.x - x0, cell.y - y0
+            keep = (ty >= 0) & (ty < tile.height) & (tx < tile.width) & (cell.delta != 0)
+            cx = Mux(tx < 0, 0, tx)[: tile.x_bits]
+            raw.append((keep, cx, ty[: tile.y_bits], cell.delta))
+        self._touched_set = Signal(tile.height)
+        rows = [Mux(keep, Const(1, tile.height) << cy, 0) for keep, _, cy, _ in raw]
+        m.d.comb += self._touched_set.eq(rows[0] | rows[1] | rows[2] | rows[3])
+        out = []
+        for j, (keep, cx, cy, delta) in enumerate(raw):
+            same = [raw[k][0] & (raw[k][1] == cx) & (raw[k][2] == cy) for k in range(4)]
+            # an earlier equal cell takes this one's delta
+            mine = keep if j == 0 else keep & ~Cat(*same[:j]).any()
+            total = delta
+            for k in range(j + 1, 4):
+                total = total + Mux(same[k], raw[k][3], 0)
+            sum_j = Signal(signed(tile.cell_bits), name=f"merged{j}")
+            m.d.comb += sum_j.eq(total)
+            bank = Cat(cx[:2], cy[0])
+            out.append((mine, bank, Cat(cx[2:], cy[1:]), sum_j))
+        return out
+
+    def _rmw(self, m, ports, cells, accept):
+        """Stages A, B, C of every bank (see the module docstring); `self._clear` (the scan's)
+        takes the write port when set."""
+        tile = self._tile
+        addr_bits = len(ports[0][0].addr)
+        self._scan_addr = Signal(addr_bits)
+        self._clear = Signal(BANKS)
+        self._read_en = Signal()
+        for b, (rd, wr) in enumerate(ports):
+            valid = Cat(*(keep & (bank == b) for keep, bank, _, _ in cells)).any()
+            addr, delta = Signal(addr_bits), Signal(signed(tile.cell_bits))
+            for keep, bank, cell_addr, cell_delta in cells:
+                with m.If(keep & (bank == b)):
+                    m.d.comb += [addr.eq(cell_addr), delta.eq(cell_delta)]
+            b_valid, b_addr, b_delta = Signal(), Signal(addr_bits), Signal.like(delta)
+            c_valid, c_addr, c_sum = Signal(), Signal(addr_bits), Signal.like(delta)
+            d_valid, d_addr, d_sum = Signal(), Signal(addr_bits), Signal.like(delta)
+            m.d.comb += [
+                rd.addr.eq(Mux(self.scanning, self._scan_addr, addr)),
+                rd.en.eq(self._read_en),
+            ]
+            m.d.sync += [
+                b_valid.eq(accept & valid),
+                b_addr.eq(addr),
+                b_delta.eq(delta),
+                c_valid.eq(b_valid),
+                c_addr.eq(b_addr),
+                d_valid.eq(c_valid),
+                d_addr.eq(c_addr),
+                d_sum.eq(c_sum),
+            ]
+            base = Mux(
+                c_valid & (c_addr == b_addr),
+                c_sum,
+                Mux(d_valid & (d_addr == b_addr), d_sum, rd.data),
+            )
+            m.d.sync += c_sum.eq(base + b_delta)
+            m.d.comb += [
+                wr.addr.eq(Mux(self._clear[b], self._scan_addr, c_addr)),
+                wr.data.eq(Mux(self._clear[b], 0, c_sum)),
+                wr.en.eq(self._clear[b] | c_valid),
+            ]
+
+    def _control(self, m, ports, o_valid, advance, accept):
+        """Input acceptance, the scan of the touched rows, and the output register."""
+        tile, p = self._tile, self.ops.payload
+        touched = Signal(tile.height)
+        scan_x, scan_y = Signal(tile.x_bits), Signal(tile.y_bits)
+        first = Signal()
+        out = self.cells.payload
+        o = {name: Signal.like(out[name]) for name in ("op", "x", "y", "first")}
+        o["sel"] = Signal(range(BANKS))  # the bank whose read data is the cell's sum
+        params = {name: Signal.like(p[name]) for name in ("intensity", "i_out", "evenodd")}
+        background = Signal.like(p.background)
+        m.d.comb += [self._read_en.eq(advance), self.cells.valid.eq(o_valid)]
+        with m.If(advance):
+            m.d.sync += o_valid.eq(0)
+        with m.If(accept & (p.op == OP["beat"])):
+            m.d.sync += touched.eq(touched | self._touched_set)
+        with m.FSM():
+            with m.State("ACC"):
+                m.d.comb += self.ops.ready.eq(advance)
+                with m.If(accept):
+                    self._take(m, p, o, o_valid, params, background, first)
+                    with m.If(p.op == OP["end"]):
+                        m.next = "WAIT"
+            with m.State("WAIT"):  # the last beat's write lands in this clock
+                m.d.sync += [scan_x.eq(0), scan_y.eq(lowest_set(touched, tile.height))]
+                m.next = "ACC"
+                with m.If(touched != 0):
+                    m.next = "SCAN"
+            with m.State("SCAN"):
+                m.d.comb += [
+                    self.scanning.eq(1),
+                    self._scan_addr.eq(Cat(scan_x[2:], scan_y[1:])),
+                ]
+                with m.If(advance):
+                    bank = Cat(scan_x[:2], scan_y[0])
+                    m.d.comb += self._clear.eq(1 << bank)
+                    m.d.sync += [
+                        o_valid.eq(1),
+                        o["op"].eq(CELL_OP["cell"]),
+                        o["x"].eq(scan_x),
+                        o["y"].eq(scan_y),
+                        o["first"].eq(first),
+                        o["sel"].eq(bank),
+                        first.eq(0),
+                        scan_x.eq(scan_x + 1),
+                    ]
+                    with m.If(scan_x == tile.width - 1):
+                        rest = touched & ~(Const(1, tile.height) << scan_y)[: tile.height]
+                        m.d.sync += [touched.eq(rest), scan_y.eq(lowest_set(rest, tile.height))]
+                        with m.If(rest == 0):
+                            m.next = "ACC"
+        self._output(m, ports, o, params, background)
+
+    def _take(self, m, p, o, o_valid, params, background, first):
+        """An op taken in ACC: an end keeps the polygon's fields; tile and flush go out."""
+        with m.If(p.op == OP["end"]):
+            m.d.sync += [reg.eq(p[name]) for name, reg in params.items()]
+            m.d.sync += first.eq(1)
+        with m.If((p.op == OP["tile"]) | (p.op == OP["flush"])):
+            code = Mux(p.op == OP["tile"], CELL_OP["tile"], CELL_OP["flush"])
+            m.d.sync += [o_valid.eq(1), o["op"].eq(code), o["first"].eq(0)]
+        with m.If(p.op == OP["tile"]):
+            m.d.sync += background.eq(p.background)
+
+    def _output(self, m, ports, o, params, background):
+        out = self.cells.payload
+        data = ports[0][0].data
+        for b in range(1, BANKS):
+            data = Mux(o["sel"] == b, ports[b][0].data, data)
+        m.d.comb += [
+            out.op.eq(o["op"]),
+            out.x.eq(o["x"]),
+            out.y.eq(o["y"]),
+            out.first.eq(o["first"]),
+            out.sum.eq(data),
+            out.background.eq(background),
+            *(out[name].eq(reg) for name, reg in params.items()),
+        ]

@@ -1,0 +1,241 @@
+# amaranth: UnusedElaboratable=no
+"""The tile's resolve (`TileResolve`): cell sums in, composited pixels into the tile's pixel
+memory, the tile out on a flush. `edgeaa.model.tile` is the model and the cycle model.
+
+One cell per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks from taking a
+cell to writing its pixel:
+
+* take (clock r): the pixel's read is issued;
+* s1: the row's prefix sum (restarting at column 0) and whether the pixel row was written
+  since the tile started (a row is written whole, so one bit per row: rows never written
+  read as the background and no clear pass is needed);
+* s2: the fill rule (`edgeaa.model.accumulate.fill`; even-odd by h + 1 compare-subtract
+  steps, exact within the cells' range) and the pixel below;
+* s3: the intensity offset q (a shift; 0 when I_in == I_out) and the unsigned numerator of
+  `edgeaa.model.tile.composite_steps` (one I x I product);
+* s4 .. s(I + 3): one quotient bit each, restoring division by 2 D; the last stage writes
+  ``below +- quotient`` (or ``below`` when q = 0).
+
+The pipeline never stalls: nothing leaves it but the write. A polygon's first cell, a tile op
+and a flush are taken only when no cell is in flight (the pixels they read must be written
+first). A flush reads the pixel memory row by row, one pixel per clock while the ``pixels``
+stream advances (the read port's enable is the advance, so a stalled pixel stays in the
+memory's output register), then forgets every written row: the tile is the background again.
+Its first pixel is offered two clocks after the flush is taken.
+"""
+
+from __future__ import annotations
+
+import types
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, unsigned
+from amaranth.lib import memory, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..model.tile import RESOLVE_OPS, TileConfig, resolve_latency
+from .layouts import tile_cell_layout, tile_pixel_layout
+
+__all__ = ["TileResolve"]
+
+OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
+
+
+class TileResolve(wiring.Component):
+    """Resolve and pixel memory of a `TileConfig` tile. ``cells`` (in, `tile_cell_layout`),
+    ``pixels`` (out, `tile_pixel_layout`); ``flushing`` is high while a tile goes out."""
+
+    def __init__(self, tile: TileConfig):
+        if not isinstance(tile, TileConfig):
+            raise TypeError(f"tile must be a TileConfig, not {tile!r}")
+        self._tile = tile
+        super().__init__(
+            {
+                "cells": In(stream.Signature(tile_cell_layout(tile))),
+                "pixels": Out(stream.Signature(tile_pixel_layout(tile))),
+                "flushing": Out(1),
+            }
+        )
+
+    @property
+    def tile(self) -> TileConfig:
+        return self._tile
+
+    @property
+    def latency(self) -> int:
+        """Clocks from taking a cell to writing its pixel (`resolve_latency`)."""
+        return resolve_latency(self._tile.config)
+
+    def elaborate(self, platform):
+        m = Module()
+        tile = self._tile
+        m.submodules.pixels = mem = memory.Memory(
+            shape=unsigned(tile.config.intensity_bits), depth=tile.pixels, init=[]
+        )
+        rd, wr = mem.read_port(), mem.write_port()
+        written = Signal(tile.height)  # rows written since the tile started
+        background = Signal(tile.config.intensity_bits)
+        p_valid = Signal()
+        advance = ~p_valid | self.pixels.ready
+        m.d.comb += rd.en.eq(advance)
+        stages = self._pipeline(m, rd, wr, written, background)
+        busy = sum((s.valid for s in stages), start=0) != 0
+        self._control(m, rd, written, background, p_valid, advance, busy)
+        return m
+
+    def _pipeline(self, m, rd, wr, written, background) -> list:
+        """s1 .. s(I + 3) (module docstring); returns the stages (each with ``valid``)."""
+        tile, c = self._tile, self.cells.payload
+        F, bits = tile.config.F, tile.config.intensity_bits
+        take = self.cells.valid & self.cells.ready & (c.op == OP["cell"])
+        self._take_cell = take
+        acc = Signal.like(c.sum)  # the row's prefix sum, wrapping like the cells
+        total = (Mux(c.x == 0, 0, acc) + c.sum)[: tile.cell_bits].as_signed()
+        s1 = _stage(
+            m,
+            "s1",
+            valid=take,
+            x=c.x,
+            y=c.y,
+            sum=total,
+            written=written.bit_select(c.y, 1),
+            intensity=c.intensity,
+            i_out=c.i_out,
+            evenodd=c.evenodd,
+        )
+        with m.If(take):
+            m.d.sync += acc.eq(total)
+        d = Signal(bits, name="d")
+        m.d.comb += d.eq(
+            Mux(s1.intensity >= s1.i_out, s1.intensity - s1.i_out, s1.i_out - s1.intensity)
+        )
+        ifix = d << F
+        s2 = _stage(
+            m,
+            "s2",
+            valid=s1.valid,
+            x=s1.x,
+            y=s1.y,
+            cov=self._fill(s1.sum, ifix, s1.evenodd),
+            below=Mux(s1.written, rd.data, background),
+            intensity=s1.intensity,
+            d=d,
+        )
+        q = Mux(s2.d == 0, 0, (s2.cov + (1 << (F - 1))) >> F)[: bits + 1]
+        neg = s2.intensity < s2.below
+        diff = Mux(neg, s2.below - s2.intensity, s2.intensity - s2.below)[:bits]
+        s3 = _stage(
+            m,
+            "s3",
+            valid=s2.valid,
+            x=s2.x,
+            y=s2.y,
+            below=s2.below,
+            zero=q == 0,
+            neg=neg,
+            num=(((q * diff) << 1) + s2.d - neg)[: 2 * bits + 2],  # >= 0 unless q = 0
+            d2=s2.d << 1,
+            quot=Const(0, bits),
+        )
+        stages = [s1, s2, s3]
+        for j in reversed(range(bits)):  # quotient bit j
+            prev = stages[-1]
+            step = prev.d2 << j
+            fits = prev.num >= step
+            fields = {
+                k: getattr(prev, k) for k in ("valid", "x", "y", "below", "zero", "neg", "d2")
+            }
+            stages.append(
+                _stage(
+                    m,
+                    f"q{j}",
+                    **fields,
+                    num=Mux(fits, prev.num - step, prev.num)[: len(prev.num)],
+                    quot=prev.quot | Mux(fits, 1 << j, 0),
+                )
+            )
+        last = stages[-1]
+        new = Mux(
+            last.zero, last.below, Mux(last.neg, last.below - last.quot, last.below + last.quot)
+        )
+        m.d.comb += [
+            wr.addr.eq(Cat(last.x, last.y)),
+            wr.data.eq(new[:bits]),
+            wr.en.eq(last.valid),
+        ]
+        self._row_done = last.valid & (last.x == tile.width - 1)
+        self._row_done_y = last.y
+        assert len(stages) == self.latency, (len(stages), self.latency)
+        return stages
+
+    def _fill(self, s, ifix, evenodd):
+        """`fill` on a prefix sum within the cells' range: non-zero min(|s|, ifix); even-odd
+        s folded with period 2 ifix (a multiple of it added when negative, then h
+        compare-subtract steps)."""
+        h = self._tile.headroom_bits
+        width = self._tile.cell_bits + 1
+        mag = Mux(s < 0, -s, s)
+        nonzero = Mux(mag > ifix, ifix, mag)
+        r = Mux(s < 0, s + ((ifix << 1) << h), s)[:width]
+        for j in reversed(range(h)):
+            step = (ifix << 1) << j
+            r = Mux(r >= step, r - step, r)[:width]
+        odd = Mux(r > ifix, (ifix << 1) - r, r)
+        return Mux(evenodd, odd, nonzero)[:width]
+
+    def _control(self, m, rd, written, background, p_valid, advance, busy):
+        """Taking cells and ops, and the flush."""
+        tile, c = self._tile, self.cells.payload
+        out = self.pixels.payload
+        fx, fy = Signal(tile.x_bits), Signal(tile.y_bits)
+        px, py, plast, pwritten = (Signal.like(out.x), Signal.like(out.y), Signal(), Signal())
+        gate = (c.op != OP["cell"]) | c.first  # waits for no cell in flight
+        take = self.cells.valid & self.cells.ready
+        with m.If(self._row_done):
+            m.d.sync += written.eq(
+                written | (Const(1, tile.height) << self._row_done_y)[: tile.height]
+            )
+        with m.If(advance):
+            m.d.sync += p_valid.eq(0)
+        with m.FSM():
+            with m.State("RUN"):
+                m.d.comb += [
+                    self.cells.ready.eq(advance & ~(gate & busy)),
+                    rd.addr.eq(Cat(c.x, c.y)),
+                ]
+                with m.If(take & (c.op == OP["tile"])):
+                    m.d.sync += [background.eq(c.background), written.eq(0)]
+                with m.If(take & (c.op == OP["flush"])):
+                    m.d.sync += [fx.eq(0), fy.eq(0)]
+                    m.next = "FLUSH"
+            with m.State("FLUSH"):
+                m.d.comb += [self.flushing.eq(1), rd.addr.eq(Cat(fx, fy))]
+                with m.If(advance):
+                    end = (fx == tile.width - 1) & (fy == tile.height - 1)
+                    m.d.sync += [
+                        p_valid.eq(1),
+                        px.eq(fx),
+                        py.eq(fy),
+                        plast.eq(end),
+                        pwritten.eq(written.bit_select(fy, 1)),
+                        Cat(fx, fy).eq(Cat(fx, fy) + 1),
+                    ]
+                    with m.If(end):
+                        m.d.sync += written.eq(0)
+                        m.next = "RUN"
+        m.d.comb += [
+            self.pixels.valid.eq(p_valid),
+            out.x.eq(px),
+            out.y.eq(py),
+            out.last.eq(plast),
+            out.value.eq(Mux(pwritten, rd.data, background)),
+        ]
+
+
+def _stage(m, prefix: str, **values) -> types.SimpleNamespace:
+    """One pipeline stage's registers, each shaped like its value, loaded every clock."""
+    regs = {}
+    for name, value in values.items():
+        value = Value.cast(value)
+        regs[name] = Signal(value.shape(), name=f"{prefix}_{name}")
+        m.d.sync += regs[name].eq(value)
+    return types.SimpleNamespace(**regs)

@@ -1,0 +1,121 @@
+"""The polygon pipeline's command format (version 1) and its model: commands in, the tile ops
+of `edgeaa.model.tile` out (`command_ops`), whose frames are the pipeline's pixels.
+
+One command per transfer of the top's ``commands`` stream (`edgeaa.hdl.pipeline`), the
+fields ``op, x0, y0, x1, y1, i_in, i_out, flag``:
+
+* ``tile`` (0): ``x0, y0`` the tile's origin in whole engine pixels (at most 2**W), ``i_in``
+  the background. The tile's pixels become the background; later edges get its clip window.
+* ``begin`` (1): ``i_in`` the polygon's intensity, ``i_out``, ``flag`` 1 for even-odd.
+* ``edge`` (2): ``x0, y0, x1, y1`` in sub-pixel units, ``flag`` the inside (0 left, 1 right):
+  one boundary edge of the polygon (`edgeaa.model.Edge`, clip `tile_clip`).
+* ``end`` (3): resolve the polygon into the tile's pixels.
+* ``flush`` (4): send the tile's pixels (row by row); the tile is the background again.
+
+Codes 5 to 7 are unknown. Bad commands are dropped and counted in ``errors``, never hang the
+pipeline and never touch another polygon's pixels: an unknown code; an edge or an end outside
+a polygon; a tile whose origin is past 2**W. A begin, tile or flush inside a polygon (a
+polygon with no end) ends it first (counted). Edges the core refuses (zero length, I_in ==
+I_out) are the core's bad commands, counted in its own ``errors`` (``edge_errors``).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from .beat import delta_column_beats
+from .config import EdgeConfig
+from .edge import Clip, Edge, EdgeError
+from .step import run_edge_deltas
+from .tile import Beats, Flush, PolygonEnd, TileConfig, TileStart
+
+__all__ = ["COMMANDS", "COMMAND_VERSION", "Command", "command_ops", "tile_clip"]
+
+COMMAND_VERSION = 1
+COMMANDS = ("tile", "begin", "edge", "end", "flush")  # codes 0 .. 4
+OP_BITS = 3
+CODE = {name: code for code, name in enumerate(COMMANDS)}
+
+
+class Command(NamedTuple):
+    op: int  # a code of COMMANDS (others are unknown)
+    x0: int = 0
+    y0: int = 0
+    x1: int = 0
+    y1: int = 0
+    i_in: int = 0
+    i_out: int = 0
+    flag: int = 0
+
+    @classmethod
+    def tile(cls, x0: int, y0: int, background: int) -> Command:
+        return cls(CODE["tile"], x0, y0, i_in=background)
+
+    @classmethod
+    def begin(cls, intensity: int, i_out: int, rule: str = "nonzero") -> Command:
+        return cls(CODE["begin"], i_in=intensity, i_out=i_out, flag=int(rule == "evenodd"))
+
+    @classmethod
+    def edge(cls, x0: int, y0: int, x1: int, y1: int, inside: str = "left") -> Command:
+        return cls(CODE["edge"], x0, y0, x1, y1, flag=int(inside == "right"))
+
+    @classmethod
+    def end(cls) -> Command:
+        return cls(CODE["end"])
+
+    @classmethod
+    def flush(cls) -> Command:
+        return cls(CODE["flush"])
+
+    @property
+    def name(self) -> str:
+        return COMMANDS[self.op] if 0 <= self.op < len(COMMANDS) else "unknown"
+
+
+def tile_clip(config: EdgeConfig, tile: TileConfig, x0: int, y0: int) -> Clip:
+    """The clip window of a tile's edges: its rows, and its columns without the left bound
+    (columns left of the tile carry their cover into it)."""
+    top = 1 << config.coord_bits
+    return Clip(0, y0, min(x0 + tile.width - 1, top), min(y0 + tile.height - 1, top))
+
+
+class CommandResult(NamedTuple):
+    ops: list  # tile ops (`edgeaa.model.tile`)
+    errors: int  # bad commands the top dropped
+    edge_errors: int  # edges the core dropped
+
+
+def command_ops(tile: TileConfig, commands) -> CommandResult:
+    """What the top makes of `commands`: the tile ops, in order, and the errors."""
+    config = tile.config
+    ops: list = []
+    errors = edge_errors = 0
+    polygon = None  # the open polygon's end, or None outside one
+    clip = tile_clip(config, tile, 0, 0)
+    for command in commands:
+        name = command.name
+        if polygon is not None and name in ("begin", "tile", "flush"):
+            ops.append(polygon)  # a polygon with no end: ended here
+            errors, polygon = errors + 1, None
+        if name == "tile" and max(command.x0, command.y0) <= 1 << config.coord_bits:
+            ops.append(TileStart(command.x0, command.y0, command.i_in))
+            clip = tile_clip(config, tile, command.x0, command.y0)
+        elif name == "begin":
+            rule = "evenodd" if command.flag else "nonzero"
+            polygon = PolygonEnd(command.i_in, command.i_out, rule)
+        elif name == "edge" and polygon is not None:
+            inside = "right" if command.flag else "left"
+            c = command
+            edge = Edge(c.x0, c.y0, c.x1, c.y1, inside, polygon.intensity, polygon.i_out, clip)
+            try:
+                ops.append(Beats.of(delta_column_beats(run_edge_deltas(config, edge))))
+            except EdgeError:
+                edge_errors += 1
+        elif name == "end" and polygon is not None:
+            ops.append(polygon)
+            polygon = None
+        elif name == "flush":
+            ops.append(Flush())
+        else:
+            errors += 1
+    return CommandResult(ops, errors, edge_errors)

@@ -1,0 +1,327 @@
+"""The tile pipeline behind the stepper: accumulation memory and resolve, as the hardware
+does them (`edgeaa.hdl.accumulator`, `edgeaa.hdl.resolve`), and their cycle model.
+
+A tile is ``width`` x ``height`` pixels at an origin in engine pixels. Its stages take, in
+order, a stream of *ops* (the accumulator's input):
+
+* `TileStart` (origin, background): the tile's pixels become the background.
+* `Beats`: delta beats of the stepper (`edgeaa.model.beat.DeltaBeat`), one per clock. A cell
+  is moved into the tile (origin subtracted); one left of it is added into its row's first
+  column (the prefix sum carries it), one right of, above or below it is dropped, as
+  `edgeaa.model.accumulate.resolve_rows` does. A row holding a nonzero delta is *touched*.
+* `PolygonEnd` (intensity, I_out, fill rule): the resolve. Every touched row, in ascending
+  order, is read cell by cell and cleared (the clear costs no extra pass), prefix-summed
+  along +x, the fill rule applied (`fill`), the coverage rounded to intensity steps
+  (`intensity_offset`, a shift) and composited over the tile's pixel (`composite`, the
+  renderer's operator). Untouched rows are not read.
+* `Flush`: the tile's pixels go out row by row, and the tile is the background again.
+
+Widths. A cell holds its sum modulo ``2**cell_bits`` (``cell_bits`` = the delta register +
+``headroom_bits``): the prefix sum of a row is then exact while it lies within
+``[-L, L)``, ``L = 2**(headroom_bits + 1) * ifix``, i.e. a winding-weighted coverage of
+``[-2**(h+1), 2**(h+1))`` pixels (8 for the default h = 2; the planner's boundary edges give
+``[0, 1]`` up to the estimate). The even-odd fold takes ``h + 1`` compare-subtract steps for
+that range. The model checks the range and raises `TileOverflow` outside it.
+
+Composite in integers (`composite_steps`, what the hardware computes): with ``n = q |I - b|``
+the new pixel is ``b + floor((2 n + D) / (2 D))`` when ``I >= b``, else
+``b - floor((2 n + D - 1) / (2 D))`` (the same half-up rounding of a negative quotient); the
+quotient is at most ``|I - b|``, so ``intensity_bits`` restoring-division steps give it.
+A polygon with ``D = 0`` changes no pixel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from .accumulate import FILL_RULES, composite, fill, intensity_offset
+from .beat import CELL_FIELDS, CELLS, DeltaBeat
+from .config import EdgeConfig
+
+__all__ = [
+    "OPS",
+    "Beats",
+    "Flush",
+    "PolygonEnd",
+    "TileConfig",
+    "TileModel",
+    "TileOverflow",
+    "TileStart",
+    "composite_steps",
+    "tile_cells",
+]
+
+# The accumulator's input ops, by code (the hardware's ``op`` field); the resolve's input
+# has ``cell`` in place of ``beat`` and ``end``.
+OPS = ("beat", "end", "tile", "flush")
+RESOLVE_OPS = ("cell", "tile", "flush")
+
+
+class TileOverflow(ValueError):
+    """A prefix sum outside the range the tile's cells hold exactly."""
+
+
+@dataclass(frozen=True)
+class TileConfig:
+    """The tile's geometry and cell width; `config` is the stepper's."""
+
+    config: EdgeConfig = field(default_factory=EdgeConfig)
+    width: int = 64
+    height: int = 32
+    headroom_bits: int = 2
+
+    def __post_init__(self):
+        if not isinstance(self.config, EdgeConfig):
+            raise TypeError(f"config must be an EdgeConfig, not {self.config!r}")
+        for name, low in (("width", 4), ("height", 2)):
+            value = getattr(self, name)
+            if not isinstance(value, int) or value < low or value & (value - 1):
+                raise ValueError(f"tile {name} must be a power of two >= {low}, not {value!r}")
+        if not isinstance(self.headroom_bits, int) or not 0 <= self.headroom_bits <= 8:
+            raise ValueError(f"headroom_bits must be in [0, 8], not {self.headroom_bits!r}")
+
+    @property
+    def x_bits(self) -> int:
+        return self.width.bit_length() - 1
+
+    @property
+    def y_bits(self) -> int:
+        return self.height.bit_length() - 1
+
+    @property
+    def cell_bits(self) -> int:
+        """Bits of an accumulation cell (signed, wrapping)."""
+        return self.config.register_widths()["delta"].bits + self.headroom_bits
+
+    @property
+    def winding_limit(self) -> int:
+        """Prefix sums are exact within [-limit * ifix, limit * ifix)."""
+        return 1 << (self.headroom_bits + 1)
+
+    @property
+    def pixels(self) -> int:
+        return self.width * self.height
+
+
+class TileStart(NamedTuple):
+    x0: int  # engine pixels of the tile's first column and row
+    y0: int
+    background: int
+
+
+class Beats(NamedTuple):
+    """Delta beats, one per clock: ``cells[k, j]`` is (x, y, delta) of cell j of beat k."""
+
+    cells: np.ndarray  # (n, 4, 3) int64
+
+    @classmethod
+    def of(cls, beats: list[DeltaBeat]) -> Beats:
+        return cls(np.array([b.cells for b in beats], dtype=np.int64).reshape(-1, 4, 3))
+
+    def __len__(self) -> int:
+        return len(self.cells)
+
+
+class PolygonEnd(NamedTuple):
+    intensity: int
+    i_out: int
+    rule: str = "nonzero"
+
+
+class Flush(NamedTuple):
+    pass
+
+
+assert len(CELLS) == 4 and len(CELL_FIELDS) == 3  # the shape of `Beats.cells`
+
+
+def tile_cells(tile: TileConfig, origin, x, y, delta):
+    """Cells of a tile at `origin` for image cells (x, y, delta) (numpy arrays): (tx, ty,
+    delta) of the kept ones, a cell left of the tile moved into its first column."""
+    tx, ty = np.asarray(x) - origin[0], np.asarray(y) - origin[1]
+    delta = np.asarray(delta)
+    keep = (ty >= 0) & (ty < tile.height) & (tx < tile.width) & (delta != 0)
+    return np.maximum(tx[keep], 0), ty[keep], delta[keep]
+
+
+# A beat's cells, as offsets (x + 4 y) from their least x and y: a 2 x 2 block (x-major) or
+# four cells of a row (y-major), as `edgeaa.model.column.delta_cells` places them. So they lie
+# in distinct banks of (y mod 2, x mod 4), and the cells left of the tile are in one row.
+BEAT_SHAPES = (0b00110011, 0b00001111)
+
+
+def check_beat_shapes(cells: np.ndarray) -> None:
+    """Raise unless every beat of `cells` (n, 4, 3) has a shape of `BEAT_SHAPES`."""
+    if not len(cells):
+        return
+    x, y = cells[:, :, 0], cells[:, :, 1]
+    dx, dy = x - x.min(axis=1, keepdims=True), y - y.min(axis=1, keepdims=True)
+    inside = (dx < 4) & (dy < 2)
+    codes = np.where(inside, 1 << np.minimum(dx + 4 * dy, 7), 256)
+    masks = np.bitwise_or.reduce(codes, axis=1)
+    bad = np.flatnonzero(~np.isin(masks, BEAT_SHAPES))
+    if len(bad):
+        raise ValueError(
+            f"beat {bad[0]}: cells {cells[bad[0], :, :2].tolist()} are neither a 2 x 2 block "
+            "nor four cells of a row"
+        )
+
+
+def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> int:
+    """`composite` as the resolve computes it: an unsigned numerator, a `bits`-step
+    restoring division by 2 d, the quotient added or subtracted (q in [1, d])."""
+    neg = intensity < below
+    num = 2 * q * abs(intensity - below) + d - neg
+    quotient = 0
+    for j in reversed(range(bits)):
+        if num >= (2 * d) << j:
+            num -= (2 * d) << j
+            quotient |= 1 << j
+    return below - quotient if neg else below + quotient
+
+
+class TileModel:
+    """The tile's stages on integers: `feed` an op, get a frame (height x width) on Flush.
+
+    `scanned` counts the rows each `PolygonEnd` read (the cycle model's input)."""
+
+    def __init__(self, tile: TileConfig):
+        self.tile = tile
+        big = tile.cell_bits + 24 > 62  # exact sums of up to 2**24 deltas in int64
+        self._dtype = object if big else np.int64
+        self.cells = np.zeros((tile.height, tile.width), dtype=self._dtype)
+        self.touched = np.zeros(tile.height, dtype=bool)
+        self.origin = (0, 0)
+        self.background = 0
+        self.pixels = np.zeros((tile.height, tile.width), dtype=np.int64)
+
+    def feed(self, op):
+        """Apply one op; a `Flush` returns the frame, a `PolygonEnd` the rows it scanned."""
+        if isinstance(op, DeltaBeat):
+            op = Beats.of([op])
+        if isinstance(op, Beats):
+            self._accumulate(op.cells)
+            return None
+        if isinstance(op, PolygonEnd):
+            return self._resolve(op)
+        if isinstance(op, TileStart):
+            self.origin, self.background = (op.x0, op.y0), op.background
+            self.pixels[:] = op.background
+            return None
+        if isinstance(op, Flush):
+            frame = self.pixels.copy()
+            self.pixels[:] = self.background
+            return frame
+        raise TypeError(f"not a tile op: {op!r}")
+
+    def run(self, ops) -> list[np.ndarray]:
+        """The frames of every Flush in `ops`."""
+        return [out for op in ops if isinstance(out := self.feed(op), np.ndarray)]
+
+    def _accumulate(self, cells: np.ndarray) -> None:
+        check_beat_shapes(cells.reshape(-1, 4, 3))
+        cells = cells.reshape(-1, 3)
+        tx, ty, delta = tile_cells(self.tile, self.origin, cells[:, 0], cells[:, 1], cells[:, 2])
+        np.add.at(self.cells, (ty, tx), delta.astype(self._dtype))
+        self.touched[ty] = True
+
+    def _resolve(self, end: PolygonEnd) -> int:
+        if end.rule not in FILL_RULES:
+            raise ValueError(f"fill rule must be one of {', '.join(FILL_RULES)}, not {end.rule!r}")
+        F = self.tile.config.F
+        d = abs(end.intensity - end.i_out)
+        ifix = d << F
+        limit = self.tile.winding_limit * ifix
+        rows = np.flatnonzero(self.touched)
+        for row in rows:
+            sums = np.cumsum(self.cells[row])
+            self.cells[row] = 0
+            if d == 0:
+                continue  # no intensity step: nothing changes
+            if sums.min() < -limit or sums.max() >= limit:
+                raise TileOverflow(
+                    f"tile row {row}: a prefix sum of {int(max(sums.max(), -sums.min()))} is "
+                    f"outside the {self.tile.cell_bits}-bit cells' exact range "
+                    f"[-{limit}, {limit}) ({self.tile.winding_limit} ifix)"
+                )
+            q = intensity_offset(fill(sums, end.rule, ifix), F).astype(np.int64)
+            self.pixels[row] = composite(self.pixels[row], q, end.intensity, d)
+        self.touched[:] = False
+        return len(rows)
+
+
+# -- cycle model ----------------------------------------------------------------------------
+#
+# Clocks from 0; a transfer happens in a clock where valid and ready are both high. The ops
+# are offered back to back (each from the clock after the previous one was taken) and the
+# pixel sink is always ready. The accumulator takes a beat per clock. An end taken in clock
+# a reads the first touched cell in a + 2 (the last beat's read-modify-write lands in a + 1)
+# and offers it to the resolve in a + 3, then one cell per clock; with no touched row it
+# takes the next op in a + 2. Tile and flush pass through its output register (offered in
+# a + 1). The resolve takes a cell per clock; a cell taken in r writes its pixel in clock
+# r + `resolve_latency`. A polygon's first cell, a tile and a flush wait until no cell is in
+# flight (the pixels they read must be written). A flush taken in f sends pixel k in
+# f + 2 + k (row by row) and the resolve takes its next op in f + width * height + 1.
+
+SCAN_START = 3  # end taken in a: its first cell offered in a + 3
+EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
+FLUSH_START = 2  # flush taken by the resolve in f: pixel 0 out in f + 2
+
+
+def resolve_latency(config: EdgeConfig) -> int:
+    """Clocks from the resolve taking a cell to writing its pixel: prefix sum (with the pixel
+    read), fill, offset and product, one clock per quotient bit."""
+    return config.intensity_bits + 3
+
+
+@dataclass
+class TileTiming:
+    """When each op was taken (a `Beats` op: one clock per beat) and each pixel left."""
+
+    accepts: list[int] = field(default_factory=list)  # accumulator input transfers
+    cells: list[int] = field(default_factory=list)  # resolve input transfers of cells
+    pixels: list[int] = field(default_factory=list)  # pixel output transfers
+    frames: list[np.ndarray] = field(default_factory=list)
+    rows_scanned: int = 0
+
+    @property
+    def clocks(self) -> int:
+        """First op to last transfer, inclusive."""
+        return max([-1, *self.accepts, *self.cells, *self.pixels]) + 1
+
+
+def tile_cycles(tile: TileConfig, ops) -> TileTiming:
+    """The clock of every transfer of the tile stages (and their frames, from `TileModel`)."""
+    model, out = TileModel(tile), TileTiming()
+    latency = resolve_latency(tile.config)
+    a = 0  # clock the accumulator can take the next op
+    quiet = 0  # first clock no cell is in flight in the resolve
+    free = 0  # first clock the resolve is not flushing
+    for op in ops:
+        result = model.feed(op)
+        if isinstance(op, (Beats, DeltaBeat)):
+            n = 1 if isinstance(op, DeltaBeat) else len(op)
+            out.accepts.extend(range(a, a + n))
+            a += n
+            continue
+        out.accepts.append(a)
+        if isinstance(op, PolygonEnd):
+            out.rows_scanned += result
+            n = result * tile.width
+            if not n:
+                a += EMPTY_END
+                continue
+            r = max(a + SCAN_START, free, quiet)
+            out.cells.extend(range(r, r + n))
+            a, quiet = r + n - 1, r + n + latency
+        else:  # tile or flush: through the accumulator's output register
+            r = max(a + 1, free, quiet)
+            a = r
+            if isinstance(op, Flush):
+                out.pixels.extend(range(r + FLUSH_START, r + FLUSH_START + tile.pixels))
+                out.frames.append(result)
+                free = r + tile.pixels + 1
+    return out

@@ -1,0 +1,129 @@
+"""A scene through the tile pipeline: per tile, the ops of `edgeaa.model.tile` (tile start,
+each polygon's delta beats and end, flush), and the image from the tiles' frames.
+
+The image is cut into tiles of `TileConfig` size, row by row. For each tile the polygons
+whose window meets it are sent in order, each edge with the tile as its clip window (without
+its left bound: columns left of the tile carry their cover into it). Edges wholly above,
+below or right of the tile, and the edges `edges_to_send` skips, are not sent. With the
+model's tile stages (`TileModel`) the image is the renderer's, bit for bit (tested).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model import Clip
+from ..model.pipeline import Command
+from ..model.tile import Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
+from .engines import run_deltas
+from .render import Plan, _write_boxes, edges_to_send
+
+
+@dataclass(frozen=True)
+class TileJob:
+    """One tile's work: its image pixels (x, y), its edges (each a command with its clip
+    window), the polygon of each edge, and the polygons sent, in order."""
+
+    x: int
+    y: int
+    edges: list
+    polygon_of_edge: np.ndarray
+    polygons: list[int]
+
+
+def tile_jobs(plan: Plan, tile: TileConfig) -> Iterator[TileJob]:
+    """The tiles of the image, row by row, with what each needs."""
+    sent = edges_to_send(plan, skip=True)["sent"]
+    lo_x, lo_y, hi_x, hi_y = (box[sent] for box in _write_boxes(plan.coords, plan.offset, S(plan)))
+    width, height = plan.scene.width, plan.scene.height
+    for ty in range(0, height, tile.height):
+        for tx in range(0, width, tile.width):
+            meets = (hi_y >= ty) & (lo_y < ty + tile.height) & (lo_x < tx + tile.width)
+            chosen = sent[meets]
+            clip = _tile_clip(plan, tile, tx, ty)
+            edges = [_clipped(plan.edge(int(e), clip=True), clip) for e in chosen]
+            owners = plan.polygon[chosen]
+            yield TileJob(tx, ty, edges, owners, list(dict.fromkeys(owners.tolist())))
+
+
+def S(plan: Plan) -> int:
+    return plan.config.subpixel_scale
+
+
+def _tile_clip(plan: Plan, tile: TileConfig, tx: int, ty: int) -> Clip:
+    top = 1 << plan.config.coord_bits
+    ox, oy = plan.offset
+    return Clip(
+        0,
+        min(oy + ty, top),
+        min(ox + tx + tile.width - 1, top),
+        min(oy + ty + tile.height - 1, top),
+    )
+
+
+def _clipped(edge, clip: Clip):
+    from dataclasses import replace
+
+    own = edge.clip
+    both = Clip(
+        max(own.x_min, clip.x_min),
+        max(own.y_min, clip.y_min),
+        min(own.x_max, clip.x_max),
+        min(own.y_max, clip.y_max),
+    )
+    return replace(edge, clip=both)
+
+
+def tile_ops(plan: Plan, tile: TileConfig, job: TileJob, engine: str = "model") -> list:
+    """The ops of one tile: start, each polygon's beats and end, flush."""
+    ox, oy = plan.offset
+    ops: list = [TileStart(ox + job.x, oy + job.y, plan.scene.background)]
+    run = run_deltas(plan.config, job.edges, engine)
+    cells = np.stack([run.x, run.y, run.delta], axis=1).reshape(-1, 4, 3)
+    beat_edge = run.edge[::4]
+    beat_polygon = job.polygon_of_edge[beat_edge] if len(beat_edge) else beat_edge
+    for i in job.polygons:
+        poly = plan.polygons[i]
+        ops.append(Beats(cells[beat_polygon == i]))
+        ops.append(PolygonEnd(poly.intensity, poly.i_out, poly.rule))
+    ops.append(Flush())
+    return ops
+
+
+def render_tiles(plan: Plan, tile: TileConfig, engine: str = "model") -> np.ndarray:
+    """The image, tile by tile, through the tile model (deltas from `engine`)."""
+    model = TileModel(tile)
+    frames = [model.run(tile_ops(plan, tile, job, engine))[0] for job in tile_jobs(plan, tile)]
+    return image_from_frames(plan, tile, frames)
+
+
+def scene_commands(plan: Plan, tile: TileConfig) -> list[Command]:
+    """The scene as pipeline commands (format `COMMAND_VERSION`): per tile, its start, each
+    polygon meeting it (begin, edges, end) and a flush. The top clips each edge to the tile
+    (`tile_clip`); an edge wholly left of the image is sent as its projection."""
+    ox, oy = plan.offset
+    commands = []
+    for job in tile_jobs(plan, tile):
+        commands.append(Command.tile(ox + job.x, oy + job.y, plan.scene.background))
+        for i in job.polygons:
+            poly = plan.polygons[i]
+            commands.append(Command.begin(poly.intensity, poly.i_out, poly.rule))
+            for edge, owner in zip(job.edges, job.polygon_of_edge, strict=True):
+                if owner == i:
+                    commands.append(Command.edge(edge.x0, edge.y0, edge.x1, edge.y1, edge.inside))
+            commands.append(Command.end())
+        commands.append(Command.flush())
+    return commands
+
+
+def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
+    """The image from the frames of the tiles of `tile_jobs`, in order."""
+    image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, np.int64)
+    for job, frame in zip(tile_jobs(plan, tile), frames, strict=True):
+        h = min(tile.height, plan.scene.height - job.y)
+        w = min(tile.width, plan.scene.width - job.x)
+        image[job.y : job.y + h, job.x : job.x + w] = np.asarray(frame)[:h, :w]
+    return image

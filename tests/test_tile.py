@@ -1,0 +1,133 @@
+"""The tile model (`edgeaa.model.tile`): the renderer's image through tiles of every size on
+the built-ins and on hypothesis scenes, the resolve's integer composite against the
+renderer's operator, the cells' exact range."""
+
+from __future__ import annotations
+
+import itertools
+import random
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from edgeaa.model import EdgeConfig
+from edgeaa.model.accumulate import composite
+from edgeaa.model.tile import (
+    Beats,
+    Flush,
+    PolygonEnd,
+    TileConfig,
+    TileModel,
+    TileOverflow,
+    TileStart,
+    composite_steps,
+)
+from edgeaa.render import Polygon, Scene, builtin, plan_scene, render_scene
+from edgeaa.render.pipeline import render_tiles
+
+DEFAULT = EdgeConfig()
+SMALL = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4)
+
+
+@pytest.mark.parametrize("name", ["starburst", "text"])
+@pytest.mark.parametrize("size", [(64, 32), (16, 8), (512, 256)])
+def test_the_tiles_give_the_renderers_image_on_the_builtins(name, size):
+    plan = plan_scene(builtin(name, DEFAULT), DEFAULT)
+    want = render_scene(plan, engine="model").image
+    got = render_tiles(plan, TileConfig(DEFAULT, *size))
+    assert np.array_equal(got, want)
+
+
+@st.composite
+def scenes(draw, config: EdgeConfig):
+    full = config.full_scale
+    width, height = draw(st.integers(5, 40)), draw(st.integers(3, 24))
+    coord = st.floats(-6, 46, allow_nan=False).map(lambda v: round(v * 16) / 16)
+    polygons = []
+    for _ in range(draw(st.integers(1, 3))):
+        contours = tuple(
+            tuple((draw(coord), draw(coord)) for _ in range(draw(st.integers(3, 6))))
+            for _ in range(draw(st.integers(1, 2)))
+        )
+        rule = draw(st.sampled_from(["nonzero", "evenodd"]))
+        polygons.append(Polygon(contours, draw(st.integers(0, full)), rule))
+    return Scene(width, height, tuple(polygons), background=draw(st.integers(0, full)))
+
+
+@pytest.mark.parametrize("config", [DEFAULT, SMALL], ids=["default", "small"])
+@settings(max_examples=60, deadline=None, database=None)
+@given(data=st.data())
+def test_the_tiles_give_the_renderers_image_on_random_scenes(config, data):
+    scene = data.draw(scenes(config))
+    tile = TileConfig(
+        config, data.draw(st.sampled_from([4, 8, 64])), data.draw(st.sampled_from([2, 4, 32]))
+    )
+    plan = plan_scene(scene, config)
+    assert np.array_equal(render_tiles(plan, tile), render_scene(plan, engine="model").image)
+
+
+def test_the_resolves_division_is_the_renderers_composite_everywhere_at_4_bits():
+    full = 15
+    for below, intensity, i_out in itertools.product(range(full + 1), repeat=3):
+        d = abs(intensity - i_out)
+        for q in range(1, d + 1):
+            want = int(composite(below, q, intensity, d))
+            assert composite_steps(below, q, intensity, d, 4) == want, (below, q, intensity, d)
+
+
+def test_the_resolves_division_is_the_renderers_composite_at_8_and_16_bits():
+    rng = random.Random(3)
+    for bits in (8, 16):
+        full = (1 << bits) - 1
+        for _ in range(20000):
+            below, intensity, i_out = (rng.randint(0, full) for _ in range(3))
+            d = abs(intensity - i_out) or 1
+            q = rng.choice([1, d, rng.randint(1, d)])
+            want = int(composite(below, q, intensity, d))
+            assert composite_steps(below, q, intensity, d, bits) == want
+
+
+def _ops(tile: TileConfig, cells, end: PolygonEnd):
+    return [
+        TileStart(0, 0, 0),
+        Beats(np.array(cells, dtype=np.int64).reshape(-1, 4, 3)),
+        end,
+        Flush(),
+    ]
+
+
+def test_a_cell_left_of_the_tile_goes_into_the_first_column_and_others_are_dropped():
+    tile = TileConfig(SMALL, 4, 2)
+    ifix = 15 << SMALL.F
+    cells = [(-3, 0, ifix), (-2, 0, 0), (-1, 0, 0), (0, 0, 0)]  # a row's four cells
+    cells += [(9, 1, -ifix), (10, 1, -ifix), (9, 2, -ifix), (10, 2, -ifix)]  # right, below
+    cells += [(1, -1, ifix), (2, -1, ifix), (1, 0, 0), (2, 0, 0)]  # above
+    (frame,) = TileModel(tile).run(_ops(tile, cells, PolygonEnd(15, 0)))
+    assert frame.tolist() == [[15, 15, 15, 15], [0, 0, 0, 0]]
+
+
+def test_a_prefix_sum_past_the_cells_range_is_refused():
+    tile = TileConfig(SMALL, 4, 2, headroom_bits=0)
+    ifix = 15 << SMALL.F
+    fits = [(0, 0, ifix), (1, 0, ifix - 1), (2, 0, 1 - 2 * ifix), (3, 0, -2 * ifix)]
+    TileModel(tile).run(_ops(tile, fits, PolygonEnd(15, 0)))  # 2 ifix - 1, then -2 ifix
+    for bad in ((1, 0, ifix), (3, 0, -2 * ifix - 1)):
+        cells = [bad if cell[0] == bad[0] else cell for cell in fits]
+        with pytest.raises(TileOverflow, match="exact range"):
+            TileModel(tile).run(_ops(tile, cells, PolygonEnd(15, 0)))
+
+
+def test_bad_tile_sizes_are_refused():
+    for kwargs in ({"width": 6}, {"width": 2}, {"height": 1}, {"headroom_bits": -1}):
+        with pytest.raises(ValueError, match="must be"):
+            TileConfig(DEFAULT, **kwargs)
+
+
+def test_a_beat_that_is_not_a_block_or_a_row_is_refused():
+    tile = TileConfig(SMALL, 4, 2)
+    with pytest.raises(ValueError, match="neither a 2 x 2 block"):
+        TileModel(tile).run(
+            _ops(tile, [(0, 0, 1), (1, 0, 1), (0, 2, 1), (1, 2, 1)], PolygonEnd(15, 0))
+        )

@@ -1,0 +1,173 @@
+# amaranth: UnusedElaboratable=no
+"""The tile stages in Amaranth's simulator (`TileAccumulator` into `TileResolve`) against
+`edgeaa.model.tile`: with an eager source and an always-ready sink every transfer in the
+clock `tile_cycles` gives and every frame equal; with random source idles and sink stalls
+the same frames, a stalled pixel held. Ops from random beats (back-to-back deltas to one
+cell, cells left of the tile, every fill rule, empty polygons, D = 0) and from scenes."""
+
+from __future__ import annotations
+
+import random
+
+import numpy as np
+import pytest
+from tile_bench import Stages, run_stages
+
+from edgeaa.hdl.accumulator import TileAccumulator
+from edgeaa.hdl.resolve import TileResolve
+from edgeaa.model import EdgeConfig
+from edgeaa.model.tile import (
+    Beats,
+    Flush,
+    PolygonEnd,
+    TileConfig,
+    TileModel,
+    TileOverflow,
+    TileStart,
+    resolve_latency,
+    tile_cycles,
+)
+from edgeaa.render import parse_scene, plan_scene, render_scene
+from edgeaa.render.pipeline import render_tiles, tile_jobs, tile_ops
+
+SMALL = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4)
+DEFAULT = EdgeConfig()
+
+
+def test_the_interfaces():
+    tile = TileConfig(SMALL, 8, 4)
+    acc, res = TileAccumulator(tile), TileResolve(tile)
+    assert set(acc.signature.members) == {"ops", "cells", "scanning"}
+    assert set(res.signature.members) == {"cells", "pixels", "flushing"}
+    assert acc.cells.signature.flip() == res.cells.signature
+    assert res.latency == resolve_latency(SMALL) == SMALL.intensity_bits + 3
+    assert set(Stages(tile).signature.members) == {"ops", "pixels"}
+
+
+def _polygon(rng: random.Random, tile: TileConfig, config: EdgeConfig, origin):
+    full = config.full_scale
+    intensity, i_out = rng.randint(0, full), rng.randint(0, full)
+    ifix = max(abs(intensity - i_out), 1) << config.F
+    anchors = [_anchor(rng, tile, origin) for _ in range(2)]
+    beats = []
+    for _ in range(rng.choice([0, 1, 3, 8, 14])):
+        x, y = rng.choice(anchors) if rng.random() < 0.6 else _anchor(rng, tile, origin)
+        if rng.random() < 0.5:  # x-major: a 2 x 2 block; y-major: four cells of a row
+            places = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)]
+        else:
+            places = [(x + k, y) for k in range(4)]
+        rng.shuffle(places)
+        deltas = [rng.choice([0, rng.randint(-ifix // 8, ifix // 8), ifix, -ifix]) for _ in places]
+        beats.append([(px, py, d) for (px, py), d in zip(places, deltas, strict=True)])
+    rule = rng.choice(["nonzero", "evenodd"])
+    return Beats(np.array(beats, dtype=np.int64).reshape(-1, 4, 3)), PolygonEnd(
+        intensity, i_out, rule
+    )
+
+
+def _anchor(rng: random.Random, tile: TileConfig, origin) -> tuple[int, int]:
+    return origin[0] + rng.randint(-5, tile.width), origin[1] + rng.randint(-2, tile.height)
+
+
+def random_ops(tile: TileConfig, config: EdgeConfig, seed: int) -> list:
+    """Tiles of random polygons (each within the cells' exact range), each flushed."""
+    rng = random.Random(seed)
+    ops = []
+    for _ in range(2):
+        origin = (rng.randint(0, 5), rng.randint(0, 3))
+        ops.append(TileStart(*origin, rng.randint(0, config.full_scale)))
+        for _ in range(rng.randint(1, 4)):
+            while True:
+                beats, end = _polygon(rng, tile, config, origin)
+                polygon = [beats, end] if rng.random() < 0.9 else [beats, beats, end]
+                try:  # keep polygons whose sums fit the cells
+                    TileModel(tile).run([TileStart(*origin, 0), *polygon])
+                    break
+                except TileOverflow:
+                    continue
+            ops += polygon
+        ops.append(Flush())
+    return ops
+
+
+def check_exact(tile: TileConfig, ops) -> None:
+    run, want = run_stages(tile, ops), tile_cycles(tile, ops)
+    assert run.accepts == want.accepts, "op clocks differ from tile_cycles"
+    assert run.cells == want.cells, "cell clocks differ from tile_cycles"
+    assert [p[0] for p in run.pixels] == want.pixels, "pixel clocks differ from tile_cycles"
+    got = run.frames(tile)
+    assert len(got) == len(want.frames)
+    for k, (frame, model) in enumerate(zip(got, want.frames, strict=True)):
+        assert np.array_equal(frame, model), f"frame {k}:\n{frame}\nmodel:\n{model}"
+    coords = [(p[1], p[2]) for p in run.pixels[: tile.pixels]]
+    assert coords == [(x, y) for y in range(tile.height) for x in range(tile.width)]
+    assert [p[4] for p in run.pixels].count(1) == len(want.frames)
+
+
+CASES = [
+    (TileConfig(SMALL, 8, 4), 1),
+    (TileConfig(SMALL, 4, 2), 2),
+    (TileConfig(SMALL, 16, 4, headroom_bits=0), 3),
+    (TileConfig(DEFAULT, 8, 4), 4),
+]
+
+
+@pytest.mark.parametrize(
+    ("tile", "seed"),
+    CASES,
+    ids=lambda v: (
+        str(v)
+        if isinstance(v, int)
+        else f"{v.width}x{v.height}h{v.headroom_bits}i{v.config.intensity_bits}"
+    ),
+)
+def test_random_beats_clock_for_clock(tile, seed):
+    for k in range(3):
+        check_exact(tile, random_ops(tile, tile.config, 10 * seed + k))
+
+
+def test_back_to_back_polygons_with_no_gap_wait_for_the_pixels_below():
+    tile = TileConfig(SMALL, 4, 2)
+    ifix = 15 << SMALL.F
+    one = Beats(np.array([[[0, 0, ifix], [1, 0, -ifix], [0, 1, ifix // 2], [1, 1, -ifix // 2]]]))
+    ops = [TileStart(0, 0, 0), one, PolygonEnd(15, 0), one, PolygonEnd(7, 0), PolygonEnd(3, 9)]
+    ops += [one, PolygonEnd(9, 9), Flush(), TileStart(1, 0, 5), Flush()]
+    check_exact(tile, ops)
+
+
+TINY = {
+    "width": 20,
+    "height": 14,
+    "background": 40,
+    "polygons": [
+        {"points": [[1.5, 1.25], [17.75, 3.5], [8.0625, 12.5]], "intensity": 220},
+        {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
+    ],
+}
+
+
+def test_a_scene_through_the_stages_is_the_renderers_image():
+    plan = plan_scene(parse_scene(TINY), DEFAULT)
+    tile = TileConfig(DEFAULT, 16, 8)
+    image = np.full((14, 20), 40, dtype=np.int64)
+    for job in tile_jobs(plan, tile):
+        ops = tile_ops(plan, tile, job)
+        run = run_stages(tile, ops)
+        assert run.accepts == tile_cycles(tile, ops).accepts
+        (frame,) = run.frames(tile)
+        h, w = min(8, 14 - job.y), min(16, 20 - job.x)
+        image[job.y : job.y + h, job.x : job.x + w] = frame[:h, :w]
+    assert np.array_equal(image, render_scene(plan, engine="model").image)
+    assert np.array_equal(image, render_tiles(plan, tile))
+
+
+@pytest.mark.parametrize("seed", [5, 6])
+def test_random_back_pressure_gives_the_same_frames(seed):
+    tile = TileConfig(SMALL, 8, 4)
+    ops = random_ops(tile, SMALL, seed)
+    run = run_stages(tile, ops, seed=seed, idle=0.3, stall=0.4)
+    assert run.stalled_changed == 0, "a stalled pixel changed"
+    want = tile_cycles(tile, ops)
+    for frame, model in zip(run.frames(tile), want.frames, strict=True):
+        assert np.array_equal(frame, model)
+    assert len(run.pixels) == len(want.pixels)
