@@ -12,11 +12,11 @@ turning the plan into their paths and their 8-bit images back into integers, as
 render_scene's stages come from `Render.timings` (wall clock): ``select`` (its "plan" key:
 which edges go to the engine, when given a plan), ``engine`` (edge commands, setup and the
 deltas), ``accumulate`` (buffers, prefix sums, fill rule, compositing); ``other`` is the rest
-of its wall time: the timing model's `engines.cycles` (render.py computes `Render.cycles`
-outside the timed stages; the ``cycles() alone`` column times that call by itself) and
-bookkeeping. For set (a) the engine stage's pieces are also timed alone: building the edge
-commands (`Plan.edge`), `edgeaa.model.edge.setup` of every edge, and `engines.run_deltas`
-(which runs setup again, then the vectorized deltas). The stages' wall minima split the
+of its wall time: the timing model's schedule and bookkeeping; the ``cycles() alone``
+column times `engines.cycles` on Edge objects, which the renderer no longer calls. For set
+(a) the engine stage's pieces are also timed alone: the edge commands as arrays
+(`render.render.edge_arrays`), `edgeaa.model.edge.setup_batch`, and `engines.run_deltas`
+(which runs setup_batch again, then the vectorized deltas). The stages' wall minima split the
 render's CPU time in proportion; each share is of plan_scene + render_scene.
 
 Three sets of scenes:
@@ -50,11 +50,12 @@ import numpy as np
 
 from edgeaa.analysis.report import machine_info, machine_line, table
 from edgeaa.model import EdgeConfig, accumulate
-from edgeaa.model.edge import setup
+from edgeaa.model.edge import setup_batch
 from edgeaa.render import builtin, plan_scene, render_scene
 from edgeaa.render.builtin import TEXT, starburst, text_polygons
 from edgeaa.render.compare import agg_scene, skia_scene
 from edgeaa.render.engines import cycles, run_deltas
+from edgeaa.render.render import edge_arrays
 from edgeaa.render.scene import DEFAULT_TOLERANCE, Scene
 
 TARGET_RATIO = 5.0  # edgeaa / AGG on the built-in text
@@ -103,6 +104,7 @@ def time_scene(scene: Scene, config: EdgeConfig, repeats: int, parts: bool = Fal
     agg_scene(plan)
     skia_scene(plan)
     edges = [plan.edge(int(e), clip=True) for e in result.sent]
+    arrays = edge_arrays(plan, result.sent, clip=True)
     calls = [
         ("plan", plan_scene, (scene, config)),
         ("render", render_scene, (plan,)),
@@ -112,9 +114,9 @@ def time_scene(scene: Scene, config: EdgeConfig, repeats: int, parts: bool = Fal
     ]
     if parts:  # the engine stage's pieces, each alone
         calls += [
-            ("commands", lambda: [plan.edge(int(e), clip=True) for e in result.sent], ()),
-            ("setups", lambda: [setup(config, e) for e in edges], ()),
-            ("run_deltas", run_deltas, (config, edges, "model")),
+            ("commands", edge_arrays, (plan, result.sent, True)),
+            ("setups", lambda: setup_batch(config, *arrays.args(), arrays.clip), ()),
+            ("run_deltas", run_deltas, (config, arrays, "model")),
         ]
     names = [name for name, _, _ in calls]
     wall = {k: [] for k in (*names, *STAGES)}

@@ -19,7 +19,7 @@ from ..model import Clip
 from ..model.pipeline import Command
 from ..model.tile import Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
 from .engines import run_deltas
-from .render import Plan, _write_boxes, edges_to_send
+from .render import EdgeArrays, Plan, _write_boxes, edges_to_send
 
 
 @dataclass(frozen=True)
@@ -81,7 +81,7 @@ def tile_ops(plan: Plan, tile: TileConfig, job: TileJob, engine: str = "model") 
     """The ops of one tile: start, each polygon's beats and end, flush."""
     ox, oy = plan.offset
     ops: list = [TileStart(ox + job.x, oy + job.y, plan.scene.background)]
-    run = run_deltas(plan.config, job.edges, engine)
+    run, _ = run_deltas(plan.config, EdgeArrays.from_edges(plan.config, job.edges), engine)
     cells = np.stack([run.x, run.y, run.delta], axis=1).reshape(-1, 4, 3)
     beat_edge = run.edge[::4]
     beat_polygon = job.polygon_of_edge[beat_edge] if len(beat_edge) else beat_edge

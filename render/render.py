@@ -122,7 +122,21 @@ class EdgeArrays:
     inside_left: np.ndarray
     i_in: np.ndarray
     i_out: np.ndarray
-    clip: Clip | None
+    clip: Clip | tuple[np.ndarray, ...] | None  # one window for all, or four arrays
+
+    @classmethod
+    def from_edges(cls, config: EdgeConfig, edges: list[Edge]) -> EdgeArrays:
+        """Edge objects (each with its own clip window, or none) as arrays."""
+        full = Clip.full(config)
+        rows = [
+            (e.x0, e.y0, e.x1, e.y1, e.inside == "left", *e.intensities(config), *e.window(config))
+            for e in edges
+        ]
+        cols = [np.array(c, dtype=np.int64) for c in zip(*rows, strict=True)] or [
+            np.zeros(0, np.int64) for _ in range(7 + len(full))
+        ]
+        cols[4] = cols[4].astype(bool)
+        return cls(*cols[:7], tuple(cols[7:]))
 
     def __len__(self) -> int:
         return len(self.x0)
@@ -133,9 +147,13 @@ class EdgeArrays:
     def edges(self) -> list[Edge]:
         """The same commands as `Edge` objects (for the simulators' drivers)."""
         rows = zip(*(a.tolist() for a in self.args()), strict=True)
+        if self.clip is None or isinstance(self.clip, Clip):
+            clips = [self.clip] * len(self)
+        else:  # four arrays
+            clips = [Clip(*c) for c in zip(*(a.tolist() for a in self.clip), strict=True)]
         return [
-            Edge(x0, y0, x1, y1, "left" if left else "right", i_in, i_out, self.clip)
-            for x0, y0, x1, y1, left, i_in, i_out in rows
+            Edge(x0, y0, x1, y1, "left" if left else "right", i_in, i_out, clip)
+            for (x0, y0, x1, y1, left, i_in, i_out), clip in zip(rows, clips, strict=True)
         ]
 
 
