@@ -249,3 +249,16 @@ def random_edge_commands(
             edge = replace(edge, clip=window_near(config, edge, rng.randint))
         edges.append(edge)
     return edges
+
+
+# A scene small enough for Amaranth's simulator: a triangle and an even-odd path with a
+# curve, over a grey background (the renderer's, the tile model's and the pipeline's tests).
+TINY_SCENE = {
+    "width": 20,
+    "height": 14,
+    "background": 40,
+    "polygons": [
+        {"points": [[1.5, 1.25], [17.75, 3.5], [8.0625, 12.5]], "intensity": 220},
+        {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
+    ],
+}

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 from amaranth.sim import Simulator
+from fixtures import TINY_SCENE
 
 from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout, pipeline_verilog
 from edgeaa.model import EdgeConfig
@@ -23,15 +24,6 @@ from edgeaa.render.pipeline import image_from_frames, render_tiles, scene_comman
 
 DEFAULT = EdgeConfig()
 SMALL = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4)
-TINY = {
-    "width": 20,
-    "height": 14,
-    "background": 40,
-    "polygons": [
-        {"points": [[1.5, 1.25], [17.75, 3.5], [8.0625, 12.5]], "intensity": 220},
-        {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
-    ],
-}
 
 
 @dataclass
@@ -96,7 +88,7 @@ def test_the_command_format_and_interface():
 
 
 def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
-    plan = plan_scene(parse_scene(TINY), DEFAULT)
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
     tile = TileConfig(DEFAULT, 16, 8)
     commands = scene_commands(plan, tile)
     run = run_pipeline(tile, commands)
@@ -163,7 +155,7 @@ def test_bad_commands_are_dropped_and_counted_and_hurt_no_other_polygon(seed):
 
 
 def test_random_back_pressure_gives_the_same_image():
-    plan = plan_scene(parse_scene(TINY), DEFAULT)
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
     tile = TileConfig(DEFAULT, 32, 16)
     run = run_pipeline(tile, scene_commands(plan, tile), seed=3, idle=0.2, stall=0.5)
     image = image_from_frames(plan, tile, run.frames(tile))

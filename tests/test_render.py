@@ -13,6 +13,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from fixtures import TINY_SCENE
 
 from edgeaa.cli import main
 from edgeaa.model import Edge, EdgeConfig, exact_coverage
@@ -428,22 +429,12 @@ def test_a_whole_pixel_shift_of_the_scene_shifts_the_image():
 
 # -- engines ------------------------------------------------------------------------------------
 
-TINY = {
-    "width": 20,
-    "height": 14,
-    "background": 40,
-    "polygons": [
-        {"points": [[1.5, 1.25], [17.75, 3.5], [8.0625, 12.5]], "intensity": 220},
-        {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
-    ],
-}
-
 
 @pytest.mark.parametrize("engine", ["verilator", "amaranth"])
 def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, model_renders):
     """The core built with output="deltas": the model's nonzero deltas in order, the same
     image, and its beats in the clocks the timing model predicts (Amaranth: a tiny scene)."""
-    tiny = plan(parse_scene(TINY), DEFAULT)
+    tiny = plan(parse_scene(TINY_SCENE), DEFAULT)
     cases = [(tiny, render_scene(tiny))]
     if engine == "verilator":
         cases += [(plans[name], model_renders[name]) for name in BUILTINS]
@@ -633,13 +624,13 @@ def test_render_through_a_simulated_core_writes_the_models_png(engine, tmp_path,
     from PIL import Image
 
     scene = tmp_path / "tiny.json"
-    scene.write_text(json.dumps(TINY))
+    scene.write_text(json.dumps(TINY_SCENE))
     out = tmp_path / f"{engine}.png"
     assert main(["render", str(scene), "--engine", engine, "-o", str(out), "--quiet"]) == 0
     text = capsys.readouterr().out
     assert f"engine {engine}" in text and "clocks simulated" in text, text
     with Image.open(out) as image:
-        assert np.array_equal(np.asarray(image), render_scene(parse_scene(TINY)).image)
+        assert np.array_equal(np.asarray(image), render_scene(parse_scene(TINY_SCENE)).image)
 
 
 def test_progress_goes_to_stderr(tmp_path, capsys, monkeypatch):

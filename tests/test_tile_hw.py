@@ -11,6 +11,7 @@ import random
 
 import numpy as np
 import pytest
+from fixtures import TINY_SCENE
 from tile_bench import Stages, run_stages
 
 from edgeaa.hdl.accumulator import TileAccumulator
@@ -135,19 +136,10 @@ def test_back_to_back_polygons_with_no_gap_wait_for_the_pixels_below():
     check_exact(tile, ops)
 
 
-TINY = {
-    "width": 20,
-    "height": 14,
-    "background": 40,
-    "polygons": [
-        {"points": [[1.5, 1.25], [17.75, 3.5], [8.0625, 12.5]], "intensity": 220},
-        {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
-    ],
-}
 
 
 def test_a_scene_through_the_stages_is_the_renderers_image():
-    plan = plan_scene(parse_scene(TINY), DEFAULT)
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
     tile = TileConfig(DEFAULT, 16, 8)
     image = np.full((14, 20), 40, dtype=np.int64)
     for job in tile_jobs(plan, tile):
