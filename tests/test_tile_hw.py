@@ -136,8 +136,6 @@ def test_back_to_back_polygons_with_no_gap_wait_for_the_pixels_below():
     check_exact(tile, ops)
 
 
-
-
 def test_a_scene_through_the_stages_is_the_renderers_image():
     plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
     tile = TileConfig(DEFAULT, 16, 8)
