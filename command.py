@@ -349,3 +349,16 @@ class ProgressBar:
             self.stream.write("\n")
             self.stream.flush()
         self.shown = False
+
+
+def tile_from_args(prog: str, text: str, config: EdgeConfig):
+    """`--tile WIDTHxHEIGHT` as the pipeline's `TileConfig` (a usage error if it is not)."""
+    from .model.tile import TileConfig
+
+    match = re.fullmatch(r"(\d{1,5})x(\d{1,5})", text)
+    try:
+        if not match:
+            raise ValueError("expected WIDTHxHEIGHT, e.g. 64x32")
+        return TileConfig(config, int(match[1]), int(match[2]))
+    except ValueError as error:
+        raise usage_error(prog, f"--tile {shown(text)}: {error}") from None

@@ -20,6 +20,7 @@ from .command import (
     config_from_args,
     integer_type,
     shown,
+    tile_from_args,
     usage_error,
 )
 from .model import MODES, Clip, Edge, EdgeConfig, run_edge
@@ -265,15 +266,8 @@ class VerilogCommand(Command):
         if args.top == "core":
             return verilog(config, name=args.name, output=args.core)
         from .hdl.pipeline import pipeline_verilog
-        from .model.tile import TileConfig
 
-        match = re.fullmatch(r"(\d{1,5})x(\d{1,5})", args.tile)
-        try:
-            if not match:
-                raise ValueError("expected WIDTHxHEIGHT, e.g. 64x32")
-            tile = TileConfig(config, int(match[1]), int(match[2]))
-        except ValueError as error:
-            raise usage_error(self.prog, f"--tile {shown(args.tile)}: {error}") from None
+        tile = tile_from_args(self.prog, args.tile, config)
         return pipeline_verilog(tile, name=args.name)
 
     def run(self, args: argparse.Namespace) -> int:

@@ -23,6 +23,7 @@ from ..command import (
     check_output,
     config_from_args,
     shown,
+    tile_from_args,
     usage_error,
 )
 from .builtin import BUILTINS
@@ -84,10 +85,12 @@ class RenderCommand(Command):
     help = "render a scene (polygons, text) to an antialiased PNG with the model or the core"
     description = (
         "Render a scene (a JSON file of polygons and SVG paths, or a built-in) "
-        "through the model or the cycle-accurate core: polygons are filled, their edges "
-        "antialiased by the engine, pixels touched by several edges combined, and polygons "
-        "composited in order. The model and the simulated hardware give the same image bit "
-        "for bit. Format and rules: docs/scenes.md."
+        "through the model or the cycle-accurate hardware pipeline: each edge adds the "
+        "signed area of its own piece into an accumulation buffer, a prefix sum per row "
+        "gives the coverage, the fill rule and intensity apply, and polygons are "
+        "composited in order. With --engine verilator or amaranth the pixels come out of "
+        "the simulated hardware (tile by tile) and are checked against the model's, bit for "
+        "bit. Format and rules: docs/scenes.md; the pipeline: docs/hardware.md."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
@@ -101,9 +104,15 @@ class RenderCommand(Command):
             "--engine",
             choices=ENGINES,
             default="model",
-            help="model (default), verilator (the core compiled by Verilator, cycle-accurate; "
-            "first build about 40 s, cached) or amaranth (the core in Amaranth's Python "
-            "simulator: slow, small scenes only)",
+            help="model (default), verilator (the whole polygon pipeline, stepper, "
+            "accumulation memory and resolve, compiled by Verilator, cycle-accurate: the "
+            "pixels come from the hardware; first build about 30 s, cached) or amaranth (the "
+            "pipeline in Amaranth's Python simulator: slow, small scenes only)",
+        )
+        parser.add_argument(
+            "--tile",
+            help="with --engine verilator or amaranth: the pipeline's tile WIDTHxHEIGHT, "
+            "powers of two (default 64x32)",
         )
         parser.add_argument("-o", "--output", help="PNG file to write (the figure with --compare)")
         parser.add_argument(
@@ -199,6 +208,12 @@ def _check_options(args: argparse.Namespace) -> None:
         raise usage_error(PROG, unavailable(args.engine))
     if args.compare and args.engine != "model":
         raise usage_error(PROG, "--compare renders with the model: --engine does not apply")
+    if args.tile is not None and args.engine == "model":
+        raise usage_error(PROG, "--tile sizes the hardware pipeline: add --engine verilator")
+    if args.no_skip and args.engine != "model":
+        raise usage_error(
+            PROG, "--no-skip applies to the model: the pipeline always skips (docs/hardware.md)"
+        )
     if args.crop and not args.compare:
         raise usage_error(PROG, "--crop selects the pixels of the --compare figure; add --compare")
     if args.output is not None:
@@ -230,42 +245,70 @@ def _cause(error: Exception) -> str:
     return f"{lines[0].rstrip(':')}: {cause}" if cause and lines[0].endswith(":") else lines[0]
 
 
-def _build_engine(engine: str, config, bar: ProgressBar) -> None:
+def _build_engine(engine: str, tile, bar: ProgressBar) -> None:
     """Compile the Verilator harness first (cached; the first build takes half a minute), with
     the bar running, so that the engine's time is the simulation's alone."""
     if engine == "verilator":
-        from ..sim.simulators import verilator_harness
+        from ..sim.simulators import pipeline_harness
 
-        with bar.ticking("verilator build (first time only, then cached)"):
-            verilator_harness.build(config, output="deltas")
+        with bar.ticking("verilator build of the pipeline (first time only, then cached)"):
+            pipeline_harness.build(tile)
         bar.close()
 
 
-def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
-    """Render the plan (twice with --stats), write the PNG and print what was asked for."""
+def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
+    """The render (the model's, or the hardware pipeline's) and with --stats the model's
+    render without skipping."""
+    from .pipeline import render_pipeline
     from .render import render_scene
 
-    config = plan.config
+    baseline = None
+    if args.stats:
+        baseline = render_scene(plan, skip=False, progress=bar)
+    if args.engine == "model":
+        return render_scene(plan, skip=not args.no_skip, progress=bar), baseline
+    tile = tile_from_args(PROG, args.tile or "64x32", plan.config)
+    _build_engine(args.engine, tile, bar)
+    return render_pipeline(plan, args.engine, tile, progress=bar), baseline
+
+
+def _engine_line(result) -> str:
+    run = result.deltas
+    line = (
+        f"engine: {len(result.sent)} edges, {result.cycles:,} stepper cycles (timing model), "
+        f"{len(run):,} nonzero deltas; accumulation: {result.rows_scanned:,} rows, "
+        f"{result.cells_scanned:,} cells scanned; {result.seconds:.3f} s"
+    )
+    hw = result.pipeline
+    if hw is None:
+        return line
+    counters = ", ".join(f"{name} {value:,}" for name, value in hw.stats.items())
+    return (
+        f"{line}\npipeline ({result.engine}): {hw.clocks:,} clocks simulated in "
+        f"{hw.seconds:.2f} s ({hw.clocks_per_second / 1e6:.2f} M clocks/s); {counters}"
+    )
+
+
+def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
+    """Render the plan (and without skipping with --stats), write the PNG and print what was
+    asked for."""
     try:
-        _build_engine(args.engine, config, bar)
-        result = render_scene(plan, engine=args.engine, skip=not args.no_skip, progress=bar)
-        baseline = None
-        if args.stats:
-            baseline = render_scene(plan, engine=args.engine, skip=False, progress=bar)
+        result, baseline = _run_engine(args, plan, bar)
     except RuntimeError as error:  # a simulator failed to build or run
         bar.close()
         print(f"{PROG}: error: the {args.engine} engine failed: {_cause(error)}", file=sys.stderr)
         return 1
     bar.close()
-    run = result.deltas
-    measured = f", {run.clocks:,} clocks simulated" if run.clocks is not None else ""
-    if not args.json:
+    config = plan.config
+    if result.mismatches:
         print(
-            f"engine: {len(result.sent)} edges, {result.cycles:,} cycles (timing model)"
-            f"{measured}, {len(run):,} nonzero deltas; accumulation: {result.rows_scanned:,} "
-            f"rows, {result.cells_scanned:,} cells scanned; {result.seconds:.3f} s "
-            f"(engine {run.seconds:.3f} s)"
+            f"{PROG}: error: the {args.engine} pipeline's image differs from the model's in "
+            f"{result.mismatches} pixels (a bug: please report it with the scene)",
+            file=sys.stderr,
         )
+        return 1
+    if not args.json:
+        print(_engine_line(result))
     say = print if not args.json else (lambda *a, **k: None)
     if args.output is not None:
         with atomic_output(PROG, args.output) as temporary:
@@ -298,6 +341,19 @@ def _figures(result) -> dict:
         "config": str(plan.config),
         **numbers,
         "writes": numbers["deltas"],  # the accumulation buffer's writes
+        **_pipeline_figures(result),
+    }
+
+
+def _pipeline_figures(result) -> dict:
+    hw = result.pipeline
+    if hw is None:
+        return {}
+    return {
+        "pipeline_clocks": hw.clocks,
+        "pipeline_seconds": round(hw.seconds, 6),
+        "pipeline_stats": dict(hw.stats),
+        "pipeline_mismatches": result.mismatches,
     }
 
 

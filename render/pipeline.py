@@ -1,5 +1,8 @@
 """A scene through the tile pipeline: per tile, the ops of `edgeaa.model.tile` (tile start,
-each polygon's delta beats and end, flush), and the image from the tiles' frames.
+each polygon's delta beats and end, flush), and the image from the tiles' frames; and a
+scene rendered by the simulated hardware pipeline (`render_pipeline`): the commands of
+`scene_commands` into `edgeaa.hdl.pipeline.EdgePipeline` in Verilator or Amaranth's
+simulator, the image from the pixels it sends.
 
 The image is cut into tiles of `TileConfig` size, row by row. For each tile the polygons
 whose window meets it are sent in order, each edge with the tile as its clip window (without
@@ -11,15 +14,17 @@ model's tile stages (`TileModel`) the image is the renderer's, bit for bit (test
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..model import Clip
 from ..model.pipeline import Command
 from ..model.tile import Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
-from .engines import run_deltas
-from .render import EdgeArrays, Plan, _write_boxes, edges_to_send
+from .engines import EngineUnavailable, run_deltas
+from .render import EdgeArrays, Plan, Render, _write_boxes, edges_to_send, render_scene
+
+PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
 
 
 @dataclass(frozen=True)
@@ -65,8 +70,6 @@ def _tile_clip(plan: Plan, tile: TileConfig, tx: int, ty: int) -> Clip:
 
 
 def _clipped(edge, clip: Clip):
-    from dataclasses import replace
-
     own = edge.clip
     both = Clip(
         max(own.x_min, clip.x_min),
@@ -127,3 +130,46 @@ def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
         w = min(tile.width, plan.scene.width - job.x)
         image[job.y : job.y + h, job.x : job.x + w] = np.asarray(frame)[:h, :w]
     return image
+
+
+def render_pipeline(
+    plan: Plan,
+    engine: str = "verilator",
+    tile: TileConfig | None = None,
+    *,
+    seed: int | None = None,
+    idle: float = 0.0,
+    stall: float = 0.0,
+    progress=None,
+) -> Render:
+    """Render `plan` through the hardware pipeline in a simulator: the image is the pixels
+    the hardware sent. The model's render is made beside it (its figures are the model's
+    stepper and accumulation counts) and `Render.mismatches` counts the pixels where the
+    two differ (0, or it is a bug). `seed`: random idle clocks and back-pressure."""
+    if engine not in PIPELINE_ENGINES:
+        raise EngineUnavailable(f"the pipeline runs in {' or '.join(PIPELINE_ENGINES)}")
+    tile = tile or TileConfig(plan.config)
+    if tile.config != plan.config:
+        raise ValueError("the tile's stepper configuration is not the plan's")
+    model = render_scene(plan, skip=True)
+    commands = scene_commands(plan, tile)
+    report = None if progress is None else (lambda done, total: progress(done, total, engine))
+    if engine == "verilator":
+        from ..sim.simulators import pipeline_harness
+
+        if report is not None:
+            report(0, len(commands))
+        run = pipeline_harness.run(tile, commands, seed=seed or 0, idle=idle, stall=stall)
+        if report is not None:
+            report(len(commands), len(commands))
+    else:
+        from ..sim.simulators.amaranth_sim import run_pipeline
+
+        run = run_pipeline(tile, commands, seed=seed, idle=idle, stall=stall, progress=report)
+    if run.errors or run.edge_errors:
+        raise RuntimeError(
+            f"the pipeline dropped {run.errors} commands and {run.edge_errors} edges as bad"
+        )
+    image = image_from_frames(plan, tile, run.frames(tile)).astype(model.image.dtype)
+    mismatches = int(np.count_nonzero(image != model.image))
+    return replace(model, image=image, engine=engine, pipeline=run, mismatches=mismatches)

@@ -435,6 +435,11 @@ class Render:
     pixel_stores: int  # image pixels written
     seconds: float = 0.0  # whole render
     timings: dict = field(default_factory=dict)
+    # Rendered by the hardware pipeline (`edgeaa.render.pipeline.render_pipeline`): its run
+    # (clocks, counters; `edgeaa.sim.simulators.pipeline_harness.PipelineRun`) and the pixels
+    # where its image differs from the model's.
+    pipeline: object | None = None
+    mismatches: int | None = None
 
     @property
     def engine_run(self) -> DeltaRun:
@@ -465,7 +470,10 @@ def render_scene(
     skip: bool = True,
     progress=None,
 ) -> Render:
-    """Render a scene (or a plan of one) through an engine. progress(done, total, stage)."""
+    """Render a scene (or a plan of one): the deltas from `engine` (the model, or the
+    stepper core alone in a simulator), accumulated and resolved by the model. The whole
+    pipeline in hardware is `edgeaa.render.pipeline.render_pipeline`. progress(done, total,
+    stage)."""
     start = time.perf_counter()
     plan = scene if isinstance(scene, Plan) else plan_scene(scene, config or EdgeConfig())
     config = plan.config

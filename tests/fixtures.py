@@ -11,6 +11,9 @@ often), `span_edges` and `random_span_edge` (P1 within a span of P0; axis-aligne
 often), `random_any_length_edge` (endpoints uniform over the whole range), `edge_commands` and
 `random_edge_commands` (good or bad commands for the core, vertices often on pixel centres or
 corners, optionally with a clip window `window_near` the edge).
+
+Scenes: `TINY_SCENE` (two polygons, one a path with a curve) and `small_scenes` (hypothesis:
+1 to 3 random polygons, both fill rules).
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from dataclasses import replace
 from hypothesis import strategies as st
 
 from edgeaa.model import Clip, Edge, EdgeConfig
+from edgeaa.render import Polygon, Scene
 
 # -- configurations ----------------------------------------------------------------------------
 
@@ -262,3 +266,21 @@ TINY_SCENE = {
         {"path": "M 3 11 l 5 -3 q 4 4 -2 5 z", "intensity": 90, "fill_rule": "evenodd"},
     ],
 }
+
+
+@st.composite
+def small_scenes(draw, config: EdgeConfig):
+    """Scenes of 1 to 3 polygons (1 or 2 contours of 3 to 6 vertices on the 1/16 px grid,
+    partly outside the image), either fill rule, random intensities and background."""
+    full = config.full_scale
+    width, height = draw(st.integers(5, 40)), draw(st.integers(3, 24))
+    coord = st.floats(-6, 46, allow_nan=False).map(lambda v: round(v * 16) / 16)
+    polygons = []
+    for _ in range(draw(st.integers(1, 3))):
+        contours = tuple(
+            tuple((draw(coord), draw(coord)) for _ in range(draw(st.integers(3, 6))))
+            for _ in range(draw(st.integers(1, 2)))
+        )
+        rule = draw(st.sampled_from(["nonzero", "evenodd"]))
+        polygons.append(Polygon(contours, draw(st.integers(0, full)), rule))
+    return Scene(width, height, tuple(polygons), background=draw(st.integers(0, full)))

