@@ -199,9 +199,47 @@ def test_edgeaa_render_engine_verilator_writes_the_pipelines_png(tmp_path, capsy
     from edgeaa.cli import main
 
     out = tmp_path / "text.png"
-    args = ["render", "--builtin", "text", "--engine", "verilator", "--tile", "32x16"]
+    args = ["render", "--builtin", "text", "--engine", "verilator", "--tile", "16x8"]
     assert main([*args, "-o", str(out), "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "pipeline (verilator)" in text and "M clocks/s" in text, text
-    assert main(["render", "--builtin", "text", "--tile", "32x16"]) == 2
+    assert main(["render", "--builtin", "text", "--tile", "16x8"]) == 2
     assert "--engine verilator" in capsys.readouterr().err
+
+
+# -- cocotb on Verilator -------------------------------------------------------------------------
+
+
+def tiny_scene_at_4_bits() -> dict:
+    """TINY_SCENE with its intensities scaled to SMALL's 4 bits."""
+    polygons = [{**p, "intensity": p["intensity"] // 16} for p in TINY_SCENE["polygons"]]
+    return {**TINY_SCENE, "background": TINY_SCENE["background"] // 16, "polygons": polygons}
+
+
+@pytest.mark.parametrize("seed", [11])
+def test_cocotb_checks_every_pixel_of_the_pipeline_under_back_pressure(seed):
+    from edgeaa.sim.simulators.pipeline_cosim import cosimulate_pipeline
+
+    tile = TileConfig(SMALL, 8, 8)
+    plan = plan_scene(parse_scene(tiny_scene_at_4_bits()), SMALL)
+    commands = scene_commands(plan, tile) + bad_commands(SMALL.subpixel_scale)
+    result = cosimulate_pipeline(tile, commands, seed=seed, idle=0.2, stall=0.4)
+    flushes = sum(c.op == Command.flush().op for c in commands)
+    assert result.pixels == flushes * tile.pixels
+
+
+def test_cocotb_catches_a_wrong_model(monkeypatch):
+    from edgeaa.sim.simulators import pipeline_cosim
+    from edgeaa.sim.simulators.verilator import CosimError
+
+    class OffByOne(TileModel):
+        def run(self, ops):
+            frames = super().run(ops)
+            frames[0][3, 5] += 1
+            return frames
+
+    monkeypatch.setattr(pipeline_cosim, "TileModel", OffByOne)
+    tile = TileConfig(SMALL, 8, 8)
+    plan = plan_scene(parse_scene(tiny_scene_at_4_bits()), SMALL)
+    with pytest.raises(CosimError, match=r"pixel 29 is"):
+        pipeline_cosim.cosimulate_pipeline(tile, scene_commands(plan, tile), seed=1)
