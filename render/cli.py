@@ -321,6 +321,12 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
         say(stats_report(baseline, result))
         figures["without_skipping"] = stats_numbers(baseline)
         figures["savings"] = [vars(saving) for saving in rule_savings(baseline, result)]
+        if result.pipeline is not None:
+            from .pipeline import pipeline_savings, savings_table
+
+            savings = pipeline_savings(plan, result.pipeline_tile)
+            say("\n" + savings_table(savings))
+            figures["pipeline_savings"] = [vars(saving) for saving in savings]
     if args.error:
         figures.update(_error(result, plan, bar, say))
     if args.json:

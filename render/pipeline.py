@@ -20,7 +20,8 @@ import numpy as np
 
 from ..model import Clip
 from ..model.pipeline import Command
-from ..model.tile import Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
+from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
+from ..model.timing import EMPTY_EDGE_CYCLES
 from .engines import EngineUnavailable, run_deltas
 from .render import EdgeArrays, Plan, Render, _write_boxes, edges_to_send, render_scene
 
@@ -172,4 +173,58 @@ def render_pipeline(
         )
     image = image_from_frames(plan, tile, run.frames(tile)).astype(model.image.dtype)
     mismatches = int(np.count_nonzero(image != model.image))
-    return replace(model, image=image, engine=engine, pipeline=run, mismatches=mismatches)
+    return replace(
+        model, image=image, engine=engine, pipeline=run, pipeline_tile=tile, mismatches=mismatches
+    )
+
+
+@dataclass(frozen=True)
+class PipelineSaving:
+    """What one of the pipeline's skipping rules saves on a scene: how many things it skips
+    and the clocks of the stage that would otherwise spend them (`edgeaa.model.timing`,
+    `edgeaa.model.tile`'s cycle model); each rule alone, so they do not add up exactly."""
+
+    rule: str
+    skipped: int
+    clocks: int
+
+
+def pipeline_savings(plan: Plan, tile: TileConfig) -> list[PipelineSaving]:
+    """The savings of `scene_commands` and the tile stages on `plan`."""
+    sent = len(edges_to_send(plan, skip=True)["sent"])
+    model = TileModel(tile)
+    edges_not_sent = polygons_not_sent = ends = rows_scanned = 0
+    for job in tile_jobs(plan, tile):
+        edges_not_sent += sent - len(job.edges)
+        polygons_not_sent += len(plan.polygons) - len(job.polygons)
+        for op in tile_ops(plan, tile, job):
+            result = model.feed(op)
+            if isinstance(op, PolygonEnd):
+                ends, rows_scanned = ends + 1, rows_scanned + result
+    unscanned = ends * tile.height - rows_scanned
+    return [
+        PipelineSaving(
+            "edges not meeting a tile (not sent to it; each would take the setup)",
+            edges_not_sent,
+            edges_not_sent * EMPTY_EDGE_CYCLES,
+        ),
+        PipelineSaving(
+            "polygons not meeting a tile (no begin, no end)",
+            polygons_not_sent,
+            polygons_not_sent * EMPTY_END,
+        ),
+        PipelineSaving(
+            "tile rows with no delta (not scanned at an end)", unscanned, unscanned * tile.width
+        ),
+        PipelineSaving(
+            "clear as each cell is read (no clear pass)",
+            rows_scanned,
+            rows_scanned * tile.width,
+        ),
+    ]
+
+
+def savings_table(savings: list[PipelineSaving]) -> str:
+    lines = [f"{'pipeline: saving of each rule alone':70} {'skipped':>8} {'clocks':>10}"]
+    lines += [f"{s.rule:70} {s.skipped:8,d} {s.clocks:10,d}" for s in savings]
+    return "\n".join(lines)

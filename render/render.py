@@ -439,6 +439,7 @@ class Render:
     # (clocks, counters; `edgeaa.sim.simulators.pipeline_harness.PipelineRun`) and the pixels
     # where its image differs from the model's.
     pipeline: object | None = None
+    pipeline_tile: object | None = None  # its `edgeaa.model.tile.TileConfig`
     mismatches: int | None = None
 
     @property

@@ -19,7 +19,13 @@ from edgeaa.model.pipeline import COMMAND_VERSION, Command, command_ops
 from edgeaa.model.tile import TileConfig, TileModel
 from edgeaa.render import builtin, parse_scene, plan_scene, render_scene
 from edgeaa.render.builtin import BUILTINS
-from edgeaa.render.pipeline import image_from_frames, render_pipeline, render_tiles, scene_commands
+from edgeaa.render.pipeline import (
+    image_from_frames,
+    pipeline_savings,
+    render_pipeline,
+    render_tiles,
+    scene_commands,
+)
 from edgeaa.sim.simulators.amaranth_sim import run_pipeline
 from edgeaa.sim.simulators.pipeline_harness import PIXEL_COLUMNS, PipelineHang, expected_pixels
 
@@ -243,3 +249,16 @@ def test_cocotb_catches_a_wrong_model(monkeypatch):
     plan = plan_scene(parse_scene(tiny_scene_at_4_bits()), SMALL)
     with pytest.raises(CosimError, match=r"pixel 29 is"):
         pipeline_cosim.cosimulate_pipeline(tile, scene_commands(plan, tile), seed=1)
+
+
+@pytest.mark.parametrize("name", ["text", "starburst"])
+def test_the_savings_rows_are_what_the_hardware_scanned(name):
+    """The resolve is busy one clock per cell scanned, per pixel flushed, and one per tile
+    and flush op: the model's rows scanned (`pipeline_savings`) match the hardware's counter."""
+    plan = plan_scene(builtin(name, DEFAULT), DEFAULT)
+    run = render_pipeline(plan, "verilator", TILE).pipeline
+    savings = {s.rule.split(" (")[0]: s for s in pipeline_savings(plan, TILE)}
+    tiles = len(run.pixels) // TILE.pixels
+    scanned = savings["clear as each cell is read"].clocks
+    assert run.stats["resolve_busy"] == scanned + tiles * (TILE.pixels + 2)
+    assert savings["tile rows with no delta"].skipped > 0
