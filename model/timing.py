@@ -292,7 +292,7 @@ def sustained_rate(
         per_unit = unit_cycles(config, setup_units)
     else:
         per_unit = setup_latency_ - pipeline_depth(config, output) - (setup_units == 1)
-    return columns / max(columns, per_unit / setup_units)
+    return columns * setup_units / max(columns * setup_units, per_unit)
 
 
 def stream_rate(timings: list[EdgeTiming]) -> float:
