@@ -73,6 +73,8 @@ from .edge import Edge, EdgeError, setup
 
 __all__ = [
     "DEFAULT_SETUP_UNITS",
+    "ClockBreakdown",
+    "clock_breakdown",
     "EdgeTiming",
     "beat_cycles",
     "pipeline_depth",
@@ -293,6 +295,44 @@ def sustained_rate(
     else:
         per_unit = setup_latency_ - pipeline_depth(config, output) - (setup_units == 1)
     return columns * setup_units / max(columns * setup_units, per_unit)
+
+
+@dataclass(frozen=True)
+class ClockBreakdown:
+    """Where the clocks of a stream went (`clock_breakdown`): ``clocks`` (clock 0 to the last
+    beat) = ``stepping`` (one per column) + ``setup_bound`` (the stepper idle between two
+    edges, waiting for the next bank) + ``latency`` (before the first column and the output
+    pipeline after the last) + ``stalls`` (sink back-pressure: 0 for the timing model's
+    always-ready sink)."""
+
+    clocks: int
+    edges: int  # edges stepped (good, with a visible column)
+    stepping: int
+    setup_bound: int
+    latency: int
+    stalls: int = 0
+
+    @property
+    def columns_per_clock(self) -> float:
+        return self.stepping / self.clocks if self.clocks else 0.0
+
+    @property
+    def edges_per_clock(self) -> float:
+        return self.edges / self.clocks if self.clocks else 0.0
+
+
+def clock_breakdown(timings: list[EdgeTiming], depth: int) -> ClockBreakdown:
+    """Split a schedule's clocks (`write_cycles`, `schedule`; `depth` its `pipeline_depth`)
+    into stepping, setup-bound and latency clocks (`ClockBreakdown`)."""
+    stepped = [t for t in timings if not t.dropped]
+    if not stepped:
+        return ClockBreakdown(0, 0, 0, 0, 0)
+    columns = sum(len(t.beats) for t in stepped)
+    gaps = sum(b.load - (a.load + len(a.beats)) for a, b in zip(stepped, stepped[1:], strict=False))
+    latency = stepped[0].load + 1 + depth
+    clocks = stepped[-1].beats[-1] + 1
+    assert clocks == columns + gaps + latency, "the breakdown does not add up"
+    return ClockBreakdown(clocks, len(stepped), columns, gaps, latency)
 
 
 def stream_rate(timings: list[EdgeTiming]) -> float:
