@@ -30,12 +30,11 @@ from amaranth.lib.wiring import In, Out
 
 from ..model.bank import check_output
 from ..model.config import EdgeConfig
+from ..model.timing import MAX_SETUP_UNITS
 from .layouts import check_config, clip_layout, edge_layout, full_clip, setup_layout
 from .setup import ERRORS_BITS, EdgeSetupUnit
 
 __all__ = ["SetupArray", "check_setup_units"]
-
-MAX_SETUP_UNITS = 16
 
 
 def check_setup_units(setup_units) -> int:

@@ -73,6 +73,7 @@ from .edge import Edge, EdgeError, setup
 
 __all__ = [
     "DEFAULT_SETUP_UNITS",
+    "MAX_SETUP_UNITS",
     "ClockBreakdown",
     "clock_breakdown",
     "EdgeTiming",
@@ -94,6 +95,7 @@ DELTAS_PIPELINE_DEPTH = 3  # the deltas stepper: p1 (depth), p2 (estimate), outp
 # Setup units of the core by default (`edgeaa.hdl.dispatch.SetupArray`): with R = 30 RUN
 # clocks (the default configuration) nine units accept an edge every ceil(35 / 9) = 4 clocks.
 DEFAULT_SETUP_UNITS = 9
+MAX_SETUP_UNITS = 16
 
 
 def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:

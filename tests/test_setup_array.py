@@ -15,9 +15,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from edgeaa.hdl import EdgeAntialiaser
-from edgeaa.hdl.dispatch import MAX_SETUP_UNITS, SetupArray
+from edgeaa.hdl.dispatch import SetupArray
 from edgeaa.model import Clip, Edge, setup
 from edgeaa.model import timing as timing_model
+from edgeaa.model.timing import MAX_SETUP_UNITS
 
 UNITS = (2, 3, timing_model.DEFAULT_SETUP_UNITS)
 
