@@ -25,6 +25,7 @@ from .command import (
 )
 from .model import MODES, Clip, Edge, EdgeConfig, run_edge
 from .model.reference import error_bound, exact_coverage_array
+from .model.timing import DEFAULT_SETUP_UNITS, MAX_SETUP_UNITS
 
 
 class EdgeCommand(Command):
@@ -322,6 +323,12 @@ class SynthCommand(Command):
             help="nextpnr placement seed (default 1)",
         )
         _add_core_option(parser)
+        parser.add_argument(
+            "--setup-units",
+            type=integer_type(1, MAX_SETUP_UNITS),
+            default=DEFAULT_SETUP_UNITS,
+            help=f"setup units of the core (default {DEFAULT_SETUP_UNITS}; 1: the smallest)",
+        )
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
@@ -331,10 +338,12 @@ class SynthCommand(Command):
 
         config = config_from_args(args)
         designs = {
-            "edgeaa": lambda: EdgeAntialiaser(config, output=args.core),
+            "edgeaa": lambda: EdgeAntialiaser(
+                config, output=args.core, setup_units=args.setup_units
+            ),
             "bresenham": lambda: BresenhamLine(config=config),
         }
-        print(f"edgeaa synth: {args.core} core, {config}")
+        print(f"edgeaa synth: {args.core} core, {args.setup_units} setup units, {config}")
         print("both cores inside the same I/O harness; figures are the core's (harness subtracted)")
         print(f"{'target':7} {'design':10} {'LUT4':>6} {'FF':>6} {'Fmax MHz':>9}")
         results = {}

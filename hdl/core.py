@@ -55,6 +55,7 @@ from ..model import timing
 from ..model.bank import check_output
 from ..model.beat import BEAT_FORMATS
 from ..model.config import EdgeConfig
+from .dispatch import SetupArray, check_setup_units
 from .layouts import (
     check_config,
     clip_layout,
@@ -77,11 +78,20 @@ class EdgeAntialiaser(wiring.Component):
     """
 
     def __init__(
-        self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS, output: str = "writes"
+        self,
+        config: EdgeConfig,
+        *,
+        errors_bits: int = ERRORS_BITS,
+        output: str = "writes",
+        setup_units: int = timing.DEFAULT_SETUP_UNITS,
     ):
         self._config = check_config(config)
         self._output = check_output(output)
-        self.setup = EdgeSetupUnit(config, errors_bits=errors_bits, output=output)
+        self._setup_units = check_setup_units(setup_units)
+        if setup_units == 1:
+            self.setup = EdgeSetupUnit(config, errors_bits=errors_bits, output=output)
+        else:
+            self.setup = SetupArray(config, setup_units, errors_bits=errors_bits, output=output)
         stream_name = BEAT_FORMATS[output].stream
         super().__init__(
             {
@@ -111,6 +121,11 @@ class EdgeAntialiaser(wiring.Component):
         return self._output
 
     @property
+    def setup_units(self) -> int:
+        """Setup units (`edgeaa.hdl.dispatch.SetupArray` when more than one)."""
+        return self._setup_units
+
+    @property
     def run_cycles(self) -> int:
         """`edgeaa.model.timing.run_cycles`: clocks of RUN for an edge not clipped at its
         start."""
@@ -129,9 +144,9 @@ class EdgeAntialiaser(wiring.Component):
 
     @property
     def setup_interval(self) -> int:
-        """`edgeaa.model.timing.setup_interval`: the fewest clocks between two accepted
-        edges."""
-        return timing.setup_interval(self._config)
+        """`edgeaa.model.timing.setup_interval`: clocks per edge the setup sustains (edges of
+        at least this many columns keep the stepper busy)."""
+        return timing.setup_interval(self._config, self._setup_units)
 
     def elaborate(self, platform):
         m = Module()

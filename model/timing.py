@@ -72,6 +72,10 @@ from .config import EdgeConfig
 from .edge import Edge, EdgeError, setup
 
 __all__ = [
+    "DEFAULT_SETUP_UNITS",
+    "MAX_SETUP_UNITS",
+    "ClockBreakdown",
+    "clock_breakdown",
     "EdgeTiming",
     "beat_cycles",
     "pipeline_depth",
@@ -81,12 +85,19 @@ __all__ = [
     "start_clip_cycles",
     "stream_rate",
     "sustained_rate",
+    "unit_cycles",
     "write_cycles",
 ]
 
 BAD_COMMAND_CYCLES = 2  # accept + FOLD: a dropped command occupies the setup two clocks
 EMPTY_EDGE_CYCLES = 5  # accept, FOLD, WINDOW, two RUN clocks: an edge with no visible column
 DELTAS_PIPELINE_DEPTH = 3  # the deltas stepper: p1 (depth), p2 (estimate), output register
+# Setup units of the core by default (`edgeaa.hdl.dispatch.SetupArray`). One: the smallest
+# core (the polygon pipeline must fit an iCE40 HX8K). With R = 30 RUN clocks (the default
+# configuration) nine units accept an edge every ceil(35 / 9) = 4 clocks, at about six times
+# the line core's area (docs/hardware.md, "Setup throughput").
+DEFAULT_SETUP_UNITS = 1
+MAX_SETUP_UNITS = 16
 
 
 def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:
@@ -118,10 +129,21 @@ def setup_latency(config: EdgeConfig, output: str = "writes") -> int:
     return run_cycles(config) + 5 + pipeline_depth(config, output)
 
 
-def setup_interval(config: EdgeConfig) -> int:
-    """The fewest clocks between two accepted edges: accept, FOLD, WINDOW, RUN and FINAL.
-    Edges of at least this many columns keep the stepper busy (one column per clock)."""
-    return run_cycles(config) + 4
+def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
+    """Clocks per edge the setup sustains, rounded up: edges of at least this many columns
+    keep the stepper busy (one column per clock). One unit: accept, FOLD, WINDOW, RUN and
+    FINAL, ``R + 4`` (its bank register lets it start the next edge while the bank waits).
+    ``N >= 2`` units (`SetupArray`): each holds an edge from its accept to the stepper's load
+    of its bank and retires it then, ``R + 5`` clocks, so ``ceil((R + 5) / N)``."""
+    if setup_units == 1:
+        return run_cycles(config) + 4
+    return -(-(run_cycles(config) + 5) // setup_units)
+
+
+def unit_cycles(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
+    """Clocks one setup unit spends per edge in steady state: ``R + 4`` alone, ``R + 5`` in
+    an array (accept to retirement, then free the clock after)."""
+    return run_cycles(config) + (4 if setup_units == 1 else 5)
 
 
 @dataclass(frozen=True)
@@ -142,7 +164,11 @@ class EdgeTiming:
 
 
 def write_cycles(
-    config: EdgeConfig, edges, setup_latency_: int | None = None, output: str = "writes"
+    config: EdgeConfig,
+    edges,
+    setup_latency_: int | None = None,
+    output: str = "writes",
+    setup_units: int = DEFAULT_SETUP_UNITS,
 ) -> list[EdgeTiming]:
     """Predict the clock of every beat for an always-ready sink and a back-to-back source.
 
@@ -151,7 +177,7 @@ def write_cycles(
     get no beats; so are edges with no column in their clip window. `setup_latency_`
     defaults to `setup_latency(config, output)`; pass the core's ``setup_latency`` to check
     the two agree. `output` is the core's (``"writes"`` or ``"deltas"``): one beat per
-    column either way, only the pipeline depth differs.
+    column either way, only the pipeline depth differs. `setup_units` is the core's.
     """
     shapes = []
     for edge in edges:
@@ -161,17 +187,29 @@ def write_cycles(
             shapes.append(None)
             continue
         shapes.append((st.columns, st.clipped_start))
-    return schedule(config, shapes, edges, setup_latency_, output)
+    return schedule(config, shapes, edges, setup_latency_, output, setup_units)
 
 
 def schedule(
-    config: EdgeConfig, shapes, edges=None, setup_latency_: int | None = None, output="writes"
+    config: EdgeConfig,
+    shapes,
+    edges=None,
+    setup_latency_: int | None = None,
+    output="writes",
+    setup_units: int = DEFAULT_SETUP_UNITS,
 ) -> list[EdgeTiming]:
     """`write_cycles` from each edge's (columns, clipped_start) as setup gives them (None for
     a command the core drops as bad), for callers that hold the setups already
     (`edgeaa.model.edge.setup_batch`). `edges` only labels the timings."""
     latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, output)
+    if setup_units == 1:
+        return _schedule_one(config, shapes, edges, latency, depth)
+    return _schedule_units(config, shapes, edges, latency, depth, setup_units)
+
+
+def _schedule_one(config: EdgeConfig, shapes, edges, latency: int, depth: int):
+    """`schedule` of the core with one setup unit (its bank register decouples it)."""
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     accept = 0
@@ -200,24 +238,105 @@ def schedule(
     return out
 
 
+def _schedule_units(config: EdgeConfig, shapes, edges, latency: int, depth: int, units: int):
+    """`schedule` of the core with `units` setup units (`edgeaa.hdl.dispatch.SetupArray`).
+
+    Command k goes to unit k mod N when that unit has retired its previous command; a good
+    edge's unit writes its bank ``R + 3`` clocks after accepting it (never waiting: a unit
+    holds one command); the stepper loads it once the collector points at it and the stepper
+    is free; a dropped command retires once its unit is back in IDLE and the collector points
+    at it. The collector points at the next unit the clock after a retirement."""
+    extra = start_clip_cycles(config)
+    out: list[EdgeTiming] = []
+    free = [0] * units  # first clock each unit may accept in
+    accept = -1
+    collector = 0  # first clock the collector points at the next command's unit
+    stepper_free = 0  # first clock the stepper may load in (idle, or its last column)
+    for k, shape in enumerate(shapes):
+        edge = None if edges is None else edges[k]
+        unit = k % units
+        accept = max(accept + 1, free[unit])
+        columns = 0 if shape is None else int(shape[0])
+        if not columns:
+            idle = accept + (BAD_COMMAND_CYCLES if shape is None else EMPTY_EDGE_CYCLES)
+            retire = max(idle, collector)
+            out.append(EdgeTiming(edge, accept, None, None, ()))
+        else:
+            bank = accept + latency - depth - 2 + (extra if shape[1] else 0)
+            load = max(bank + 1, collector, stepper_free)
+            beats = range(load + 1 + depth, load + 1 + depth + columns)
+            out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
+            retire, stepper_free = load, load + columns
+        collector = retire + 1
+        free[unit] = retire + 1
+    return out
+
+
 def beat_cycles(
-    config: EdgeConfig, edges, setup_latency_: int | None = None, output: str = "writes"
+    config: EdgeConfig,
+    edges,
+    setup_latency_: int | None = None,
+    output: str = "writes",
+    setup_units: int = DEFAULT_SETUP_UNITS,
 ) -> list[int]:
     """The clock of every beat of the stream, in order (`write_cycles` flattened)."""
-    timings = write_cycles(config, edges, setup_latency_, output)
+    timings = write_cycles(config, edges, setup_latency_, output, setup_units)
     return [beat for timing in timings for beat in timing.beats]
 
 
 def sustained_rate(
-    config: EdgeConfig, columns: int, setup_latency_: int | None = None, output: str = "writes"
+    config: EdgeConfig,
+    columns: int,
+    setup_latency_: int | None = None,
+    output: str = "writes",
+    setup_units: int = DEFAULT_SETUP_UNITS,
 ) -> float:
     """Steady-state columns per clock of an endless stream of edges of `columns` columns
-    (`setup_latency_`, if given, is the core's: the interval is ``L - D - 1``)."""
+    (`setup_latency_`, if given, is the core's: a unit spends ``L - D - 1`` clocks per edge
+    alone, ``L - D`` in an array): ``C / max(C, unit clocks / N)``."""
     if setup_latency_ is None:
-        interval = setup_interval(config)
+        per_unit = unit_cycles(config, setup_units)
     else:
-        interval = setup_latency_ - pipeline_depth(config, output) - 1
-    return columns / max(columns, interval)
+        per_unit = setup_latency_ - pipeline_depth(config, output) - (setup_units == 1)
+    return columns * setup_units / max(columns * setup_units, per_unit)
+
+
+@dataclass(frozen=True)
+class ClockBreakdown:
+    """Where the clocks of a stream went (`clock_breakdown`): ``clocks`` (clock 0 to the last
+    beat) = ``stepping`` (one per column) + ``setup_bound`` (the stepper idle between two
+    edges, waiting for the next bank) + ``latency`` (before the first column and the output
+    pipeline after the last) + ``stalls`` (sink back-pressure: 0 for the timing model's
+    always-ready sink)."""
+
+    clocks: int
+    edges: int  # edges stepped (good, with a visible column)
+    stepping: int
+    setup_bound: int
+    latency: int
+    stalls: int = 0
+
+    @property
+    def columns_per_clock(self) -> float:
+        return self.stepping / self.clocks if self.clocks else 0.0
+
+    @property
+    def edges_per_clock(self) -> float:
+        return self.edges / self.clocks if self.clocks else 0.0
+
+
+def clock_breakdown(timings: list[EdgeTiming], depth: int) -> ClockBreakdown:
+    """Split a schedule's clocks (`write_cycles`, `schedule`; `depth` its `pipeline_depth`)
+    into stepping, setup-bound and latency clocks (`ClockBreakdown`)."""
+    stepped = [t for t in timings if not t.dropped]
+    if not stepped:
+        return ClockBreakdown(0, 0, 0, 0, 0)
+    columns = sum(len(t.beats) for t in stepped)
+    gaps = sum(b.load - (a.load + len(a.beats)) for a, b in zip(stepped, stepped[1:], strict=False))
+    latency = stepped[0].load + 1 + depth
+    clocks = stepped[-1].beats[-1] + 1
+    assert clocks == columns + gaps + latency, "the breakdown does not add up"
+    return ClockBreakdown(clocks, len(stepped), columns, gaps, latency)
 
 
 def stream_rate(timings: list[EdgeTiming]) -> float:

@@ -14,6 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import setup
+from ..model.timing import (
+    DEFAULT_SETUP_UNITS,
+    ClockBreakdown,
+    clock_breakdown,
+    pipeline_depth,
+    write_cycles,
+)
 from .engines import cycles
 from .render import Render
 
@@ -77,11 +84,24 @@ def rule_savings(baseline: Render, skipping: Render) -> list[RuleSaving]:
 
 
 def stats_numbers(result: Render) -> dict:
-    """The figures of one render, for --stats and --json."""
+    """The figures of one render, for --stats and --json: besides the counts, the core's
+    throughput (``columns_per_clock``, ``edges_per_clock``) and where its clocks went
+    (``clocks_stepping``, ``clocks_setup_bound``: the stepper idle waiting for the next
+    bank, ``clocks_latency``: before the first column and the pipeline after the last,
+    ``clocks_stalled``: sink back-pressure, 0 for the timing model's ready sink), by the
+    timing model with the core's default `setup_units`."""
+    split = clock_split(result)
     return {
         "edges": len(result.sent),
-        "columns": _columns(result),
+        "columns": split.stepping,
         "cycles": result.cycles,
+        "setup_units": DEFAULT_SETUP_UNITS,
+        "columns_per_clock": round(split.columns_per_clock, 6),
+        "edges_per_clock": round(split.edges_per_clock, 6),
+        "clocks_stepping": split.stepping,
+        "clocks_setup_bound": split.setup_bound,
+        "clocks_latency": split.latency,
+        "clocks_stalled": split.stalls,
         "deltas": len(result.deltas),
         "rows_scanned": result.rows_scanned,
         "cells_scanned": result.cells_scanned,
@@ -90,13 +110,19 @@ def stats_numbers(result: Render) -> dict:
     }
 
 
-def _columns(result: Render) -> int:
-    """Columns stepped: each sent edge's visible columns (the timing model's count)."""
-    from ..model.timing import write_cycles
-
+def clock_split(result: Render) -> ClockBreakdown:
+    """The timing model's clocks of the render's edges (the deltas core, as sent: clipped
+    when skipping), split by `edgeaa.model.timing.clock_breakdown`."""
     plan = result.plan
     edges = [plan.edge(int(e), clip=result.skip) for e in result.sent]
-    return sum(len(t.beats) for t in write_cycles(plan.config, edges))
+    timings = write_cycles(plan.config, edges, output="deltas")
+    split = clock_breakdown(timings, pipeline_depth(plan.config, "deltas"))
+    if split.clocks != result.cycles:
+        raise AssertionError(f"clock split {split.clocks} != render cycles {result.cycles}")
+    return split
+
+
+FLOAT = "{:11.3f}"
 
 
 def _ratio(a: float, b: float) -> str:
@@ -109,7 +135,8 @@ def stats_report(baseline: Render, skipping: Render) -> str:
     lines = [
         "",
         f"skipping: {plan.scene.name}, {baseline.engine} engine (without = every boundary edge "
-        "to the engine unclipped, each polygon accumulated over the whole image)",
+        "to the engine unclipped, each polygon accumulated over the whole image); clocks: "
+        f"timing model, deltas core with {DEFAULT_SETUP_UNITS} setup units",
         f"{'':34} {'without':>11} {'with':>11} {'with/without':>12}",
     ]
 
@@ -120,6 +147,12 @@ def stats_report(baseline: Render, skipping: Render) -> str:
     row("edges to the engine", without["edges"], with_["edges"])
     row("columns stepped", without["columns"], with_["columns"])
     row("cycles (timing model)", without["cycles"], with_["cycles"])
+    row("columns per clock", without["columns_per_clock"], with_["columns_per_clock"], FLOAT)
+    row("edges per clock", without["edges_per_clock"], with_["edges_per_clock"], FLOAT)
+    row("  clocks stepping", without["clocks_stepping"], with_["clocks_stepping"])
+    row("  clocks setup-bound", without["clocks_setup_bound"], with_["clocks_setup_bound"])
+    row("  clocks latency", without["clocks_latency"], with_["clocks_latency"])
+    row("  clocks stalled (sink)", without["clocks_stalled"], with_["clocks_stalled"])
     if baseline.deltas.clocks is not None:
         row("clocks simulated (with drain)", baseline.deltas.clocks, skipping.deltas.clocks)
     row("nonzero deltas", without["deltas"], with_["deltas"])

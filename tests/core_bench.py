@@ -108,6 +108,7 @@ class Run:
     areas: list = field(default_factory=list)  # (clock, area0, area1) per column, in order
     banks: list = field(default_factory=list)  # (clock, decoded bank) handed to the stepper
     error_pulses: list = field(default_factory=list)  # clocks with `error` high
+    setup_units: int = timing_model.DEFAULT_SETUP_UNITS
     errors: int = 0  # final `errors` count
     final_idle: tuple = ()  # writes.valid, bank valid, stepper active, edges.ready
     clocks: int = 0
@@ -121,15 +122,17 @@ def simulate(
     idle: float = 0.0,
     stall: float = 0.0,
     label: str = "",
+    setup_units: int = timing_model.DEFAULT_SETUP_UNITS,
 ) -> Run:
     """Offer `edges` in order (each with its window on ``clip``) and drain the writes; with
     `seed`, random idle source clocks (probability `idle` per clock before each offer), random
     sink stalls (`stall`) and a random window on ``clip`` whenever no edge is offered."""
-    dut = EdgeAntialiaser(config)
+    dut = EdgeAntialiaser(config, setup_units=setup_units)
     stepper = dut.stepper
     rng = random.Random(seed) if seed is not None else None
     tag = f"[{label} seed={seed} idle={idle} stall={stall} config={config}]"
-    run = Run(config, list(edges), tag, dut.setup_latency)
+    tag = f"{tag[:-1]} setup_units={setup_units}]"
+    run = Run(config, list(edges), tag, dut.setup_latency, setup_units=setup_units)
     payloads = [edge_payload(config, edge) for edge in edges]
     clips = [edge_clip(config, edge) for edge in edges]
     expected_beats = sum(setup(config, edge).columns for edge in edges if is_good(config, edge))
@@ -334,7 +337,9 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     if not exact_timing:
         return
     # The clock of each accept, bank load, stepped column, beat and error pulse.
-    timings = timing_model.write_cycles(config, run.edges, run.setup_latency)
+    timings = timing_model.write_cycles(
+        config, run.edges, run.setup_latency, setup_units=run.setup_units
+    )
     assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
     want_clocks = [clock for t in timings for clock in t.beats]
     got_clocks = [clock for clock, _ in run.beats]
@@ -350,8 +355,9 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     assert run.error_pulses == want_errors, f"{tag} error pulse clocks"
 
 
-def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label=""):
-    run = simulate(config, edges, seed=seed, idle=idle, stall=stall, label=label)
+def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None):
+    units = timing_model.DEFAULT_SETUP_UNITS if setup_units is None else setup_units
+    run = simulate(config, edges, seed=seed, idle=idle, stall=stall, label=label, setup_units=units)
     check_run(run, exact_timing=seed is None)
     return run
 

@@ -177,7 +177,12 @@ def test_clip_latency():
     assert [clock for clock, _ in run.beats] == list(range(latency, latency + 4))
 
     bad = Edge(7, 7, 7, 7)
-    run = run_and_check(config, [empty, bad, empty, edge], label="empty edge occupancy")
+    run = run_and_check(
+        config, [empty, bad, empty, edge], label="empty edge occupancy", setup_units=1
+    )
     assert run.accepts == [0, 5, 7, 12] and run.error_pulses == [7], run.accepts
     assert [clock for clock, _ in run.beats] == list(range(12 + latency, 12 + latency + 6))
     assert len(run.banks) == 1
+    # Several units: the next command goes to the next unit in the next clock.
+    run = run_and_check(config, [empty, bad, empty, edge], label="empty edge, units")
+    assert run.accepts == [0, 1, 2, 3] and run.error_pulses == [3], run.accepts

@@ -33,7 +33,12 @@ def test_setup_latency_is_the_timing_model(name):
     assert dut.setup_latency == timing_model.setup_latency(config)
     assert dut.setup_latency == config.intensity_bits + config.F + 6 + depth
     assert dut.run_cycles == timing_model.run_cycles(config) == config.intensity_bits + config.F + 1
-    assert timing_model.setup_interval(config) == dut.setup_interval == dut.run_cycles + 4
+    units = dut.setup_units
+    assert units == timing_model.DEFAULT_SETUP_UNITS
+    assert timing_model.setup_interval(config) == dut.setup_interval
+    assert dut.setup_interval == -(-(dut.run_cycles + 5) // units)
+    assert timing_model.setup_interval(config, 1) == dut.run_cycles + 4
+    assert EdgeAntialiaser(config, setup_units=1).setup_interval == dut.run_cycles + 4
     assert dut.start_clip_cycles == timing_model.start_clip_cycles(config) == config.coord_bits + 1
     assert timing_model.run_cycles(config, True) == dut.run_cycles + dut.start_clip_cycles
 
@@ -128,21 +133,44 @@ def test_timing_model_basics():
     latency = timing_model.setup_latency(config)
     edge = run_of(config, 3, 4, 5)
     bad = Edge(1, 1, 1, 1)
-    assert timing_model.beat_cycles(config, [edge]) == list(range(latency, latency + 5))
-    shifted = timing_model.write_cycles(config, [bad, bad, edge])
+    for units in (1, timing_model.DEFAULT_SETUP_UNITS):
+        beats = timing_model.beat_cycles(config, [edge], setup_units=units)
+        assert beats == list(range(latency, latency + 5))
+    shifted = timing_model.write_cycles(config, [bad, bad, edge], setup_units=1)
     assert [t.accepted for t in shifted] == [0, 2, 4]
     assert shifted[-1].beats == tuple(range(latency + 4, latency + 9))
-    interval = timing_model.setup_interval(config)
-    assert timing_model.sustained_rate(config, 10) == 10 / interval
-    assert timing_model.sustained_rate(config, interval) == 1
-    assert timing_model.sustained_rate(config, 10, latency) == 10 / interval
+    # Several units: one command per clock while units are free; a bad one retires when its
+    # unit is back in IDLE (two clocks after its accept), then the collector moves on.
+    shifted = timing_model.write_cycles(config, [bad, bad, edge], setup_units=9)
+    assert [t.accepted for t in shifted] == [0, 1, 2]
+    assert shifted[-1].beats == tuple(range(latency + 2, latency + 7))
+    interval = timing_model.setup_interval(config, 1)
+    assert timing_model.sustained_rate(config, 10, setup_units=1) == 10 / interval
+    assert timing_model.sustained_rate(config, interval, setup_units=1) == 1
+    assert timing_model.sustained_rate(config, 10, latency, setup_units=1) == 10 / interval
+    per_unit = timing_model.run_cycles(config) + 5
+    assert timing_model.sustained_rate(config, 1, latency, setup_units=9) == 9 / per_unit
+    assert timing_model.sustained_rate(config, 1, setup_units=9) == 9 / per_unit
+    assert timing_model.sustained_rate(config, 4, setup_units=9) == 1
 
 
-def test_short_edges_are_setup_bound():
+@pytest.mark.parametrize("units", [1, 9])
+def test_short_edges_are_setup_bound(units):
+    """Edges shorter than the setup interval: one unit takes R + 4 clocks per edge; nine
+    units take R + 5 clocks per nine edges (one edge every 4 clocks by default)."""
     config = CORE_CONFIGS["default"]
-    interval = timing_model.setup_interval(config)
-    edges = [Edge(16 * n, 100, 16 * n + 16 * 9, 130 + n) for n in range(8)]  # 10 columns
-    run = run_and_check(config, edges, label="short edges")
+    interval = timing_model.setup_interval(config, units)
+    columns = 10 if units == 1 else 1
+    edges = [run_of(config, 3 + n, 100 + n, columns) for n in range(30)]
+    run = run_and_check(config, edges, label="short edges", setup_units=units)
     starts = [clock for clock, beat in run.beats if beat["last"]]
-    assert all(b - a == interval for a, b in zip(starts, starts[1:], strict=False)), starts
-    assert timing_model.sustained_rate(config, 10) == 10 / interval
+    gaps = [b - a for a, b in zip(starts, starts[1:], strict=False)]
+    if units == 1:
+        assert set(gaps) == {interval}, gaps
+    else:  # nine edges (a burst, one a clock) every R + 5 clocks: 35 / 9 <= 4 clocks each
+        per_unit = timing_model.run_cycles(config) + 5
+        assert [starts[n + 9] - starts[n] for n in range(len(starts) - 9)] == [per_unit] * 21
+        assert per_unit / units <= interval == 4, gaps
+    assert timing_model.sustained_rate(config, columns, setup_units=units) == min(
+        1, columns * units / timing_model.unit_cycles(config, units)
+    )

@@ -7,6 +7,7 @@ import pytest
 
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, setup
 from edgeaa.model.timing import (
+    DEFAULT_SETUP_UNITS,
     EMPTY_EDGE_CYCLES,
     beat_cycles,
     setup_latency,
@@ -137,8 +138,10 @@ def test_a_start_clipped_last_edge_is_waited_for(config):
         expected = expected_beats(config, edges)[0]
         assert run.as_beats() == expected
         assert run.beats[:, 0].tolist() == beat_cycles(config, edges)
-    # After an empty edge (accepted in clock 0, gone from the setup in 5 clocks):
-    first = EMPTY_EDGE_CYCLES + setup_latency(config) + start_clip_cycles(config)
+    # After an empty edge (accepted in clock 0, gone from its unit in 5 clocks; with several
+    # units the edge goes to the next one in clock 1):
+    after = EMPTY_EDGE_CYCLES if DEFAULT_SETUP_UNITS == 1 else 1
+    first = after + setup_latency(config) + start_clip_cycles(config)
     assert verilator_harness.run(config, [empty, edge]).beats[0, 0] == first
 
 

@@ -107,7 +107,7 @@ def test_observation_points():
     """What the harness reads: the setup's registers, state and next bank, the stepper's
     pipeline stages, all made in the components' constructors."""
     config = EdgeConfig()
-    core = EdgeAntialiaser(config)
+    core = EdgeAntialiaser(config, setup_units=1)  # the harness's core
     setup_unit, stepper = core.setup, core.stepper
     names = ("du", "dv", "counter", "row0", "i_d", "first", "last", "lo", "hi", "start_clip")
     for name in (*names, "columns", "kq", "kr"):
@@ -166,7 +166,7 @@ def test_capacity_is_reached_in_simulation():
         {"x0": e.x0, "y0": e.y0, "x1": e.x1, "y1": e.y1, "i_in": e.i_in, "i_out": e.i_out}
         for e in [long_edge] + [short_edge] * 10
     ]
-    dut = EdgeAntialiaser(config)
+    dut = EdgeAntialiaser(config, setup_units=1)  # the harness's core
     counts = {}
 
     async def bench(ctx):

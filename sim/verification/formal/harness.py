@@ -62,7 +62,9 @@ class FormalHarness(Elaboratable):
         self.assumes = _choose("assumes", assumes, CHECKS)
         self.reset = reset
         self.fault = fault
-        self.core = EdgeAntialiaser(self.config)
+        # One setup unit: the properties observe its internals (`SetupArray` is checked in
+        # simulation, tests/test_setup_array.py).
+        self.core = EdgeAntialiaser(self.config, setup_units=1)
         # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
         self.domain = ClockDomain("sync", reset_less=not reset)
 
