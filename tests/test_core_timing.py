@@ -33,10 +33,11 @@ def test_setup_latency_is_the_timing_model(name):
     assert dut.setup_latency == timing_model.setup_latency(config)
     assert dut.setup_latency == config.intensity_bits + config.F + 6 + depth
     assert dut.run_cycles == timing_model.run_cycles(config) == config.intensity_bits + config.F + 1
-    units = dut.setup_units
-    assert units == timing_model.DEFAULT_SETUP_UNITS
+    assert dut.setup_units == timing_model.DEFAULT_SETUP_UNITS
     assert timing_model.setup_interval(config) == dut.setup_interval
-    assert dut.setup_interval == -(-(dut.run_cycles + 5) // units)
+    nine = EdgeAntialiaser(config, setup_units=9)
+    assert nine.setup_interval == timing_model.setup_interval(config, 9)
+    assert nine.setup_interval == -(-(dut.run_cycles + 5) // 9)
     assert timing_model.setup_interval(config, 1) == dut.run_cycles + 4
     assert EdgeAntialiaser(config, setup_units=1).setup_interval == dut.run_cycles + 4
     assert dut.start_clip_cycles == timing_model.start_clip_cycles(config) == config.coord_bits + 1
