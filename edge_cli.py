@@ -286,7 +286,9 @@ class VerilogCommand(Command):
             check_output(self.prog, args.output, VERILOG_SUFFIXES)
             waivers_path = os.path.splitext(args.output)[0] + ".vlt"
             if os.path.isdir(waivers_path):
-                raise usage_error(self.prog, f"{shown(waivers_path)} is a directory")
+                raise usage_error(
+                    self.prog, f"the lint waiver file {shown(waivers_path)} is a directory"
+                )
         source = self._source(args, config)
         if not to_file:
             sys.stdout.write(source)

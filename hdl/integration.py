@@ -44,6 +44,7 @@ _ZERO_TEST = re.compile(rf"{_ASSIGN}! {_OPERAND};$")
 _SHIFT_RIGHT = re.compile(rf"{_ASSIGN}{_OPERAND} >> {_OPERAND};$")
 _DECLARATION = re.compile(rf"^\s*(?:wire|reg)(?: signed)?(?: \[\d+:\d+\])? (?P<name>{_NAME})")
 _INPUT = re.compile(rf"^\s*input(?: signed)?(?: \[\d+:\d+\])? (?P<name>{_NAME})")
+_PORT = re.compile(rf"^\s*(?:input|output)(?: signed)?(?: \[\d+:\d+\])? (?P<name>{_NAME})")
 _REG_INIT = re.compile(rf"^\s*reg(?: signed)?(?: \[\d+:\d+\])? {_NAME} ?= {_CONST};$")
 _CASEZ = re.compile(r"^\s*casez \(")
 _MODULE = re.compile(rf"^module (?P<name>{_NAME})")
@@ -68,6 +69,7 @@ class _Scope:
     name: str = ""
     top: bool = False
     one_bit: set[str] | None = None
+    ports: set[str] | None = None  # the top's ports declared so far
 
 
 WAIVERS = (
@@ -125,8 +127,9 @@ def _is_bit_select(line: str, scope: _Scope) -> bool:
 
 
 def _is_unused_candidate(line: str, scope: _Scope) -> bool:
-    if _DECLARATION.match(line):
-        return True
+    declared = _DECLARATION.match(line)
+    if declared:  # not the wire Yosys declares again for each of the top's ports
+        return declared["name"].strip() not in (scope.ports or ())
     return not scope.top and bool(_INPUT.match(line))
 
 
@@ -149,8 +152,11 @@ def _scopes(lines: list[str]) -> list[_Scope]:
             top_next = True
         match = _MODULE.match(line)
         if match:
-            scope = _Scope(match["name"].strip(), top_next, set())
+            scope = _Scope(match["name"].strip(), top_next, set(), set())
             top_next = False
+        port = _PORT.match(line)
+        if port and scope.top:
+            scope.ports.add(port["name"].strip())
         declared = _DECLARATION.match(line)
         if declared and scope.one_bit is not None and not re.search(r"\[\d+:\d+\]", line):
             scope.one_bit.add(declared["name"].strip())
