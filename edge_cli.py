@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 import sys
 from pathlib import Path
@@ -281,20 +282,46 @@ class VerilogCommand(Command):
                 f"--name must be a Verilog identifier (a letter or _, then letters, digits, _ "
                 f"or $; at most 64), not {shown(args.name)}",
             )
-        if args.output not in (None, "-"):
+        to_file = args.output not in (None, "-")
+        if to_file:
             check_output(self.prog, args.output, VERILOG_SUFFIXES)
+            waivers_path = os.path.splitext(args.output)[0] + ".vlt"
+            if os.path.isdir(waivers_path):
+                raise usage_error(
+                    self.prog, f"the lint waiver file {shown(waivers_path)} is a directory"
+                )
         source = self._source(args, config)
-        if args.output in (None, "-"):
+        if not to_file:
             sys.stdout.write(source)
         else:
-            with atomic_output(self.prog, args.output) as temporary:
+            from .hdl.integration import lint_waivers
+
+            waivers = lint_waivers(source, os.path.basename(args.output))
+            # Both files or neither: the waivers name the lines of this exact text.
+            with (
+                atomic_output(self.prog, waivers_path) as temporary_waivers,
+                atomic_output(self.prog, args.output) as temporary,
+            ):
                 Path(temporary).write_text(source)
+                Path(temporary_waivers).write_text(waivers)
+            what = "pipeline" if args.top == "pipeline" else args.core + " core"
             print(
-                f"wrote {args.output}: module {args.name} "
-                f"({'pipeline' if args.top == 'pipeline' else args.core + ' core'}), {config}",
+                f"wrote {args.output}: module {args.name} ({what}), {config}; lint waivers "
+                f"{waivers_path}",
                 file=sys.stderr,
             )
+        self._note(args, config)
         return 0
+
+    def _note(self, args: argparse.Namespace, config) -> None:
+        """The inputs that must be driven, on standard error (the file's header has them)."""
+        from .hdl.integration import must_drive
+
+        items = must_drive(args.top, config, args.core)
+        note = f"{self.prog}: note: drive every input: " + "; ".join(items)
+        if args.output in (None, "-"):
+            note += " (-o FILE.v also writes the lint waiver file FILE.vlt)"
+        print(note, file=sys.stderr)
 
 
 class SynthCommand(Command):

@@ -26,8 +26,9 @@ Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
   `edgeaa.model.Edge`), ``i_in, i_out`` unsigned ``I``, ``inside`` (0: left, 1: right).
 * ``clip`` (in, `clip_layout`): ``x_min, y_min, x_max, y_max`` unsigned ``W + 1``, whole
   pixels, bounds included (`edgeaa.model.Clip`); sampled in the clock an edge is accepted,
-  so it may change freely otherwise. Its init (an undriven port in simulation) is the full
-  window ``(0, 0, 2**W, 2**W)``, which clips nothing. In Verilog: ``clip__x_min`` etc.
+  so it may change freely otherwise. Its init (an undriven port in Amaranth simulation) is
+  the full window ``(0, 0, 2**W, 2**W)``, which clips nothing. In Verilog (``clip__x_min``
+  etc.) an input has no default: it must be driven (docs/hardware.md, "Integration").
 * ``writes`` (out stream, one beat per column): ``lane0`` and ``lane1``, each ``x, y`` signed
   ``W + 2`` and ``value`` unsigned ``I``; ``lane1_valid``; ``last`` (the edge's last column).
   Lane order is the model's write order: the primary pixel, then its neighbour. The fields of
@@ -47,7 +48,7 @@ Bad commands, clipping and the setup arithmetic: the module docstring of `edgeaa
 
 from __future__ import annotations
 
-from amaranth.hdl import Module, Signal, unsigned
+from amaranth.hdl import Module, ResetSignal, Signal, unsigned
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -152,7 +153,13 @@ class EdgeAntialiaser(wiring.Component):
         m = Module()
         m.submodules.setup = setup = self.setup
         m.submodules.stepper = stepper = self.stepper
-        wiring.connect(m, wiring.flipped(self.edges), setup.edges)
+        # Nothing is accepted while rst is high: ready low, and the setup sees no command.
+        rst = ResetSignal(allow_reset_less=True)
+        m.d.comb += [
+            setup.edges.valid.eq(self.edges.valid & ~rst),
+            setup.edges.payload.eq(self.edges.payload),
+            self.edges.ready.eq(setup.edges.ready & ~rst),
+        ]
         wiring.connect(m, setup.bank, stepper.setup)
         wiring.connect(m, stepper.out, wiring.flipped(self.out))
         m.d.comb += [
@@ -189,9 +196,9 @@ def verilog(
     converted directly and each payload is one vector port (``edges__payload``), whose fields
     appear only as internal wires.
 
-    Lint: ``verilator --lint-only -Wall`` is clean with six waivers, all about the style of
-    generated code; `edgeaa.sim.simulators.verilator.LINT_WAIVER_REASONS` lists them with
-    their reasons.
+    The text starts with a comment for integrators (`edgeaa.hdl.integration.header`), and
+    the signed outputs are declared ``signed``. Lint: ``verilator --lint-only -Wall`` is
+    clean with the waiver file `edgeaa.hdl.integration.lint_waivers` makes of the text.
     """
     from amaranth.back import verilog as back_verilog
 
@@ -215,4 +222,8 @@ def flat_verilog(component: wiring.Component, name: str) -> str:
             port = Signal(leaf.shape(), name="__".join(leaf_path))
             m.d.comb += leaf.eq(port) if member.flow == In else port.eq(leaf)
             ports.append((port.name, port, None))
-    return back_verilog.convert(m, name=name, ports=ports, emit_src=False)
+    from .integration import annotate
+
+    source = back_verilog.convert(m, name=name, ports=ports, emit_src=False)
+    signed = [(port.name, len(port)) for _, port, _ in ports if port.shape().signed]
+    return annotate(source, component, name, signed)

@@ -17,7 +17,7 @@ scanning; cells waiting), ``resolve_*`` (taking a cell or flushing; pixels waiti
 
 from __future__ import annotations
 
-from amaranth.hdl import Module, Mux, Signal, unsigned
+from amaranth.hdl import Module, Mux, ResetSignal, Signal, unsigned
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -100,7 +100,11 @@ class EdgePipeline(wiring.Component):
         origin = [Signal(config.coord_bits + 1, name=n) for n in ("tile_x0", "tile_y0")]
         top = 1 << config.coord_bits
         is_ = {key: c.op == code for key, code in CODE.items()}
-        take = self.commands.valid & self.commands.ready
+        # Nothing is accepted while rst is high: the stage sees no command, ready is low.
+        rst = ResetSignal(allow_reset_less=True)
+        valid = Signal()
+        m.d.comb += valid.eq(self.commands.valid & ~rst)
+        take = valid & self.commands.ready
         error = Signal()
         m.d.comb += [
             core.edges.payload.x0.eq(c.x0),
@@ -128,7 +132,7 @@ class EdgePipeline(wiring.Component):
         good_tile = (c.x0 <= top) & (c.y0 <= top)
         with m.FSM(name="commands"):
             with m.State("OUT"):
-                send = self.commands.valid & core.idle & ((is_["tile"] & good_tile) | is_["flush"])
+                send = valid & core.idle & ((is_["tile"] & good_tile) | is_["flush"])
                 m.d.comb += [
                     op_valid.eq(send),
                     code.eq(Mux(is_["tile"], OPS.index("tile"), OPS.index("flush"))),
@@ -144,10 +148,10 @@ class EdgePipeline(wiring.Component):
                     with m.Elif(~is_["flush"]):
                         m.d.comb += error.eq(1)
             with m.State("IN"):
-                ending = self.commands.valid & ~is_["edge"]
+                ending = valid & ~is_["edge"]
                 known = Mux(c.op < len(CODE), 1, 0)
                 m.d.comb += [
-                    core.edges.valid.eq(self.commands.valid & is_["edge"]),
+                    core.edges.valid.eq(valid & is_["edge"]),
                     op_valid.eq(ending & known & core.idle),
                     code.eq(OPS.index("end")),
                 ]
@@ -156,10 +160,12 @@ class EdgePipeline(wiring.Component):
                 with m.Elif(is_["end"]):
                     m.d.comb += self.commands.ready.eq(core.idle & self.acc.ops.ready)
                 with m.Elif(~known):
-                    m.d.comb += [self.commands.ready.eq(1), error.eq(self.commands.valid)]
+                    m.d.comb += [self.commands.ready.eq(1), error.eq(valid)]
                 with m.If(op_valid & self.acc.ops.ready):
                     m.d.comb += error.eq(~is_["end"])  # a polygon with no end: ended here
                     m.next = "OUT"
+        with m.If(rst):
+            m.d.comb += self.commands.ready.eq(0)
         with m.If(error & (self.errors != (1 << ERRORS_BITS) - 1)):
             m.d.sync += self.errors.eq(self.errors + 1)
         return op_valid, op, code

@@ -46,6 +46,29 @@ class Clip(NamedTuple):
         top = 1 << config.coord_bits
         return cls(0, 0, top, top)
 
+    @classmethod
+    def from_port(cls, config: EdgeConfig, x_min, y_min, x_max, y_max) -> Clip:
+        """The window the core steps for any value of its ``clip`` ports, which are
+        ``coord_bits + 1`` bits wide and so carry bounds up to ``2**(coord_bits + 1) - 1``,
+        past the model's [0, 2**coord_bits]. Columns lie in [0, 2**coord_bits] on either
+        axis, so a max above ``2**coord_bits`` acts as ``2**coord_bits``, and a min above it
+        leaves that axis no column: the window (1, 0) on it (empty stepping up or down).
+        Bounds in range are returned unchanged (`window` computes the same columns from
+        either)."""
+        top, port_max = 1 << config.coord_bits, (1 << (config.coord_bits + 1)) - 1
+        bounds = (x_min, y_min, x_max, y_max)
+        for name, value in zip(cls._fields, bounds, strict=True):
+            if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= port_max:
+                raise EdgeError(
+                    f"clip port {name} must be an integer in [0, {port_max}] "
+                    f"(coord_bits + 1 = {config.coord_bits + 1} bits), not {value!r}"
+                )
+        axes = []
+        for low, high in ((x_min, x_max), (y_min, y_max)):
+            axes.append((1, 0) if low > top else (low, min(high, top)))
+        (x_lo, x_hi), (y_lo, y_hi) = axes
+        return cls(x_lo, y_lo, x_hi, y_hi)
+
 
 @dataclass(frozen=True)
 class Edge:

@@ -122,11 +122,12 @@ def test_verilog_ports():
     }
     assert "input [14:0] edges__payload__x0;" in text
     assert "input [11:0] clip__x_max;" in text
-    assert "output [12:0] writes__payload__lane1__y;" in text
+    assert "output signed [12:0] writes__payload__lane1__y;" in text
+    assert "output [7:0] writes__payload__lane1__value;" in text
 
 
 @pytest.mark.parametrize("name", ["default", "seg4", "small"])
 def test_verilog_lints(name):
-    """verilator --lint-only -Wall, with only the documented waivers of sim/verilator.py."""
+    """verilator --lint-only -Wall, with the targeted waiver file `edgeaa verilog` writes."""
     proc = lint(verilog(CORE_CONFIGS[name]))
     assert proc.returncode == 0, proc.stdout + proc.stderr

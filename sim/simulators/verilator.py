@@ -26,21 +26,10 @@ from ...hdl import verilog
 from ...model import Edge, EdgeConfig
 from ..verification.scoreboard import beats_to_array, expected_beats
 
-# Warnings of -Wall waived for the emitted core, each for a reason (also in docs/hardware.md).
-# All six come from the shape of the Verilog Amaranth's Yosys back end writes, not from the
-# design; the design's behaviour is checked bit for bit against the model instead.
-LINT_WAIVER_REASONS = {
-    "UNUSEDSIGNAL": "Amaranth emits a wire per payload field and per intermediate; many are "
-    "read only through the packed vector",
-    "WIDTHEXPAND": "operands are zero/sign-extended implicitly, as Amaranth's arithmetic rules "
-    "define (e.g. `a + 21'h100000` into a 31-bit sum)",
-    "WIDTHTRUNC": "`!vector` for a zero test and Amaranth's truncating `.eq` assignments",
-    "PROCASSINIT": "registers get their reset value as an initial value and in the process",
-    "CASEINCOMPLETE": "state-machine `casez` without a default: unlisted states hold the old "
-    "value by the preceding assignment",
-    "DECLFILENAME": "the wrapper module is named edgeaa_core whatever the file is called",
-}
-LINT_WAIVERS: tuple[str, ...] = tuple(LINT_WAIVER_REASONS)
+# No blanket -Wno-... flag: the waivers are the targeted configuration file that `edgeaa
+# verilog` writes beside the Verilog (`edgeaa.hdl.integration.lint_waivers`, each rule on the
+# lines of one shape, `WAIVERS` gives the reasons). Any other warning fails the lint.
+LINT_FLAGS: tuple[str, ...] = ("--lint-only", "-Wall")
 
 TOP = "edgeaa_core"
 
@@ -89,12 +78,17 @@ def publish(build_dir: Path, final: Path) -> Path:
     return final
 
 
-def lint(source: str, waivers: tuple[str, ...] = LINT_WAIVERS) -> subprocess.CompletedProcess:
-    """``verilator --lint-only -Wall`` on Verilog text; returns the completed process."""
+def lint(source: str, name: str = TOP) -> subprocess.CompletedProcess:
+    """``verilator --lint-only -Wall`` on Verilog text written to ``name.v``, with the
+    waiver file `edgeaa verilog` would write beside it (``name.vlt``); returns the completed
+    process."""
+    from ...hdl.integration import lint_waivers
+
     with tempfile.TemporaryDirectory(prefix="edgeaa-lint-") as tmp:
-        path = Path(tmp) / f"{TOP}.v"
+        path, waivers = Path(tmp) / f"{name}.v", Path(tmp) / f"{name}.vlt"
         path.write_text(source)
-        command = ["verilator", "--lint-only", "-Wall", *(f"-Wno-{w}" for w in waivers), str(path)]
+        waivers.write_text(lint_waivers(source, path.name))
+        command = ["verilator", *LINT_FLAGS, str(waivers), str(path)]
         return subprocess.run(
             command, env=verilator_env(), capture_output=True, text=True, check=False
         )
