@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """The aliased Bresenham baseline core against a plain Python Bresenham, pixel for pixel.
 
 Every test compares the whole pixel stream (with the `last` framing) of a batch of lines
