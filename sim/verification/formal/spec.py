@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Mux, Signal, Value
+from amaranth.hdl import Mux, Signal, Value, signed
 from amaranth.lib import data
 
 from ....model.bank import BANK_FIELDS
@@ -264,12 +264,30 @@ def column(config: EdgeConfig, b, axes) -> types.SimpleNamespace:
     )
 
 
+class Sign:
+    """A 2-bit signed value (a winding sign) whose product with a value is a select: exactly
+    the product for each of -2 .. 1, without the full-width multiplier the model's ``sigma *
+    value`` would otherwise be (one the solver cannot see through)."""
+
+    def __init__(self, value):
+        self.value = Value.cast(value)
+        assert self.value.shape() == signed(2), self.value.shape()
+
+    def __mul__(self, other):
+        other = Value.cast(other)
+        sign = self.value
+        return Mux(sign == 1, other, Mux(sign == -1, -other, Mux(sign == 0, 0, -(other << 1))))
+
+    __rmul__ = __mul__
+
+
 def deltas_setup(b) -> types.SimpleNamespace:
     """A bank-like record of the deltas core (`bank_fields(config, "deltas")`) as the model's
     `EdgeSetup` the deltas functions read: its fields, ``x_major``, ``major_neg_x`` and
-    ``pieces`` (the `EndPieces` fields)."""
+    ``pieces`` (the `EndPieces` fields, the winding sign as a `Sign`)."""
     x_major = b.col_dx != 0
     pieces = {f.name: getattr(b, f.name) for f in BANK_FIELDS if f.pieces}
+    pieces["sigma"] = Sign(pieces["sigma"])
     return types.SimpleNamespace(
         **vars(b),
         x_major=x_major,
