@@ -118,6 +118,7 @@ from __future__ import annotations
 from .count import capacity
 from .harness import CHECKS, COVERS, FAULTS, FormalHarness
 from .run import (
+    DELTA_PROOFS,
     PROOFS,
     FormalError,
     FormalResult,
@@ -133,6 +134,7 @@ from .run import (
 __all__ = [
     "CHECKS",
     "COVERS",
+    "DELTA_PROOFS",
     "FAULTS",
     "PROOFS",
     "FormalError",
