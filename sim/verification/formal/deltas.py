@@ -18,14 +18,17 @@ loop's: the model's row is ``end_row - adj``) and ``first_col``.
     ``remaining`` are the model's next state of the column stepped (`advance`, the piece
     end less a row on a row step, one row further, not the first), after a bank load the
     bank's (modulo the registers' widths; ``dbounds`` and ``bounds`` show they fit).
-``dpipe``, ``dbeat``
+``dpipe``, ``dcells``, ``dbeat``
     Every beat's cells are the model's `delta_cells` of the loop state its column was
     stepped with (modulo the payload's widths, which ``dbounds`` shows the model's values
     fit), and ``last`` is set exactly on an edge's last column. As for the writes core
-    (`pipeline`), the harness carries a snapshot of the loop state along the pipeline;
+    (`pipeline`), the harness carries a snapshot of the loop state along p1 and p2;
     ``dpipe`` states what p1 holds (the model's heights and the column's per-edge selects)
-    and that the cells the output register would load from p2 are the model's, ``dbeat``
-    the output register.
+    and what p2 holds (those it carries, the model's clamped estimate, the piece's cover of
+    each row), ``dcells`` that the cells the output register loads from p2 are the model's
+    in full width, ``dbeat`` the output register against the model's cells of p2's
+    snapshot, registered by the harness as the pipeline moves (one copy of the model, not
+    two).
 """
 
 from __future__ import annotations
@@ -144,19 +147,25 @@ def _loop(ctx, st):
         with m.If(bank.valid & bank.ready):  # the load wins, as in the stepper
             m.d.sync += want.eq(loaded[name])
         ctx.emit("dloop", implies(stepper.active, reg == want), f"dloop: {name}")
+    # The piece end of the column being stepped is the model's (`piece_end`): with ``hs``
+    # above, each column starts where the previous one ended (a row less on a row step).
+    he = implies(stepper.active, stepper.delta_he == live.he)
+    ctx.emit("dloop", he, "dloop: piece end")
+    if ctx.fault == "tight_hs":  # false: a piece can start in the row above (a cover)
+        ctx.emit("dloop", implies(stepper.active, st.hs >= 0), "dloop: false invariant hs >= 0")
 
 
 # -- dpipe, dbeat --------------------------------------------------------------------------
 
 
 def _snapshots(ctx, st) -> list:
-    """(snapshot, valid) of the loop state for each pipeline position, p1 first and the
-    output register last (one enable moves them, as the stepper's pipeline)."""
+    """(snapshot, valid) of the loop state for p1 and p2 (one enable moves them, as the
+    stepper's pipeline)."""
     m, out = ctx.m, ctx.out
     en = ~out.valid | out.ready
     snaps = []
     source, source_valid = st, ctx.stepper.active
-    for index in range(ctx.stepper.latency):
+    for index in range(ctx.stepper.latency - 1):
         regs = {}
         for name, value in vars(source).items():
             tag = f"d{index + 1}s_{name}"
@@ -174,8 +183,8 @@ def _snapshots(ctx, st) -> list:
 def _pipeline(ctx, st):
     snaps = _snapshots(ctx, st)
     _stage_p1(ctx, *snaps[0])
-    _stage_p2(ctx, *snaps[1])
-    _output(ctx, *snaps[2])
+    cells = _stage_p2(ctx, *snaps[1])
+    _output(ctx, *snaps[1], cells)
 
 
 def _stage_p1(ctx, s1, v1):
@@ -183,37 +192,66 @@ def _stage_p1(ctx, s1, v1):
     depth of its crossing part) and the column's per-edge selects (restated from
     `column_deltas`: total, band, the rectangles)."""
     p1 = ctx.stages[0]
-    c1 = _column(ctx, s1, "d1spec")
-    x_major = s1.col_dx != 0
-    ifix, hs, he = s1.ifix, s1.hs, c1.he
+    values = _p1_values(s1, _column(ctx, s1, "d1spec"))
+    ctx.emit("dpipe", p1.valid == v1, "dpipe: p1 valid")
+    for name, value in values.items():
+        ctx.emit("dpipe", implies(v1, getattr(p1, name) == value), f"dpipe: p1 {name}")
+    _snapshot_ok(ctx, "dpipe", s1, v1, "p1")
+
+
+def _p1_values(s, c) -> dict:
+    """What p1 holds for the column of loop state `s` (`c` its `spec.deltas_column`)."""
+    x_major = s.col_dx != 0
+    ifix, hs, he = s.ifix, s.hs, c.he
     low = he > ifix
-    band1 = Mux(c1.adj > 0, s1.band1, Mux(c1.adj < 0, -s1.band1, 0))
-    interior = Mux(x_major, s1.khq, s1.jq)
-    last_total = s1.total1 + band1
+    band1 = Mux(c.adj > 0, s.band1, Mux(c.adj < 0, -s.band1, 0))
+    interior = Mux(x_major, s.khq, s.jq)
+    last_total = s.total1 + band1
     values = {
-        "last": s1.remaining == 0,
-        "x": s1.x,
-        "y": s1.y,
+        "last": s.remaining == 0,
+        "x": s.x,
+        "y": s.y,
         "x_major": x_major,
-        "neg": x_major & (s1.col_dx < 0),
-        "minor_neg": Mux(x_major, s1.row_dy < 0, s1.row_dx < 0),
-        "sigma_neg": s1.sigma < 0,
+        "neg": x_major & (s.col_dx < 0),
+        "minor_neg": Mux(x_major, s.row_dy < 0, s.row_dx < 0),
+        "sigma_neg": s.sigma < 0,
         "hs": hs,
         "he": he,
         "ifix": ifix,
         "low": low,
         "depth": Mux(low, he - ifix, -hs),
-        "total": Mux(c1.first, s1.total0, Mux(c1.last, last_total, interior)),
-        "band": Mux(c1.first, s1.band0, Mux(c1.last, s1.band1, ifix)),
-        "rect_up": Mux(c1.first, s1.rect0, 0),
-        "rect_low": Mux(c1.last, s1.rect1, 0),
+        "total": Mux(c.first, s.total0, Mux(c.last, last_total, interior)),
+        "band": Mux(c.first, s.band0, Mux(c.last, s.band1, ifix)),
+        "rect_up": Mux(c.first, s.rect0, 0),
+        "rect_low": Mux(c.last, s.rect1, 0),
     }
-    values.update({f"thr{j}": t for j, t in enumerate(s1.seg_thresholds, start=1)})
-    values.update({f"icpt{j}": icpt for j, icpt in enumerate(s1.seg_intercepts)})
-    ctx.emit("dpipe", p1.valid == v1, "dpipe: p1 valid")
-    for name, value in values.items():
-        ctx.emit("dpipe", implies(v1, getattr(p1, name) == value), f"dpipe: p1 {name}")
-    _snapshot_ok(ctx, "dpipe", s1, v1, "p1")
+    values.update({f"thr{j}": t for j, t in enumerate(s.seg_thresholds, start=1)})
+    values.update({f"icpt{j}": icpt for j, icpt in enumerate(s.seg_intercepts)})
+    return values
+
+
+def _p2_values(s, c) -> dict:
+    """What p2 holds for the column of loop state `s`: p1's values it carries, the model's
+    clamped estimate ``t`` and ``up``, and the piece's cover of the rows r - 1, r, r + 1
+    (restated from `column_deltas`)."""
+    p1 = _p1_values(s, c)
+    carried = ("last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg")
+    carried += ("low", "total", "band", "rect_up", "rect_low")
+    hs, he, ifix = s.hs, c.he, s.ifix
+    return dict(
+        {name: p1[name] for name in carried},
+        t=c.t,
+        up=c.up,
+        hs_ge=hs >= ifix,
+        he_le0=he <= 0,
+        cov_up=Mux(he < 0, he, 0) - Mux(hs < 0, hs, 0),
+        cov_mid=_clamp(he, ifix) - _clamp(hs, ifix),
+        cov_low=Mux(he > ifix, he, ifix) - Mux(hs > ifix, hs, ifix),
+    )
+
+
+def _clamp(value, hi):
+    return Mux(value < 0, 0, Mux(value > hi, hi, value))
 
 
 def _snapshot_ok(ctx, group, snap, valid, where):
@@ -224,31 +262,37 @@ def _snapshot_ok(ctx, group, snap, valid, where):
 
 
 def _stage_p2(ctx, s2, v2):
-    """``dpipe``: p2 holds the column of its snapshot: the cells the output register loads
-    from it are the model's, in full width."""
+    """``dpipe``: p2 holds the column of its snapshot (`_p2_values`); ``dcells``: the cells
+    the output register loads from it are the model's, in full width."""
     p2 = ctx.stages[1]
     c2 = _column(ctx, s2, "d2spec")
     ctx.emit("dpipe", p2.valid == v2, "dpipe: p2 valid")
-    ctx.emit("dpipe", implies(v2, p2.last == (s2.remaining == 0)), "dpipe: p2 last")
+    for name, value in _p2_values(s2, c2).items():
+        ctx.emit("dpipe", implies(v2, getattr(p2, name) == value), f"dpipe: p2 {name}")
     for k, (cell, model) in enumerate(zip(ctx.stepper.delta_cells, c2.cells, strict=True)):
         match = all_([Value.cast(a) == b for a, b in zip(cell, model, strict=True)])
         ctx.emit("dcells", implies(v2, match), f"dcells: p2 cell{k}")
+    return c2.cells
 
 
-def _output(ctx, s3, v3):
-    """``dbeat``: the output register is the beat of its snapshot's column: the model's
-    cells (modulo the payload's widths) and ``last`` on the edge's last column."""
+def _output(ctx, s2, v2, cells):
+    """``dbeat``: the output register is the beat of its column: the model's cells of the
+    loop state the column was stepped with (`cells`, of p2's snapshot `s2`, registered by
+    the harness when the pipeline moves; modulo the payload's widths) and ``last`` on the
+    edge's last column."""
+    m, out = ctx.m, ctx.out
+    en = ~out.valid | out.ready
     beat = data.View(ctx.layout, ctx.payload)
-    c3 = _column(ctx, s3, "d3spec")
-    ctx.emit("dbeat", ctx.out.valid == v3, "dbeat: beat valid")
-    ctx.emit("dbeat", implies(v3, beat.last == (s3.remaining == 0)), "dbeat: last")
-    for k, model in enumerate(c3.cells):
+    v3 = delayed(m, en, v2, "d3_valid")
+    last = delayed(m, en, s2.remaining == 0, "d3_last")
+    ctx.emit("dbeat", out.valid == v3, "dbeat: beat valid")
+    ctx.emit("dbeat", implies(v3, beat.last == last), "dbeat: last")
+    for k, model in enumerate(cells):
         cell = beat[f"cell{k}"]
         got = (cell.x, cell.y, cell.delta)
-        match = all_(
-            [
-                Value.cast(a).as_unsigned() == Value.cast(b)[: len(Value.cast(a))]
-                for a, b in zip(got, model, strict=True)
-            ]
-        )
+        want = [
+            delayed(m, en, Value.cast(b)[: len(Value.cast(a))], f"d3_cell{k}_{name}")
+            for a, b, name in zip(got, model, "xyd", strict=True)
+        ]
+        match = all_([Value.cast(a).as_unsigned() == b for a, b in zip(got, want, strict=True)])
         ctx.emit("dbeat", implies(v3, match), f"dbeat: cell{k} is the model's")

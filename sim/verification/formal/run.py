@@ -118,11 +118,21 @@ DELTA_PROOFS = (
         "snapshot they carry (k-induction)",
     ),
     Proof(
+        "deltas_cells",
+        ("dcells",),
+        "prove",
+        1,
+        assumes=("bounds", "dbounds", "dpipe"),
+        output="deltas",
+        description="the four cells the output register loads from p2 are the model's "
+        "`delta_cells` of p2's column snapshot, in full width (k-induction)",
+    ),
+    Proof(
         "deltas_beat",
         ("dbeat",),
         "prove",
         1,
-        assumes=("bounds", "dbounds", "dpipe"),
+        assumes=("bounds", "dbounds", "dpipe", "dcells"),
         output="deltas",
         description="every delta beat is the model's `delta_cells` of the loop state its "
         "column was stepped with, last on the last column (k-induction)",
