@@ -17,6 +17,11 @@ column per clock:
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
 intermediate wraps; only the payload's fields are cut to the width table's ``x``, ``y`` and
 ``delta``, which the model checks. No multiplier: adds, compares, selects and fixed shifts.
+
+Observation points for the formal harness (attributes of the stepper, set when it is
+elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
+registers of p1 and p2 (namespaces, each with ``valid`` and ``last``), ``delta_cells`` the
+four ``(x, y, delta)`` values the output register loads from p2 (before the payload's cut).
 """
 
 from __future__ import annotations
@@ -67,7 +72,9 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     _loop(m, st, he, advance.row_step)
     p1 = _stage(m, en, "d1", _stage0(st, last, he))
     p2 = _stage(m, en, "d2", _covers(st.config, p1))
-    _output(m, st, en, p2)
+    cells = _output(m, st, en, p2)
+    # Observation points (formal harness): no logic of their own.
+    st.delta_he, st.delta_stages, st.delta_cells = he, [p1, p2], cells
     return [p1.valid, p2.valid]
 
 
@@ -190,8 +197,9 @@ def _cells_y_major(p2):
     return band - q0, q0 - q1, q1, 0
 
 
-def _output(m, st, en, p2) -> None:
-    """`delta_cells`: the four cells on screen, signed by the winding, into the payload."""
+def _output(m, st, en, p2) -> list:
+    """`delta_cells`: the four cells on screen, signed by the winding, into the payload;
+    returns them (the values the payload loads)."""
     widths = st.config.register_widths()
     cx, cy = _cells_x_major(p2), _cells_y_major(p2)
     up = p2.up
@@ -218,3 +226,4 @@ def _output(m, st, en, p2) -> None:
             cell = beat[f"cell{k}"]
             m.d.sync += [cell.x.eq(x), cell.y.eq(y), cell.delta.eq(delta)]
     assert len(cell.delta) == widths["delta"].bits
+    return cells

@@ -184,14 +184,17 @@ def delta_beats_from_array(rows: np.ndarray) -> list[DeltaBeat]:
 
 class BeatFormat(NamedTuple):
     """What a harness needs to know of one output of the core: its stream's name, payload
-    leaves in array order, the register sizing each leaf (None: a one-bit flag), and the
-    decoders to Python beats."""
+    leaves in array order, the register sizing each leaf (None: a one-bit flag), the
+    decoders to Python beats, the encoder to array rows and the model's beats of one edge's
+    columns (`EdgeResult.columns` or `run_edge_deltas`)."""
 
     stream: str
     paths: tuple[tuple[str, ...], ...]
     registers: dict[str, str | None]  # leaf name -> width-table register
     from_fields: Callable
     from_array: Callable
+    to_array: Callable
+    from_columns: Callable
 
     @property
     def run_columns(self) -> tuple[str, ...]:
@@ -205,6 +208,8 @@ BEAT_FORMATS = {
         {"x": "x", "y": "y", "value": "value", "lane1_valid": None, "last": None},
         beat_from_fields,
         beats_from_array,
+        beats_to_array,
+        column_beats,
     ),
     DELTA_STREAM: BeatFormat(
         DELTA_STREAM,
@@ -212,5 +217,7 @@ BEAT_FORMATS = {
         {"x": "x", "y": "y", "delta": "delta", "last": None},
         delta_beat_from_fields,
         delta_beats_from_array,
+        delta_beats_to_array,
+        delta_column_beats,
     ),
 }

@@ -1,9 +1,10 @@
 """The emitted Verilog, Verilated and driven by cocotb, against the model beat for beat.
 
-Every beat of every edge is compared (sim/cocotb_edges.py), under random source idles and
-sink back-pressure, with bad commands mixed in; some runs give edges random clip windows
-(empty ones among them). The default run checks 1000 edges; the soak run (`pytest -m slow`)
-checks 100 000.
+Every beat of every edge is compared (`edgeaa.sim.simulators.cocotb_bench`), under random
+source idles and sink back-pressure, with bad commands mixed in; some runs give edges random
+clip windows (empty ones among them). The default run checks 1000 edges on the line-writes
+core and 300 on the deltas core (``output="deltas"``, every beat against `run_edge_deltas`);
+the soak runs (`pytest -m slow`) check 100 000 and 20 000.
 """
 
 import pytest
@@ -18,6 +19,7 @@ DEFAULT = EdgeConfig()
 def run(config, count, seed, clip_fraction=0.0, **kwargs):
     edges = random_sim_edges(config, count, seed, bad_fraction=0.02, clip_fraction=clip_fraction)
     result = cosimulate(config, edges, seed=seed, idle=0.2, stall=0.3, **kwargs)
+    print(f"cosim seed {seed}: {result.beats} beats, {result.clocks} clocks")
     assert result.beats == result.expected_beats > count  # every column of every edge
     assert result.dropped > 0  # bad commands were sent, dropped and counted
     return result
@@ -77,3 +79,34 @@ def test_a_wrong_model_is_caught(monkeypatch):
 @pytest.mark.slow
 def test_hundred_thousand_edges():
     run(DEFAULT, 100_000, seed=100_000)
+
+
+# -- the deltas core ---------------------------------------------------------------------------
+
+
+def test_deltas_core_with_back_pressure():
+    """The deltas core's four cells and last flag of every column against `run_edge_deltas`,
+    with idles, stalls, bad commands and clip windows (empty ones among them)."""
+    run(DEFAULT, 300, seed=2028, clip_fraction=0.3, output="deltas")
+
+
+def test_deltas_wrong_model_is_caught(monkeypatch):
+    """The deltas bench can fail: with one cell of the model's deltas moved a row, the core
+    disagrees."""
+    import edgeaa.model.step as step
+
+    original = step.delta_cells
+
+    def shifted(a, st, x, y, d):
+        cells = original(a, st, x, y, d)
+        return [(cx, cy + (k == 3), v) for k, (cx, cy, v) in enumerate(cells)]
+
+    monkeypatch.setattr(step, "delta_cells", shifted)
+    edges = random_sim_edges(DEFAULT, 5, seed=1)
+    with pytest.raises(CosimError, match="the model says"):
+        cosimulate(DEFAULT, edges, seed=1, stall=0.3, output="deltas")
+
+
+@pytest.mark.slow
+def test_deltas_twenty_thousand_edges():
+    run(DEFAULT, 20_000, seed=20_000, clip_fraction=0.2, output="deltas")

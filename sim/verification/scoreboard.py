@@ -1,8 +1,9 @@
 """The golden side of every hardware comparison: the model's writes as the core's beats.
 
 The core emits one beat per column with two lanes (the primary pixel, then the neighbour
-when the column has two writes; the format is `edgeaa.model.beat`). `expected_beats` turns
-model results into that form, and `Scoreboard` checks observed beats against it in order and,
+when the column has two writes; the format is `edgeaa.model.beat`), or with output
+``"deltas"`` the column's four accumulation deltas. `expected_beats` turns model results
+into that form, and `Scoreboard` checks observed beats against it in order and,
 at the end, that nothing is missing (verilog-axis style: the run ends with "the scoreboard
 is empty").
 """
@@ -14,8 +15,8 @@ from collections.abc import Iterable
 import numpy as np
 
 from ...model import Edge, EdgeConfig, EdgeError, run_edge, setup
-from ...model.beat import Beat, beats_from_array, beats_to_array, column_beats
-from ...model.step import EdgeResult
+from ...model.beat import BEAT_FORMATS, Beat, beats_from_array, beats_to_array, column_beats
+from ...model.step import EdgeResult, run_edge_deltas
 
 __all__ = [
     "Beat",
@@ -33,16 +34,23 @@ def edge_beats(result: EdgeResult) -> list[Beat]:
     return column_beats(result.columns)
 
 
-def expected_beats(config: EdgeConfig, edges: Iterable[Edge]) -> tuple[list[Beat], int]:
+def expected_beats(
+    config: EdgeConfig, edges: Iterable[Edge], output: str = "writes"
+) -> tuple[list, int]:
     """All beats of a command stream, and how many commands the core must drop as bad.
 
-    An edge with no column in its clip window has no beat (not even a `last` one) and is not
-    dropped: it is not counted."""
-    beats: list[Beat] = []
+    `output`: the core's output, ``"writes"`` (`Beat`, from `run_edge`) or ``"deltas"``
+    (`edgeaa.model.beat.DeltaBeat`, from `run_edge_deltas`). An edge with no column in its
+    clip window has no beat (not even a `last` one) and is not dropped: it is not counted."""
+    from_columns = BEAT_FORMATS[output].from_columns
+    beats: list = []
     dropped = 0
     for edge in edges:
         try:
-            beats.extend(edge_beats(run_edge(config, edge)))
+            if output == "writes":
+                beats.extend(from_columns(run_edge(config, edge).columns))
+            else:
+                beats.extend(from_columns(run_edge_deltas(config, edge)))
         except EdgeError:
             dropped += 1
     return beats, dropped

@@ -19,8 +19,8 @@ when the harness is built, never a vacuous proof.
 
 Files: `spec` (the model-side specification: fold, window, bank invariants, one column in
 full width), `harness` (`FormalHarness`), one module per property family (`stream`, `count`,
-`bounds`, `pipeline` for ``pipe``, ``beat`` and ``minor``, `covers`) and `run` (`Proof`,
-`PROOFS`, `run_proof`, `main`).
+`bounds`, `pipeline` for ``pipe``, ``beat`` and ``minor``, `deltas` for the deltas core,
+`covers`) and `run` (`Proof`, `PROOFS`, `DELTA_PROOFS`, `run_proof`, `main`).
 
 Check groups (``checks``):
 
@@ -74,11 +74,18 @@ Check groups (``checks``):
     values that SAT-based induction cannot handle, and a bounded check from reset reaches
     only the first columns of an edge (the first is stepped 35 clocks after reset).
 
+``dbounds``, ``dloop``, ``dpipe``, ``dcells``, ``dbeat`` (the deltas core, ``output="deltas"``)
+    The end pieces of the setup and the deltas loop's registers against the model's, every
+    height, estimate and delta register of a column within its width, the loop following
+    the model's loop (the piece start telescoping from the previous piece end), the
+    pipeline stages, the cells and the beat: `deltas` has the details. ``stream`` and
+    ``count`` apply to the deltas stream unchanged (``pipe``, ``beat``, ``minor`` do not).
+
 Covers (``covers``, run with ``mode cover``): ``drop`` a dropped command; ``stepper`` a
 two-lane beat, a neighbour in the row below, a beat that is not the last, a last beat, a
-held beat taken, two edges in flight. ``assumes`` turns check groups into assumptions: sound
-once they are proven by induction (they hold in every reachable state), and it gives a
-bounded check the invariants for free.
+held beat taken, two edges in flight; ``deltas`` the deltas core's (`covers`). ``assumes``
+turns check groups into assumptions: sound once they are proven by induction (they hold in
+every reachable state), and it gives a bounded check the invariants for free.
 
 Runs (`PROOFS`; times measured on the 2-core development machine, shared with other jobs;
 "latency" is the core's ``setup_latency``, the clock of the first beat after reset):
@@ -110,7 +117,9 @@ change, not the property.
 Faults (``fault``, to show the checks can fail): ``stall_payload`` flips a payload bit the
 harness observes while a beat is held (a core that changes a stalled beat), ``silent_drop``
 hides the ``error`` pulse (a core that drops a bad command without reporting it),
-``tight_jq`` asserts the false invariant jq < ifix / 2.
+``tight_jq`` asserts the false invariant jq < ifix / 2, ``tight_hs`` (deltas core, group
+``dloop``) the false invariant hs >= 0. The deltas proofs (`DELTA_PROOFS`) and their times:
+docs/hardware.md, "Formal proofs of the deltas core".
 """
 
 from __future__ import annotations
@@ -118,6 +127,7 @@ from __future__ import annotations
 from .count import capacity
 from .harness import CHECKS, COVERS, FAULTS, FormalHarness
 from .run import (
+    DELTA_PROOFS,
     PROOFS,
     FormalError,
     FormalResult,
@@ -133,6 +143,7 @@ from .run import (
 __all__ = [
     "CHECKS",
     "COVERS",
+    "DELTA_PROOFS",
     "FAULTS",
     "PROOFS",
     "FormalError",

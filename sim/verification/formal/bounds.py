@@ -40,6 +40,7 @@ def check(ctx):
         asserts.append((condition, f"bounds: {name}"))
 
     s = _setup(ctx, add)
+    ctx.setup_spec = s  # the latched command's fold and window, the next bank (deltas checks)
     _lanes(ctx, s, add)
     _bank(ctx, s, add)
     _stepper(ctx, add)
@@ -63,7 +64,7 @@ def _setup(ctx, add) -> types.SimpleNamespace:
     busy = in_window | run | final
     cut = run | final  # the columns are cut to the window, lane A is loaded
     counter = r.counter
-    nb = fields(setup.next_bank, setup_layout(config))
+    nb = fields(setup.next_bank, setup_layout(config, ctx.output))
     nb_axes = axes(nb)
     # The registers the setup loads when it accepts a command, besides the command: each
     # equals its value with the latched command in place of the incoming payload.
@@ -100,7 +101,7 @@ def _setup(ctx, add) -> types.SimpleNamespace:
     run_cycles = timing.run_cycles(config)
     long_run = timing.run_cycles(config, clipped_start=True)
     add(implies(run, counter < Mux(r.start_clip, long_run, run_cycles)), "counter")
-    return types.SimpleNamespace(win=win, busy=busy, nb=nb, nb_axes=nb_axes)
+    return types.SimpleNamespace(fold=f, win=win, busy=busy, nb=nb, nb_axes=nb_axes)
 
 
 def _fold_registers(config, r, f, nb, nb_axes) -> dict:
@@ -250,7 +251,7 @@ def _bank(ctx, s, add):
     m, config, setup = ctx.m, ctx.config, ctx.setup
     bank = setup.bank
     top = 1 << config.coord_bits
-    bk = fields(bank.payload, setup_layout(config))
+    bk = fields(bank.payload, setup_layout(config, ctx.output))
     bk_axes = axes(bk)
     for name, condition in constants_ok(config, bk).items():
         add(implies(bank.valid, condition), f"bank {name}")
@@ -267,10 +268,13 @@ def _bank(ctx, s, add):
 
 # -- the stepper -------------------------------------------------------------------------------
 
+_LOOP_FITS = ("jsum", "next_acc", "next_major")  # `spec.column`'s fits of the loop's step
+
 
 def _stepper_registers(config, stepper) -> types.SimpleNamespace:
     """The stepper's `bank_fields` registers as a bank-like record (arrays as lists)."""
-    regs = {field.name: getattr(stepper, field.name) for field in bank_fields(config)}
+    fields = bank_fields(config, stepper.output)
+    regs = {field.name: getattr(stepper, field.name) for field in fields}
     regs.update(seg_thresholds=stepper.seg_thresholds, seg_intercepts=stepper.seg_intercepts)
     return types.SimpleNamespace(**regs)
 
@@ -312,7 +316,9 @@ def _stepper(ctx, add):
     ]
     add(implies(active, all_(stepped)), "stepper rows stepped")
     for name, condition in col.fits.items():
-        add(implies(active, condition), f"column {name} fits")
+        # The deltas core computes no writes: only the loop's registers matter there.
+        if ctx.output == "writes" or name in _LOOP_FITS:
+            add(implies(active, condition), f"column {name} fits")
     if ctx.fault == "tight_jq":
         add(implies(active, st.jq < (st.ifix >> 1)), "false invariant jq < ifix / 2")
     # The per-edge constants the stepper derives at load (`EdgeStepper.derive`).
@@ -320,6 +326,6 @@ def _stepper(ctx, add):
         add(implies(active, stepper.derived[name] == value), f"stepper derived {name}")
     # Observation wires of the column being stepped.
     add(implies(active, stepper.jsum == col.jsum), "stepper jsum wire")
-    if config.segments:
+    if config.segments and ctx.output == "writes":
         add(implies(active, stepper.dq == col.dq), "stepper dq wire")
     ctx.st, ctx.st_axes, ctx.column = st, st_axes, col

@@ -20,7 +20,6 @@ import types
 from amaranth.hdl import Mux, Signal, signed
 from amaranth.lib import data
 
-from ....hdl.layouts import write_layout
 from ....hdl.setup import accept_values
 from .spec import all_, fold, implies
 
@@ -37,12 +36,12 @@ def check(ctx):
     the covers."""
     m, config, core = ctx.m, ctx.config, ctx.core
     setup, stepper = ctx.setup, ctx.stepper
-    edges, writes, bank = core.edges, core.writes, setup.bank
-    beat = data.View(write_layout(config), ctx.payload)
+    edges, out, bank = core.edges, ctx.out, setup.bank
+    beat = data.View(ctx.layout, ctx.payload)
     incoming_bad = fold(config, edges.payload).bad
     cmd_bad = fold(config, setup.cmd).bad
     accepted = edges.valid & edges.ready
-    finished = writes.valid & writes.ready & beat.last
+    finished = out.valid & out.ready & beat.last
     error = ctx.error
     in_window, in_run, in_final = setup.in_window, setup.in_run, setup.in_final
     # An edge with no column inside its window ends in its second RUN clock, when the
@@ -59,10 +58,7 @@ def check(ctx):
     # The stepper's output pipeline, youngest first: the stages p1 .. p{latency - 1} and the
     # output register. An edge whose last column has left the stepper is counted where that
     # column is.
-    positions = [
-        *((stage.valid, stage.last) for stage in stepper.stages),
-        (writes.valid, beat.last),
-    ]
+    positions = [*((stage.valid, stage.last) for stage in ctx.stages), (out.valid, beat.last)]
     occupancy = _occupancy(ctx, positions, cmd_bad, error)
     tags = _tags(ctx, positions, cmd_bad)
 
@@ -132,8 +128,8 @@ def _occupancy(ctx, positions, cmd_bad, error) -> types.SimpleNamespace:
 def _tags(ctx, positions, cmd_bad):
     """The command's badness, carried by the harness from FINAL to the bank, the stepper and
     along the pipeline; ``positions``: each pipeline position holds no bad command's column."""
-    m, writes, bank = ctx.m, ctx.core.writes, ctx.setup.bank
-    en = ~writes.valid | writes.ready
+    m, out, bank = ctx.m, ctx.out, ctx.setup.bank
+    en = ~out.valid | out.ready
     tag_bank, tag_stepper = Signal(), Signal()
     tags = [Signal(name=f"tag_p{index + 1}") for index in range(len(positions))]
     with m.If(ctx.setup.in_final & (~bank.valid | bank.ready)):

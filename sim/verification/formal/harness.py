@@ -7,22 +7,27 @@ from __future__ import annotations
 import types
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, Assume, ClockDomain, Elaboratable, Module, Signal, Value
+from amaranth.hdl import Assert, Assume, ClockDomain, Elaboratable, Fragment, Module, Signal, Value
 
 from ....hdl.core import EdgeAntialiaser
+from ....hdl.layouts import output_layout
+from ....model.bank import check_output
 from ....model.config import EdgeConfig
 from .bounds import check as check_bounds
 from .count import capacity
 from .count import check as check_count
 from .covers import add as add_covers
+from .deltas import DELTA_CHECKS
+from .deltas import check as check_deltas
 from .pipeline import check as check_pipeline
 from .stream import check as check_stream
 
-__all__ = ["CHECKS", "COVERS", "FAULTS", "FormalHarness", "capacity"]
+__all__ = ["CHECKS", "COVERS", "DELTA_CHECKS", "FAULTS", "LINE_CHECKS", "FormalHarness", "capacity"]
 
-CHECKS = ("stream", "count", "bounds", "pipe", "beat", "minor")
-COVERS = ("drop", "stepper")
-FAULTS = ("stall_payload", "silent_drop", "tight_jq")
+LINE_CHECKS = ("pipe", "beat", "minor")  # the writes core's pipeline
+CHECKS = ("stream", "count", "bounds", *LINE_CHECKS, *DELTA_CHECKS)
+COVERS = ("drop", "stepper", "deltas")
+FAULTS = ("stall_payload", "silent_drop", "tight_jq", "tight_hs")
 
 
 def _choose(name: str, value, allowed) -> tuple[str, ...]:
@@ -33,12 +38,24 @@ def _choose(name: str, value, allowed) -> tuple[str, ...]:
     return value
 
 
+def _check_output_groups(output: str, groups, covers) -> None:
+    """The pipeline groups and covers of the other output do not apply."""
+    other = set(DELTA_CHECKS if output == "writes" else LINE_CHECKS)
+    other |= {"deltas"} if output == "writes" else {"stepper"}
+    wrong = sorted(other & (set(groups) | set(covers)))
+    if wrong:
+        raise ValueError(f"{', '.join(wrong)} do not apply to the {output} core")
+
+
 class FormalHarness(Elaboratable):
     """The core with free inputs and the properties of `checks` (see the package docstring).
 
     ``reset``: the reset is a free input (else the domain has no reset). ``covers``: add the
     Cover statements. ``assumes``: check groups proven elsewhere, assumed here. ``fault``: one
-    of `FAULTS`, a deliberate error the checks must catch.
+    of `FAULTS`, a deliberate error the checks must catch. ``output``: the core's output,
+    ``"writes"`` (line writes) or ``"deltas"`` (accumulation deltas; its pipeline groups are
+    `DELTA_CHECKS`, the writes pipeline's `LINE_CHECKS` do not apply, its covers
+    ``deltas``).
     """
 
     def __init__(
@@ -50,6 +67,7 @@ class FormalHarness(Elaboratable):
         assumes=(),
         reset: bool = True,
         fault: str | None = None,
+        output: str = "writes",
     ):
         self.config = EdgeConfig() if config is None else config
         if not isinstance(self.config, EdgeConfig):
@@ -62,9 +80,11 @@ class FormalHarness(Elaboratable):
         self.assumes = _choose("assumes", assumes, CHECKS)
         self.reset = reset
         self.fault = fault
+        self.output = check_output(output)
+        _check_output_groups(self.output, self.checks + self.assumes, self.covers)
         # One setup unit: the properties observe its internals (`SetupArray` is checked in
         # simulation, tests/test_setup_array.py).
-        self.core = EdgeAntialiaser(self.config, setup_units=1)
+        self.core = EdgeAntialiaser(self.config, output=self.output, setup_units=1)
         # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
         self.domain = ClockDomain("sync", reset_less=not reset)
 
@@ -75,28 +95,32 @@ class FormalHarness(Elaboratable):
     def elaborate(self, platform):
         m = Module()
         core = self.core
-        m.submodules.dut = core
+        # Elaborated here: the deltas stepper makes its observation points as it elaborates.
+        m.submodules.dut = Fragment.get(core, platform)
         m.domains.sync = self.domain
         if self.reset:
             m.d.comb += self.domain.rst.eq(AnySeq(1))
-        edges, writes = core.edges, core.writes
+        edges = core.edges
         m.d.comb += [
             edges.valid.eq(AnySeq(1)),
             edges.payload.eq(AnySeq(len(Value.cast(edges.payload)))),
             # The window is free in every clock: the core must sample it with the command.
             Value.cast(core.clip).eq(AnySeq(len(Value.cast(core.clip)))),
-            writes.ready.eq(AnySeq(1)),
+            core.out.ready.eq(AnySeq(1)),
         ]
         ctx = self._context(m)
-        stepper_covers = "stepper" in self.covers
+        stepper_covers = bool({"stepper", "deltas"} & set(self.covers))
         if "stream" in self.checks or stepper_covers:
             check_stream(ctx)
         wanted = set(self.checks) | set(self.assumes)
         if "count" in wanted or self.covers:
             check_count(ctx)
-        if wanted & {"bounds", "pipe", "beat", "minor"} or stepper_covers:
+        if wanted & {"bounds", *LINE_CHECKS, *DELTA_CHECKS} or stepper_covers:
             check_bounds(ctx)
-            check_pipeline(ctx)
+            if self.output == "deltas":
+                check_deltas(ctx)
+            else:
+                check_pipeline(ctx)
         add_covers(ctx)
         return m
 
@@ -104,23 +128,30 @@ class FormalHarness(Elaboratable):
         """What the check families share: the module, the core and its two parts, what they
         observe of the outputs (faults act here), and `emit`."""
         core = self.core
-        writes = core.writes
+        out = core.out
+        stepper = core.stepper
+        deltas = self.output == "deltas"
         ctx = types.SimpleNamespace(
             m=m,
             config=self.config,
+            output=self.output,
             core=core,
             setup=core.setup,
-            stepper=core.stepper,
+            stepper=stepper,
+            out=out,  # the output stream: writes or deltas
+            layout=output_layout(self.config, self.output),
+            # The stages before the output register, each with valid and last.
+            stages=stepper.delta_stages if deltas else stepper.stages,
             checks=self.checks,
             assumes=self.assumes,
             covers=self.covers,
             fault=self.fault,
             emit=self._emit(m),
         )
-        ctx.payload = Value.cast(writes.payload)
+        ctx.payload = Value.cast(out.payload)
         ctx.error = core.error
         held = Signal()  # a beat was valid and not taken in the previous clock
-        m.d.sync += held.eq(writes.valid & ~writes.ready)
+        m.d.sync += held.eq(out.valid & ~out.ready)
         if self.fault == "stall_payload":
             ctx.payload = ctx.payload ^ held
         if self.fault == "silent_drop":

@@ -47,23 +47,23 @@ def _snapshots(ctx) -> list:
     source, source_valid = st, ctx.stepper.active
     for index in range(ctx.stepper.latency):
         regs = {
-            name: _delayed(m, en, getattr(source, name), f"s{index + 1}_{name}")
+            name: delayed(m, en, getattr(source, name), f"s{index + 1}_{name}")
             for name in vars(st)
             if name not in _ARRAYS
         }
         for name in _ARRAYS:
             values = getattr(source, name)
             regs[name] = [
-                _delayed(m, en, value, f"s{index + 1}_{name}{j}") for j, value in enumerate(values)
+                delayed(m, en, value, f"s{index + 1}_{name}{j}") for j, value in enumerate(values)
             ]
-        valid = _delayed(m, en, source_valid, f"s{index + 1}_valid")
+        valid = delayed(m, en, source_valid, f"s{index + 1}_valid")
         snap = types.SimpleNamespace(**regs)
         snaps.append((snap, valid))
         source, source_valid = snap, valid
     return snaps
 
 
-def _delayed(m, en, value, name: str) -> Signal:
+def delayed(m, en, value, name: str) -> Signal:
     """`value` one pipeline move later."""
     reg = Signal(Value.cast(value).shape(), name=name)
     with m.If(en):

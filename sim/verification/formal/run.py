@@ -21,6 +21,7 @@ from ....model.config import EdgeConfig
 from .harness import FAULTS, FormalHarness
 
 __all__ = [
+    "DELTA_PROOFS",
     "PROOFS",
     "FormalError",
     "FormalResult",
@@ -57,7 +58,97 @@ class Proof:
     assumes: tuple[str, ...] = ()  # check groups proven elsewhere, assumed here
     skip: int | str = 0  # clocks after reset whose assertions and covers are not checked
     description: str = ""
+    output: str = "writes"  # the core's output: line writes or accumulation deltas
 
+
+# The deltas core (output "deltas"): the stream, count and bounds groups of the writes core,
+# the deltas groups (`deltas`) and its covers.
+DELTA_PROOFS = (
+    Proof(
+        "deltas_stream",
+        ("stream",),
+        "prove",
+        1,
+        output="deltas",
+        description="deltas hold rule, any reachable state (k-induction)",
+    ),
+    Proof(
+        "deltas_count",
+        ("count",),
+        "prove",
+        1,
+        output="deltas",
+        description="deltas core: no command lost, bad commands never beat (k-induction)",
+    ),
+    Proof(
+        "deltas_bounds",
+        ("bounds",),
+        "prove",
+        1,
+        output="deltas",
+        description="deltas core: the setup, bank and loop invariants of `bounds` (k-induction)",
+    ),
+    Proof(
+        "deltas_pieces",
+        ("dbounds",),
+        "prove",
+        1,
+        assumes=("bounds",),
+        output="deltas",
+        description="end pieces equal the model's where they are selects of the fold, "
+        "within range; the piece start; every register of a column fits (k-induction)",
+    ),
+    Proof(
+        "deltas_loop",
+        ("dloop",),
+        "prove",
+        1,
+        assumes=("bounds", "dbounds"),
+        output="deltas",
+        description="the loop registers follow the model's loop (k-induction)",
+    ),
+    Proof(
+        "deltas_pipe",
+        ("dpipe",),
+        "prove",
+        1,
+        assumes=("bounds", "dbounds"),
+        output="deltas",
+        description="the deltas pipeline's stages hold the model's values of the column "
+        "snapshot they carry (k-induction)",
+    ),
+    Proof(
+        "deltas_cells",
+        ("dcells",),
+        "prove",
+        1,
+        assumes=("bounds", "dbounds", "dpipe"),
+        output="deltas",
+        description="the four cells the output register loads from p2 are the model's "
+        "`delta_cells` of p2's column snapshot, in full width (k-induction)",
+    ),
+    Proof(
+        "deltas_beat",
+        ("dbeat",),
+        "prove",
+        1,
+        assumes=("bounds", "dbounds", "dpipe", "dcells"),
+        output="deltas",
+        description="every delta beat is the model's `delta_cells` of the loop state its "
+        "column was stepped with, last on the last column (k-induction)",
+    ),
+    Proof(
+        "deltas_cover",
+        (),
+        "cover",
+        "latency+2",
+        covers=("deltas",),
+        skip="latency-4",
+        output="deltas",
+        description="the deltas stepper is reachable: pieces above and below their row, a "
+        "one-column edge, a y-major column, a negative delta, last and held beats, two edges",
+    ),
+)
 
 PROOFS: dict[str, Proof] = {
     proof.name: proof
@@ -128,6 +219,7 @@ PROOFS: dict[str, Proof] = {
             description="the stepper is reachable: two-lane beat, neighbour below, last beat, "
             "held beat, two edges in flight (from the first beat of an edge accepted at reset)",
         ),
+        *DELTA_PROOFS,
     )
 }
 
@@ -312,7 +404,7 @@ def run_proof(
     mode = mode or proof.mode
     depth = proof.depth if depth is None else depth
     skip = proof.skip if skip is None else skip
-    latency = timing.setup_latency(config or EdgeConfig())
+    latency = timing.setup_latency(config or EdgeConfig(), proof.output)
     depth, skip = (
         latency + int(value[len("latency") :]) if isinstance(value, str) else value
         for value in (depth, skip)
@@ -325,6 +417,7 @@ def run_proof(
         assumes=proof.assumes,
         reset=reset,
         fault=fault,
+        output=proof.output,
     )
     text = harness_rtlil(harness)
     keep = workdir is not None
