@@ -10,13 +10,15 @@ lowest-indexed of equal cells takes the others' deltas). Each bank is an
 `amaranth.lib.memory.Memory` with one synchronous read port (not transparent) and one write
 port: a simple dual-port block RAM. A cell holds its sum modulo ``2**cell_bits``.
 
-Read-modify-write, one beat per clock, three stages per bank: A (the beat is taken; read the
-cell), B (add the delta to what was read, or to the sum of an earlier delta to the same cell
-still on its way to memory: C's, being written now, or D's, written last clock, which the
-read did not see), C (write). So back-to-back deltas to one cell are neither lost nor
-doubled; the forwarding compares bank addresses only.
+Read-modify-write, one beat per clock, two stages per bank: A (the beat is taken; read the
+cell), B (add the delta to what was read, or to the sum of the beat before if it wrote the
+same cell last clock, which the read did not see; write the sum). So back-to-back deltas to
+one cell are neither lost nor doubled; the forwarding compares bank addresses only. The
+bank's delta is selected from the beat's cells by an AND-OR (one cell at most per bank) and
+is zero when no beat is taken, so a scan's clear is the same add with the read forced to
+zero.
 
-Scan. An end taken in clock a: the last beat's write lands in a + 1 (WAIT); from a + 2 the
+Scan. An end taken in clock a: the last beat's write lands in a (WAIT in a + 1); from a + 2 the
 touched rows (a bit per row, set by every nonzero delta kept) are read in ascending order,
 one cell per clock while the output advances, each read clearing its cell through the write
 port (the read returns the old value), so the clear costs no pass. The read port's enable is
@@ -39,6 +41,14 @@ __all__ = ["BANKS", "TileAccumulator", "lowest_set"]
 BANKS = 8  # (y mod 2, x mod 4)
 OP = {name: code for code, name in enumerate(OPS)}
 CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
+
+
+def _one_hot(selects, values):
+    """The value whose select is set (at most one is), zero when none: an AND-OR."""
+    total = 0
+    for select, value in zip(selects, values, strict=True):
+        total = total | Mux(select, value, 0)
+    return total
 
 
 def lowest_set(bits: Signal, width: int):
@@ -119,46 +129,42 @@ class TileAccumulator(wiring.Component):
         return out
 
     def _rmw(self, m, ports, cells, accept):
-        """Stages A, B, C of every bank (see the module docstring); `self._clear` (the scan's)
-        takes the write port when set."""
+        """Stages A and B of every bank (see the module docstring); `self._clear` (the
+        scan's) takes the write port when set and writes zero."""
         tile = self._tile
         addr_bits = len(ports[0][0].addr)
         self._scan_addr = Signal(addr_bits)
         self._clear = Signal(BANKS)
         self._read_en = Signal()
         for b, (rd, wr) in enumerate(ports):
-            valid = Cat(*(keep & (bank == b) for keep, bank, _, _ in cells)).any()
+            # one-hot AND-OR selection of the bank's cell; zero when no beat is taken
+            sel = [accept & keep & (bank == b) for keep, bank, _, _ in cells]
             addr, delta = Signal(addr_bits), Signal(signed(tile.cell_bits))
-            for keep, bank, cell_addr, cell_delta in cells:
-                with m.If(keep & (bank == b)):
-                    m.d.comb += [addr.eq(cell_addr), delta.eq(cell_delta)]
+            m.d.comb += [
+                addr.eq(_one_hot(sel, [cell_addr for _, _, cell_addr, _ in cells])),
+                delta.eq(_one_hot(sel, [cell_delta for _, _, _, cell_delta in cells])),
+            ]
             b_valid, b_addr, b_delta = Signal(), Signal(addr_bits), Signal.like(delta)
             c_valid, c_addr, c_sum = Signal(), Signal(addr_bits), Signal.like(delta)
-            d_valid, d_addr, d_sum = Signal(), Signal(addr_bits), Signal.like(delta)
-            m.d.comb += [
-                rd.addr.eq(Mux(self.scanning, self._scan_addr, addr)),
-                rd.en.eq(self._read_en),
-            ]
+            total = Signal.like(delta)
+            m.d.comb += rd.addr.eq(Mux(self.scanning, self._scan_addr, addr))
+            m.d.comb += rd.en.eq(self._read_en)
             m.d.sync += [
-                b_valid.eq(accept & valid),
+                b_valid.eq(Cat(*sel).any()),
                 b_addr.eq(addr),
                 b_delta.eq(delta),
                 c_valid.eq(b_valid),
                 c_addr.eq(b_addr),
-                d_valid.eq(c_valid),
-                d_addr.eq(c_addr),
-                d_sum.eq(c_sum),
+                c_sum.eq(total),
             ]
-            base = Mux(
-                c_valid & (c_addr == b_addr),
-                c_sum,
-                Mux(d_valid & (d_addr == b_addr), d_sum, rd.data),
-            )
-            m.d.sync += c_sum.eq(base + b_delta)
+            # the write of the beat before (C) is not in the read B got; a clear writes
+            # zero (b_delta is zero while scanning)
+            base = Mux(c_valid & (c_addr == b_addr), c_sum, Mux(self._clear[b], 0, rd.data))
             m.d.comb += [
-                wr.addr.eq(Mux(self._clear[b], self._scan_addr, c_addr)),
-                wr.data.eq(Mux(self._clear[b], 0, c_sum)),
-                wr.en.eq(self._clear[b] | c_valid),
+                total.eq(base + b_delta),
+                wr.addr.eq(Mux(self._clear[b], self._scan_addr, b_addr)),
+                wr.data.eq(total),
+                wr.en.eq(self._clear[b] | b_valid),
             ]
 
     def _control(self, m, ports, o_valid, advance, accept):
