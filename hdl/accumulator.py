@@ -3,10 +3,11 @@
 polygon's end, the touched rows' cell sums out to the resolve, each cell cleared as it is
 read. `edgeaa.model.tile` is the model and the cycle model.
 
-Memory. The tile's cells are split over eight banks by ``(y mod 2, x mod 4)``: a beat's cells
-(a 2 x 2 block, or four consecutive cells of a row) fall in distinct banks, except cells left
-of the tile, which all move into the row's first column; those are added together first (the
-lowest-indexed of equal cells takes the others' deltas). Each bank is an
+Memory. The tile's cells are split over four banks by ``(x + 2 y) mod 4``: a beat's cells
+(a 2 x 2 block, ``k .. k + 3`` in some order, or four consecutive cells of a row) fall in
+distinct banks, except cells left of the tile, which all move into the row's first column;
+those are added together first (the lowest-indexed of equal cells takes the others' deltas),
+and the distinct cells left still fall in distinct banks. Each bank is an
 `amaranth.lib.memory.Memory` with one synchronous read port (not transparent) and one write
 port: a simple dual-port block RAM. A cell holds its sum modulo ``2**cell_bits``.
 
@@ -36,11 +37,17 @@ from amaranth.lib.wiring import In, Out
 from ..model.tile import OPS, RESOLVE_OPS, TileConfig
 from .layouts import tile_cell_layout, tile_op_layout
 
-__all__ = ["BANKS", "TileAccumulator", "lowest_set"]
+__all__ = ["BANKS", "TileAccumulator", "bank_of", "lowest_set"]
 
-BANKS = 8  # (y mod 2, x mod 4)
+BANKS = 4  # (x + 2 y) mod 4
 OP = {name: code for code, name in enumerate(OPS)}
 CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
+
+
+def bank_of(x, y):
+    """The bank of cell (x, y): ``(x + 2 y) mod 4`` (the cell's address in it is
+    ``(y, x >> 2)``)."""
+    return Cat(x[0], x[1] ^ y[0])
 
 
 def _one_hot(selects, values):
@@ -124,8 +131,7 @@ class TileAccumulator(wiring.Component):
                 total = total + Mux(same[k], raw[k][3], 0)
             sum_j = Signal(signed(tile.cell_bits), name=f"merged{j}")
             m.d.comb += sum_j.eq(total)
-            bank = Cat(cx[:2], cy[0])
-            out.append((mine, bank, Cat(cx[2:], cy[1:]), sum_j))
+            out.append((mine, bank_of(cx, cy), Cat(cx[2:], cy), sum_j))
         return out
 
     def _rmw(self, m, ports, cells, accept):
@@ -198,10 +204,10 @@ class TileAccumulator(wiring.Component):
             with m.State("SCAN"):
                 m.d.comb += [
                     self.scanning.eq(1),
-                    self._scan_addr.eq(Cat(scan_x[2:], scan_y[1:])),
+                    self._scan_addr.eq(Cat(scan_x[2:], scan_y)),
                 ]
                 with m.If(advance):
-                    bank = Cat(scan_x[:2], scan_y[0])
+                    bank = bank_of(scan_x, scan_y)
                     m.d.comb += self._clear.eq(1 << bank)
                     m.d.sync += [
                         o_valid.eq(1),
