@@ -27,7 +27,14 @@ from amaranth.hdl import Const, Mux, Signal, signed, unsigned
 from ..model.config import EdgeConfig
 from .layouts import register_shape
 
-__all__ = ["final_pieces", "kq_product_steps", "pieces_registers", "run_end_loads"]
+__all__ = [
+    "final_pieces",
+    "id_product_clear",
+    "id_product_steps",
+    "kq_product_steps",
+    "pieces_registers",
+    "run_end_loads",
+]
 
 # The pieces registered at the end of RUN (bank fields of the same name), then FINAL's own.
 _EARLY = ("end_row", "end_height", "total1", "rect0", "rect1", "band0", "band1")
@@ -36,9 +43,10 @@ _EARLY = ("end_row", "end_height", "total1", "rect0", "rect1", "band0", "band1")
 def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
     """The setup's registers of the end pieces: ``cut_end`` (WINDOW: the window cut the last
     column), the `_EARLY` bank fields, the operands FINAL needs (``single``, ``w0``,
-    ``hs0_fp``) and the products by kq (``k_me``, ``k_mg``: `kq_product_steps`)."""
+    ``hs0_fp``), the products by kq (``k_me``, ``k_mg``: `kq_product_steps`) and by
+    ``|I_d|`` (``id_*``: `id_product_steps`)."""
     widths = config.register_widths()
-    s = config.subpixel_bits
+    s, I = config.subpixel_bits, config.intensity_bits  # noqa: E741
     product = unsigned(widths["kq"].bits + 2 * s + 3)  # kq times at most (2 S)**2
     height = register_shape(widths["height"])
     regs = {name: Signal(height, name=f"pc_{name}") for name in _EARLY}
@@ -52,6 +60,12 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         k_mg=Signal(product, name="pc_k_mg"),
         m_me=Signal(unsigned(2 * s + 3), name="pc_m_me"),  # their multiplicands (comb)
         m_mg=Signal(unsigned(2 * s + 3), name="pc_m_mg"),
+        # |I_d| times h0, e1, w1, first, end (`id_product_steps`)
+        id_h0=Signal(signed(I + s + 4), name="pc_id_h0"),  # h0 in [-S, 3 S)
+        id_e1=Signal(unsigned(I + s + 1), name="pc_id_e1"),  # e1 < 2 S
+        id_w1=Signal(unsigned(I + s + 2), name="pc_id_w1"),  # w1 <= 2 S
+        id_first=Signal(unsigned(I + 2 * s + 3), name="pc_id_first"),  # < 6 S^2
+        id_end=Signal(unsigned(I + 2 * s + 2), name="pc_id_end"),  # < 4 S^2
     )
     return types.SimpleNamespace(**regs)
 
@@ -82,42 +96,78 @@ def kq_product_steps(unit, twice, once) -> list:
     return loads
 
 
-def run_end_loads(unit) -> list:
-    """The loads of RUN's last clock: the pieces that need no lane result (`unit` is the
-    `EdgeSetupUnit`; its regs, command and ``pieces`` registers). x-major edges use rect
-    and y-major ones band, so one product serves both where the shift allows; the products
-    by ``|I_d|`` multiply the sub-pixel factors first (``half`` is ``|I_d|`` shifted)."""
-    config = unit.config
-    s, F = config.subpixel_bits, config.F
-    S, k = 1 << s, F - s - 1  # half = |I_d| << k: ifix per half sub-pixel step
-    r, pc, w = unit.regs, unit.pieces, _end_widths(unit)
-    mg, me, w1 = w.mg, w.me, w.w1
+def _end_factors(unit) -> types.SimpleNamespace:
+    """The sub-pixel factors of the pieces (combinational, valid from the clock after lane
+    A's fix-up: ``h0`` needs ``row0``), and the flag ``single``."""
+    s = unit.config.subpixel_bits
+    S = 1 << s
+    r, w = unit.regs, _end_widths(unit)
     single = (r.columns == 1) & w.fp & w.lp
     v1_2 = ((r.v0_r + r.dv) << 1) + S  # 2 v1 + S
     e1 = v1_2[: s + 1]  # P1's height in its row, half sub-pixel steps
     # h0 = 2 v0 - (2 row0 - 1) S = m - q in [-S, 3 S) when the first column holds P0 (row0's
     # digit m in [0, 2 S), |q| <= S): s + 3 bits; it is used only then (mg = 0 otherwise).
     h0 = ((r.v0_r << 1) + S - (r.row0 << (s + 1)))[: s + 3].as_signed()
-    w0 = 2 * S - mg - Mux(single, me, 0)
+    w0 = 2 * S - w.mg - Mux(single, w.me, 0)
     xm = r.x_major
-    # x: rect0 = (max(-hs0, 0) mg) >> (s + 1) (mg = 0 unless hs0 = half h0); y: band0.
-    first_rect = (r.i_d * Mux(xm, Mux(h0 < 0, -h0, 0)[: s + 2] * mg, w0)) << k
-    # x: rect1 = (end_height me) >> (s + 1); y: the first term of total1.
-    end_rect = ((r.i_d * (e1 * Mux(xm, me, w1))) << k) >> (s + 1)
+    return types.SimpleNamespace(
+        single=single,
+        v1_2=v1_2,
+        w0=w0,
+        # the multiplicands of the products by |I_d| (`id_product_steps`)
+        h0=h0,
+        e1=e1,
+        w1=w.w1,
+        # x: max(-h0, 0) mg (rect0); y: w0 (band0)
+        first=Mux(xm, Mux(h0 < 0, -h0, 0)[: s + 2] * w.mg, w0),
+        # x: e1 me (rect1); y: e1 w1 (the first term of total1)
+        end=e1 * Mux(xm, w.me, w.w1),
+    )
+
+
+ID_PRODUCTS = ("h0", "e1", "w1", "first", "end")  # `id_product_steps`: |I_d| times these
+
+
+def id_product_steps(unit, bit) -> list:
+    """One Horner step of the products by ``|I_d|``: ``P = 2 P + bit M`` for each
+    multiplicand of `ID_PRODUCTS`, `bit` the next bit of ``|I_d|`` (MSB first: lane A's
+    multiplier bit in the first ``I`` clocks of its second pass; `unit` clears them at the
+    fix-up)."""
+    f, pc = _end_factors(unit), unit.pieces
+    products = [(getattr(pc, f"id_{name}"), getattr(f, name)) for name in ID_PRODUCTS]
+    return [product.eq((product << 1) + Mux(bit, value, 0)) for product, value in products]
+
+
+def id_product_clear(unit) -> list:
+    return [getattr(unit.pieces, f"id_{name}").eq(0) for name in ID_PRODUCTS]
+
+
+def run_end_loads(unit) -> list:
+    """The loads of RUN's last clock: the pieces that need no lane result (`unit` is the
+    `EdgeSetupUnit`; its regs, command and ``pieces`` registers). x-major edges use rect
+    and y-major ones band, so one product serves both where the shift allows; the products
+    by ``|I_d|`` are done (``id_*``), shifted by ``k`` they are in ``ifix`` units."""
+    config = unit.config
+    s, F = config.subpixel_bits, config.F
+    k = F - s - 1  # |I_d| << k: ifix per half sub-pixel step
+    r, pc, f = unit.regs, unit.pieces, _end_factors(unit)
+    xm = r.x_major
+    first_rect = pc.id_first << k  # x: rect0 << (s + 1); y: band0
+    end_rect = (pc.id_end << k) >> (s + 1)  # x: rect1; y: the first term of total1
     sq = 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
     # kq (4 S^2 - me^2) for x-major, kq w1^2 for y-major (`kq_product_steps`)
     slope_area = Mux(xm, (r.kq << (2 * s + 2)) - pc.k_me, pc.k_me) >> sq
     return [
-        pc.single.eq(single),
-        pc.w0.eq(w0),
-        pc.hs0_fp.eq((r.i_d * h0) << k),
-        pc.end_row.eq(v1_2 >> (s + 1)),
-        pc.end_height.eq((r.i_d * e1) << k),
+        pc.single.eq(f.single),
+        pc.w0.eq(f.w0),
+        pc.hs0_fp.eq(pc.id_h0 << k),
+        pc.end_row.eq(f.v1_2 >> (s + 1)),
+        pc.end_height.eq(pc.id_e1 << k),
         pc.total1.eq(Mux(xm, slope_area, end_rect - slope_area)),
         pc.rect0.eq(Mux(xm, first_rect >> (s + 1), 0)),
         pc.rect1.eq(Mux(xm, end_rect, 0)),
         pc.band0.eq(Mux(xm, 0, first_rect)),
-        pc.band1.eq(Mux(xm, 0, (r.i_d * w1) << k)),
+        pc.band1.eq(Mux(xm, 0, pc.id_w1 << k)),
     ]
 
 

@@ -84,7 +84,14 @@ from .layouts import (
     register_shape,
     setup_layout,
 )
-from .pieces import final_pieces, kq_product_steps, pieces_registers, run_end_loads
+from .pieces import (
+    final_pieces,
+    id_product_clear,
+    id_product_steps,
+    kq_product_steps,
+    pieces_registers,
+    run_end_loads,
+)
 
 __all__ = ["ERRORS_BITS", "EdgeSetupUnit", "accept_values"]
 
@@ -504,6 +511,12 @@ class EdgeSetupUnit(wiring.Component):
             a_step=lane_a.step(m, r.neg_du, "lane_a"),
             b_step=lane_b.step(m, r.neg_du, "lane_b"),
             b_bits=I + F - 1,  # lane B is done at counter I + F - 1
+            # the first I clocks of pass 2 (or before the fix-up): |I_d|'s bits
+            id_bits=Mux(
+                r.start_clip,
+                counter <= self.pass1_long + I,
+                counter <= self.pass1_bits + I,
+            ),
             k_bit=k_bit,
             k_loads=[
                 r.kq.eq((lane_b.q << 1) + k_bit),
@@ -597,6 +610,11 @@ class EdgeSetupUnit(wiring.Component):
             m.d.sync += lanes.fixup_loads
         with m.Else():
             m.d.sync += lanes.a_step
+        if self.pieces is not None:  # the products by |I_d|: its bits lead lane A's pass 2
+            with m.If(lanes.fixup):
+                m.d.sync += id_product_clear(self)
+            with m.Elif(lanes.id_bits):
+                m.d.sync += id_product_steps(self, self.lane_a.a[-1])
         with m.If(counter < lanes.b_bits):
             m.d.sync += lanes.b_step
             if self.pieces is not None:  # the products by kq, one quotient digit a clock
