@@ -35,7 +35,7 @@ from amaranth.lib import memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model.tile import OPS, RESOLVE_OPS, TileConfig
-from .layouts import tile_cell_layout, tile_op_layout
+from .layouts import log2, tile_cell_layout, tile_op_layout
 
 __all__ = ["BANKS", "TileAccumulator", "bank_of", "lowest_set"]
 
@@ -59,11 +59,13 @@ def _one_hot(selects, values):
 
 
 def lowest_set(bits: Signal, width: int):
-    """Index of the lowest set bit of `bits` (0 when none): a priority mux."""
-    index = 0
-    for k in reversed(range(width)):
-        index = Mux(bits[k], k, index)
-    return index
+    """Index of the lowest set bit of `bits` (0 when none) and that bit alone (one-hot, 0
+    when none): ``bits & -bits`` and an OR per index bit."""
+    one_hot = (bits & -bits)[:width]
+    index = Cat(
+        *(Cat(*(one_hot[k] for k in range(width) if k >> j & 1)).any() for j in range(log2(width)))
+    )
+    return index, one_hot
 
 
 class TileAccumulator(wiring.Component):
@@ -196,8 +198,10 @@ class TileAccumulator(wiring.Component):
                     self._take(m, p, o, o_valid, params, background, first)
                     with m.If(p.op == OP["end"]):
                         m.next = "WAIT"
-            with m.State("WAIT"):  # the last beat's write lands in this clock
-                m.d.sync += [scan_x.eq(0), scan_y.eq(lowest_set(touched, tile.height))]
+            # the next row to scan and its bit, taken out of `touched` when it is chosen
+            next_y, next_bit = lowest_set(touched, tile.height)
+            with m.State("WAIT"):  # the last beat's write landed in the clock before
+                m.d.sync += [scan_x.eq(0), scan_y.eq(next_y), touched.eq(touched & ~next_bit)]
                 m.next = "ACC"
                 with m.If(touched != 0):
                     m.next = "SCAN"
@@ -219,10 +223,9 @@ class TileAccumulator(wiring.Component):
                         first.eq(0),
                         scan_x.eq(scan_x + 1),
                     ]
-                    with m.If(scan_x == tile.width - 1):
-                        rest = touched & ~(Const(1, tile.height) << scan_y)[: tile.height]
-                        m.d.sync += [touched.eq(rest), scan_y.eq(lowest_set(rest, tile.height))]
-                        with m.If(rest == 0):
+                    with m.If(scan_x == tile.width - 1):  # `touched`: the rows still to scan
+                        m.d.sync += [scan_y.eq(next_y), touched.eq(touched & ~next_bit)]
+                        with m.If(touched == 0):
                             m.next = "ACC"
         self._output(m, ports, o, params, background)
 
