@@ -184,5 +184,5 @@ def test_clip_latency():
     assert [clock for clock, _ in run.beats] == list(range(12 + latency, 12 + latency + 6))
     assert len(run.banks) == 1
     # Several units: the next command goes to the next unit in the next clock.
-    run = run_and_check(config, [empty, bad, empty, edge], label="empty edge, units")
+    run = run_and_check(config, [empty, bad, empty, edge], label="empty edge, units", setup_units=9)
     assert run.accepts == [0, 1, 2, 3] and run.error_pulses == [3], run.accepts
