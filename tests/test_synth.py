@@ -286,3 +286,72 @@ def test_synthesized_netlist_shows_dsp_cells():
     # An iCE40 HX has no DSP: the multiplier is LUTs and only the elaborated design shows it.
     assert muldiv_cells(synthesized_rtlil(Multiplier(16), "ice40")) == {}
     assert muldiv_cells(Multiplier(16)) == {"$mul": 1}
+
+
+# -- edgeaa synth --top pipeline -----------------------------------------------------------------
+
+
+def _run_synth(capsys, *argv):
+    from edgeaa.cli import main
+
+    status = main(["synth", *argv])
+    return status, capsys.readouterr()
+
+
+def _synth_rows(out: str) -> dict:
+    return {tuple(line.split()[:2]): line.split()[2:] for line in out.splitlines()[3:]}
+
+
+def test_synth_top_pipeline_synthesises_the_pipeline_and_counts_its_block_rams(monkeypatch, capsys):
+    """The command's plumbing (Yosys only, faked): the pipeline of the --tile tile in place
+    of the core, a block-RAM column (SB_RAM40_4K, DP16KD), the baseline beside it."""
+    from edgeaa import edge_cli
+    from edgeaa.hdl.pipeline import EdgePipeline
+    from edgeaa.sim.synthesis import SynthResult
+
+    made = []
+
+    def fake(make, target, seed):
+        design = make()
+        made.append((target, design))
+        rams = {"ice40": {"SB_RAM40_4K": 28}, "ecp5": {"DP16KD": 9}}[target]
+        is_pipe = isinstance(design, EdgePipeline)
+        cells = rams if is_pipe else {}
+        luts, ffs = (9000, 4000) if is_pipe else (400, 100)
+        return SynthResult(target, "dev", luts, ffs, 0, cells, 4, False, fmax_mhz=50.0), None
+
+    monkeypatch.setattr(edge_cli, "_synthesize", fake)
+    status, captured = _run_synth(capsys, "--top", "pipeline", "--tile", "32x16")
+    assert status == 0, captured.err
+    assert [target for target, _ in made] == ["ice40", "ice40", "ecp5", "ecp5"]
+    pipes = [design for _, design in made if isinstance(design, EdgePipeline)]
+    assert len(pipes) == 2 and all((p.tile.width, p.tile.height) == (32, 16) for p in pipes)
+    assert "pipeline, tile 32x16" in captured.out.splitlines()[0]
+    rows = _synth_rows(captured.out)
+    assert rows["ice40", "pipeline"] == ["9000", "4000", "50.0", "28"]
+    assert rows["ecp5", "pipeline"] == ["9000", "4000", "50.0", "9"]
+    assert rows["ice40", "bresenham"][-1] == "0"
+    assert rows["ice40", "ratio"][:2] == ["22.50", "40.00"]
+    # the core (the default) has no block-RAM column
+    made.clear()
+    status, captured = _run_synth(capsys, "--target", "ice40")
+    assert status == 0 and len(_synth_rows(captured.out)["ice40", "edgeaa"]) == 3
+    assert not any(isinstance(design, EdgePipeline) for _, design in made)
+
+
+def test_synth_top_pipeline_rejects_a_bad_tile(capsys):
+    status, captured = _run_synth(capsys, "--top", "pipeline", "--tile", "30x16")
+    assert status == 2 and "--tile" in captured.err
+
+
+@pytest.mark.slow
+def test_synth_top_pipeline_places_a_small_pipeline(capsys):
+    status, captured = _run_synth(
+        capsys,
+        "--top", "pipeline", "--tile", "16x8", "--target", "ice40",
+        "--coord-bits", "5", "--subpixel-bits", "1", "--intensity-bits", "2",
+    )  # fmt: skip
+    assert status == 0, captured.err
+    rows = _synth_rows(captured.out)
+    luts, ffs, fmax, rams = rows["ice40", "pipeline"]
+    assert int(luts) > 0 and int(ffs) > 0 and float(fmax) > 10 and int(rams) > 0
