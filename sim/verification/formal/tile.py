@@ -1,0 +1,603 @@
+# amaranth: UnusedElaboratable=no
+"""Formal checks of the tile stages (`edgeaa.hdl.accumulator.TileAccumulator`,
+`edgeaa.hdl.resolve.TileResolve`) with SymbiYosys, black-box: the harness reads only the
+stages' ports.
+
+`TileHarness` wraps one stage of a `TileConfig`. Its input stream is free in every clock
+(``AnySeq``) except for the hold rule, which is assumed of the source (a valid transfer not
+taken stays valid with the same payload); the output's ready is free. Check groups:
+
+``accumulator`` ``stream``
+    The ``cells`` hold rule: a valid output not taken stays valid with the same payload in
+    the next clock (the reset is a free input; a reset in between lifts the rule).
+``accumulator`` ``deltas``
+    One symbolic cell (X, Y) of the tile (``AnyConst``) and a shadow of it: the exact sum of
+    every delta of an accepted beat that the model's `tile_cells` places there (the origin of
+    the last tile op subtracted, a cell left of the tile moved into column 0, several cells
+    of one beat merged, back-to-back beats through the read-modify-write forwarding). Beats
+    are assumed to have a shape of `BEAT_SHAPES` (what the stepper emits and the model
+    checks). Asserted: each cell (X, Y) sent carries the shadow modulo ``2**cell_bits`` and
+    the shadow restarts from 0 (the clear); (X, Y) is sent once after an end if and only if
+    a nonzero delta was kept in row Y since the previous end, and before the accumulator
+    takes another op (nothing lost, nothing doubled, untouched rows not scanned); the cells
+    come in row-major order, whole rows, ``first`` on the polygon's first cell only, with
+    the end's intensity, I_out and fill rule; each tile and flush op comes out once, in
+    order, with its background; no other op code is sent.
+``resolve`` ``stream``
+    The ``pixels`` hold rule (as ``accumulator`` ``stream``).
+``resolve`` ``pixels``
+    The resolve's input is assumed to be what the accumulator is proved to send (cells in
+    row-major order, whole rows, ``first`` on a polygon's first, the polygon's fields
+    constant). Each cell's sum is the residue modulo ``2**cell_bits`` of a difference of two
+    exact prefix sums chosen by the harness (``AnySeq``): the exact prefix sum of the row up
+    to the cell, assumed within the documented range ``[-L, L)``, ``L = 2**(h + 1) ifix``
+    (`TileConfig.winding_limit`; polygons with ``I_in == I_out`` are not limited, as in the
+    model). One symbolic pixel (X, Y) and its shadow: the background of the last tile op,
+    then for each cell (X, Y) taken the model's own `composite` of `intensity_offset` of the
+    model's `fill` of the exact prefix sum, computed on Amaranth values in full width.
+    Asserted: a flush sends every pixel once, in raster order, ``last`` on the last, and
+    pixel (X, Y) equals the shadow; no pixel is sent outside a flush. So the wrapping cells,
+    the wrapping prefix sum and the ``h + 1``-step even-odd fold are exact in the documented
+    range (no overflow); outside it they are not (fault ``wide_range``).
+
+Faults (``fault``; each must make its proof fail): ``stall_cell`` / ``stall_pixel`` flip a
+payload bit of a held output as the harness sees it; ``lost_delta`` gives the accumulator
+the beat with cell 3's delta zeroed while the shadow counts it (a stage that loses a
+delta); ``wide_range`` assumes the prefix sums within ``[-2 L, 2 L)``, twice the documented
+range.
+
+The ``deltas`` and ``pixels`` groups run from power-on (the memories and registers at
+their initial values, no reset: a reset does not clear the accumulation memory) as bounded
+model checks; ``stream`` is proved by k-induction for every reachable state. `TILE_PROOFS`
+lists the runs and their configurations; `run_tile_proof` runs one (``python -m
+edgeaa.sim.verification.formal.tile [proof ...]``).
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+import time
+import types
+from dataclasses import dataclass
+from pathlib import Path
+
+from amaranth.asserts import AnyConst, AnySeq
+from amaranth.hdl import (
+    Assert,
+    Assume,
+    ClockDomain,
+    Const,
+    Elaboratable,
+    Module,
+    Mux,
+    Signal,
+    Value,
+    signed,
+)
+
+from ....hdl.accumulator import TileAccumulator
+from ....hdl.resolve import TileResolve
+from ....model.accumulate import composite, intensity_offset
+from ....model.beat import CELLS
+from ....model.config import EdgeConfig
+from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig
+from .run import (
+    FormalResult,
+    _check_messages,
+    _failed,
+    _run_sby,
+    find_tools,
+    harness_rtlil,
+    sby_script,
+)
+
+__all__ = [
+    "SMALL_TILE",
+    "TILE_CHECKS",
+    "TILE_FAULTS",
+    "TILE_PROOFS",
+    "TileHarness",
+    "TileProof",
+    "main",
+    "run_tile_proof",
+]
+
+TILE_CHECKS = {"accumulator": ("stream", "deltas", "sums"), "resolve": ("stream", "pixels")}
+TILE_FAULTS = {
+    "stall_cell": "accumulator",
+    "lost_delta": "accumulator",
+    "stall_pixel": "resolve",
+    "wide_range": "resolve",
+}
+OP = {name: code for code, name in enumerate(OPS)}
+# ``sums`` compares the low SUM_BITS bits of a cell's sum (the full width is beyond the
+# bounded check's reach: see the module docstring).
+SUM_BITS = 4
+CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
+
+# The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels (one
+# cell per accumulator bank), 18-bit cells.
+SMALL_CONFIG = EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4)
+SMALL_TILE = TileConfig(SMALL_CONFIG, width=4, height=2)
+
+
+def _all(conditions):
+    result = Const(1, 1)
+    for condition in conditions:
+        result = result & condition
+    return result
+
+
+def _any(conditions):
+    result = Const(0, 1)
+    for condition in conditions:
+        result = result | condition
+    return result
+
+
+def _implies(a, b):
+    return ~a | b
+
+
+class TileHarness(Elaboratable):
+    """One tile stage (``"accumulator"`` or ``"resolve"``) with a free input stream and the
+    check groups of `TILE_CHECKS` (the module docstring). ``reset``: the reset is a free
+    input (else the registers and memories start at their initial values and never reset).
+    """
+
+    def __init__(self, tile: TileConfig, stage: str, checks, *, reset=False, fault=None):
+        if not isinstance(tile, TileConfig):
+            raise TypeError(f"tile must be a TileConfig, not {tile!r}")
+        if stage not in TILE_CHECKS:
+            raise ValueError(f"stage must be one of {', '.join(TILE_CHECKS)}, not {stage!r}")
+        checks = tuple(checks)
+        unknown = [c for c in checks if c not in TILE_CHECKS[stage]]
+        if unknown:
+            raise ValueError(f"checks must be among {', '.join(TILE_CHECKS[stage])}: {unknown}")
+        if fault is not None and TILE_FAULTS.get(fault) != stage:
+            faults = [f for f, s in TILE_FAULTS.items() if s == stage]
+            raise ValueError(f"fault must be one of {', '.join(faults)} or None, not {fault!r}")
+        self.tile, self.stage, self.checks = tile, stage, checks
+        self.reset, self.fault = reset, fault
+        self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile)
+        # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
+        self.domain = ClockDomain("sync", reset_less=not reset)
+
+    @property
+    def clk(self) -> Signal:
+        return self.domain.clk
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.dut = dut = self.dut
+        m.domains.sync = self.domain
+        if self.reset:
+            m.d.comb += self.domain.rst.eq(AnySeq(1))
+        source, sink = (dut.ops, dut.cells) if self.stage == "accumulator" else (dut.cells, None)
+        sink = sink if sink is not None else dut.pixels
+        payload = _free_source(m, source, self.fault)
+        m.d.comb += sink.ready.eq(AnySeq(1))
+        seen = Value.cast(sink.payload)
+        held = _held(m, sink, "held_out")
+        if self.fault in ("stall_cell", "stall_pixel"):
+            seen = seen ^ held
+        if "stream" in self.checks:
+            _hold_rule(m, sink, seen, held)
+        if {"deltas", "sums"} & set(self.checks):
+            _accumulator_deltas(m, self.tile, source, payload, sink, self.checks, SUM_BITS)
+        if "pixels" in self.checks:
+            _resolve_pixels(m, self.tile, source, sink, wide=self.fault == "wide_range")
+        return m
+
+
+# -- streams ---------------------------------------------------------------------------------
+
+
+def _held(m, stream, name):
+    """High in the clock after one where `stream` was valid and not ready."""
+    held = Signal(name=name)
+    m.d.sync += held.eq(stream.valid & ~stream.ready)
+    return held
+
+
+def _free_source(m, stream, fault):
+    """Drive `stream` from a free source that keeps the hold rule; returns the source's
+    payload (a view). Fault ``lost_delta``: the stage gets cell 3's delta zeroed."""
+    layout = stream.payload.shape()
+    free = Signal(layout, name="source")
+    m.d.comb += [stream.valid.eq(AnySeq(1)), Value.cast(free).eq(AnySeq(layout.size))]
+    given = Signal(layout, name="given")
+    m.d.comb += given.eq(free)
+    if fault == "lost_delta":
+        m.d.comb += given.beat.cell3.delta.eq(0)
+    m.d.comb += stream.payload.eq(given)
+    held, prev = _held(m, stream, "held_in"), Signal(layout.size)
+    m.d.sync += prev.eq(free.as_value())
+    with m.If(held):
+        m.d.comb += Assume(stream.valid & (free.as_value() == prev), "source: hold rule")
+    return free
+
+
+def _hold_rule(m, stream, seen, held):
+    prev = Signal(len(seen))
+    m.d.sync += prev.eq(seen)
+    with m.If(held):
+        m.d.comb += [
+            Assert(stream.valid, "stream: a held output stays valid"),
+            Assert(seen == prev, "stream: a held output keeps its payload"),
+        ]
+
+
+# -- the accumulator: one symbolic cell ------------------------------------------------------
+
+
+def _beat_shape(beat):
+    """The four cells form a shape of `BEAT_SHAPES` (a 2 x 2 block or four of a row)."""
+    cells = [beat[name] for name in CELLS]
+    lo_x, lo_y = cells[0].x, cells[0].y
+    for cell in cells[1:]:
+        lo_x, lo_y = Mux(cell.x < lo_x, cell.x, lo_x), Mux(cell.y < lo_y, cell.y, lo_y)
+    mask = 0
+    for cell in cells:
+        dx, dy = cell.x - lo_x, cell.y - lo_y
+        inside = (dx < 4) & (dy < 2)
+        mask = mask | Mux(inside, Const(1, 9) << (dx[:2] + 4 * dy[:1]), 1 << 8)
+    return _any(mask == shape for shape in BEAT_SHAPES)
+
+
+def _placed(tile, beat, origin):
+    """Per cell of `beat`: (kept, tile x, tile y, delta), the model's `tile_cells`."""
+    out = []
+    for name in CELLS:
+        cell = beat[name]
+        tx, ty = cell.x - origin[0], cell.y - origin[1]
+        keep = (ty >= 0) & (ty < tile.height) & (tx < tile.width) & (cell.delta != 0)
+        out.append((keep, Mux(tx < 0, 0, tx), ty, cell.delta))
+    return out
+
+
+def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
+    """The ``deltas`` group (module docstring); `src` is the source's payload."""
+    s = types.SimpleNamespace(
+        X=Signal(tile.x_bits, name="track_x"),
+        Y=Signal(tile.y_bits, name="track_y"),
+        origin=[Signal.like(src.x0, name="origin_x"), Signal.like(src.y0, name="origin_y")],
+        shadow=Signal(signed(tile.cell_bits + 8), name="shadow"),
+        row=Signal(name="row_touched"),
+        any=Signal(name="any_touched"),
+        owed=Signal(name="owed"),
+        first=Signal(name="first_due"),
+        params={n: Signal.like(src[n], name=f"end_{n}") for n in ("intensity", "i_out", "evenodd")},
+        passing=Signal(name="pass_pending"),
+        code=Signal.like(cells.payload.op, name="pass_code"),
+        background=Signal.like(src.background, name="pass_background"),
+        last=[Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")],
+    )
+    m.d.comb += [s.X.eq(AnyConst(tile.x_bits)), s.Y.eq(AnyConst(tile.y_bits))]
+    take = ops.valid & ops.ready
+    is_op = {name: take & (src.op == code) for name, code in OP.items()}
+    with m.If(ops.valid & (src.op == OP["beat"])):
+        m.d.comb += Assume(_beat_shape(src.beat), "source: beat shape")
+    placed = _placed(tile, src.beat, s.origin)
+    hits = sum(Mux(k & (x == s.X) & (y == s.Y), d, 0) for k, x, y, d in placed)
+    out, sent = cells.payload, cells.valid & cells.ready
+    tracked = sent & (out.op == CELL_OP["cell"]) & (out.x == s.X) & (out.y == s.Y)
+    base = Mux(tracked, 0, s.shadow)
+    m.d.sync += s.shadow.eq(base + Mux(is_op["beat"], hits, 0))
+    with m.If(is_op["beat"]):
+        m.d.sync += [
+            s.row.eq(s.row | _any(k & (y == s.Y) for k, _, y, _ in placed)),
+            s.any.eq(s.any | _any(k for k, _, _, _ in placed)),
+        ]
+    with m.If(is_op["end"]):
+        m.d.sync += [s.owed.eq(s.row), s.first.eq(s.any), s.row.eq(0), s.any.eq(0)]
+        m.d.sync += [reg.eq(src[name]) for name, reg in s.params.items()]
+    with m.If(is_op["tile"]):
+        m.d.sync += [s.origin[0].eq(src.x0), s.origin[1].eq(src.y0)]
+    condition = _implies(take, ~s.owed | tracked)
+    if "deltas" in checks:
+        m.d.comb += Assert(condition, "deltas: op taken before a cell")
+    if "sums" in checks:
+        same = out.sum[:sum_bits] == s.shadow[:sum_bits]
+        m.d.comb += Assert(_implies(tracked, same), "sums: cell sum")
+    if "deltas" in checks:
+        _accumulator_outputs(m, tile, s, out, sent, tracked)
+    with m.If(tracked):
+        m.d.sync += s.owed.eq(0)
+    passing = is_op["tile"] | is_op["flush"]
+    if "deltas" in checks:
+        overtaken = _implies(passing, ~s.passing | (sent & (out.op != CELL_OP["cell"])))
+        m.d.comb += Assert(overtaken, "deltas: tile or flush overtaken")
+    with m.If(passing):
+        code = Mux(src.op == OP["tile"], CELL_OP["tile"], CELL_OP["flush"])
+        m.d.sync += [s.passing.eq(1), s.code.eq(code), s.background.eq(src.background)]
+
+
+def _accumulator_outputs(m, tile, s, out, sent, tracked):
+    """What each output transfer must be (the ``deltas`` group's output side)."""
+    is_cell = sent & (out.op == CELL_OP["cell"])
+    follows = ((out.x == s.last[0] + 1) & (out.y == s.last[1])) | (
+        (s.last[0] == tile.width - 1) & (out.x == 0) & (out.y > s.last[1])
+    )
+    checks = [
+        (_implies(tracked, s.owed), "deltas: a cell sent twice or not after an end"),
+        (_implies(is_cell, out.first == s.first), "deltas: first flag"),
+        (_implies(is_cell & out.first, out.x == 0), "deltas: first cell not in column 0"),
+        (_implies(is_cell & ~out.first, follows), "deltas: cells out of order"),
+        (_implies(is_cell, _all(out[k] == r for k, r in s.params.items())), "deltas: fields"),
+        (_implies(sent & ~is_cell, s.passing & ~s.owed), "deltas: tile or flush not taken"),
+        (_implies(sent & ~is_cell, out.op == s.code), "deltas: tile or flush code"),
+        (
+            _implies(sent & (out.op == CELL_OP["tile"]), out.background == s.background),
+            "deltas: tile background",
+        ),
+        (_implies(sent, out.op < len(RESOLVE_OPS)), "deltas: unknown op code sent"),
+    ]
+    for condition, message in checks:
+        m.d.comb += Assert(condition, message)
+    with m.If(is_cell):
+        m.d.sync += [s.first.eq(0), s.last[0].eq(out.x), s.last[1].eq(out.y)]
+    with m.If(sent & ~is_cell):
+        m.d.sync += s.passing.eq(0)
+
+
+# -- the resolve: one symbolic pixel ---------------------------------------------------------
+
+
+def model_fill(exact, evenodd, ifix):
+    """The model's `fill` (`edgeaa.model.accumulate`) on Amaranth values, full width."""
+    mag = Mux(exact < 0, -exact, exact)
+    nonzero = Mux(mag > ifix, ifix, mag)
+    folded = exact % (ifix << 1)
+    odd = Mux(folded > ifix, (ifix << 1) - folded, folded)
+    return Mux(evenodd, odd, nonzero)
+
+
+def _resolve_source(m, tile, cells, wide):
+    """Assumptions on the resolve's input (what the accumulator is proved to send) and the
+    exact prefix sums; returns (exact prefix of the cell taken now, d, taken cell)."""
+    c = cells.payload
+    take = cells.valid & cells.ready
+    is_cell = c.op == CELL_OP["cell"]
+    last = [Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")]
+    params = {n: Signal.like(c[n], name=f"poly_{n}") for n in ("intensity", "i_out", "evenodd")}
+    row_open = Signal(name="row_open")  # a polygon's row not yet sent whole
+    need_first = Signal(init=1, name="need_first")
+    follows = ((c.x == last[0] + 1) & (c.y == last[1])) | (
+        (last[0] == tile.width - 1) & (c.x == 0) & (c.y > last[1])
+    )
+    well_formed = [
+        c.op < len(RESOLVE_OPS),
+        _implies(is_cell, c.first | (~need_first & follows)),
+        _implies(is_cell & c.first, (c.x == 0) & ~row_open),
+        _implies(is_cell & ~c.first, _all(c[n] == r for n, r in params.items())),
+        _implies(~is_cell, ~row_open),
+    ]
+    with m.If(cells.valid):
+        m.d.comb += Assume(_all(well_formed), "source: cells as the accumulator sends them")
+    with m.If(take & is_cell):
+        m.d.sync += [last[0].eq(c.x), last[1].eq(c.y), need_first.eq(0)]
+        m.d.sync += row_open.eq(c.x != tile.width - 1)
+        with m.If(c.first):
+            m.d.sync += [r.eq(c[n]) for n, r in params.items()]
+    with m.If(take & ~is_cell):
+        m.d.sync += need_first.eq(1)
+    n = tile.cell_bits
+    exact, prev = Signal(signed(n + 4), name="exact"), Signal(signed(n + 4), name="exact_prev")
+    m.d.comb += exact.eq(AnySeq(n + 4))
+    d = Mux(c.intensity >= c.i_out, c.intensity - c.i_out, c.i_out - c.intensity)
+    limit = (tile.winding_limit * (2 if wide else 1)) * (d << tile.config.F)
+    residue = (exact - Mux(c.x == 0, 0, prev))[:n]
+    in_range = (d == 0) | ((exact >= -limit) & (exact < limit))
+    with m.If(cells.valid & is_cell):
+        m.d.comb += Assume(in_range & (c.sum[:n] == residue), "source: exact sums")
+    with m.If(take & is_cell):
+        m.d.sync += prev.eq(exact)
+    return exact, d, take & is_cell
+
+
+def _resolve_pixels(m, tile, cells, pixels, *, wide):
+    """The ``pixels`` group (module docstring)."""
+    config, c = tile.config, cells.payload
+    exact, d, took = _resolve_source(m, tile, cells, wide)
+    X, Y = Signal(tile.x_bits, name="track_x"), Signal(tile.y_bits, name="track_y")
+    m.d.comb += [X.eq(AnyConst(tile.x_bits)), Y.eq(AnyConst(tile.y_bits))]
+    bits = config.intensity_bits
+    value, frame, background = (Signal(bits, name=n) for n in ("value", "frame", "background"))
+    take = cells.valid & cells.ready
+    ifix = d << config.F
+    q = intensity_offset(model_fill(exact, c.evenodd, ifix), config.F)
+    new = composite(value, q, c.intensity, d)
+    with m.If(took & (c.x == X) & (c.y == Y) & (d != 0)):
+        m.d.sync += value.eq(new)
+    with m.If(take & (c.op == CELL_OP["tile"])):
+        m.d.sync += [value.eq(c.background), background.eq(c.background)]
+    flushing = Signal(name="flushing_h")
+    count = Signal(range(tile.pixels), name="pixel_count")
+    p, sent = pixels.payload, pixels.valid & pixels.ready
+    mine = (p.x == X) & (p.y == Y)
+    checks = [
+        (_implies(sent, flushing), "pixels: a pixel outside a flush"),
+        (_implies(sent, (p.x | (p.y << tile.x_bits)) == count), "pixels: raster order"),
+        (_implies(sent, p.last == (count == tile.pixels - 1)), "pixels: last flag"),
+        (_implies(sent & mine, p.value == frame), "pixels: value"),
+    ]
+    for condition, message in checks:
+        m.d.comb += Assert(condition, message)
+    with m.If(sent):
+        m.d.sync += count.eq(count + 1)
+        with m.If(p.last):
+            m.d.sync += flushing.eq(0)
+    # after the pixel: a flush may be taken in the clock its predecessor's last pixel goes
+    with m.If(take & (c.op == CELL_OP["flush"])):
+        m.d.sync += [frame.eq(value), value.eq(background), flushing.eq(1), count.eq(0)]
+
+
+# -- running ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TileProof:
+    """One SymbiYosys run of a `TileHarness`."""
+
+    name: str
+    stage: str
+    checks: tuple[str, ...]
+    mode: str  # prove (k-induction) or bmc
+    depth: int
+    tile: TileConfig = SMALL_TILE
+    reset: bool = False
+    memory_map: bool = True
+    description: str = ""
+
+
+TILE_PROOFS: dict[str, TileProof] = {
+    proof.name: proof
+    for proof in (
+        TileProof(
+            "acc_stream",
+            "accumulator",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="cells hold rule, any reachable state (k-induction), default tile",
+        ),
+        TileProof(
+            "res_stream",
+            "resolve",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="pixels hold rule, any reachable state (k-induction), default tile",
+        ),
+        TileProof(
+            "acc_deltas",
+            "accumulator",
+            ("deltas",),
+            "bmc",
+            20,
+            description="every touched cell sent once per end and before the next op, "
+            "untouched rows not sent, order, fields, tile and flush passed on (bounded from "
+            "power-on)",
+        ),
+        TileProof(
+            "acc_sums",
+            "accumulator",
+            ("sums",),
+            "bmc",
+            8,
+            description=f"each cell sent carries the sum of its deltas since the last time it "
+            f"was sent, modulo 2**{SUM_BITS} (bounded from power-on)",
+        ),
+        TileProof(
+            "res_pixels",
+            "resolve",
+            ("pixels",),
+            "bmc",
+            16,
+            description="pixels equal the model's composite of exact prefix sums within the "
+            "documented range (no overflow; bounded from power-on)",
+        ),
+    )
+}
+
+
+def _lookup(proof) -> TileProof:
+    if isinstance(proof, TileProof):
+        return proof
+    try:
+        return TILE_PROOFS[proof]
+    except KeyError:
+        names = ", ".join(TILE_PROOFS)
+        raise ValueError(f"proof must be one of {names} or a TileProof, not {proof!r}") from None
+
+
+def run_tile_proof(
+    proof,
+    *,
+    tile: TileConfig | None = None,
+    fault: str | None = None,
+    depth: int | None = None,
+    mode: str | None = None,
+    solver: str = "yices",
+    workdir=None,
+    timeout: float | None = None,
+    tail: int = 40,
+) -> FormalResult:
+    """Build the harness of `proof` (a `TILE_PROOFS` name or a `TileProof`), run sby, return
+    the result (`edgeaa.sim.verification.formal.run.run_proof`'s, for the tile stages)."""
+    proof = _lookup(proof)
+    mode, depth = mode or proof.mode, proof.depth if depth is None else depth
+    tools = find_tools(solver)
+    harness = TileHarness(
+        tile or proof.tile, proof.stage, proof.checks, reset=proof.reset, fault=fault
+    )
+    text = harness_rtlil(harness)
+    keep = workdir is not None
+    base = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="edgeaa-tile-formal-"))
+    try:
+        base.mkdir(parents=True, exist_ok=True)
+        (base / "harness.il").write_text(text)
+        script = sby_script(mode, depth, solver=solver)
+        if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
+            script = script.replace("prep -top formal_top", "prep -top formal_top\nmemory_map")
+        (base / "check.sby").write_text(script)
+        start = time.monotonic()
+        status, log = _run_sby(tools, base, timeout)
+        return FormalResult(
+            name=proof.name + (f"+{fault}" if fault else ""),
+            mode=mode,
+            depth=depth,
+            status=status,
+            elapsed=time.monotonic() - start,
+            log_tail="\n".join(log.splitlines()[-tail:]),
+            workdir=base if keep else None,
+            failed=_failed(log, _check_messages(text)),
+        )
+    finally:
+        if not keep:
+            shutil.rmtree(base, ignore_errors=True)
+
+
+def main(argv=None) -> int:
+    """``python -m edgeaa.sim.verification.formal.tile [proof ...]``."""
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m edgeaa.sim.verification.formal.tile",
+        description="Formal proofs of the tile stages.",
+        epilog="proofs: " + ", ".join(f"{p.name} ({p.description})" for p in TILE_PROOFS.values()),
+    )
+    parser.add_argument("proofs", nargs="*", default=list(TILE_PROOFS))
+    parser.add_argument("--fault", choices=tuple(TILE_FAULTS))
+    parser.add_argument("--depth", type=int)
+    parser.add_argument("--mode", choices=("prove", "bmc"))
+    parser.add_argument("--workdir", help="keep the runs in WORKDIR/<proof>")
+    parser.add_argument("--timeout", type=float)
+    args = parser.parse_args(argv)
+    failures = 0
+    for name in args.proofs:
+        result = run_tile_proof(
+            name,
+            fault=args.fault,
+            depth=args.depth,
+            mode=args.mode,
+            workdir=Path(args.workdir) / name if args.workdir else None,
+            timeout=args.timeout,
+        )
+        print(result.summary(), flush=True)
+        for entry in result.failed:
+            print(f"  {entry}")
+        failures += not result.passed
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
