@@ -11,18 +11,23 @@ taken stays valid with the same payload); the output's ready is free. Check grou
     The ``cells`` hold rule: a valid output not taken stays valid with the same payload in
     the next clock (the reset is a free input; a reset in between lifts the rule).
 ``accumulator`` ``deltas``
-    One symbolic cell (X, Y) of the tile (``AnyConst``) and a shadow of it: the exact sum of
-    every delta of an accepted beat that the model's `tile_cells` places there (the origin of
-    the last tile op subtracted, a cell left of the tile moved into column 0, several cells
-    of one beat merged, back-to-back beats through the read-modify-write forwarding). Beats
-    are assumed to have a shape of `BEAT_SHAPES` (what the stepper emits and the model
-    checks). Asserted: each cell (X, Y) sent carries the shadow modulo ``2**cell_bits`` and
-    the shadow restarts from 0 (the clear); (X, Y) is sent once after an end if and only if
-    a nonzero delta was kept in row Y since the previous end, and before the accumulator
-    takes another op (nothing lost, nothing doubled, untouched rows not scanned); the cells
-    come in row-major order, whole rows, ``first`` on the polygon's first cell only, with
-    the end's intensity, I_out and fill rule; each tile and flush op comes out once, in
-    order, with its background; no other op code is sent.
+    One symbolic cell (X, Y) of the tile (``AnyConst``). Beats are assumed to have a shape
+    of `BEAT_SHAPES` (what the stepper emits and the model checks). Asserted: (X, Y) is sent
+    once after an end if and only if a nonzero delta was kept in row Y since the previous
+    end (the model's `tile_cells`: the origin of the last tile op subtracted, a cell left of
+    the tile moved into column 0), and before the accumulator takes another op (nothing
+    lost, nothing doubled, untouched rows not scanned); the cells come in row-major order,
+    whole rows, ``first`` on the polygon's first cell only, with the end's intensity, I_out
+    and fill rule; each tile and flush op comes out once, in order, with its background; no
+    other op code is sent.
+``accumulator`` ``sums``
+    The shadow of cell (X, Y): the exact sum of every delta of an accepted beat placed there
+    (several cells of one beat merged, back-to-back beats through the read-modify-write
+    forwarding) since (X, Y) was last sent. Asserted: each (X, Y) sent carries the shadow
+    modulo ``2**SUM_BITS``, and the shadow restarts from 0 (the clear). The low bits of a
+    sum depend only on the low bits of the deltas, so a delta lost, doubled or misplaced
+    shows (the deltas are free); the full width is beyond the bounded check (it does not
+    finish) and is simulated (`tests/test_tile_hw.py`).
 ``resolve`` ``stream``
     The ``pixels`` hold rule (as ``accumulator`` ``stream``).
 ``resolve`` ``pixels``
@@ -46,9 +51,9 @@ the beat with cell 3's delta zeroed while the shadow counts it (a stage that los
 delta); ``wide_range`` assumes the prefix sums within ``[-2 L, 2 L)``, twice the documented
 range.
 
-The ``deltas`` and ``pixels`` groups run from power-on (the memories and registers at
-their initial values, no reset: a reset does not clear the accumulation memory) as bounded
-model checks; ``stream`` is proved by k-induction for every reachable state. `TILE_PROOFS`
+The ``deltas``, ``sums`` and ``pixels`` groups run from power-on (the memories and registers
+at their initial values, no reset: a reset does not clear the accumulation memory) as
+bounded model checks; ``stream`` is proved by k-induction for every reachable state. `TILE_PROOFS`
 lists the runs and their configurations; `run_tile_proof` runs one (``python -m
 edgeaa.sim.verification.formal.tile [proof ...]``).
 """
