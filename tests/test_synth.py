@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """Synthesis estimates and the multiplier detector (edgeaa.sim.synthesis).
 
 The default run synthesises once (Yosys only, no place-and-route: the first YoWASP call
