@@ -11,6 +11,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
+from fixtures import CORE_CONFIGS, random_span_edge
 
 from edgeaa.cli import main
 from edgeaa.hdl import verilog
@@ -20,7 +21,6 @@ from edgeaa.sim.simulators.verilator import lint, verilator_env
 from edgeaa.sim.simulators.verilator_harness import compile_harness
 from edgeaa.sim.verification.commands import COMMAND_FIELDS, edge_command
 from edgeaa.sim.verification.scoreboard import Beat, expected_beats
-from tests.fixtures import CORE_CONFIGS, random_span_edge
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT = CORE_CONFIGS["default"]

@@ -19,6 +19,8 @@ from dataclasses import replace
 import pytest
 from amaranth.hdl import ClockDomain, Module
 from amaranth.sim import Simulator
+from core_bench import decoder, observed_beat
+from fixtures import CORE_CONFIGS
 
 from edgeaa.hdl import EdgeAntialiaser
 from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout
@@ -29,8 +31,6 @@ from edgeaa.model.pipeline import CODE, Command
 from edgeaa.model.tile import TileConfig
 from edgeaa.sim.verification.commands import edge_command
 from edgeaa.sim.verification.scoreboard import edge_beats
-from tests.core_bench import decoder, observed_beat
-from tests.fixtures import CORE_CONFIGS
 
 CONFIG = CORE_CONFIGS["small"]  # W 4, s 0, I 4: 17 x 17 pixels
 RESET_CLOCKS = 4
