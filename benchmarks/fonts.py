@@ -2,12 +2,12 @@
 
 Fonts: TrueType fonts matplotlib ships (`matplotlib.get_data_path()/fonts/ttf/`), serif and
 sans; DejaVu Sans, the font of the built-in text scene, is the reference row. Each font
-draws one line of `TEXT` (black on white) at 9, 12, 16, 24 and 48 px: the glyph outlines
-come from the font's quadratic curves through fontTools' pen, flattened within the scene
-tolerance (1/16 px), one polygon per glyph, non-zero, advance widths from hmtx, no kerning,
-no hinting; the same approach as `edgeaa.render.builtin.text_polygons` (which is hardwired to
-DejaVu Sans), with the font path as a parameter. The pen origin is put off the pixel grid
-(x 3.3 px, baseline 1.15 size + 0.37 px).
+draws one line of `TEXT` (black on white) at 9, 12, 16, 24 and 48 px (the scenes and the
+adversarial ones below are `edgeaa.render.corpus`'s): the glyph outlines come from the font's
+quadratic curves through fontTools' pen, flattened within the scene tolerance (1/16 px), one
+polygon per glyph, non-zero, advance widths from hmtx, no kerning, no hinting
+(`edgeaa.render.builtin.glyph_polygons`). The pen origin is put off the pixel grid (x 3.3 px,
+baseline 1.15 size + 0.37 px).
 
 Every method draws the same quantized polygons of one plan (`plan_scene`, 1/16 px grid):
 
@@ -28,6 +28,9 @@ reference| in intensity LSB (full scale 255): the maximum and the RMS over all p
 over the pixels an edge passes through; edgeaa's maximum is split by the number of edges
 through the pixel (`edgeaa.render.exact.error_rows`), and so are the peers' (same masks).
 
+Icons: matplotlib's SVG toolbar icons (`edgeaa.render.corpus.ICONS`, real path data with
+cubic curves) at 16, 24 and 48 px.
+
 Adversarial scenes: a self-intersecting star (even-odd and non-zero), a contour winding
 three times round (both rules), two overlapping squares in one polygon (non-zero; same and
 opposite orientation), slivers (triangles 1/16 to 1/4 px wide at their open end, at several
@@ -35,7 +38,7 @@ angles), and many vertices in one pixel (a square whose top side zigzags 24 time
 pixel, and a 16-pointed star of radius 0.45 px).
 
     python benchmarks/fonts.py [--fonts DejaVuSerif,STIXGeneral,...] [--sizes 9,12,16,24,48]
-                               [--no-adversarial] [--json]
+                               [--icon-sizes 16,24,48] [--no-adversarial] [--json]
 """
 
 from __future__ import annotations
@@ -43,7 +46,6 @@ from __future__ import annotations
 import argparse
 import io
 import json
-import math
 import sys
 import time
 import warnings
@@ -53,73 +55,18 @@ import numpy as np
 from edgeaa.analysis.report import machine_info, machine_line, table
 from edgeaa.model import EdgeConfig
 from edgeaa.render import plan_scene, render_scene
-from edgeaa.render.builtin import _FlattenPen
 from edgeaa.render.compare import _polygon_points, agg_scene, skia_scene
+from edgeaa.render.corpus import FONT_TEXT as TEXT
+from edgeaa.render.corpus import FONTS, ICONS, adversarial_scenes, font_scene, icon_scene
 from edgeaa.render.exact import crossed_cells, edges_per_pixel, error_rows, exact_image
 from edgeaa.render.render import Plan
-from edgeaa.render.scene import DEFAULT_TOLERANCE, Polygon, Scene
+from edgeaa.render.scene import Scene
 
-TEXT = "Hamburgefonstiv AVWxyz 0123 &@Qg"
-FONTS = (
-    ("DejaVuSans", "sans (the built-in text's font)"),
-    ("DejaVuSansMono", "sans mono"),
-    ("cmss10", "sans (Computer Modern)"),
-    ("DejaVuSerif", "serif"),
-    ("STIXGeneral", "serif (Times-like)"),
-    ("cmr10", "serif (Computer Modern)"),
-    ("STIXGeneralItalic", "serif italic"),
-)
 SIZES = (9, 12, 16, 24, 48)
 METHODS = ("paper", "seg4", "AGG", "Skia", "FreeType")
 SPLIT = ("no edge", "one edge", "two edges", "three or more")
 FT_UNITS = 16  # font units per pixel in the built font: 1/16 px, the plan's grid
 FT_PPEM = 64  # pixels per em; units per em = FT_UNITS * FT_PPEM
-
-
-def font_file(name: str) -> str:
-    import matplotlib
-
-    return f"{matplotlib.get_data_path()}/fonts/ttf/{name}.ttf"
-
-
-def glyph_polygons(
-    path: str,
-    text: str,
-    size: float,
-    x: float,
-    baseline: float,
-    intensity: int,
-    tolerance: float = DEFAULT_TOLERANCE,
-) -> tuple[tuple[Polygon, ...], float, list[str]]:
-    """`text_polygons` for any TrueType/OpenType font file: one non-zero polygon per visible
-    glyph; returns them, the pen position after the last glyph and the characters the font
-    has no glyph for (drawn as .notdef)."""
-    from fontTools.ttLib import TTFont
-
-    font = TTFont(path)
-    glyph_set = font.getGlyphSet()
-    cmap = font.getBestCmap()
-    scale = size / font["head"].unitsPerEm
-    polygons, missing = [], []
-    for ch in text:
-        if ord(ch) not in cmap:
-            missing.append(ch)
-        name = cmap.get(ord(ch), ".notdef")
-        pen = _FlattenPen(glyph_set, scale, x, baseline, tolerance)
-        glyph_set[name].draw(pen.pen)
-        pen._close()
-        if pen.contours:
-            polygons.append(Polygon(tuple(pen.contours), intensity, "nonzero", f"glyph {ch!r}"))
-        x += font["hmtx"][name][0] * scale
-    return tuple(polygons), x, missing
-
-
-def font_scene(name: str, size: int, full: int = 255) -> tuple[Scene, list[str]]:
-    baseline = round(1.15 * size) + 0.37
-    glyphs, end, missing = glyph_polygons(font_file(name), TEXT, size, 3.3, baseline, 0)
-    width = math.ceil(end) + 4
-    height = math.ceil(baseline + 0.45 * size) + 2
-    return Scene(width, height, glyphs, background=full, name=f"{name} {size}px"), missing
 
 
 # -- FreeType ----------------------------------------------------------------------------------
@@ -288,95 +235,6 @@ def evaluate(scene: Scene, config: EdgeConfig) -> dict:
     return row
 
 
-# -- adversarial scenes ------------------------------------------------------------------------
-
-
-def _star(cx, cy, r_out, r_in, points, turn=0.0):
-    pts = []
-    for k in range(2 * points):
-        r = r_out if k % 2 == 0 else r_in
-        a = turn + math.pi * k / points
-        pts.append((cx + r * math.cos(a), cy + r * math.sin(a)))
-    return tuple(pts)
-
-
-def _pentagram(cx, cy, r):
-    """The five-pointed star drawn in one stroke: its centre has winding 2."""
-    return tuple(
-        (
-            cx + r * math.cos(-math.pi / 2 + 4 * math.pi * k / 5),
-            cy + r * math.sin(-math.pi / 2 + 4 * math.pi * k / 5),
-        )
-        for k in range(5)
-    )
-
-
-def _triple_loop(cx, cy):
-    """One contour going three times round (radii 18, 14, 10 px): winding 1, 2, 3 rings."""
-    pts = []
-    for k in range(3 * 40):
-        a = 2 * math.pi * k / 40 + 0.1
-        r = 18 - 4 * (k / 40)
-        pts.append((cx + r * math.cos(a), cy + r * math.sin(a)))
-    return tuple(pts)
-
-
-def adversarial_scenes(full: int = 255) -> list[Scene]:
-    def one(name, contours, rule, size=48):
-        return Scene(size, size, (Polygon(contours, 0, rule, name),), background=full, name=name)
-
-    star = _pentagram(24.3, 25.1, 21.0)
-    loop = _triple_loop(24.2, 23.9)
-    a = ((5.3, 5.3), (30.1, 5.3), (30.1, 30.1), (5.3, 30.1))
-    b = ((18.6, 12.2), (42.4, 12.2), (42.4, 40.9), (18.6, 40.9))
-    slivers = []
-    for k, (angle, width) in enumerate(
-        [
-            (0.0, 1 / 16),
-            (3.0, 1 / 8),
-            (27.0, 1 / 16),
-            (45.0, 1 / 4),
-            (63.0, 1 / 16),
-            (88.0, 1 / 8),
-            (90.0, 1 / 16),
-            (135.0, 1 / 8),
-        ]
-    ):
-        t = math.radians(angle)
-        ox, oy = 4.2 + 5.1 * k, 3.7 + 2.3 * k
-        if angle > 90:
-            ox += 25
-        tip = (ox, oy)
-        length = 40.0
-        ex, ey = ox + length * math.cos(t), oy + length * math.sin(t)
-        nx, ny = -math.sin(t) * width, math.cos(t) * width
-        slivers.append(Polygon(((tip, (ex, ey), (ex + nx, ey + ny)),), 0, "nonzero", f"sliver {k}"))
-    zig = [(5.2, 5.2)]
-    for k in range(24):
-        zig.append((21.55 + k * 0.8 / 24, 4.75 if k % 2 == 0 else 5.3))
-    zig += [(40.8, 5.2), (40.8, 40.8), (5.2, 40.8)]
-    tiny = _star(10.2, 30.7, 0.45, 0.2, 16, 0.13)
-    return [
-        one("pentagram even-odd", (star,), "evenodd"),
-        one("pentagram non-zero", (star,), "nonzero"),
-        one("triple loop even-odd", (loop,), "evenodd"),
-        one("triple loop non-zero", (loop,), "nonzero"),
-        one("overlapping squares, same direction", (a, b), "nonzero"),
-        one("overlapping squares, opposite", (a, b[::-1]), "nonzero"),
-        Scene(48, 48, tuple(slivers), background=full, name="slivers"),
-        Scene(
-            48,
-            48,
-            (
-                Polygon((tuple(zig),), 0, "nonzero", "zigzag"),
-                Polygon((tiny,), 0, "nonzero", "tiny star"),
-            ),
-            background=full,
-            name="many vertices in one pixel",
-        ),
-    ]
-
-
 # -- output ------------------------------------------------------------------------------------
 
 
@@ -458,6 +316,7 @@ def main() -> int:
     parser.add_argument("--fonts", default=",".join(name for name, _ in FONTS))
     parser.add_argument("--sizes", default=",".join(str(s) for s in SIZES), help="px per em")
     parser.add_argument("--no-adversarial", action="store_true")
+    parser.add_argument("--icon-sizes", default="16,24,48", help="px; empty for no icons")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     args = parser.parse_args()
     config = EdgeConfig()
@@ -474,6 +333,12 @@ def main() -> int:
             row.update(font=name, kind=kinds.get(name, ""), size=size, missing="".join(missing))
             out["fonts"].append(row)
     out["fonts"].sort(key=lambda r: (-r["methods"]["paper"]["max"], r["scene"]))
+    out["icons"] = []
+    for size in [int(s) for s in args.icon_sizes.split(",") if s]:
+        for name in ICONS:
+            print(f"icon {name} {size} px", file=sys.stderr, flush=True)
+            out["icons"].append(evaluate(icon_scene(name, size, config.full_scale), config))
+    out["icons"].sort(key=lambda r: (-r["methods"]["paper"]["max"], r["scene"]))
     out["adversarial"] = []
     if not args.no_adversarial:
         for scene in adversarial_scenes(config.full_scale):
@@ -503,6 +368,14 @@ def main() -> int:
         print("\n" + error_rows_note(rows))
         print("\nWorst case of each method over the fonts:\n")
         for m, (value, where) in worst(rows).items():
+            print(f"- {m}: {value:.2f} LSB ({where})")
+    if out["icons"]:
+        print("\n### matplotlib's SVG toolbar icons: |error| in LSB of 255, worst paper first\n")
+        print(error_table(out["icons"], "icon"))
+        print("\nLargest |error| by edges through the pixel:\n")
+        print(split_rows_table(out["icons"], "icon"))
+        print("\nWorst case of each method over the icons:\n")
+        for m, (value, where) in worst(out["icons"]).items():
             print(f"- {m}: {value:.2f} LSB ({where})")
     adv = out["adversarial"]
     if adv:

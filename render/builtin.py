@@ -136,16 +136,33 @@ class _FlattenPen:
 def text_polygons(
     text: str, size: float, x: float, baseline: float, intensity: int, tolerance: float
 ) -> tuple[tuple[Polygon, ...], float]:
-    """One polygon per visible glyph (non-zero rule, as TrueType); returns them and the pen
-    position after the last glyph. Advance widths from hmtx, no kerning."""
+    """`glyph_polygons` in DejaVu Sans (the built-in text's font)."""
+    polygons, end, _ = glyph_polygons(font_path(), text, size, x, baseline, intensity, tolerance)
+    return polygons, end
+
+
+def glyph_polygons(
+    path: str,
+    text: str,
+    size: float,
+    x: float,
+    baseline: float,
+    intensity: int,
+    tolerance: float = DEFAULT_TOLERANCE,
+) -> tuple[tuple[Polygon, ...], float, list[str]]:
+    """One polygon per visible glyph of a TrueType/OpenType font file (non-zero rule, as
+    TrueType); returns them, the pen position after the last glyph and the characters the
+    font has no glyph for (drawn as .notdef). Advance widths from hmtx, no kerning."""
     from fontTools.ttLib import TTFont
 
-    font = TTFont(font_path())
+    font = TTFont(path)
     glyph_set = font.getGlyphSet()
     cmap = font.getBestCmap()
     scale = size / font["head"].unitsPerEm
-    polygons = []
+    polygons, missing = [], []
     for ch in text:
+        if ord(ch) not in cmap:
+            missing.append(ch)
         name = cmap.get(ord(ch), ".notdef")
         pen = _FlattenPen(glyph_set, scale, x, baseline, tolerance)
         glyph_set[name].draw(pen.pen)
@@ -153,7 +170,7 @@ def text_polygons(
         if pen.contours:
             polygons.append(Polygon(tuple(pen.contours), intensity, "nonzero", f"glyph {ch!r}"))
         x += font["hmtx"][name][0] * scale
-    return tuple(polygons), x
+    return tuple(polygons), x, missing
 
 
 def text_scene(
