@@ -30,6 +30,7 @@ __all__ = [
     "find_tools",
     "harness_rtlil",
     "main",
+    "run_harness",
     "run_proof",
     "sby_script",
 ]
@@ -419,25 +420,53 @@ def run_proof(
         fault=fault,
         output=proof.output,
     )
-    text = harness_rtlil(harness)
+    script = sby_script(mode, depth, skip=skip, solver=solver)
+    name = proof.name + (f"+{fault}" if fault else "")
+    return run_harness(
+        name,
+        harness_rtlil(harness),
+        script,
+        tools,
+        mode=mode,
+        depth=depth,
+        workdir=workdir,
+        timeout=timeout,
+        tail=tail,
+    )
+
+
+def run_harness(
+    name: str,
+    rtlil: str,
+    script: str,
+    tools: dict[str, str],
+    *,
+    mode: str,
+    depth: int,
+    workdir: str | os.PathLike | None = None,
+    timeout: float | None = None,
+    tail: int = 40,
+) -> FormalResult:
+    """Run sby with `script` on a harness's RTLIL (`harness_rtlil`) and read the result: the
+    common end of `run_proof` and the tile stages' `run_tile_proof`. `workdir` keeps the run
+    (else a temporary directory is removed afterwards)."""
     keep = workdir is not None
     base = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="edgeaa-formal-"))
     try:
         base.mkdir(parents=True, exist_ok=True)
-        (base / "harness.il").write_text(text)
-        (base / "check.sby").write_text(sby_script(mode, depth, skip=skip, solver=solver))
+        (base / "harness.il").write_text(rtlil)
+        (base / "check.sby").write_text(script)
         start = time.monotonic()
         status, log = _run_sby(tools, base, timeout)
-        elapsed = time.monotonic() - start
         return FormalResult(
-            name=proof.name + (f"+{fault}" if fault else ""),
+            name=name,
             mode=mode,
             depth=depth,
             status=status,
-            elapsed=elapsed,
+            elapsed=time.monotonic() - start,
             log_tail="\n".join(log.splitlines()[-tail:]),
             workdir=base if keep else None,
-            failed=_failed(log, _check_messages(text)),
+            failed=_failed(log, _check_messages(rtlil)),
             traces=sorted(set(re.findall(r"(check/engine_\d+/\w+\.vcd)", log))),
         )
     finally:

@@ -60,9 +60,6 @@ edgeaa.sim.verification.formal.tile [proof ...]``).
 
 from __future__ import annotations
 
-import shutil
-import tempfile
-import time
 import types
 from dataclasses import dataclass
 from pathlib import Path
@@ -87,15 +84,7 @@ from ....model.accumulate import composite, intensity_offset
 from ....model.beat import CELLS
 from ....model.config import EdgeConfig
 from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig
-from .run import (
-    FormalResult,
-    _check_messages,
-    _failed,
-    _run_sby,
-    find_tools,
-    harness_rtlil,
-    sby_script,
-)
+from .run import FormalResult, find_tools, harness_rtlil, run_harness, sby_script
 
 __all__ = [
     "SMALL_TILE",
@@ -544,31 +533,21 @@ def run_tile_proof(
     harness = TileHarness(
         tile or proof.tile, proof.stage, proof.checks, reset=proof.reset, fault=fault
     )
-    text = harness_rtlil(harness)
-    keep = workdir is not None
-    base = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="edgeaa-tile-formal-"))
-    try:
-        base.mkdir(parents=True, exist_ok=True)
-        (base / "harness.il").write_text(text)
-        script = sby_script(mode, depth, solver=solver)
-        if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
-            script = script.replace("prep -top formal_top", "prep -top formal_top\nmemory_map")
-        (base / "check.sby").write_text(script)
-        start = time.monotonic()
-        status, log = _run_sby(tools, base, timeout)
-        return FormalResult(
-            name=proof.name + (f"+{fault}" if fault else ""),
-            mode=mode,
-            depth=depth,
-            status=status,
-            elapsed=time.monotonic() - start,
-            log_tail="\n".join(log.splitlines()[-tail:]),
-            workdir=base if keep else None,
-            failed=_failed(log, _check_messages(text)),
-        )
-    finally:
-        if not keep:
-            shutil.rmtree(base, ignore_errors=True)
+    script = sby_script(mode, depth, solver=solver)
+    if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
+        script = script.replace("prep -top formal_top", "prep -top formal_top\nmemory_map")
+    name = proof.name + (f"+{fault}" if fault else "")
+    return run_harness(
+        name,
+        harness_rtlil(harness),
+        script,
+        tools,
+        mode=mode,
+        depth=depth,
+        workdir=workdir,
+        timeout=timeout,
+        tail=tail,
+    )
 
 
 def main(argv=None) -> int:
