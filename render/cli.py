@@ -156,7 +156,7 @@ class RenderCommand(Command):
         from .scene import SceneError, check_pixels
 
         config = config_from_args(args)
-        _check_options(args)
+        _check_options(args, config)
         crop = _crop(args.crop) if args.crop else None
         try:
             scene = _load(args, config)
@@ -196,8 +196,9 @@ CONFLICTS = (
 )
 
 
-def _check_options(args: argparse.Namespace) -> None:
-    """Refuse conflicting or no-op options and unwritable outputs, before any work."""
+def _check_options(args: argparse.Namespace, config) -> None:
+    """Refuse conflicting or no-op options, a bad tile and unwritable outputs, before any
+    work."""
     for first, second, why in CONFLICTS:
         if getattr(args, first) and getattr(args, second):
             names = (f"--{n.replace('_', '-')}" for n in (first, second))
@@ -210,6 +211,8 @@ def _check_options(args: argparse.Namespace) -> None:
         raise usage_error(PROG, "--compare renders with the model: --engine does not apply")
     if args.tile is not None and args.engine == "model":
         raise usage_error(PROG, "--tile sizes the hardware pipeline: add --engine verilator")
+    if args.engine != "model":
+        tile_from_args(PROG, args.tile or "64x32", config)
     if args.no_skip and args.engine != "model":
         raise usage_error(
             PROG, "--no-skip applies to the model: the pipeline always skips (docs/hardware.md)"

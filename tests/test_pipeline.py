@@ -213,6 +213,20 @@ def test_edgeaa_render_engine_verilator_writes_the_pipelines_png(tmp_path, capsy
     assert "--engine verilator" in capsys.readouterr().err
 
 
+def test_a_bad_tile_is_refused_before_the_scene_is_planned(capsys, monkeypatch):
+    from edgeaa import render
+    from edgeaa.cli import main
+
+    def no_planning(*args, **kwargs):
+        raise AssertionError("the scene was planned before --tile was checked")
+
+    monkeypatch.setattr(render, "plan_scene", no_planning)
+    args = ["render", "--builtin", "text", "--engine", "verilator", "--tile", "6x4"]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "--tile '6x4'" in err and "power of two" in err and len(err.splitlines()) == 1, err
+
+
 # -- cocotb on Verilator -------------------------------------------------------------------------
 
 
