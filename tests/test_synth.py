@@ -306,6 +306,8 @@ def _synth_rows(out: str) -> dict:
 def test_synth_top_pipeline_synthesises_the_pipeline_and_counts_its_block_rams(monkeypatch, capsys):
     """The command's plumbing (Yosys only, faked): the pipeline of the --tile tile in place
     of the core, a block-RAM column (SB_RAM40_4K, DP16KD), the baseline beside it."""
+    from amaranth.hdl import Fragment
+
     from edgeaa import edge_cli
     from edgeaa.hdl.pipeline import EdgePipeline
     from edgeaa.sim.synthesis import SynthResult
@@ -314,6 +316,7 @@ def test_synth_top_pipeline_synthesises_the_pipeline_and_counts_its_block_rams(m
 
     def fake(make, target, seed):
         design = make()
+        Fragment.get(design, None)  # elaborated, as the real synthesis would (no warning)
         made.append((target, design))
         rams = {"ice40": {"SB_RAM40_4K": 28}, "ecp5": {"DP16KD": 9}}[target]
         is_pipe = isinstance(design, EdgePipeline)
