@@ -127,3 +127,21 @@ def test_the_tiny_scene_at_the_default_configuration():
     hw = run_transfers(tile, commands)
     check_clock_for_clock(tile, commands, hw, "tiny scene")
     assert hw.stats["core_stall"] > 0 and hw.stats["acc_stall"] > 0  # the stall is exercised
+
+
+@pytest.mark.parametrize("name", ["text", "starburst"])
+def test_verilator_runs_the_builtins_in_the_models_clocks(name):
+    from edgeaa.render import builtin
+    from edgeaa.sim.simulators import pipeline_harness
+
+    tile = TileConfig(DEFAULT)
+    commands = scene_commands(plan_scene(builtin(name, DEFAULT), DEFAULT), tile)
+    run = pipeline_harness.run(tile, commands)
+    model = pipeline_cycles(tile, commands)
+    got = run.pixels[:, 0]
+    assert list(run.commands) == model.commands, first_difference(
+        "command", run.commands, model.commands
+    )
+    assert list(got) == model.pixels, first_difference("pixel", got, model.pixels)
+    assert run.stats == model.stats
+    assert run.clocks == model.clocks + pixel_drain_clocks(tile)
