@@ -12,18 +12,17 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass
 
-import numpy as np
 import pytest
 from amaranth.sim import Simulator
 from fixtures import TINY_SCENE, small_scenes
 from hypothesis import HealthCheck, given, settings
 
 from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout
-from edgeaa.model import EdgeConfig
+from edgeaa.model import EdgeConfig, pipeline_timing, timing
 from edgeaa.model import tile as tile_model
-from edgeaa.model.pipeline import CODE, Command
+from edgeaa.model.pipeline import Command
 from edgeaa.model.pipeline_timing import pipeline_cycles
-from edgeaa.model.tile import TileConfig
+from edgeaa.model.tile import RESOLVE_OPS, TileConfig
 from edgeaa.render import parse_scene, plan_scene
 from edgeaa.render.pipeline import scene_commands
 from edgeaa.sim.simulators.pipeline_harness import expected_pixels, pixel_drain_clocks
@@ -35,7 +34,8 @@ DEFAULT = EdgeConfig()
 @dataclass
 class Transfers:
     commands: list[int]
-    beats: list[int]
+    beats: list[int]  # into the accumulator
+    cells: list[int]  # into the resolve (cell ops)
     pixels: list[int]
     stats: dict
     clocks: int  # clock 0 to the last transfer, inclusive
@@ -43,40 +43,47 @@ class Transfers:
 
 def run_transfers(tile: TileConfig, commands: list[Command]) -> Transfers:
     """`EdgePipeline` in Amaranth's simulator, commands back to back, the sink always ready:
-    the clock of every command taken, delta beat into the accumulator and pixel out."""
+    the clock of every command taken, delta beat into the accumulator, cell into the resolve
+    and pixel out; after the last, the harness's drain (nothing more may move)."""
     dut = EdgePipeline(tile)
     layout = command_layout(tile)
     payloads = [layout.const(c._asdict()) for c in commands]
     expected = expected_pixels(tile, commands)
-    out = Transfers([], [], [], {}, 0)
+    out = Transfers([], [], [], [], {}, 0)
+    beats, cells = dut.core.deltas, dut.acc.cells
+    logs = [out.commands, out.pixels, out.beats, out.cells]
 
     async def bench(ctx):
         ctx.set(dut.pixels.ready, 1)
-        clock = 0
-        while len(out.commands) < len(payloads) or len(out.pixels) < expected:
+        clock = quiet = 0
+        while len(out.commands) < len(payloads) or len(out.pixels) < expected or quiet < drain:
             assert clock < 200_000, "the pipeline hangs"
             index = len(out.commands)
             offer = index < len(payloads)
             ctx.set(dut.commands.valid, offer)
             if offer:
                 ctx.set(dut.commands.payload, payloads[index])
-            *_, taken, beat, beat_ready, pixel = await ctx.tick().sample(
-                dut.commands.ready, dut.core.deltas.valid, dut.core.deltas.ready, dut.pixels.valid
+            _, _, taken, pixel, *handshakes = await ctx.tick().sample(
+                dut.commands.ready,
+                dut.pixels.valid,
+                beats.valid,
+                beats.ready,
+                cells.valid,
+                cells.ready,
+                cells.payload.op,
             )
-            for hit, log in ((offer and taken, out.commands), (beat and beat_ready, out.beats)):
+            b_valid, b_ready, c_valid, c_ready, op = handshakes
+            cell = c_valid and c_ready and op == RESOLVE_OPS.index("cell")
+            moved = [offer and taken, pixel, b_valid and b_ready, cell]
+            for hit, log in zip(moved, logs, strict=True):
                 if hit:
                     log.append(clock)
-            if pixel:
-                out.pixels.append(clock)
+            quiet = 0 if any(moved) or len(out.pixels) < expected else quiet + 1
             clock += 1
-        # a few quiet clocks: nothing more may move
-        for _ in range(2 * tile_model.resolve_latency(tile.config) + 8):
-            ctx.set(dut.commands.valid, 0)
-            *_, beat, pixel = await ctx.tick().sample(dut.core.deltas.valid, dut.pixels.valid)
-            assert not (beat or pixel), "a transfer after the last expected one"
         out.stats = {name: ctx.get(dut.stats[name]) for name in STATS}
-        out.clocks = max([-1, *out.commands, *out.beats, *out.pixels]) + 1
+        out.clocks = max([-1, *out.commands, *out.beats, *out.cells, *out.pixels]) + 1
 
+    drain = pixel_drain_clocks(tile)
     sim = Simulator(dut)
     sim.add_clock(1e-8)
     sim.add_testbench(bench)
@@ -97,6 +104,7 @@ def check_clock_for_clock(tile: TileConfig, commands, hw: Transfers, label: str)
     for name, got, want in (
         ("command", hw.commands, model.commands),
         ("beat", hw.beats, model.beats),
+        ("cell", hw.cells, model.tile.cells),
         ("pixel", hw.pixels, model.pixels),
     ):
         assert list(got) == list(want), f"{label}: {first_difference(name, got, want)}"
@@ -108,17 +116,71 @@ def check_clock_for_clock(tile: TileConfig, commands, hw: Transfers, label: str)
 SMALL_TILE = TileConfig(SMALL, 16, 8)
 
 
-def scene_for(scene, config):
-    plan = plan_scene(scene, config)
-    return plan
-
-
-@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scene=small_scenes(SMALL))
 def test_random_scenes_go_through_the_hardware_as_the_model_says(scene):
     commands = scene_commands(plan_scene(scene, SMALL), SMALL_TILE)
     hw = run_transfers(SMALL_TILE, commands)
     check_clock_for_clock(SMALL_TILE, commands, hw, f"scene {scene}")
+
+
+def random_commands(rng: random.Random, tile: TileConfig, count: int = 60) -> list[Command]:
+    """A stream of tiles, polygons and flushes with every kind of bad command among them:
+    unknown codes (in and out of polygons), zero-length edges and I_in == I_out polygons
+    (the core's errors), edges with no column in the tile or cut at their start, empty
+    polygons, polygons with no end, edges and ends outside a polygon, tiles past 2**W,
+    flushes and tiles back to back (an op waiting behind a flush)."""
+    config = tile.config
+    scale, top = config.subpixel_scale, 1 << config.coord_bits
+    limit = (top << config.subpixel_bits) - 1
+    origin = (0, 0)
+    out: list[Command] = []
+
+    def point():
+        x = origin[0] + rng.uniform(-3, tile.width + 3)
+        y = origin[1] + rng.uniform(-3, tile.height + 3)
+        return [min(max(round(v * scale), 0), limit) for v in (x, y)]
+
+    while len(out) < count:
+        kind = rng.choices(["tile", "polygon", "flush", "junk"], [2, 6, 2, 1])[0]
+        if kind == "tile":
+            bad = rng.random() < 0.15
+            origin = (rng.randrange(top - tile.width), rng.randrange(top - tile.height))
+            out.append(Command.tile(top + 1 if bad else origin[0], origin[1], rng.randrange(16)))
+        elif kind == "flush":
+            out.append(Command.flush())
+        elif kind == "junk":
+            out.append(
+                rng.choice([Command(rng.randrange(5, 8)), Command.end(), Command.edge(1, 2, 3, 4)])
+            )
+        else:
+            i_in = rng.randrange(16)
+            i_out = i_in if rng.random() < 0.1 else rng.randrange(16)
+            out.append(Command.begin(i_in, i_out, rng.choice(["nonzero", "evenodd"])))
+            for _ in range(rng.randrange(6)):
+                if rng.random() < 0.1:
+                    out.append(Command(rng.randrange(5, 8)))
+                p0 = point()
+                p1 = p0 if rng.random() < 0.1 else point()
+                out.append(Command.edge(*p0, *p1, rng.choice(["left", "right"])))
+            if rng.random() < 0.85:
+                out.append(Command.end())
+    return out
+
+
+@pytest.mark.parametrize("seed", [2, 3, 10])
+def test_random_command_streams_with_bad_commands_in_the_models_clocks(seed):
+    commands = random_commands(random.Random(seed), SMALL_TILE)
+    hw = run_transfers(SMALL_TILE, commands)
+    check_clock_for_clock(SMALL_TILE, commands, hw, f"seed {seed}")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(100, 140))
+def test_many_random_command_streams_in_the_models_clocks(seed):
+    commands = random_commands(random.Random(seed), SMALL_TILE, count=150)
+    hw = run_transfers(SMALL_TILE, commands)
+    check_clock_for_clock(SMALL_TILE, commands, hw, f"seed {seed}")
 
 
 def test_the_tiny_scene_at_the_default_configuration():
@@ -127,6 +189,40 @@ def test_the_tiny_scene_at_the_default_configuration():
     hw = run_transfers(tile, commands)
     check_clock_for_clock(tile, commands, hw, "tiny scene")
     assert hw.stats["core_stall"] > 0 and hw.stats["acc_stall"] > 0  # the stall is exercised
+
+
+WRONG_SEED = 5  # a stream where every wrong model below shows
+
+
+@pytest.fixture(scope="module")
+def wrong_model_run():
+    commands = random_commands(random.Random(WRONG_SEED), SMALL_TILE)
+    return commands, run_transfers(SMALL_TILE, commands)
+
+
+def no_stall(first_beat: int, sink_ready: int) -> tuple[int, int]:
+    return first_beat, 0
+
+
+# A constant one clock off, or the stall not modelled (beats before the accumulator is ready).
+WRONG = ["SCAN_START", "EMPTY_END", "FLUSH_START", "DELTAS_PIPELINE_DEPTH", "BAD_COMMAND_CYCLES"]
+WRONG += ["EMPTY_EDGE_CYCLES"]
+
+
+@pytest.mark.parametrize("wrong", [*WRONG, "resolve_latency", "stall_window"])
+def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
+    commands, hw = wrong_model_run
+    check_clock_for_clock(SMALL_TILE, commands, hw, "the right model")
+    latency = tile_model.resolve_latency(SMALL) + 1
+    for module in (timing, tile_model, pipeline_timing):
+        if wrong == "stall_window" and hasattr(module, wrong):
+            monkeypatch.setattr(module, wrong, no_stall)
+        elif wrong == "resolve_latency" and hasattr(module, wrong):
+            monkeypatch.setattr(module, wrong, lambda config: latency)
+        elif hasattr(module, wrong):
+            monkeypatch.setattr(module, wrong, getattr(module, wrong) + 1)
+    with pytest.raises(AssertionError):
+        check_clock_for_clock(SMALL_TILE, commands, hw, f"{wrong} one off")
 
 
 @pytest.mark.parametrize("name", ["text", "starburst"])
