@@ -116,12 +116,23 @@ def check_clock_for_clock(tile: TileConfig, commands, hw: Transfers, label: str)
 SMALL_TILE = TileConfig(SMALL, 16, 8)
 
 
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(scene=small_scenes(SMALL))
-def test_random_scenes_go_through_the_hardware_as_the_model_says(scene):
+def check_scene(scene) -> None:
     commands = scene_commands(plan_scene(scene, SMALL), SMALL_TILE)
     hw = run_transfers(SMALL_TILE, commands)
     check_clock_for_clock(SMALL_TILE, commands, hw, f"scene {scene}")
+
+
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(scene=small_scenes(SMALL))
+def test_random_scenes_go_through_the_hardware_as_the_model_says(scene):
+    check_scene(scene)
+
+
+@pytest.mark.slow
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(scene=small_scenes(SMALL))
+def test_many_random_scenes_go_through_the_hardware_as_the_model_says(scene):
+    check_scene(scene)
 
 
 def random_commands(rng: random.Random, tile: TileConfig, count: int = 60) -> list[Command]:
@@ -225,7 +236,9 @@ def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
         check_clock_for_clock(SMALL_TILE, commands, hw, f"{wrong} one off")
 
 
-@pytest.mark.parametrize("name", ["text", "starburst"])
+@pytest.mark.parametrize(
+    "name", ["text", "starburst", pytest.param("hatch", marks=pytest.mark.slow)]
+)
 def test_verilator_runs_the_builtins_in_the_models_clocks(name):
     from edgeaa.render import builtin
     from edgeaa.sim.simulators import pipeline_harness
