@@ -36,6 +36,8 @@ from .timing import BAD_COMMAND_CYCLES, EMPTY_EDGE_CYCLES, pipeline_depth, sched
 
 __all__ = ["PipelineTiming", "pipeline_cycles"]
 
+OTHER = "other"  # an unknown code inside a polygon: taken the clock it is offered
+
 
 @dataclass
 class PipelineTiming:
@@ -65,7 +67,7 @@ class _Top:
         self.tile, self.model, self.clock = tile, TileModel(tile), TileClock(tile)
         self.taken = [0] * count
         self.offer = 0  # clock the next command is offered
-        self.polygon: list | None = None  # the open polygon's (index, shape or "other")
+        self.polygon: list | None = None  # the open polygon's (index, shape or OTHER)
         self.first = 0  # clock the open polygon's first command was offered
         self.busy = self.stall = 0  # the core's counters
         self.beats: list[int] = []
@@ -90,9 +92,9 @@ class _Top:
         self.offer = self.taken[k] + 1
 
     def shape(self, d: Decoded):
-        """An edge's (columns, clipped_start) (None: a bad command), or "other" (one clock)."""
+        """An edge's (columns, clipped_start) (None: a bad command), or OTHER."""
         if d.edge is None:
-            return "other"
+            return OTHER
         try:
             st = setup(self.tile.config, d.edge)
         except EdgeError:
@@ -111,7 +113,7 @@ class _Top:
         items, self.polygon = self.polygon or [], None
         shapes, idle, extra = [], [], 0
         for _, shape in items:
-            if shape == "other":
+            if shape is OTHER:
                 extra += 1
             else:
                 shapes.append(shape)
@@ -123,7 +125,7 @@ class _Top:
         )
         last, free, stalled = self.first - 1, 0, None
         for k, shape in items:
-            if shape == "other":
+            if shape is OTHER:
                 last = self.taken[k] = last + 1
                 continue
             t = next(timings)

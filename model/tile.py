@@ -331,16 +331,15 @@ class TileClock:
             r = max(a + SCAN_START, self.free, self.quiet)
             out.cells.extend(range(r, r + n))
             self.ready, self.quiet = r + n - 1, r + n + self.latency
-            self.scanning += r + n - a - 3  # WAIT in a + 1, SCAN from a + 2 to the last read
+            # SCAN from the first read (the clock before its offer) to the last, r + n - 2
+            self.scanning += r + n - 1 - (a + SCAN_START - 1)
             self.acc_stall += r - a - SCAN_START
             self.resolve_ops += n
             return a
         r = max(a + 1, self.free, self.quiet)  # tile or flush: the output register
-        self.ready, self.acc_stall, self.resolve_ops = (
-            r,
-            self.acc_stall + r - a - 1,
-            self.resolve_ops + 1,
-        )
+        self.ready = r
+        self.acc_stall += r - a - 1
+        self.resolve_ops += 1
         if isinstance(op, Flush):
             out.pixels.extend(range(r + FLUSH_START, r + FLUSH_START + tile.pixels))
             out.frames.append(result)

@@ -55,7 +55,9 @@ clock: exactly one column per clock (no gap between edges) when every edge has a
 beat in clock ``L + T - 1``: the mean over the whole run is ``T / (L + T)`` (`stream_rate`),
 at least 0.95 once ``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks.
 A stalled sink delays the stepper and its pipeline (and, once the bank is full, the setup)
-clock for clock; nothing else depends on the data.
+clock for clock; nothing else depends on the data. `schedule`'s ``sink_ready`` models a sink
+first ready in clock T (the polygon pipeline's accumulator after a scan, `stall_window`),
+its ``idle`` a source that idles before some commands.
 
 Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
 One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
