@@ -254,3 +254,22 @@ def test_verilator_runs_the_builtins_in_the_models_clocks(name):
     assert list(got) == model.pixels, first_difference("pixel", got, model.pixels)
     assert run.stats == model.stats
     assert run.clocks == model.clocks + pixel_drain_clocks(tile)
+
+
+def test_schedule_without_idles_or_a_stall_is_the_back_to_back_one():
+    rng = random.Random(5)
+    for _ in range(50):
+        shapes = [
+            None if rng.random() < 0.1 else (rng.choice([0, 1, 3, 40]), rng.random() < 0.3)
+            for _ in range(rng.randrange(1, 8))
+        ]
+        plain = timing.schedule(SMALL, shapes, output="deltas")
+        zero = timing.schedule(SMALL, shapes, output="deltas", idle=[0] * len(shapes))
+        assert plain == zero == timing.schedule(SMALL, shapes, output="deltas", sink_ready=0)
+        late = plain[-1].accepted + 1000  # after every beat would be valid
+        stalled = timing.schedule(SMALL, shapes, output="deltas", sink_ready=late)
+        beats = [b for t in stalled for b in t.beats]
+        assert beats == sorted(set(beats)) and all(b >= late for b in beats), shapes
+        # the setup runs on: every command is accepted as with an always-ready sink while
+        # the stepper waits (the bank holds one edge: only the first two)
+        assert [t.accepted for t in stalled[:2]] == [t.accepted for t in plain[:2]]
