@@ -122,7 +122,7 @@ def check_scene(scene) -> None:
     check_clock_for_clock(SMALL_TILE, commands, hw, f"scene {scene}")
 
 
-@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(scene=small_scenes(SMALL))
 def test_random_scenes_go_through_the_hardware_as_the_model_says(scene):
     check_scene(scene)
