@@ -29,7 +29,15 @@ from .edge import Clip, Edge, EdgeError
 from .step import run_edge_deltas
 from .tile import Beats, Flush, PolygonEnd, TileConfig, TileStart
 
-__all__ = ["COMMANDS", "COMMAND_VERSION", "Command", "command_ops", "tile_clip"]
+__all__ = [
+    "COMMANDS",
+    "COMMAND_VERSION",
+    "Command",
+    "Decoded",
+    "command_ops",
+    "decode_commands",
+    "tile_clip",
+]
 
 COMMAND_VERSION = 1
 COMMANDS = ("tile", "begin", "edge", "end", "flush")  # codes 0 .. 4
@@ -85,20 +93,28 @@ class CommandResult(NamedTuple):
     edge_errors: int  # edges the core dropped
 
 
-def command_ops(tile: TileConfig, commands) -> CommandResult:
-    """What the top makes of `commands`: the tile ops, in order, and the errors."""
+class Decoded(NamedTuple):
+    """What the top makes of one command (`decode_commands`)."""
+
+    command: Command
+    ended: PolygonEnd | None  # a polygon with no end, ended before this command (an error)
+    op: object  # the tile op the command makes (None: none)
+    edge: Edge | None  # an edge of a polygon (with its clip): the core takes it
+    error: str | None  # "top": dropped by the top; "edge": dropped by the core
+
+
+def decode_commands(tile: TileConfig, commands):
+    """`Decoded` of each command, in order (`command_ops`; the cycle model's input)."""
     config = tile.config
-    ops: list = []
-    errors = edge_errors = 0
     polygon = None  # the open polygon's end, or None outside one
     clip = tile_clip(config, tile, 0, 0)
     for command in commands:
-        name = command.name
+        name, ended = command.name, None
         if polygon is not None and name in ("begin", "tile", "flush"):
-            ops.append(polygon)  # a polygon with no end: ended here
-            errors, polygon = errors + 1, None
+            ended, polygon = polygon, None  # a polygon with no end: ended here
+        op = edge = error = None
         if name == "tile" and max(command.x0, command.y0) <= 1 << config.coord_bits:
-            ops.append(TileStart(command.x0, command.y0, command.i_in))
+            op = TileStart(command.x0, command.y0, command.i_in)
             clip = tile_clip(config, tile, command.x0, command.y0)
         elif name == "begin":
             rule = "evenodd" if command.flag else "nonzero"
@@ -108,14 +124,28 @@ def command_ops(tile: TileConfig, commands) -> CommandResult:
             c = command
             edge = Edge(c.x0, c.y0, c.x1, c.y1, inside, polygon.intensity, polygon.i_out, clip)
             try:
-                ops.append(Beats.of(delta_column_beats(run_edge_deltas(config, edge))))
+                op = Beats.of(delta_column_beats(run_edge_deltas(config, edge)))
             except EdgeError:
-                edge_errors += 1
+                error = "edge"
         elif name == "end" and polygon is not None:
-            ops.append(polygon)
-            polygon = None
+            op, polygon = polygon, None
         elif name == "flush":
-            ops.append(Flush())
+            op = Flush()
         else:
+            error = "top"
+        yield Decoded(command, ended, op, edge, error)
+
+
+def command_ops(tile: TileConfig, commands) -> CommandResult:
+    """What the top makes of `commands`: the tile ops, in order, and the errors."""
+    ops: list = []
+    errors = edge_errors = 0
+    for d in decode_commands(tile, commands):
+        if d.ended is not None:
+            ops.append(d.ended)
             errors += 1
+        if d.op is not None:
+            ops.append(d.op)
+        errors += d.error == "top"
+        edge_errors += d.error == "edge"
     return CommandResult(ops, errors, edge_errors)

@@ -294,35 +294,68 @@ class TileTiming:
         return max([-1, *self.accepts, *self.cells, *self.pixels]) + 1
 
 
-def tile_cycles(tile: TileConfig, ops) -> TileTiming:
-    """The clock of every transfer of the tile stages (and their frames, from `TileModel`)."""
-    model, out = TileModel(tile), TileTiming()
-    latency = resolve_latency(tile.config)
-    a = 0  # clock the accumulator can take the next op
-    quiet = 0  # first clock no cell is in flight in the resolve
-    free = 0  # first clock the resolve is not flushing
-    for op in ops:
-        result = model.feed(op)
-        if isinstance(op, (Beats, DeltaBeat)):
-            n = 1 if isinstance(op, DeltaBeat) else len(op)
-            out.accepts.extend(range(a, a + n))
-            a += n
-            continue
+class TileClock:
+    """The tile stages' clocks, op by op, for ops offered at any clock: `ready` is the first
+    clock the accumulator can take the next op (it stays ready from then until it takes a
+    non-beat op). `timing` collects the transfers; `acc_stall` and `resolve_busy` count
+    clocks as the top's counters do (`edgeaa.hdl.pipeline.STATS`)."""
+
+    def __init__(self, tile: TileConfig):
+        self.tile, self.latency = tile, resolve_latency(tile.config)
+        self.timing = TileTiming()
+        self.ready = 0
+        self.quiet = 0  # first clock no cell is in flight in the resolve
+        self.free = 0  # first clock the resolve is not flushing
+        self.scanning = self.acc_stall = self.resolve_ops = 0
+
+    def beats(self, clocks) -> None:
+        """Beats taken in `clocks` (each at or after `ready`, ascending)."""
+        clocks = list(clocks)
+        if clocks:
+            assert clocks[0] >= self.ready, "a beat before the accumulator is ready"
+            self.timing.accepts.extend(clocks)
+            self.ready = clocks[-1] + 1
+
+    def take(self, op, result, clock: int | None = None) -> int:
+        """A non-beat op (`result`: what `TileModel.feed` returned for it) offered from
+        `clock` (default: `ready`); returns the clock the accumulator takes it."""
+        a = self.ready if clock is None else max(clock, self.ready)
+        out, tile = self.timing, self.tile
         out.accepts.append(a)
         if isinstance(op, PolygonEnd):
             out.rows_scanned += result
             n = result * tile.width
             if not n:
-                a += EMPTY_END
-                continue
-            r = max(a + SCAN_START, free, quiet)
+                self.ready = a + EMPTY_END
+                return a
+            r = max(a + SCAN_START, self.free, self.quiet)
             out.cells.extend(range(r, r + n))
-            a, quiet = r + n - 1, r + n + latency
-        else:  # tile or flush: through the accumulator's output register
-            r = max(a + 1, free, quiet)
-            a = r
-            if isinstance(op, Flush):
-                out.pixels.extend(range(r + FLUSH_START, r + FLUSH_START + tile.pixels))
-                out.frames.append(result)
-                free = r + tile.pixels + 1
-    return out
+            self.ready, self.quiet = r + n - 1, r + n + self.latency
+            # SCAN from the first read (the clock before its offer) to the last, r + n - 2
+            self.scanning += r + n - 1 - (a + SCAN_START - 1)
+            self.acc_stall += r - a - SCAN_START
+            self.resolve_ops += n
+            return a
+        r = max(a + 1, self.free, self.quiet)  # tile or flush: the output register
+        self.ready = r
+        self.acc_stall += r - a - 1
+        self.resolve_ops += 1
+        if isinstance(op, Flush):
+            out.pixels.extend(range(r + FLUSH_START, r + FLUSH_START + tile.pixels))
+            out.frames.append(result)
+            self.free = r + tile.pixels + 1
+        return a
+
+
+def tile_cycles(tile: TileConfig, ops) -> TileTiming:
+    """The clock of every transfer of the tile stages (and their frames, from `TileModel`)
+    for ops offered back to back."""
+    model, clock = TileModel(tile), TileClock(tile)
+    for op in ops:
+        result = model.feed(op)
+        if isinstance(op, (Beats, DeltaBeat)):
+            n = 1 if isinstance(op, DeltaBeat) else len(op)
+            clock.beats(range(clock.ready, clock.ready + n))
+        else:
+            clock.take(op, result)
+    return clock.timing

@@ -55,7 +55,9 @@ clock: exactly one column per clock (no gap between edges) when every edge has a
 beat in clock ``L + T - 1``: the mean over the whole run is ``T / (L + T)`` (`stream_rate`),
 at least 0.95 once ``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks.
 A stalled sink delays the stepper and its pipeline (and, once the bank is full, the setup)
-clock for clock; nothing else depends on the data.
+clock for clock; nothing else depends on the data. `schedule`'s ``sink_ready`` models a sink
+first ready in clock T (the polygon pipeline's accumulator after a scan, `stall_window`),
+its ``idle`` a source that idles before some commands.
 
 Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
 One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
@@ -83,6 +85,7 @@ __all__ = [
     "setup_interval",
     "setup_latency",
     "start_clip_cycles",
+    "stall_window",
     "stream_rate",
     "sustained_rate",
     "unit_cycles",
@@ -197,26 +200,61 @@ def schedule(
     setup_latency_: int | None = None,
     output="writes",
     setup_units: int = DEFAULT_SETUP_UNITS,
+    *,
+    idle=None,
+    sink_ready: int = 0,
 ) -> list[EdgeTiming]:
     """`write_cycles` from each edge's (columns, clipped_start) as setup gives them (None for
     a command the core drops as bad), for callers that hold the setups already
-    (`edgeaa.model.edge.setup_batch`). `edges` only labels the timings."""
+    (`edgeaa.model.edge.setup_batch`). `edges` only labels the timings.
+
+    `idle` (one unit only): clocks the source idles before offering each command: command k
+    is offered ``idle[k]`` clocks after the clock following command k - 1's accept, the first
+    in clock ``idle[0]`` (default: back to back from clock 0). `sink_ready` (one unit only):
+    the sink is not ready before this clock and always ready from it (`stall_window`).
+    """
     latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, output)
     if setup_units == 1:
-        return _schedule_one(config, shapes, edges, latency, depth)
+        return _schedule_one(config, shapes, edges, latency, depth, idle, sink_ready)
+    if idle is not None or sink_ready:
+        raise ValueError("idle and sink_ready are modelled for one setup unit only")
     return _schedule_units(config, shapes, edges, latency, depth, setup_units)
 
 
-def _schedule_one(config: EdgeConfig, shapes, edges, latency: int, depth: int):
+def stall_window(first_beat: int, sink_ready: int) -> tuple[int, int]:
+    """The stepper's stall (start, clocks) under a sink first ready in clock `sink_ready`.
+
+    The stepper's one enable (``~out.valid | out.ready``) is high until its first beat is
+    valid (clock `first_beat` with an always-ready sink) and from `sink_ready` on; the beat
+    waits in the output register in between, and the loop and the pipeline hold. So the
+    stepper's clocks are every clock but ``[first_beat, sink_ready)``, while the setup runs
+    on: a bank is loaded in the window only while the loop is idle (``~active``)."""
+    return first_beat, max(0, sink_ready - first_beat)
+
+
+def _enabled(clock: int, count: int, stall: tuple[int, int]) -> list[int]:
+    """The first `count` stepper clocks (`stall_window`) from `clock` on."""
+    start, length = stall
+    if start <= clock < start + length:
+        clock = start + length
+    index = clock if clock < start else clock - length  # stepper clocks before `clock`
+    return [i if i < start else i + length for i in range(index, index + count)]
+
+
+def _schedule_one(
+    config: EdgeConfig, shapes, edges, latency: int, depth: int, idle=None, sink_ready=0
+):
     """`schedule` of the core with one setup unit (its bank register decouples it)."""
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
-    accept = 0
-    prev_load = None  # load clock of the previous good edge
-    prev_columns = 0
+    accept = 0  # the setup's first free clock, then the accept
+    prev_load = prev_last = None  # load and last step clocks of the previous good edge
+    stall = None  # the stepper's stall window, from the first beat on
     for k, shape in enumerate(shapes):
         edge = None if edges is None else edges[k]
+        if idle is not None:
+            accept = max(accept, (out[-1].accepted + 1 if out else 0) + idle[k])
         if shape is None:
             out.append(EdgeTiming(edge, accept, None, None, ()))
             accept += BAD_COMMAND_CYCLES
@@ -230,11 +268,13 @@ def _schedule_one(config: EdgeConfig, shapes, edges, latency: int, depth: int):
         load = bank + 1
         if prev_load is not None:
             bank = max(bank, prev_load)
-            load = max(bank + 1, prev_load + prev_columns)
-        beats = range(load + 1 + depth, load + 1 + depth + columns)
-        out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
+            load = max(bank + 1, prev_last)
+        if stall is None:
+            stall = stall_window(load + 1 + depth, sink_ready)
+        steps = _enabled(load + 1, columns + depth, stall)  # step c, then the pipeline's
+        out.append(EdgeTiming(edge, accept, bank, load, tuple(steps[depth:])))
         accept = bank + 1
-        prev_load, prev_columns = load, columns
+        prev_load, prev_last = load, steps[columns - 1]
     return out
 
 

@@ -4,11 +4,13 @@ harness: pipeline commands in, every pixel out, with the clock it came in.
 The harness reads the commands (int32 rows of `edgeaa.model.pipeline.Command`'s fields) from
 a file, offers them on ``commands`` (optionally with seeded random idle clocks), takes pixels
 with optionally seeded random back-pressure, and writes each pixel as an int64 row
-``clock, x, y, value, last``. It stops when it has every pixel the flushes ask for and then
-`drain` quiet clocks have passed (an extra pixel in them is kept, so a duplicate shows), or
-when neither a command nor a pixel has moved for `max_quiet` clocks while work is left (a
-hang: raised as `PipelineHang`, never silent). It prints the clocks, the counters
-``errors``, ``edge_errors`` and the stage counters `STATS`, and whether it timed out.
+``clock, x, y, value, last`` and the clock each command was taken (int64, one per command;
+`edgeaa.model.pipeline_timing` predicts both). It stops when it has every pixel the flushes
+ask for and then `drain` quiet clocks have passed (an extra pixel in them is kept, so a
+duplicate shows), or when neither a command nor a pixel has moved for `max_quiet` clocks
+while work is left (a hang: raised as `PipelineHang`, never silent). It prints the clocks,
+the counters ``errors``, ``edge_errors`` and the stage counters `STATS`, and whether it timed
+out.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ class PipelineRun:
     stats: dict = field(default_factory=dict)
     seconds: float = 0.0
     engine: str = "verilator"
+    commands: np.ndarray | None = None  # the clock each command was taken (Verilator)
 
     @property
     def clocks_per_second(self) -> float:
@@ -100,14 +103,18 @@ static uint32_t rng_permille() {{
 }}
 
 int main(int argc, char** argv) {{
-    if (argc != 9) {{
-        fprintf(stderr, "usage: %s COMMANDS PIXELS SEED IDLE STALL EXPECTED DRAIN MAX_QUIET\\n",
-                argv[0]);
+    if (argc != 9 && argc != 10) {{
+        fprintf(stderr, "usage: %s COMMANDS PIXELS SEED IDLE STALL EXPECTED DRAIN MAX_QUIET"
+                " [TAKEN]\\n", argv[0]);
         return 2;
     }}
     FILE* in = fopen(argv[1], "rb");
     FILE* out = fopen(argv[2], "wb");
-    if (!in || !out) {{ perror("edgeaa pipeline harness"); return 2; }}
+    FILE* taken_log = argc == 10 ? fopen(argv[9], "wb") : nullptr;
+    if (!in || !out || (argc == 10 && !taken_log)) {{
+        perror("edgeaa pipeline harness");
+        return 2;
+    }}
     rng_state = strtoull(argv[3], nullptr, 10) * 0x9E3779B97F4A7C15ull + 1;
     const uint32_t idle = atoi(argv[4]), stall = atoi(argv[5]);
     const uint64_t expected = strtoull(argv[6], nullptr, 10);
@@ -141,7 +148,10 @@ int main(int argc, char** argv) {{
         {cpp_port("pixels__ready")} = (stall == 0 || rng_permille() >= stall);
         top->clk = 0; top->eval();
         const bool accepted = offering && {cpp_port("commands__ready")};
-        if (accepted) {{ offering = false; next++; }}
+        if (accepted) {{
+            offering = false; next++;
+            if (taken_log) {{ const int64_t c = (int64_t)clock; fwrite(&c, 8, 1, taken_log); }}
+        }}
         const bool taken = {cpp_port("pixels__valid")} && {cpp_port("pixels__ready")};
         if (taken) {{
             int64_t row[5] = {{(int64_t)clock, {pixel_row}}};
@@ -159,6 +169,7 @@ int main(int argc, char** argv) {{
     }}
     fwrite(rows.data(), 8, rows.size(), out);
     fclose(out);
+    if (taken_log) fclose(taken_log);
     printf("%llu %llu %llu {stats} %d\\n", (unsigned long long)clock,
            (unsigned long long)top->errors, (unsigned long long)top->edge_errors, {stat_args},
            hung ? 1 : 0);
@@ -205,9 +216,10 @@ def run(
         max_quiet = stuck_limit(tile, idle, stall)
     with tempfile.TemporaryDirectory(prefix="edgeaa-pipeline-") as tmp:
         commands_path, pixels_path = Path(tmp) / "commands.bin", Path(tmp) / "pixels.bin"
+        taken_path = Path(tmp) / "taken.bin"
         np.array(commands, dtype=np.int32).reshape(-1, len(Command._fields)).tofile(commands_path)
         argv = [exe, commands_path, pixels_path, seed, round(idle * 1000), round(stall * 1000)]
-        argv += [expected, pixel_drain_clocks(tile), max_quiet]
+        argv += [expected, pixel_drain_clocks(tile), max_quiet, taken_path]
         start = time.perf_counter()
         proc = subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=False)
         seconds = time.perf_counter() - start
@@ -217,10 +229,11 @@ def run(
             )
         values = [int(v) for v in proc.stdout.split()]
         rows = np.fromfile(pixels_path, dtype=np.int64).reshape(-1, len(PIXEL_COLUMNS))
+        taken = np.fromfile(taken_path, dtype=np.int64)
     clocks, errors, edge_errors, *counters, timed_out = values
     if timed_out:
         raise PipelineHang(
             f"the pipeline gave {len(rows)} of {expected} pixels in {clocks:,} clocks (seed {seed})"
         )
     stats = dict(zip(STATS, counters, strict=True))
-    return PipelineRun(rows, clocks, errors, edge_errors, stats, seconds)
+    return PipelineRun(rows, clocks, errors, edge_errors, stats, seconds, commands=taken)
