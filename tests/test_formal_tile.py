@@ -2,10 +2,12 @@
 """Formal checks of the tile stages (`edgeaa.sim.verification.formal.tile`).
 
 By default: the k-induction proofs of both stages' stream hold rule on the default 64 x 32
-tile (seconds each), a check that each property can fail (a fault in the harness or in what
-the stage is given, caught by the proof) and the plumbing. Marked ``formal`` (``pytest -m
-formal``), minutes each: the bounded checks from power-on of the accumulator's deltas and
-sums and of the resolve's pixels on the 4 x 2 tile `SMALL_TILE`.
+tile and of the accumulator's deltas on the 4 x 2 tile `SMALL_TILE` (seconds each), a check
+that each property can fail (a fault in the harness or in what the stage is given, caught by
+the group's own assertions from power-on and by the unbounded proof) and the plumbing. Marked
+``formal`` (``pytest -m formal``): the k-induction proof of the accumulator's sums (half a
+minute) and the bounded check from power-on of the resolve's pixels (minutes), on
+`SMALL_TILE`.
 """
 
 from __future__ import annotations
@@ -35,15 +37,15 @@ def _explain(result) -> str:
 # -- the proofs ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["acc_stream", "res_stream"])
-def test_stream_proofs(tools, name):
+@pytest.mark.parametrize("name", ["acc_stream", "res_stream", "acc_deltas"])
+def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
     assert result.passed, _explain(result)
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", ["acc_deltas", "acc_sums", "res_pixels"])
-def test_bounded_checks(tools, name):
+@pytest.mark.parametrize("name", ["acc_sums", "res_pixels"])
+def test_slow_proofs(tools, name):
     result = run_tile_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
@@ -63,8 +65,26 @@ def test_bounded_checks(tools, name):
 )
 def test_fault_is_caught(tools, name, fault, depth, message):
     """A stage that changes a held output, loses a delta, or prefix sums beyond the
-    documented range: each gives a counterexample from power-on."""
-    result = run_tile_proof(name, fault=fault, mode="bmc", depth=depth, timeout=600)
+    documented range: each gives a counterexample from power-on to the group's own
+    assertions (without the invariants of the unbounded proofs)."""
+    result = run_tile_proof(
+        name, fault=fault, mode="bmc", depth=depth, timeout=600, invariants=False
+    )
+    assert result.status == "FAIL", _explain(result)
+    assert message in result.failed, _explain(result)
+
+
+@pytest.mark.parametrize(
+    ("name", "fault", "message"),
+    [
+        ("acc_sums", "lost_delta", "state: shadow (basecase)"),
+        ("acc_deltas", "lost_delta", "state: acc rows (basecase)"),
+    ],
+)
+def test_unbounded_proof_catches_fault(tools, name, fault, message):
+    """The k-induction proofs fail on the same faults (an invariant, which holds in every
+    state the group's assertions are proved in, breaks first)."""
+    result = run_tile_proof(name, fault=fault, timeout=600)
     assert result.status == "FAIL", _explain(result)
     assert message in result.failed, _explain(result)
 

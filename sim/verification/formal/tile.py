@@ -68,6 +68,7 @@ from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import (
     Assert,
     Assume,
+    Cat,
     ClockDomain,
     Const,
     Elaboratable,
@@ -78,7 +79,7 @@ from amaranth.hdl import (
     signed,
 )
 
-from ....hdl.accumulator import TileAccumulator
+from ....hdl.accumulator import TileAccumulator, bank_of
 from ....hdl.resolve import TileResolve
 from ....model.accumulate import composite, intensity_offset
 from ....model.beat import CELLS
@@ -105,9 +106,6 @@ TILE_FAULTS = {
     "wide_range": "resolve",
 }
 OP = {name: code for code, name in enumerate(OPS)}
-# ``sums`` compares the low SUM_BITS bits of a cell's sum (the full width is beyond the
-# bounded check's reach: see the module docstring).
-SUM_BITS = 4
 CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
 
 # The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels (one
@@ -138,9 +136,14 @@ class TileHarness(Elaboratable):
     """One tile stage (``"accumulator"`` or ``"resolve"``) with a free input stream and the
     check groups of `TILE_CHECKS` (the module docstring). ``reset``: the reset is a free
     input (else the registers and memories start at their initial values and never reset).
+    ``invariants``: with the ``deltas`` or ``sums`` group, also assert the invariants of the
+    accumulator's state that make the group inductive (off: the group's own assertions only,
+    to show that they catch a fault by themselves).
     """
 
-    def __init__(self, tile: TileConfig, stage: str, checks, *, reset=False, fault=None):
+    def __init__(
+        self, tile: TileConfig, stage: str, checks, *, reset=False, fault=None, invariants=True
+    ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
         if stage not in TILE_CHECKS:
@@ -153,7 +156,7 @@ class TileHarness(Elaboratable):
             faults = [f for f, s in TILE_FAULTS.items() if s == stage]
             raise ValueError(f"fault must be one of {', '.join(faults)} or None, not {fault!r}")
         self.tile, self.stage, self.checks = tile, stage, checks
-        self.reset, self.fault = reset, fault
+        self.reset, self.fault, self.invariants = reset, fault, invariants
         self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile)
         # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
         self.domain = ClockDomain("sync", reset_less=not reset)
@@ -164,7 +167,14 @@ class TileHarness(Elaboratable):
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.dut = dut = self.dut
+        dut = self.dut
+        groups = {"deltas", "sums"} & set(self.checks)
+        if self.invariants and self.stage == "accumulator" and groups:
+            # elaborated here so that the harness can add read ports to its memories
+            m.submodules.dut = dut.elaborate(platform)
+            rows = _memory_rows(m, dut)
+        else:
+            m.submodules.dut = dut
         m.domains.sync = self.domain
         if self.reset:
             m.d.comb += self.domain.rst.eq(AnySeq(1))
@@ -178,8 +188,10 @@ class TileHarness(Elaboratable):
             seen = seen ^ held
         if "stream" in self.checks:
             _hold_rule(m, sink, seen, held)
-        if {"deltas", "sums"} & set(self.checks):
-            _accumulator_deltas(m, self.tile, source, payload, sink, self.checks, SUM_BITS)
+        if groups:
+            s = _accumulator_deltas(m, self.tile, source, payload, sink, self.checks)
+            if self.invariants:
+                _accumulator_invariants(m, self.tile, dut, rows, s, self.checks)
         if "pixels" in self.checks:
             _resolve_pixels(m, self.tile, source, sink, wide=self.fault == "wide_range")
         return m
@@ -251,13 +263,13 @@ def _placed(tile, beat, origin):
     return out
 
 
-def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
+def _accumulator_deltas(m, tile, ops, src, cells, checks):
     """The ``deltas`` group (module docstring); `src` is the source's payload."""
     s = types.SimpleNamespace(
         X=Signal(tile.x_bits, name="track_x"),
         Y=Signal(tile.y_bits, name="track_y"),
         origin=[Signal.like(src.x0, name="origin_x"), Signal.like(src.y0, name="origin_y")],
-        shadow=Signal(signed(tile.cell_bits + 8), name="shadow"),
+        shadow=Signal(tile.cell_bits, name="shadow"),  # modulo 2**cell_bits, as a cell
         row=Signal(name="row_touched"),
         any=Signal(name="any_touched"),
         owed=Signal(name="owed"),
@@ -269,6 +281,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
         last=[Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")],
     )
     m.d.comb += [s.X.eq(AnyConst(tile.x_bits)), s.Y.eq(AnyConst(tile.y_bits))]
+    s.cells = cells
     take = ops.valid & ops.ready
     is_op = {name: take & (src.op == code) for name, code in OP.items()}
     with m.If(ops.valid & (src.op == OP["beat"])):
@@ -278,7 +291,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
     out, sent = cells.payload, cells.valid & cells.ready
     tracked = sent & (out.op == CELL_OP["cell"]) & (out.x == s.X) & (out.y == s.Y)
     base = Mux(tracked, 0, s.shadow)
-    m.d.sync += s.shadow.eq(base + Mux(is_op["beat"], hits, 0))
+    m.d.sync += s.shadow.eq((base + Mux(is_op["beat"], hits, 0))[: tile.cell_bits])
     with m.If(is_op["beat"]):
         m.d.sync += [
             s.row.eq(s.row | _any(k & (y == s.Y) for k, _, y, _ in placed)),
@@ -293,7 +306,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
     if "deltas" in checks:
         m.d.comb += Assert(condition, "deltas: op taken before a cell")
     if "sums" in checks:
-        same = out.sum[:sum_bits] == s.shadow[:sum_bits]
+        same = out.sum[: tile.cell_bits] == s.shadow
         m.d.comb += Assert(_implies(tracked, same), "sums: cell sum")
     if "deltas" in checks:
         _accumulator_outputs(m, tile, s, out, sent, tracked)
@@ -306,14 +319,152 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
     with m.If(passing):
         code = Mux(src.op == OP["tile"], CELL_OP["tile"], CELL_OP["flush"])
         m.d.sync += [s.passing.eq(1), s.code.eq(code), s.background.eq(src.background)]
+    return s
+
+
+def _accumulator_invariants(m, tile, dut, rows, s, checks):
+    """The invariants of the groups in `checks` (`_memory_state`, `_scan_state`)."""
+    origin = zip(dut.observe.origin, s.origin, strict=True)
+    m.d.comb += Assert(_all(a == b for a, b in origin), "state: origin")
+    if "sums" in checks:
+        _memory_state(m, tile, dut, rows, s)
+    if "deltas" in checks:
+        _scan_state(m, tile, dut, s)
+
+
+def _memory_rows(m, dut):
+    """Per bank of the accumulator, its rows as values: a combinational read port per row
+    (the harness's; the accumulator's own ports are untouched)."""
+    rows = []
+    for mem in dut.observe.banks:
+        bank = []
+        for address in range(mem.depth):
+            port = mem.read_port(domain="comb")
+            m.d.comb += port.addr.eq(address)
+            bank.append(port.data)
+        rows.append(bank)
+    return rows
+
+
+def _row(rows, bank, address):
+    """The row at `address` of bank `bank` (both values)."""
+    value = rows[0][0]
+    for b, bank_rows in enumerate(rows):
+        for a, row in enumerate(bank_rows):
+            value = Mux((bank == b) & (address == a), row, value)
+    return value
+
+
+def _cell_address(tile, x, y):
+    return Cat(x[2:], y) if tile.x_bits > 2 else y
+
+
+def _memory_state(m, tile, dut, rows, s):
+    """Invariants of the accumulator's state (what makes the groups inductive): the read-
+    modify-write stages agree with the banks, the output register's cell was cleared, and the
+    tracked cell's shadow is the bank's row plus stage B's delta for it plus the output's sum
+    while the cell waits there. Each is implied by the ones before in the clock before."""
+    obs, out = dut.observe, s.cells.payload
+    o = obs.o
+    pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
+    o_bank, o_addr = bank_of(o["x"], o["y"]), _cell_address(tile, o["x"], o["y"])
+    t_bank, t_addr = bank_of(s.X, s.Y), _cell_address(tile, s.X, s.Y)
+    checks = [
+        (obs.in_acc | obs.in_wait | dut.scanning, "state: a known state"),
+        (_implies(pending, o["sel"] == o_bank), "state: output bank"),
+        (_implies(pending, _row(rows, o_bank, o_addr) == 0), "state: output cell cleared"),
+    ]
+    stage_b = 0
+    for b, st in enumerate(obs.stages):
+        forwarded = st.c_valid & (st.c_addr == st.b_addr)
+        checks += [
+            (_implies(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
+            (_implies(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
+            (
+                _implies(st.c_valid, rows[b][0] if False else _row(rows, b, st.c_addr) == st.c_sum),
+                "state: stage C written",
+            ),
+            (
+                _implies(st.b_valid & ~forwarded, obs.reads[b].data == _row(rows, b, st.b_addr)),
+                "state: stage B read",
+            ),
+            (
+                _implies(pending & st.b_valid & (o_bank == b), st.b_addr != o_addr),
+                "state: stage B on the output cell",
+            ),
+        ]
+        mine = st.b_valid & (t_bank == b) & (st.b_addr == t_addr)
+        stage_b = stage_b + Mux(mine, st.b_delta, 0)
+    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    total = _row(rows, t_bank, t_addr) + stage_b + Mux(waiting, out.sum, 0)
+    checks.append((s.shadow == total[: len(s.shadow)], "state: shadow"))
+    for condition, message in checks:
+        m.d.comb += Assert(condition, message)
+
+
+def _follows(tile, x, y, last_x, last_y):
+    """Cell (x, y) comes right after (last_x, last_y) in a scan of whole rows."""
+    return ((x == last_x + 1) & (y == last_y)) | (
+        (last_x == tile.width - 1) & (x == 0) & (y > last_y)
+    )
+
+
+def _scan_state(m, tile, dut, s):
+    """Invariants of the accumulator's control against the ``deltas`` ghost: the touched rows
+    are the ghost's while the accumulator takes ops; after an end, the tracked cell is owed
+    exactly while its row is still to scan, or it is ahead of the scan in the current row, or
+    it waits in the output register; the scan moves up through whole rows in order, the
+    output register holds the cell before the scan position, and a tile or flush op waiting
+    there is the ghost's. Each follows from all of them in the clock before."""
+    obs, o = dut.observe, dut.observe.o
+    scan = dut.scanning
+    touched, scan_x, scan_y = obs.touched, obs.scan_x, obs.scan_y
+    pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
+    passing = obs.o_valid & (o["op"] != CELL_OP["cell"])
+    row_left = touched.bit_select(s.Y, 1)
+    ahead = (scan_y == s.Y) & (scan_x <= s.X)
+    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    above = _all(~touched[r] | (scan_y < r) for r in range(tile.height))
+    checks = [
+        (_implies(obs.in_acc, (row_left == s.row) & (s.any == (touched != 0))), "acc rows"),
+        (_implies(~obs.in_acc, ~s.row & ~s.any), "no beat after an end"),
+        (_implies(obs.in_acc, s.owed == waiting), "owed in ACC"),
+        (_implies(obs.in_acc & ~pending, ~s.first), "first in ACC"),
+        (_implies(obs.in_acc & pending, touched == 0), "no beat while the last cell waits"),
+        (_implies(obs.in_wait, ~obs.o_valid & obs.first), "WAIT output"),
+        (_implies(obs.in_wait, (s.owed == row_left) & (s.first == (touched != 0))), "WAIT"),
+        (_implies(scan, s.owed == (row_left | ahead | waiting)), "owed in SCAN"),
+        (_implies(scan, above), "rows above the scan"),
+        (_implies(scan & obs.first, ~obs.o_valid & s.first & (scan_x == 0)), "SCAN start"),
+        (_implies(scan & ~obs.first, pending), "SCAN output"),
+        (
+            _implies(scan & pending, _follows(tile, scan_x, scan_y, o["x"], o["y"])),
+            "scan after the output",
+        ),
+        (_implies(pending, o["first"] == s.first), "output first"),
+        (_implies(pending & o["first"], o["x"] == 0), "output first in column 0"),
+        (
+            _implies(pending & ~o["first"], _follows(tile, o["x"], o["y"], *s.last)),
+            "output after the last sent",
+        ),
+        (_all(obs.params[n] == r for n, r in s.params.items()), "polygon fields"),
+        (_implies(obs.o_valid, o["op"] < len(RESOLVE_OPS)), "output op"),
+        (s.passing == passing, "tile or flush waiting"),
+        (_implies(passing, o["op"] == s.code), "tile or flush code"),
+        (
+            _implies(passing & (o["op"] == CELL_OP["tile"]), obs.background == s.background),
+            "tile background",
+        ),
+        (obs.in_acc | obs.in_wait | scan, "a known state"),
+    ]
+    for condition, message in checks:
+        m.d.comb += Assert(condition, f"state: {message}")
 
 
 def _accumulator_outputs(m, tile, s, out, sent, tracked):
     """What each output transfer must be (the ``deltas`` group's output side)."""
     is_cell = sent & (out.op == CELL_OP["cell"])
-    follows = ((out.x == s.last[0] + 1) & (out.y == s.last[1])) | (
-        (s.last[0] == tile.width - 1) & (out.x == 0) & (out.y > s.last[1])
-    )
+    follows = _follows(tile, out.x, out.y, *s.last)
     checks = [
         (_implies(tracked, s.owed), "deltas: a cell sent twice or not after an end"),
         (_implies(is_cell, out.first == s.first), "deltas: first flag"),
@@ -475,20 +626,21 @@ TILE_PROOFS: dict[str, TileProof] = {
             "acc_deltas",
             "accumulator",
             ("deltas",),
-            "bmc",
-            20,
+            "prove",
+            2,
             description="every touched cell sent once per end and before the next op, "
-            "untouched rows not sent, order, fields, tile and flush passed on (bounded from "
-            "power-on)",
+            "untouched rows not sent, order, fields, tile and flush passed on (k-induction "
+            "with the scan's invariants)",
         ),
         TileProof(
             "acc_sums",
             "accumulator",
             ("sums",),
-            "bmc",
-            8,
-            description=f"each cell sent carries the sum of its deltas since the last time it "
-            f"was sent, modulo 2**{SUM_BITS} (bounded from power-on)",
+            "prove",
+            2,
+            description="each cell sent carries the sum of its deltas since the last time it "
+            "was sent, modulo 2**cell_bits (k-induction with the banks' and read-modify-write "
+            "stages' invariants)",
         ),
         TileProof(
             "res_pixels",
@@ -524,14 +676,21 @@ def run_tile_proof(
     workdir=None,
     timeout: float | None = None,
     tail: int = 40,
+    invariants: bool = True,
 ) -> FormalResult:
     """Build the harness of `proof` (a `TILE_PROOFS` name or a `TileProof`), run sby, return
-    the result (`edgeaa.sim.verification.formal.run.run_proof`'s, for the tile stages)."""
+    the result (`edgeaa.sim.verification.formal.run.run_proof`'s, for the tile stages).
+    ``invariants``: `TileHarness`'s (off: the groups' own assertions only)."""
     proof = _lookup(proof)
     mode, depth = mode or proof.mode, proof.depth if depth is None else depth
     tools = find_tools(solver)
     harness = TileHarness(
-        tile or proof.tile, proof.stage, proof.checks, reset=proof.reset, fault=fault
+        tile or proof.tile,
+        proof.stage,
+        proof.checks,
+        reset=proof.reset,
+        fault=fault,
+        invariants=invariants,
     )
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
@@ -565,6 +724,12 @@ def main(argv=None) -> int:
     parser.add_argument("--mode", choices=("prove", "bmc"))
     parser.add_argument("--workdir", help="keep the runs in WORKDIR/<proof>")
     parser.add_argument("--timeout", type=float)
+    parser.add_argument(
+        "--no-invariants",
+        dest="invariants",
+        action="store_false",
+        help="the groups' own assertions only (not inductive)",
+    )
     args = parser.parse_args(argv)
     failures = 0
     for name in args.proofs:
@@ -575,6 +740,7 @@ def main(argv=None) -> int:
             mode=args.mode,
             workdir=Path(args.workdir) / name if args.workdir else None,
             timeout=args.timeout,
+            invariants=args.invariants,
         )
         print(result.summary(), flush=True)
         for entry in result.failed:
