@@ -1,7 +1,10 @@
 # amaranth: UnusedElaboratable=no
 """Formal checks of the tile stages (`edgeaa.hdl.accumulator.TileAccumulator`,
-`edgeaa.hdl.resolve.TileResolve`) with SymbiYosys, black-box: the harness reads only the
-stages' ports.
+`edgeaa.hdl.resolve.TileResolve`) with SymbiYosys. The ``stream`` and ``pixels`` groups
+are black-box (only the stages' ports); the accumulator's ``deltas`` and ``sums`` groups
+also state invariants of its internals (its observation points, ``TileAccumulator.observe``,
+and its bank memories read through combinational read ports the harness adds), which make
+them inductive.
 
 `TileHarness` wraps one stage of a `TileConfig`. Its input stream is free in every clock
 (``AnySeq``) except for the hold rule, which is assumed of the source (a valid transfer not
@@ -23,11 +26,9 @@ taken stays valid with the same payload); the output's ready is free. Check grou
 ``accumulator`` ``sums``
     The shadow of cell (X, Y): the exact sum of every delta of an accepted beat placed there
     (several cells of one beat merged, back-to-back beats through the read-modify-write
-    forwarding) since (X, Y) was last sent. Asserted: each (X, Y) sent carries the shadow
-    modulo ``2**SUM_BITS``, and the shadow restarts from 0 (the clear). The low bits of a
-    sum depend only on the low bits of the deltas, so a delta lost, doubled or misplaced
-    shows (the deltas are free); the full width is beyond the bounded check (it does not
-    finish) and is simulated (`tests/test_tile_hw.py`).
+    forwarding) since (X, Y) was last sent, modulo ``2**cell_bits`` (a cell's width).
+    Asserted: each (X, Y) sent carries the shadow, all ``cell_bits`` bits, and the shadow
+    restarts from 0 (the clear).
 ``resolve`` ``stream``
     The ``pixels`` hold rule (as ``accumulator`` ``stream``).
 ``resolve`` ``pixels``
@@ -51,11 +52,30 @@ the beat with cell 3's delta zeroed while the shadow counts it (a stage that los
 delta); ``wide_range`` assumes the prefix sums within ``[-2 L, 2 L)``, twice the documented
 range.
 
-The ``deltas``, ``sums`` and ``pixels`` groups run from power-on (the memories and registers
-at their initial values, no reset: a reset does not clear the accumulation memory) as
-bounded model checks; ``stream`` is proved by k-induction for every reachable state. `TILE_PROOFS`
-lists the runs and their configurations; `run_tile_proof` runs one (``python -m
-edgeaa.sim.verification.formal.tile [proof ...]``).
+Invariants (``invariants``, on by default; each an assertion, so the proofs show they hold
+in every reachable state). ``sums`` (`_memory_state`): the bank's row of (X, Y) plus stage
+B's delta for its address plus the output's sum while (X, Y) waits in the output register
+equals the shadow; stage C's sum is in its bank (written the clock before), stage B's read
+is its bank's row unless stage C wrote that row the clock before (then B takes C's sum: the
+forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register is
+cleared in its bank (its ``sel`` its bank) and stage B is not on it, stage B's delta is
+zero when it is empty (a clear adds it). ``deltas``
+(`_scan_state`): in ACC the touched rows are the ghost's, in WAIT and SCAN the ghost saw no
+beat; (X, Y) is owed exactly while it waits in the output register (ACC), its row is touched
+(WAIT), or its row is still to scan, it is ahead of the scan in the current row or it waits
+(SCAN); the rows left to scan are above the scan row; SCAN's first read has not happened
+exactly while the ``first`` register is set (then nothing is in the output register and the
+scan is in column 0), else a cell waits there, and the scan position follows it; the waiting
+cell's ``first`` is the ghost's and follows the last cell sent; the end's fields are the
+ghost's; a tile or flush op waits exactly when the ghost's does, with its code and
+background. Both: the origin is the ghost's. Each invariant follows from all of them in the
+clock before (both groups pass at k = 1; `TILE_PROOFS` runs k = 2, which is faster).
+
+``stream``, ``deltas`` and ``sums`` are proved by k-induction for every reachable state
+(``deltas`` and ``sums`` from power-on, the memories and registers at their initial values,
+no reset: a reset does not clear the accumulation memory); ``pixels`` is a bounded model
+check from power-on. `TILE_PROOFS` lists the runs and their configurations;
+`run_tile_proof` runs one (``python -m edgeaa.sim.verification.formal.tile [proof ...]``).
 """
 
 from __future__ import annotations
@@ -379,6 +399,7 @@ def _memory_state(m, tile, dut, rows, s):
         forwarded = st.c_valid & (st.c_addr == st.b_addr)
         checks += [
             (_implies(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
+            (_implies(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty"),
             (_implies(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
             (
                 _implies(st.c_valid, rows[b][0] if False else _row(rows, b, st.c_addr) == st.c_sum),
