@@ -2,12 +2,11 @@
 """Formal checks of the tile stages (`edgeaa.sim.verification.formal.tile`).
 
 By default: the k-induction proofs of both stages' stream hold rule on the default 64 x 32
-tile and of the accumulator's deltas on the 4 x 2 tile `SMALL_TILE` (seconds each), a check
-that each property can fail (a fault in the harness or in what the stage is given, caught by
-the group's own assertions from power-on and by the unbounded proof) and the plumbing. Marked
-``formal`` (``pytest -m formal``): the k-induction proof of the accumulator's sums (half a
-minute) and the bounded check from power-on of the resolve's pixels (minutes), on
-`SMALL_TILE`.
+tile, of the accumulator's deltas and of the resolve's pixels on the 4 x 2 tile `SMALL_TILE`
+(seconds each), a check that each property can fail (a fault in the harness or in what the
+stage is given, caught by the group's own assertions from power-on and by the unbounded
+proof) and the plumbing. Marked ``formal`` (``pytest -m formal``): the k-induction proof of
+the accumulator's sums on `SMALL_TILE` (half a minute).
 """
 
 from __future__ import annotations
@@ -22,7 +21,7 @@ from edgeaa.sim.verification.formal.tile import (
     run_tile_proof,
 )
 
-SLOW_TIMEOUT = 1800  # a bounded check that does not finish in this time fails (TIMEOUT)
+SLOW_TIMEOUT = 900  # a proof that does not finish in this time fails (TIMEOUT)
 
 
 @pytest.fixture
@@ -37,14 +36,14 @@ def _explain(result) -> str:
 # -- the proofs ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["acc_stream", "res_stream", "acc_deltas"])
+@pytest.mark.parametrize("name", ["acc_stream", "res_stream", "acc_deltas", "res_pixels"])
 def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
     assert result.passed, _explain(result)
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", ["acc_sums", "res_pixels"])
+@pytest.mark.parametrize("name", ["acc_sums"])
 def test_slow_proofs(tools, name):
     result = run_tile_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -75,16 +74,19 @@ def test_fault_is_caught(tools, name, fault, depth, message):
 
 
 @pytest.mark.parametrize(
-    ("name", "fault", "message"),
+    ("name", "fault", "depth", "message"),
     [
-        ("acc_sums", "lost_delta", "state: shadow (basecase)"),
-        ("acc_deltas", "lost_delta", "state: acc rows (basecase)"),
+        ("acc_sums", "lost_delta", None, "state: shadow (basecase)"),
+        ("acc_deltas", "lost_delta", None, "state: acc rows (basecase)"),
+        # the wrong pixel is written 8 clocks from power-on: one past the proof's k
+        ("res_pixels", "wide_range", 9, "state: value (basecase)"),
     ],
 )
-def test_unbounded_proof_catches_fault(tools, name, fault, message):
+def test_unbounded_proof_catches_fault(tools, name, fault, depth, message):
     """The k-induction proofs fail on the same faults (an invariant, which holds in every
-    state the group's assertions are proved in, breaks first)."""
-    result = run_tile_proof(name, fault=fault, timeout=600)
+    state the group's assertions are proved in, breaks first), with a counterexample from
+    power-on."""
+    result = run_tile_proof(name, fault=fault, depth=depth, timeout=600)
     assert result.status == "FAIL", _explain(result)
     assert message in result.failed, _explain(result)
 

@@ -104,7 +104,7 @@ from ....hdl.resolve import TileResolve
 from ....model.accumulate import composite, intensity_offset
 from ....model.beat import CELLS
 from ....model.config import EdgeConfig
-from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig
+from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig, resolve_latency
 from .run import FormalResult, find_tools, harness_rtlil, run_harness, sby_script
 
 __all__ = [
@@ -189,7 +189,7 @@ class TileHarness(Elaboratable):
         m = Module()
         dut = self.dut
         groups = {"deltas", "sums"} & set(self.checks)
-        if self.invariants and self.stage == "accumulator" and groups:
+        if self.invariants and (groups or "pixels" in self.checks):
             # elaborated here so that the harness can add read ports to its memories
             m.submodules.dut = dut.elaborate(platform)
             rows = _memory_rows(m, dut)
@@ -213,7 +213,9 @@ class TileHarness(Elaboratable):
             if self.invariants:
                 _accumulator_invariants(m, self.tile, dut, rows, s, self.checks)
         if "pixels" in self.checks:
-            _resolve_pixels(m, self.tile, source, sink, wide=self.fault == "wide_range")
+            g = _resolve_pixels(m, self.tile, source, sink, wide=self.fault == "wide_range")
+            if self.invariants:
+                _resolve_invariants(m, self.tile, dut, rows[0], g)
         return m
 
 
@@ -356,7 +358,8 @@ def _memory_rows(m, dut):
     """Per bank of the accumulator, its rows as values: a combinational read port per row
     (the harness's; the accumulator's own ports are untouched)."""
     rows = []
-    for mem in dut.observe.banks:
+    banks = getattr(dut.observe, "banks", None) or [dut.observe.memory]
+    for mem in banks:
         bank = []
         for address in range(mem.depth):
             port = mem.read_port(domain="comb")
@@ -560,13 +563,17 @@ def _resolve_source(m, tile, cells, wide):
         m.d.comb += Assume(in_range & (c.sum[:n] == residue), "source: exact sums")
     with m.If(take & is_cell):
         m.d.sync += prev.eq(exact)
-    return exact, d, take & is_cell
+    ghost = types.SimpleNamespace(
+        last=last, row_open=row_open, need_first=need_first, prev=prev, exact=exact
+    )
+    return ghost, d, take & is_cell
 
 
 def _resolve_pixels(m, tile, cells, pixels, *, wide):
     """The ``pixels`` group (module docstring)."""
     config, c = tile.config, cells.payload
-    exact, d, took = _resolve_source(m, tile, cells, wide)
+    g, d, took = _resolve_source(m, tile, cells, wide)
+    exact = g.exact
     X, Y = Signal(tile.x_bits, name="track_x"), Signal(tile.y_bits, name="track_y")
     m.d.comb += [X.eq(AnyConst(tile.x_bits)), Y.eq(AnyConst(tile.y_bits))]
     bits = config.intensity_bits
@@ -598,6 +605,82 @@ def _resolve_pixels(m, tile, cells, pixels, *, wide):
     # after the pixel: a flush may be taken in the clock its predecessor's last pixel goes
     with m.If(take & (c.op == CELL_OP["flush"])):
         m.d.sync += [frame.eq(value), value.eq(background), flushing.eq(1), count.eq(0)]
+    g.__dict__.update(
+        X=X, Y=Y, value=value, frame=frame, background=background, flushing=flushing, count=count
+    )
+    g.pixels = pixels
+    return g
+
+
+def _resolve_invariants(m, tile, dut, pixel_rows, g):
+    """Invariants of the resolve's state against the ``pixels`` ghost (what makes the group
+    inductive, with k above the pipeline's latency: a cell in flight is written within it)."""
+    obs = dut.observe
+    stages, written = obs.stages, obs.written
+    busy = _any(st.valid for st in stages)
+    flush = dut.flushing
+    last_pos = Cat(*g.last)
+    tracked = Cat(g.X, g.Y)
+
+    def in_flight(position):
+        return _any(st.valid & (Cat(st.x, st.y) == position) for st in stages)
+
+    def pixel(position):
+        value = pixel_rows[0]
+        for address, row in enumerate(pixel_rows):
+            value = Mux(position == address, row, value)
+        return value
+
+    written_y = written.bit_select(g.Y, 1)
+    shown = Mux(written_y, pixel(tracked), obs.background)  # what a read of (X, Y) gives
+    row_end = Cat(Const(tile.width - 1, tile.x_bits), g.Y)
+    # written in this pass of its row, the row not yet marked written: the row's end is in
+    # flight, or the row is still open and (X, Y) was taken
+    row_open = (g.last[1] == g.Y) & g.row_open & ~g.need_first
+    done = in_flight(row_end) | (row_open & (g.last[0] >= g.X))
+    n = tile.cell_bits
+    count = g.count
+    p = obs.p
+    checks = [
+        (g.background == obs.background, "background"),
+        (obs.acc[:n] == g.prev[:n], "row prefix sum"),
+        (g.flushing == (flush | obs.p_valid), "flushing"),
+        (_implies(flush | obs.p_valid | g.need_first, ~busy), "nothing in flight"),
+        (_implies(flush | obs.p_valid, g.need_first), "no cell since the flush"),
+        (g.row_open == (~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
+        (
+            _implies(
+                obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))
+            ),
+            "output position",
+        ),
+        (_implies(obs.p_valid, p.last == ~flush), "the last pixel waits after the flush"),
+        (
+            _implies(flush, Cat(obs.fx, obs.fy) == (count + obs.p_valid)[: len(count)]),
+            "flush position",
+        ),
+        (
+            _implies(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == shown),
+            "frame not yet read",
+        ),
+        (
+            _implies(obs.p_valid & (Cat(p.x, p.y) == tracked), g.pixels.payload.value == g.frame),
+            "frame waiting",
+        ),
+        (_implies(flush, g.value == g.background), "value in a flush"),
+        (
+            _implies(~flush & ~in_flight(tracked), g.value == Mux(done, pixel(tracked), shown)),
+            "value",
+        ),
+    ]
+    for i, st in enumerate(stages):
+        position = Cat(st.x, st.y)
+        checks.append((_implies(st.valid, position <= last_pos), f"stage {i} taken"))
+        for older in stages[i + 1 :]:
+            both = st.valid & older.valid
+            checks.append((_implies(both, Cat(older.x, older.y) < position), f"stage {i} order"))
+    for condition, message in checks:
+        m.d.comb += Assert(condition, f"state: {message}")
 
 
 # -- running ---------------------------------------------------------------------------------
@@ -667,10 +750,11 @@ TILE_PROOFS: dict[str, TileProof] = {
             "res_pixels",
             "resolve",
             ("pixels",),
-            "bmc",
-            16,
+            "prove",
+            resolve_latency(SMALL_CONFIG) + 1,  # a cell in flight is written within k
             description="pixels equal the model's composite of exact prefix sums within the "
-            "documented range (no overflow; bounded from power-on)",
+            "documented range (no overflow; k-induction with the pipeline's and the pixel "
+            "memory's invariants)",
         ),
     )
 }
