@@ -49,8 +49,11 @@ taken stays valid with the same payload); the output's ready is free. Check grou
 Faults (``fault``; each must make its proof fail): ``stall_cell`` / ``stall_pixel`` flip a
 payload bit of a held output as the harness sees it; ``lost_delta`` gives the accumulator
 the beat with cell 3's delta zeroed while the shadow counts it (a stage that loses a
-delta); ``wide_range`` assumes the prefix sums within ``[-2 L, 2 L)``, twice the documented
-range.
+delta); ``stale_origin`` gives it every op with x0 zeroed (a stage that ignores a tile's x
+origin: cells land in the wrong columns); ``wide_range`` assumes the prefix sums within
+``[-2 L, 2 L)``, twice the documented range; ``lost_first`` gives the resolve every cell
+with ``first`` cleared (a stage that takes a polygon's first cell while the previous
+polygon's cells are in flight, so its pixel read may miss their writes).
 
 Invariants (``invariants``, on by default; each an assertion, so the proofs show they hold
 in every reachable state). ``sums`` (`_memory_state`): the bank's row of (X, Y) plus stage
@@ -122,8 +125,10 @@ TILE_CHECKS = {"accumulator": ("stream", "deltas", "sums"), "resolve": ("stream"
 TILE_FAULTS = {
     "stall_cell": "accumulator",
     "lost_delta": "accumulator",
+    "stale_origin": "accumulator",
     "stall_pixel": "resolve",
     "wide_range": "resolve",
+    "lost_first": "resolve",
 }
 OP = {name: code for code, name in enumerate(OPS)}
 CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
@@ -213,7 +218,8 @@ class TileHarness(Elaboratable):
             if self.invariants:
                 _accumulator_invariants(m, self.tile, dut, rows, s, self.checks)
         if "pixels" in self.checks:
-            g = _resolve_pixels(m, self.tile, source, sink, wide=self.fault == "wide_range")
+            wide = self.fault == "wide_range"
+            g = _resolve_pixels(m, self.tile, source, payload, sink, wide=wide)
             if self.invariants:
                 _resolve_invariants(m, self.tile, dut, rows[0], g)
         return m
@@ -231,7 +237,8 @@ def _held(m, stream, name):
 
 def _free_source(m, stream, fault):
     """Drive `stream` from a free source that keeps the hold rule; returns the source's
-    payload (a view). Fault ``lost_delta``: the stage gets cell 3's delta zeroed."""
+    payload (a view). Faults ``lost_delta``, ``stale_origin``, ``lost_first``: the stage gets
+    cell 3's delta, x0 or ``first`` zeroed."""
     layout = stream.payload.shape()
     free = Signal(layout, name="source")
     m.d.comb += [stream.valid.eq(AnySeq(1)), Value.cast(free).eq(AnySeq(layout.size))]
@@ -239,6 +246,10 @@ def _free_source(m, stream, fault):
     m.d.comb += given.eq(free)
     if fault == "lost_delta":
         m.d.comb += given.beat.cell3.delta.eq(0)
+    if fault == "stale_origin":
+        m.d.comb += given.x0.eq(0)
+    if fault == "lost_first":
+        m.d.comb += given.first.eq(0)
     m.d.comb += stream.payload.eq(given)
     held, prev = _held(m, stream, "held_in"), Signal(layout.size)
     m.d.sync += prev.eq(free.as_value())
@@ -523,10 +534,12 @@ def model_fill(exact, evenodd, ifix):
     return Mux(evenodd, odd, nonzero)
 
 
-def _resolve_source(m, tile, cells, wide):
-    """Assumptions on the resolve's input (what the accumulator is proved to send) and the
-    exact prefix sums; returns (exact prefix of the cell taken now, d, taken cell)."""
-    c = cells.payload
+def _resolve_source(m, tile, cells, src, wide):
+    """Assumptions on the resolve's input (what the accumulator is proved to send; `src`, the
+    source's payload) and the exact prefix sums; returns (the ghost of the input: ``exact``
+    the exact prefix of the cell taken now, ``prev`` the last one, ``last``, ``row_open``,
+    ``need_first``; d; a cell taken)."""
+    c = src
     take = cells.valid & cells.ready
     is_cell = c.op == CELL_OP["cell"]
     last = [Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")]
@@ -569,10 +582,10 @@ def _resolve_source(m, tile, cells, wide):
     return ghost, d, take & is_cell
 
 
-def _resolve_pixels(m, tile, cells, pixels, *, wide):
-    """The ``pixels`` group (module docstring)."""
-    config, c = tile.config, cells.payload
-    g, d, took = _resolve_source(m, tile, cells, wide)
+def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
+    """The ``pixels`` group (module docstring); `src` is the source's payload."""
+    config, c = tile.config, src
+    g, d, took = _resolve_source(m, tile, cells, src, wide)
     exact = g.exact
     X, Y = Signal(tile.x_bits, name="track_x"), Signal(tile.y_bits, name="track_y")
     m.d.comb += [X.eq(AnyConst(tile.x_bits)), Y.eq(AnyConst(tile.y_bits))]
