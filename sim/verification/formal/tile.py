@@ -62,23 +62,33 @@ equals the shadow; stage C's sum is in its bank (written the clock before), stag
 is its bank's row unless stage C wrote that row the clock before (then B takes C's sum: the
 forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register is
 cleared in its bank (its ``sel`` its bank) and stage B is not on it, stage B's delta is
-zero when it is empty (a clear adds it). ``deltas``
-(`_scan_state`): in ACC the touched rows are the ghost's, in WAIT and SCAN the ghost saw no
-beat; (X, Y) is owed exactly while it waits in the output register (ACC), its row is touched
-(WAIT), or its row is still to scan, it is ahead of the scan in the current row or it waits
-(SCAN); the rows left to scan are above the scan row; SCAN's first read has not happened
-exactly while the ``first`` register is set (then nothing is in the output register and the
-scan is in column 0), else a cell waits there, and the scan position follows it; the waiting
-cell's ``first`` is the ghost's and follows the last cell sent; the end's fields are the
-ghost's; a tile or flush op waits exactly when the ghost's does, with its code and
-background. Both: the origin is the ghost's. Each invariant follows from all of them in the
-clock before (both groups pass at k = 1; `TILE_PROOFS` runs k = 2, which is faster).
+zero when it is empty (a clear adds it). ``deltas`` (`_scan_state`): in ACC the touched
+rows are the ghost's, in WAIT and SCAN the ghost saw no beat; (X, Y) is owed exactly while
+it waits in the output register (ACC), its row is touched (WAIT), or its row is still to
+scan, it is ahead of the scan in the current row or it waits (SCAN); the rows left to scan
+are above the scan row; SCAN's first read has not happened exactly while the ``first``
+register is set (then nothing is in the output register and the scan is in column 0), else
+a cell waits there, and the scan position follows it; the waiting cell's ``first`` is the
+ghost's and follows the last cell sent; the end's fields are the ghost's; a tile or flush
+op waits exactly when the ghost's does, with its code and background. Both: the origin is
+the ghost's. Each follows from all of them in the clock before (both groups pass at k = 1;
+`TILE_PROOFS` runs k = 2, which is faster). ``pixels`` (`_resolve_invariants`): (X, Y)
+not in flight holds the shadow: its pixel memory row if its row was written since the tile
+started or in the row's current pass ((X, Y) taken while the row is open, or the row's end
+in flight), else the background; in a flush the frame equals that until (X, Y) is read and
+the waiting pixel (X, Y) equals the frame, the shadow being the background; the row's
+prefix sum register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells in
+taken order, none after the last taken and none in a flush, with a pixel waiting or before a
+polygon's first cell; the flush and output positions and ``last`` follow the pixel count; the
+background is the shadow's. A cell in flight has no invariant of its own: with k above the
+resolve's latency every cell the induction step sees written was taken within the k clocks
+it assumes, from a state where the invariants held.
 
-``stream``, ``deltas`` and ``sums`` are proved by k-induction for every reachable state
-(``deltas`` and ``sums`` from power-on, the memories and registers at their initial values,
-no reset: a reset does not clear the accumulation memory); ``pixels`` is a bounded model
-check from power-on. `TILE_PROOFS` lists the runs and their configurations;
-`run_tile_proof` runs one (``python -m edgeaa.sim.verification.formal.tile [proof ...]``).
+All groups are proved by k-induction for every reachable state (``deltas``, ``sums`` and
+``pixels`` from power-on, the memories and registers at their initial values, no reset: a
+reset does not clear the accumulation memory). `TILE_PROOFS` lists the runs and their
+configurations; `run_tile_proof` runs one (``python -m
+edgeaa.sim.verification.formal.tile [proof ...]``).
 """
 
 from __future__ import annotations
