@@ -61,7 +61,7 @@ B's delta for its address plus the output's sum while (X, Y) waits in the output
 equals the shadow; stage C's sum is in its bank (written the clock before), stage B's read
 is its bank's row unless stage C wrote that row the clock before (then B takes C's sum: the
 forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register is
-cleared in its bank (its ``sel`` its bank) and stage B is not on it, stage B's delta is
+cleared in its bank (its ``sel`` its bank) and stage B is then empty, stage B's delta is
 zero when it is empty (a clear adds it). ``deltas`` (`_scan_state`): in ACC the touched
 rows are the ghost's, in WAIT and SCAN the ghost saw no beat; (X, Y) is owed exactly while
 it waits in the output register (ACC), its row is touched (WAIT), or its row is still to
@@ -104,6 +104,7 @@ from amaranth.hdl import (
     Cat,
     ClockDomain,
     Const,
+    Cover,
     Elaboratable,
     Module,
     Mux,
@@ -167,17 +168,48 @@ def _implies(a, b):
     return ~a | b
 
 
+@dataclass(frozen=True)
+class _When:
+    """An invariant ``premise -> conclusion`` (`_state_checks`)."""
+
+    premise: Value
+    conclusion: Value
+
+
+def _state_checks(m, checks, covers, prefix="state: "):
+    """Assert each invariant of `checks` ((condition or `_When`, message)); with `covers`, also
+    cover each `_When`'s premise together with its conclusion (the premise is reachable, so
+    the invariant is not vacuous)."""
+    for condition, message in checks:
+        if isinstance(condition, _When):
+            m.d.comb += Assert(_implies(condition.premise, condition.conclusion), prefix + message)
+            if covers:
+                reached = condition.premise & condition.conclusion
+                m.d.comb += Cover(reached, "cover: " + (prefix + message)[len("state: ") :])
+        else:
+            m.d.comb += Assert(condition, prefix + message)
+
+
 class TileHarness(Elaboratable):
     """One tile stage (``"accumulator"`` or ``"resolve"``) with a free input stream and the
     check groups of `TILE_CHECKS` (the module docstring). ``reset``: the reset is a free
     input (else the registers and memories start at their initial values and never reset).
     ``invariants``: with the ``deltas`` or ``sums`` group, also assert the invariants of the
     accumulator's state that make the group inductive (off: the group's own assertions only,
-    to show that they catch a fault by themselves).
+    to show that they catch a fault by themselves). ``covers``: also cover each invariant's
+    premise with its conclusion (for sby's cover mode: no invariant is vacuous).
     """
 
     def __init__(
-        self, tile: TileConfig, stage: str, checks, *, reset=False, fault=None, invariants=True
+        self,
+        tile: TileConfig,
+        stage: str,
+        checks,
+        *,
+        reset=False,
+        fault=None,
+        invariants=True,
+        covers=False,
     ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
@@ -192,6 +224,7 @@ class TileHarness(Elaboratable):
             raise ValueError(f"fault must be one of {', '.join(faults)} or None, not {fault!r}")
         self.tile, self.stage, self.checks = tile, stage, checks
         self.reset, self.fault, self.invariants = reset, fault, invariants
+        self.covers = covers and invariants
         self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile)
         # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
         self.domain = ClockDomain("sync", reset_less=not reset)
@@ -229,12 +262,12 @@ class TileHarness(Elaboratable):
         if groups:
             s = _accumulator_deltas(m, self.tile, source, payload, sink, self.checks)
             if self.invariants:
-                _accumulator_invariants(m, self.tile, dut, rows, s, self.checks)
+                _accumulator_invariants(m, self.tile, dut, rows, s, self.checks, self.covers)
         if "pixels" in self.checks:
             wide = self.fault == "wide_range"
             g = _resolve_pixels(m, self.tile, source, payload, sink, wide=wide)
             if self.invariants:
-                _resolve_invariants(m, self.tile, dut, rows[0], g)
+                _resolve_invariants(m, self.tile, dut, rows[0], g, self.covers)
         return m
 
 
@@ -368,14 +401,14 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
     return s
 
 
-def _accumulator_invariants(m, tile, dut, rows, s, checks):
+def _accumulator_invariants(m, tile, dut, rows, s, checks, covers):
     """The invariants of the groups in `checks` (`_memory_state`, `_scan_state`)."""
     origin = zip(dut.observe.origin, s.origin, strict=True)
     m.d.comb += Assert(_all(a == b for a, b in origin), "state: origin")
     if "sums" in checks:
-        _memory_state(m, tile, dut, rows, s)
+        _memory_state(m, tile, dut, rows, s, covers)
     if "deltas" in checks:
-        _scan_state(m, tile, dut, s)
+        _scan_state(m, tile, dut, s, covers)
 
 
 def _memory_rows(m, dut):
@@ -406,7 +439,7 @@ def _cell_address(tile, x, y):
     return Cat(x[2:], y) if tile.x_bits > 2 else y
 
 
-def _memory_state(m, tile, dut, rows, s):
+def _memory_state(m, tile, dut, rows, s, covers):
     """Invariants of the accumulator's state (what makes the groups inductive): the read-
     modify-write stages agree with the banks, the output register's cell was cleared, and the
     tracked cell's shadow is the bank's row plus stage B's delta for it plus the output's sum
@@ -418,27 +451,27 @@ def _memory_state(m, tile, dut, rows, s):
     t_bank, t_addr = bank_of(s.X, s.Y), _cell_address(tile, s.X, s.Y)
     checks = [
         (obs.in_acc | obs.in_wait | dut.scanning, "state: a known state"),
-        (_implies(pending, o["sel"] == o_bank), "state: output bank"),
-        (_implies(pending, _row(rows, o_bank, o_addr) == 0), "state: output cell cleared"),
+        (_When(pending, o["sel"] == o_bank), "state: output bank"),
+        (_When(pending, _row(rows, o_bank, o_addr) == 0), "state: output cell cleared"),
     ]
     stage_b = 0
     for b, st in enumerate(obs.stages):
         forwarded = st.c_valid & (st.c_addr == st.b_addr)
         checks += [
-            (_implies(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
-            (_implies(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty"),
-            (_implies(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
+            (_When(st.b_valid, obs.in_acc), f"state: stage B outside ACC (bank {b})"),
+            (_When(~st.b_valid, st.b_delta == 0), f"state: stage B's delta when empty (bank {b})"),
+            (_When(st.c_valid, ~dut.scanning), f"state: stage C in SCAN (bank {b})"),
             (
-                _implies(st.c_valid, rows[b][0] if False else _row(rows, b, st.c_addr) == st.c_sum),
-                "state: stage C written",
+                _When(st.c_valid, _row(rows, b, st.c_addr) == st.c_sum),
+                f"state: stage C written (bank {b})",
             ),
             (
-                _implies(st.b_valid & ~forwarded, obs.reads[b].data == _row(rows, b, st.b_addr)),
-                "state: stage B read",
+                _When(st.b_valid & ~forwarded, obs.reads[b].data == _row(rows, b, st.b_addr)),
+                f"state: stage B read (bank {b})",
             ),
             (
-                _implies(pending & st.b_valid & (o_bank == b), st.b_addr != o_addr),
-                "state: stage B on the output cell",
+                _When(pending, ~st.b_valid),  # a beat is taken only as the output advances
+                f"state: stage B empty while a cell waits (bank {b})",
             ),
         ]
         mine = st.b_valid & (t_bank == b) & (st.b_addr == t_addr)
@@ -446,8 +479,7 @@ def _memory_state(m, tile, dut, rows, s):
     waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
     total = _row(rows, t_bank, t_addr) + stage_b + Mux(waiting, out.sum, 0)
     checks.append((s.shadow == total[: len(s.shadow)], "state: shadow"))
-    for condition, message in checks:
-        m.d.comb += Assert(condition, message)
+    _state_checks(m, checks, covers, prefix="")
 
 
 def _follows(tile, x, y, last_x, last_y):
@@ -457,7 +489,7 @@ def _follows(tile, x, y, last_x, last_y):
     )
 
 
-def _scan_state(m, tile, dut, s):
+def _scan_state(m, tile, dut, s, covers):
     """Invariants of the accumulator's control against the ``deltas`` ghost: the touched rows
     are the ghost's while the accumulator takes ops; after an end, the tracked cell is owed
     exactly while its row is still to scan, or it is ahead of the scan in the current row, or
@@ -474,39 +506,38 @@ def _scan_state(m, tile, dut, s):
     waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
     above = _all(~touched[r] | (scan_y < r) for r in range(tile.height))
     checks = [
-        (_implies(obs.in_acc, (row_left == s.row) & (s.any == (touched != 0))), "acc rows"),
-        (_implies(~obs.in_acc, ~s.row & ~s.any), "no beat after an end"),
-        (_implies(obs.in_acc, s.owed == waiting), "owed in ACC"),
-        (_implies(obs.in_acc & ~pending, ~s.first), "first in ACC"),
-        (_implies(obs.in_acc & pending, touched == 0), "no beat while the last cell waits"),
-        (_implies(obs.in_wait, ~obs.o_valid & obs.first), "WAIT output"),
-        (_implies(obs.in_wait, (s.owed == row_left) & (s.first == (touched != 0))), "WAIT"),
-        (_implies(scan, s.owed == (row_left | ahead | waiting)), "owed in SCAN"),
-        (_implies(scan, above), "rows above the scan"),
-        (_implies(scan & obs.first, ~obs.o_valid & s.first & (scan_x == 0)), "SCAN start"),
-        (_implies(scan & ~obs.first, pending), "SCAN output"),
+        (_When(obs.in_acc, (row_left == s.row) & (s.any == (touched != 0))), "acc rows"),
+        (_When(~obs.in_acc, ~s.row & ~s.any), "no beat after an end"),
+        (_When(obs.in_acc, s.owed == waiting), "owed in ACC"),
+        (_When(obs.in_acc & ~pending, ~s.first), "first in ACC"),
+        (_When(obs.in_acc & pending, touched == 0), "no beat while the last cell waits"),
+        (_When(obs.in_wait, ~obs.o_valid & obs.first), "WAIT output"),
+        (_When(obs.in_wait, (s.owed == row_left) & (s.first == (touched != 0))), "WAIT"),
+        (_When(scan, s.owed == (row_left | ahead | waiting)), "owed in SCAN"),
+        (_When(scan, above), "rows above the scan"),
+        (_When(scan & obs.first, ~obs.o_valid & s.first & (scan_x == 0)), "SCAN start"),
+        (_When(scan & ~obs.first, pending), "SCAN output"),
         (
-            _implies(scan & pending, _follows(tile, scan_x, scan_y, o["x"], o["y"])),
+            _When(scan & pending, _follows(tile, scan_x, scan_y, o["x"], o["y"])),
             "scan after the output",
         ),
-        (_implies(pending, o["first"] == s.first), "output first"),
-        (_implies(pending & o["first"], o["x"] == 0), "output first in column 0"),
+        (_When(pending, o["first"] == s.first), "output first"),
+        (_When(pending & o["first"], o["x"] == 0), "output first in column 0"),
         (
-            _implies(pending & ~o["first"], _follows(tile, o["x"], o["y"], *s.last)),
+            _When(pending & ~o["first"], _follows(tile, o["x"], o["y"], *s.last)),
             "output after the last sent",
         ),
         (_all(obs.params[n] == r for n, r in s.params.items()), "polygon fields"),
-        (_implies(obs.o_valid, o["op"] < len(RESOLVE_OPS)), "output op"),
+        (_When(obs.o_valid, o["op"] < len(RESOLVE_OPS)), "output op"),
         (s.passing == passing, "tile or flush waiting"),
-        (_implies(passing, o["op"] == s.code), "tile or flush code"),
+        (_When(passing, o["op"] == s.code), "tile or flush code"),
         (
-            _implies(passing & (o["op"] == CELL_OP["tile"]), obs.background == s.background),
+            _When(passing & (o["op"] == CELL_OP["tile"]), obs.background == s.background),
             "tile background",
         ),
         (obs.in_acc | obs.in_wait | scan, "a known state"),
     ]
-    for condition, message in checks:
-        m.d.comb += Assert(condition, f"state: {message}")
+    _state_checks(m, checks, covers)
 
 
 def _accumulator_outputs(m, tile, s, out, sent, tracked):
@@ -638,7 +669,7 @@ def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
     return g
 
 
-def _resolve_invariants(m, tile, dut, pixel_rows, g):
+def _resolve_invariants(m, tile, dut, pixel_rows, g, covers):
     """Invariants of the resolve's state against the ``pixels`` ghost (what makes the group
     inductive, with k above the pipeline's latency: a cell in flight is written within it)."""
     obs = dut.observe
@@ -671,42 +702,39 @@ def _resolve_invariants(m, tile, dut, pixel_rows, g):
         (g.background == obs.background, "background"),
         (obs.acc[:n] == g.prev[:n], "row prefix sum"),
         (g.flushing == (flush | obs.p_valid), "flushing"),
-        (_implies(flush | obs.p_valid | g.need_first, ~busy), "nothing in flight"),
-        (_implies(flush | obs.p_valid, g.need_first), "no cell since the flush"),
+        (_When(flush | obs.p_valid | g.need_first, ~busy), "nothing in flight"),
+        (_When(flush | obs.p_valid, g.need_first), "no cell since the flush"),
         (g.row_open == (~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
         (
-            _implies(
-                obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))
-            ),
+            _When(obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))),
             "output position",
         ),
-        (_implies(obs.p_valid, p.last == ~flush), "the last pixel waits after the flush"),
+        (_When(obs.p_valid, p.last == ~flush), "the last pixel waits after the flush"),
         (
-            _implies(flush, Cat(obs.fx, obs.fy) == (count + obs.p_valid)[: len(count)]),
+            _When(flush, Cat(obs.fx, obs.fy) == (count + obs.p_valid)[: len(count)]),
             "flush position",
         ),
         (
-            _implies(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == shown),
+            _When(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == shown),
             "frame not yet read",
         ),
         (
-            _implies(obs.p_valid & (Cat(p.x, p.y) == tracked), g.pixels.payload.value == g.frame),
+            _When(obs.p_valid & (Cat(p.x, p.y) == tracked), g.pixels.payload.value == g.frame),
             "frame waiting",
         ),
-        (_implies(flush, g.value == g.background), "value in a flush"),
+        (_When(flush, g.value == g.background), "value in a flush"),
         (
-            _implies(~flush & ~in_flight(tracked), g.value == Mux(done, pixel(tracked), shown)),
+            _When(~flush & ~in_flight(tracked), g.value == Mux(done, pixel(tracked), shown)),
             "value",
         ),
     ]
     for i, st in enumerate(stages):
         position = Cat(st.x, st.y)
-        checks.append((_implies(st.valid, position <= last_pos), f"stage {i} taken"))
+        checks.append((_When(st.valid, position <= last_pos), f"stage {i} taken"))
         for older in stages[i + 1 :]:
             both = st.valid & older.valid
-            checks.append((_implies(both, Cat(older.x, older.y) < position), f"stage {i} order"))
-    for condition, message in checks:
-        m.d.comb += Assert(condition, f"state: {message}")
+            checks.append((_When(both, Cat(older.x, older.y) < position), f"stage {i} order"))
+    _state_checks(m, checks, covers)
 
 
 # -- running ---------------------------------------------------------------------------------
@@ -784,6 +812,22 @@ TILE_PROOFS: dict[str, TileProof] = {
             "documented range (no overflow; k-induction with the pipeline's and the pixel "
             "memory's invariants)",
         ),
+        *(
+            TileProof(
+                f"{name}_cover",
+                stage,
+                (check,),
+                "cover",
+                depth,
+                description=f"each invariant of {name} (an implication) has its premise reached "
+                "with its conclusion (not vacuous; cover from power-on)",
+            )
+            for name, stage, check, depth in (
+                ("acc_deltas", "accumulator", "deltas", 16),
+                ("acc_sums", "accumulator", "sums", 16),
+                ("res_pixels", "resolve", "pixels", 14),
+            )
+        ),
     )
 }
 
@@ -813,7 +857,8 @@ def run_tile_proof(
 ) -> FormalResult:
     """Build the harness of `proof` (a `TILE_PROOFS` name or a `TileProof`), run sby, return
     the result (`edgeaa.sim.verification.formal.run.run_proof`'s, for the tile stages).
-    ``invariants``: `TileHarness`'s (off: the groups' own assertions only)."""
+    ``invariants``: `TileHarness`'s (off: the groups' own assertions only); in ``cover`` mode
+    the harness covers each invariant's premise (`TileHarness` ``covers``)."""
     proof = _lookup(proof)
     mode, depth = mode or proof.mode, proof.depth if depth is None else depth
     tools = find_tools(solver)
@@ -824,6 +869,7 @@ def run_tile_proof(
         reset=proof.reset,
         fault=fault,
         invariants=invariants,
+        covers=mode == "cover",
     )
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
@@ -854,7 +900,7 @@ def main(argv=None) -> int:
     parser.add_argument("proofs", nargs="*", default=list(TILE_PROOFS))
     parser.add_argument("--fault", choices=tuple(TILE_FAULTS))
     parser.add_argument("--depth", type=int)
-    parser.add_argument("--mode", choices=("prove", "bmc"))
+    parser.add_argument("--mode", choices=("prove", "bmc", "cover"))
     parser.add_argument("--workdir", help="keep the runs in WORKDIR/<proof>")
     parser.add_argument("--timeout", type=float)
     parser.add_argument(
