@@ -30,6 +30,8 @@ output register, in order. Latency: a cell read in clock s is offered in s + 1.
 
 from __future__ import annotations
 
+import types
+
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
 from amaranth.lib import memory, stream, wiring
 from amaranth.lib.wiring import In, Out
@@ -92,11 +94,14 @@ class TileAccumulator(wiring.Component):
         m = Module()
         tile = self._tile
         depth = tile.pixels // BANKS
-        ports = []
+        ports, banks = [], []
+        self.observe = types.SimpleNamespace(banks=banks, stages=[])
         for b in range(BANKS):
             mem = memory.Memory(shape=signed(tile.cell_bits), depth=depth, init=[])
             m.submodules[f"bank{b}"] = mem
+            banks.append(mem)
             ports.append((mem.read_port(), mem.write_port()))
+        self.observe.reads = [rd for rd, _ in ports]
         o_valid = Signal()
         advance = ~o_valid | self.cells.ready
         accept = self.ops.valid & self.ops.ready
@@ -113,6 +118,7 @@ class TileAccumulator(wiring.Component):
         x0, y0 = Signal.like(p.x0), Signal.like(p.y0)  # the origin, set by a tile op
         with m.If(accept & (p.op == OP["tile"])):
             m.d.sync += [x0.eq(p.x0), y0.eq(p.y0)]
+        self.observe.origin = (x0, y0)
         raw = []
         for j in range(4):
             cell = p.beat[f"cell{j}"]
@@ -155,6 +161,16 @@ class TileAccumulator(wiring.Component):
             b_valid, b_addr, b_delta = Signal(), Signal(addr_bits), Signal.like(delta)
             c_valid, c_addr, c_sum = Signal(), Signal(addr_bits), Signal.like(delta)
             total = Signal.like(delta)
+            self.observe.stages.append(
+                types.SimpleNamespace(
+                    b_valid=b_valid,
+                    b_addr=b_addr,
+                    b_delta=b_delta,
+                    c_valid=c_valid,
+                    c_addr=c_addr,
+                    c_sum=c_sum,
+                )
+            )
             m.d.comb += rd.addr.eq(Mux(self.scanning, self._scan_addr, addr))
             m.d.comb += rd.en.eq(self._read_en)
             m.d.sync += [
@@ -191,7 +207,7 @@ class TileAccumulator(wiring.Component):
             m.d.sync += o_valid.eq(0)
         with m.If(accept & (p.op == OP["beat"])):
             m.d.sync += touched.eq(touched | self._touched_set)
-        with m.FSM():
+        with m.FSM() as fsm:
             with m.State("ACC"):
                 m.d.comb += self.ops.ready.eq(advance)
                 with m.If(accept):
@@ -227,6 +243,19 @@ class TileAccumulator(wiring.Component):
                         m.d.sync += [scan_y.eq(next_y), touched.eq(touched & ~next_bit)]
                         with m.If(touched == 0):
                             m.next = "ACC"
+            in_acc, in_wait = fsm.ongoing("ACC"), fsm.ongoing("WAIT")
+        self.observe.__dict__.update(
+            o_valid=o_valid,
+            o=o,
+            in_acc=in_acc,
+            in_wait=in_wait,
+            scan_x=scan_x,
+            scan_y=scan_y,
+            touched=touched,
+            first=first,
+            params=params,
+            background=background,
+        )
         self._output(m, ports, o, params, background)
 
     def _take(self, m, p, o, o_valid, params, background, first):

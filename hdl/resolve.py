@@ -22,6 +22,13 @@ first). A flush reads the pixel memory row by row, one pixel per clock while the
 stream advances (the read port's enable is the advance, so a stalled pixel stays in the
 memory's output register), then forgets every written row: the tile is the background again.
 Its first pixel is offered two clocks after the flush is taken.
+
+Observation points for the formal harness (``observe``, a namespace set when the resolve is
+elaborated; no logic of their own): ``memory`` the pixel `Memory`, ``read`` its read port,
+``stages`` the pipeline's stages (s1 first; namespaces of registers, each with ``valid``,
+``x`` and ``y``), ``acc`` the row's prefix sum, ``written``, ``background``, ``p_valid``
+and ``p`` the output register (``x``, ``y``, ``last``, ``written``), ``fx`` and ``fy`` the
+flush position (FLUSH is ``flushing``).
 """
 
 from __future__ import annotations
@@ -72,6 +79,7 @@ class TileResolve(wiring.Component):
             shape=unsigned(tile.config.intensity_bits), depth=tile.pixels, init=[]
         )
         rd, wr = mem.read_port(), mem.write_port()
+        self.observe = types.SimpleNamespace(memory=mem, read=rd)
         written = Signal(tile.height)  # rows written since the tile started
         background = Signal(tile.config.intensity_bits)
         p_valid = Signal()
@@ -79,6 +87,9 @@ class TileResolve(wiring.Component):
         m.d.comb += rd.en.eq(advance)
         stages = self._pipeline(m, rd, wr, written, background)
         busy = sum((s.valid for s in stages), start=0) != 0
+        self.observe.__dict__.update(
+            stages=stages, written=written, background=background, p_valid=p_valid
+        )
         self._control(m, rd, written, background, p_valid, advance, busy)
         return m
 
@@ -104,6 +115,7 @@ class TileResolve(wiring.Component):
         )
         with m.If(take):
             m.d.sync += acc.eq(total)
+        self.observe.acc = acc
         d = Signal(bits, name="d")
         m.d.comb += d.eq(
             Mux(s1.intensity >= s1.i_out, s1.intensity - s1.i_out, s1.i_out - s1.intensity)
@@ -189,6 +201,8 @@ class TileResolve(wiring.Component):
         fx, fy = Signal(tile.x_bits), Signal(tile.y_bits)
         px, py, plast, pwritten = (Signal.like(out.x), Signal.like(out.y), Signal(), Signal())
         gate = (c.op != OP["cell"]) | c.first  # waits for no cell in flight
+        self.observe.p = types.SimpleNamespace(x=px, y=py, last=plast, written=pwritten)
+        self.observe.fx, self.observe.fy = fx, fy
         take = self.cells.valid & self.cells.ready
         with m.If(self._row_done):
             m.d.sync += written.eq(

@@ -1,7 +1,10 @@
 # amaranth: UnusedElaboratable=no
 """Formal checks of the tile stages (`edgeaa.hdl.accumulator.TileAccumulator`,
-`edgeaa.hdl.resolve.TileResolve`) with SymbiYosys, black-box: the harness reads only the
-stages' ports.
+`edgeaa.hdl.resolve.TileResolve`) with SymbiYosys. The ``stream`` and ``pixels`` groups
+are black-box (only the stages' ports); the accumulator's ``deltas`` and ``sums`` groups
+also state invariants of its internals (its observation points, ``TileAccumulator.observe``,
+and its bank memories read through combinational read ports the harness adds), which make
+them inductive.
 
 `TileHarness` wraps one stage of a `TileConfig`. Its input stream is free in every clock
 (``AnySeq``) except for the hold rule, which is assumed of the source (a valid transfer not
@@ -23,11 +26,9 @@ taken stays valid with the same payload); the output's ready is free. Check grou
 ``accumulator`` ``sums``
     The shadow of cell (X, Y): the exact sum of every delta of an accepted beat placed there
     (several cells of one beat merged, back-to-back beats through the read-modify-write
-    forwarding) since (X, Y) was last sent. Asserted: each (X, Y) sent carries the shadow
-    modulo ``2**SUM_BITS``, and the shadow restarts from 0 (the clear). The low bits of a
-    sum depend only on the low bits of the deltas, so a delta lost, doubled or misplaced
-    shows (the deltas are free); the full width is beyond the bounded check (it does not
-    finish) and is simulated (`tests/test_tile_hw.py`).
+    forwarding) since (X, Y) was last sent, modulo ``2**cell_bits`` (a cell's width).
+    Asserted: each (X, Y) sent carries the shadow, all ``cell_bits`` bits, and the shadow
+    restarts from 0 (the clear).
 ``resolve`` ``stream``
     The ``pixels`` hold rule (as ``accumulator`` ``stream``).
 ``resolve`` ``pixels``
@@ -48,13 +49,45 @@ taken stays valid with the same payload); the output's ready is free. Check grou
 Faults (``fault``; each must make its proof fail): ``stall_cell`` / ``stall_pixel`` flip a
 payload bit of a held output as the harness sees it; ``lost_delta`` gives the accumulator
 the beat with cell 3's delta zeroed while the shadow counts it (a stage that loses a
-delta); ``wide_range`` assumes the prefix sums within ``[-2 L, 2 L)``, twice the documented
-range.
+delta); ``stale_origin`` gives it every op with x0 zeroed (a stage that ignores a tile's x
+origin: cells land in the wrong columns); ``wide_range`` assumes the prefix sums within
+``[-2 L, 2 L)``, twice the documented range; ``lost_first`` gives the resolve every cell
+with ``first`` cleared (a stage that takes a polygon's first cell while the previous
+polygon's cells are in flight, so its pixel read may miss their writes).
 
-The ``deltas``, ``sums`` and ``pixels`` groups run from power-on (the memories and registers
-at their initial values, no reset: a reset does not clear the accumulation memory) as
-bounded model checks; ``stream`` is proved by k-induction for every reachable state. `TILE_PROOFS`
-lists the runs and their configurations; `run_tile_proof` runs one (``python -m
+Invariants (``invariants``, on by default; each an assertion, so the proofs show they hold
+in every reachable state). ``sums`` (`_memory_state`): the bank's row of (X, Y) plus stage
+B's delta for its address plus the output's sum while (X, Y) waits in the output register
+equals the shadow; stage C's sum is in its bank (written the clock before), stage B's read
+is its bank's row unless stage C wrote that row the clock before (then B takes C's sum: the
+forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register is
+cleared in its bank (its ``sel`` its bank) and stage B is then empty, stage B's delta is
+zero when it is empty (a clear adds it). ``deltas`` (`_scan_state`): in ACC the touched
+rows are the ghost's, in WAIT and SCAN the ghost saw no beat; (X, Y) is owed exactly while
+it waits in the output register (ACC), its row is touched (WAIT), or its row is still to
+scan, it is ahead of the scan in the current row or it waits (SCAN); the rows left to scan
+are above the scan row; SCAN's first read has not happened exactly while the ``first``
+register is set (then nothing is in the output register and the scan is in column 0), else
+a cell waits there, and the scan position follows it; the waiting cell's ``first`` is the
+ghost's and follows the last cell sent; the end's fields are the ghost's; a tile or flush
+op waits exactly when the ghost's does, with its code and background. Both: the origin is
+the ghost's. Each follows from all of them in the clock before (both groups pass at k = 1;
+`TILE_PROOFS` runs k = 2, which is faster). ``pixels`` (`_resolve_invariants`): (X, Y)
+not in flight holds the shadow: its pixel memory row if its row was written since the tile
+started or in the row's current pass ((X, Y) taken while the row is open, or the row's end
+in flight), else the background; in a flush the frame equals that until (X, Y) is read and
+the waiting pixel (X, Y) equals the frame, the shadow being the background; the row's
+prefix sum register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells in
+taken order, none after the last taken and none in a flush, with a pixel waiting or before a
+polygon's first cell; the flush and output positions and ``last`` follow the pixel count; the
+background is the shadow's. A cell in flight has no invariant of its own: with k above the
+resolve's latency every cell the induction step sees written was taken within the k clocks
+it assumes, from a state where the invariants held.
+
+All groups are proved by k-induction for every reachable state (``deltas``, ``sums`` and
+``pixels`` from power-on, the memories and registers at their initial values, no reset: a
+reset does not clear the accumulation memory). `TILE_PROOFS` lists the runs and their
+configurations; `run_tile_proof` runs one (``python -m
 edgeaa.sim.verification.formal.tile [proof ...]``).
 """
 
@@ -68,8 +101,10 @@ from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import (
     Assert,
     Assume,
+    Cat,
     ClockDomain,
     Const,
+    Cover,
     Elaboratable,
     Module,
     Mux,
@@ -78,12 +113,12 @@ from amaranth.hdl import (
     signed,
 )
 
-from ....hdl.accumulator import TileAccumulator
+from ....hdl.accumulator import TileAccumulator, bank_of
 from ....hdl.resolve import TileResolve
 from ....model.accumulate import composite, intensity_offset
 from ....model.beat import CELLS
 from ....model.config import EdgeConfig
-from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig
+from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig, resolve_latency
 from .run import FormalResult, find_tools, harness_rtlil, run_harness, sby_script
 
 __all__ = [
@@ -101,13 +136,12 @@ TILE_CHECKS = {"accumulator": ("stream", "deltas", "sums"), "resolve": ("stream"
 TILE_FAULTS = {
     "stall_cell": "accumulator",
     "lost_delta": "accumulator",
+    "stale_origin": "accumulator",
     "stall_pixel": "resolve",
     "wide_range": "resolve",
+    "lost_first": "resolve",
 }
 OP = {name: code for code, name in enumerate(OPS)}
-# ``sums`` compares the low SUM_BITS bits of a cell's sum (the full width is beyond the
-# bounded check's reach: see the module docstring).
-SUM_BITS = 4
 CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
 
 # The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels (one
@@ -134,13 +168,49 @@ def _implies(a, b):
     return ~a | b
 
 
+@dataclass(frozen=True)
+class _When:
+    """An invariant ``premise -> conclusion`` (`_state_checks`)."""
+
+    premise: Value
+    conclusion: Value
+
+
+def _state_checks(m, checks, covers, prefix="state: "):
+    """Assert each invariant of `checks` ((condition or `_When`, message)); with `covers`, also
+    cover each `_When`'s premise together with its conclusion (the premise is reachable, so
+    the invariant is not vacuous)."""
+    for condition, message in checks:
+        if isinstance(condition, _When):
+            m.d.comb += Assert(_implies(condition.premise, condition.conclusion), prefix + message)
+            if covers:
+                reached = condition.premise & condition.conclusion
+                m.d.comb += Cover(reached, "cover: " + (prefix + message)[len("state: ") :])
+        else:
+            m.d.comb += Assert(condition, prefix + message)
+
+
 class TileHarness(Elaboratable):
     """One tile stage (``"accumulator"`` or ``"resolve"``) with a free input stream and the
     check groups of `TILE_CHECKS` (the module docstring). ``reset``: the reset is a free
     input (else the registers and memories start at their initial values and never reset).
+    ``invariants``: with the ``deltas`` or ``sums`` group, also assert the invariants of the
+    accumulator's state that make the group inductive (off: the group's own assertions only,
+    to show that they catch a fault by themselves). ``covers``: also cover each invariant's
+    premise with its conclusion (for sby's cover mode: no invariant is vacuous).
     """
 
-    def __init__(self, tile: TileConfig, stage: str, checks, *, reset=False, fault=None):
+    def __init__(
+        self,
+        tile: TileConfig,
+        stage: str,
+        checks,
+        *,
+        reset=False,
+        fault=None,
+        invariants=True,
+        covers=False,
+    ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
         if stage not in TILE_CHECKS:
@@ -153,7 +223,8 @@ class TileHarness(Elaboratable):
             faults = [f for f, s in TILE_FAULTS.items() if s == stage]
             raise ValueError(f"fault must be one of {', '.join(faults)} or None, not {fault!r}")
         self.tile, self.stage, self.checks = tile, stage, checks
-        self.reset, self.fault = reset, fault
+        self.reset, self.fault, self.invariants = reset, fault, invariants
+        self.covers = covers and invariants
         self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile)
         # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
         self.domain = ClockDomain("sync", reset_less=not reset)
@@ -164,7 +235,17 @@ class TileHarness(Elaboratable):
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.dut = dut = self.dut
+        dut = self.dut
+        groups = {"deltas", "sums"} & set(self.checks)
+        rows = None
+        if self.invariants and (groups or "pixels" in self.checks):
+            # elaborated here: the invariants read its observation points, and the harness
+            # adds read ports to its memories
+            m.submodules.dut = dut.elaborate(platform)
+            if {"sums", "pixels"} & set(self.checks):
+                rows = _memory_rows(m, dut)
+        else:
+            m.submodules.dut = dut
         m.domains.sync = self.domain
         if self.reset:
             m.d.comb += self.domain.rst.eq(AnySeq(1))
@@ -178,10 +259,15 @@ class TileHarness(Elaboratable):
             seen = seen ^ held
         if "stream" in self.checks:
             _hold_rule(m, sink, seen, held)
-        if {"deltas", "sums"} & set(self.checks):
-            _accumulator_deltas(m, self.tile, source, payload, sink, self.checks, SUM_BITS)
+        if groups:
+            s = _accumulator_deltas(m, self.tile, source, payload, sink, self.checks)
+            if self.invariants:
+                _accumulator_invariants(m, self.tile, dut, rows, s, self.checks, self.covers)
         if "pixels" in self.checks:
-            _resolve_pixels(m, self.tile, source, sink, wide=self.fault == "wide_range")
+            wide = self.fault == "wide_range"
+            g = _resolve_pixels(m, self.tile, source, payload, sink, wide=wide)
+            if self.invariants:
+                _resolve_invariants(m, self.tile, dut, rows[0], g, self.covers)
         return m
 
 
@@ -197,7 +283,8 @@ def _held(m, stream, name):
 
 def _free_source(m, stream, fault):
     """Drive `stream` from a free source that keeps the hold rule; returns the source's
-    payload (a view). Fault ``lost_delta``: the stage gets cell 3's delta zeroed."""
+    payload (a view). Faults ``lost_delta``, ``stale_origin``, ``lost_first``: the stage gets
+    cell 3's delta, x0 or ``first`` zeroed."""
     layout = stream.payload.shape()
     free = Signal(layout, name="source")
     m.d.comb += [stream.valid.eq(AnySeq(1)), Value.cast(free).eq(AnySeq(layout.size))]
@@ -205,6 +292,10 @@ def _free_source(m, stream, fault):
     m.d.comb += given.eq(free)
     if fault == "lost_delta":
         m.d.comb += given.beat.cell3.delta.eq(0)
+    if fault == "stale_origin":
+        m.d.comb += given.x0.eq(0)
+    if fault == "lost_first":
+        m.d.comb += given.first.eq(0)
     m.d.comb += stream.payload.eq(given)
     held, prev = _held(m, stream, "held_in"), Signal(layout.size)
     m.d.sync += prev.eq(free.as_value())
@@ -251,13 +342,13 @@ def _placed(tile, beat, origin):
     return out
 
 
-def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
+def _accumulator_deltas(m, tile, ops, src, cells, checks):
     """The ``deltas`` group (module docstring); `src` is the source's payload."""
     s = types.SimpleNamespace(
         X=Signal(tile.x_bits, name="track_x"),
         Y=Signal(tile.y_bits, name="track_y"),
         origin=[Signal.like(src.x0, name="origin_x"), Signal.like(src.y0, name="origin_y")],
-        shadow=Signal(signed(tile.cell_bits + 8), name="shadow"),
+        shadow=Signal(tile.cell_bits, name="shadow"),  # modulo 2**cell_bits, as a cell
         row=Signal(name="row_touched"),
         any=Signal(name="any_touched"),
         owed=Signal(name="owed"),
@@ -269,6 +360,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
         last=[Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")],
     )
     m.d.comb += [s.X.eq(AnyConst(tile.x_bits)), s.Y.eq(AnyConst(tile.y_bits))]
+    s.cells = cells
     take = ops.valid & ops.ready
     is_op = {name: take & (src.op == code) for name, code in OP.items()}
     with m.If(ops.valid & (src.op == OP["beat"])):
@@ -278,7 +370,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
     out, sent = cells.payload, cells.valid & cells.ready
     tracked = sent & (out.op == CELL_OP["cell"]) & (out.x == s.X) & (out.y == s.Y)
     base = Mux(tracked, 0, s.shadow)
-    m.d.sync += s.shadow.eq(base + Mux(is_op["beat"], hits, 0))
+    m.d.sync += s.shadow.eq((base + Mux(is_op["beat"], hits, 0))[: tile.cell_bits])
     with m.If(is_op["beat"]):
         m.d.sync += [
             s.row.eq(s.row | _any(k & (y == s.Y) for k, _, y, _ in placed)),
@@ -293,7 +385,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
     if "deltas" in checks:
         m.d.comb += Assert(condition, "deltas: op taken before a cell")
     if "sums" in checks:
-        same = out.sum[:sum_bits] == s.shadow[:sum_bits]
+        same = out.sum[: tile.cell_bits] == s.shadow
         m.d.comb += Assert(_implies(tracked, same), "sums: cell sum")
     if "deltas" in checks:
         _accumulator_outputs(m, tile, s, out, sent, tracked)
@@ -306,14 +398,152 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks, sum_bits):
     with m.If(passing):
         code = Mux(src.op == OP["tile"], CELL_OP["tile"], CELL_OP["flush"])
         m.d.sync += [s.passing.eq(1), s.code.eq(code), s.background.eq(src.background)]
+    return s
+
+
+def _accumulator_invariants(m, tile, dut, rows, s, checks, covers):
+    """The invariants of the groups in `checks` (`_memory_state`, `_scan_state`)."""
+    origin = zip(dut.observe.origin, s.origin, strict=True)
+    m.d.comb += Assert(_all(a == b for a, b in origin), "state: origin")
+    if "sums" in checks:
+        _memory_state(m, tile, dut, rows, s, covers)
+    if "deltas" in checks:
+        _scan_state(m, tile, dut, s, covers)
+
+
+def _memory_rows(m, dut):
+    """Per bank of the accumulator, its rows as values: a combinational read port per row
+    (the harness's; the accumulator's own ports are untouched)."""
+    rows = []
+    banks = getattr(dut.observe, "banks", None) or [dut.observe.memory]
+    for mem in banks:
+        bank = []
+        for address in range(mem.depth):
+            port = mem.read_port(domain="comb")
+            m.d.comb += port.addr.eq(address)
+            bank.append(port.data)
+        rows.append(bank)
+    return rows
+
+
+def _row(rows, bank, address):
+    """The row at `address` of bank `bank` (both values)."""
+    value = rows[0][0]
+    for b, bank_rows in enumerate(rows):
+        for a, row in enumerate(bank_rows):
+            value = Mux((bank == b) & (address == a), row, value)
+    return value
+
+
+def _cell_address(tile, x, y):
+    return Cat(x[2:], y) if tile.x_bits > 2 else y
+
+
+def _memory_state(m, tile, dut, rows, s, covers):
+    """Invariants of the accumulator's state (what makes the groups inductive): the read-
+    modify-write stages agree with the banks, the output register's cell was cleared, and the
+    tracked cell's shadow is the bank's row plus stage B's delta for it plus the output's sum
+    while the cell waits there. Each is implied by the ones before in the clock before."""
+    obs, out = dut.observe, s.cells.payload
+    o = obs.o
+    pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
+    o_bank, o_addr = bank_of(o["x"], o["y"]), _cell_address(tile, o["x"], o["y"])
+    t_bank, t_addr = bank_of(s.X, s.Y), _cell_address(tile, s.X, s.Y)
+    checks = [
+        (obs.in_acc | obs.in_wait | dut.scanning, "state: a known state"),
+        (_When(pending, o["sel"] == o_bank), "state: output bank"),
+        (_When(pending, _row(rows, o_bank, o_addr) == 0), "state: output cell cleared"),
+    ]
+    stage_b = 0
+    for b, st in enumerate(obs.stages):
+        forwarded = st.c_valid & (st.c_addr == st.b_addr)
+        checks += [
+            (_When(st.b_valid, obs.in_acc), f"state: stage B outside ACC (bank {b})"),
+            (_When(~st.b_valid, st.b_delta == 0), f"state: stage B's delta when empty (bank {b})"),
+            (_When(st.c_valid, ~dut.scanning), f"state: stage C in SCAN (bank {b})"),
+            (
+                _When(st.c_valid, _row(rows, b, st.c_addr) == st.c_sum),
+                f"state: stage C written (bank {b})",
+            ),
+            (
+                _When(st.b_valid & ~forwarded, obs.reads[b].data == _row(rows, b, st.b_addr)),
+                f"state: stage B read (bank {b})",
+            ),
+            (
+                _When(pending, ~st.b_valid),  # a beat is taken only as the output advances
+                f"state: stage B empty while a cell waits (bank {b})",
+            ),
+        ]
+        mine = st.b_valid & (t_bank == b) & (st.b_addr == t_addr)
+        stage_b = stage_b + Mux(mine, st.b_delta, 0)
+    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    total = _row(rows, t_bank, t_addr) + stage_b + Mux(waiting, out.sum, 0)
+    checks.append((s.shadow == total[: len(s.shadow)], "state: shadow"))
+    _state_checks(m, checks, covers, prefix="")
+
+
+def _follows(tile, x, y, last_x, last_y):
+    """Cell (x, y) comes right after (last_x, last_y) in a scan of whole rows."""
+    return ((x == last_x + 1) & (y == last_y)) | (
+        (last_x == tile.width - 1) & (x == 0) & (y > last_y)
+    )
+
+
+def _scan_state(m, tile, dut, s, covers):
+    """Invariants of the accumulator's control against the ``deltas`` ghost: the touched rows
+    are the ghost's while the accumulator takes ops; after an end, the tracked cell is owed
+    exactly while its row is still to scan, or it is ahead of the scan in the current row, or
+    it waits in the output register; the scan moves up through whole rows in order, the
+    output register holds the cell before the scan position, and a tile or flush op waiting
+    there is the ghost's. Each follows from all of them in the clock before."""
+    obs, o = dut.observe, dut.observe.o
+    scan = dut.scanning
+    touched, scan_x, scan_y = obs.touched, obs.scan_x, obs.scan_y
+    pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
+    passing = obs.o_valid & (o["op"] != CELL_OP["cell"])
+    row_left = touched.bit_select(s.Y, 1)
+    ahead = (scan_y == s.Y) & (scan_x <= s.X)
+    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    above = _all(~touched[r] | (scan_y < r) for r in range(tile.height))
+    checks = [
+        (_When(obs.in_acc, (row_left == s.row) & (s.any == (touched != 0))), "acc rows"),
+        (_When(~obs.in_acc, ~s.row & ~s.any), "no beat after an end"),
+        (_When(obs.in_acc, s.owed == waiting), "owed in ACC"),
+        (_When(obs.in_acc & ~pending, ~s.first), "first in ACC"),
+        (_When(obs.in_acc & pending, touched == 0), "no beat while the last cell waits"),
+        (_When(obs.in_wait, ~obs.o_valid & obs.first), "WAIT output"),
+        (_When(obs.in_wait, (s.owed == row_left) & (s.first == (touched != 0))), "WAIT"),
+        (_When(scan, s.owed == (row_left | ahead | waiting)), "owed in SCAN"),
+        (_When(scan, above), "rows above the scan"),
+        (_When(scan & obs.first, ~obs.o_valid & s.first & (scan_x == 0)), "SCAN start"),
+        (_When(scan & ~obs.first, pending), "SCAN output"),
+        (
+            _When(scan & pending, _follows(tile, scan_x, scan_y, o["x"], o["y"])),
+            "scan after the output",
+        ),
+        (_When(pending, o["first"] == s.first), "output first"),
+        (_When(pending & o["first"], o["x"] == 0), "output first in column 0"),
+        (
+            _When(pending & ~o["first"], _follows(tile, o["x"], o["y"], *s.last)),
+            "output after the last sent",
+        ),
+        (_all(obs.params[n] == r for n, r in s.params.items()), "polygon fields"),
+        (_When(obs.o_valid, o["op"] < len(RESOLVE_OPS)), "output op"),
+        (s.passing == passing, "tile or flush waiting"),
+        (_When(passing, o["op"] == s.code), "tile or flush code"),
+        (
+            _When(passing & (o["op"] == CELL_OP["tile"]), obs.background == s.background),
+            "tile background",
+        ),
+        (obs.in_acc | obs.in_wait | scan, "a known state"),
+    ]
+    _state_checks(m, checks, covers)
 
 
 def _accumulator_outputs(m, tile, s, out, sent, tracked):
     """What each output transfer must be (the ``deltas`` group's output side)."""
     is_cell = sent & (out.op == CELL_OP["cell"])
-    follows = ((out.x == s.last[0] + 1) & (out.y == s.last[1])) | (
-        (s.last[0] == tile.width - 1) & (out.x == 0) & (out.y > s.last[1])
-    )
+    follows = _follows(tile, out.x, out.y, *s.last)
     checks = [
         (_implies(tracked, s.owed), "deltas: a cell sent twice or not after an end"),
         (_implies(is_cell, out.first == s.first), "deltas: first flag"),
@@ -348,10 +578,12 @@ def model_fill(exact, evenodd, ifix):
     return Mux(evenodd, odd, nonzero)
 
 
-def _resolve_source(m, tile, cells, wide):
-    """Assumptions on the resolve's input (what the accumulator is proved to send) and the
-    exact prefix sums; returns (exact prefix of the cell taken now, d, taken cell)."""
-    c = cells.payload
+def _resolve_source(m, tile, cells, src, wide):
+    """Assumptions on the resolve's input (what the accumulator is proved to send; `src`, the
+    source's payload) and the exact prefix sums; returns (the ghost of the input: ``exact``
+    the exact prefix of the cell taken now, ``prev`` the last one, ``last``, ``row_open``,
+    ``need_first``; d; a cell taken)."""
+    c = src
     take = cells.valid & cells.ready
     is_cell = c.op == CELL_OP["cell"]
     last = [Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")]
@@ -388,13 +620,17 @@ def _resolve_source(m, tile, cells, wide):
         m.d.comb += Assume(in_range & (c.sum[:n] == residue), "source: exact sums")
     with m.If(take & is_cell):
         m.d.sync += prev.eq(exact)
-    return exact, d, take & is_cell
+    ghost = types.SimpleNamespace(
+        last=last, row_open=row_open, need_first=need_first, prev=prev, exact=exact
+    )
+    return ghost, d, take & is_cell
 
 
-def _resolve_pixels(m, tile, cells, pixels, *, wide):
-    """The ``pixels`` group (module docstring)."""
-    config, c = tile.config, cells.payload
-    exact, d, took = _resolve_source(m, tile, cells, wide)
+def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
+    """The ``pixels`` group (module docstring); `src` is the source's payload."""
+    config, c = tile.config, src
+    g, d, took = _resolve_source(m, tile, cells, src, wide)
+    exact = g.exact
     X, Y = Signal(tile.x_bits, name="track_x"), Signal(tile.y_bits, name="track_y")
     m.d.comb += [X.eq(AnyConst(tile.x_bits)), Y.eq(AnyConst(tile.y_bits))]
     bits = config.intensity_bits
@@ -426,6 +662,79 @@ def _resolve_pixels(m, tile, cells, pixels, *, wide):
     # after the pixel: a flush may be taken in the clock its predecessor's last pixel goes
     with m.If(take & (c.op == CELL_OP["flush"])):
         m.d.sync += [frame.eq(value), value.eq(background), flushing.eq(1), count.eq(0)]
+    g.__dict__.update(
+        X=X, Y=Y, value=value, frame=frame, background=background, flushing=flushing, count=count
+    )
+    g.pixels = pixels
+    return g
+
+
+def _resolve_invariants(m, tile, dut, pixel_rows, g, covers):
+    """Invariants of the resolve's state against the ``pixels`` ghost (what makes the group
+    inductive, with k above the pipeline's latency: a cell in flight is written within it)."""
+    obs = dut.observe
+    stages, written = obs.stages, obs.written
+    busy = _any(st.valid for st in stages)
+    flush = dut.flushing
+    last_pos = Cat(*g.last)
+    tracked = Cat(g.X, g.Y)
+
+    def in_flight(position):
+        return _any(st.valid & (Cat(st.x, st.y) == position) for st in stages)
+
+    def pixel(position):
+        value = pixel_rows[0]
+        for address, row in enumerate(pixel_rows):
+            value = Mux(position == address, row, value)
+        return value
+
+    written_y = written.bit_select(g.Y, 1)
+    shown = Mux(written_y, pixel(tracked), obs.background)  # what a read of (X, Y) gives
+    row_end = Cat(Const(tile.width - 1, tile.x_bits), g.Y)
+    # written in this pass of its row, the row not yet marked written: the row's end is in
+    # flight, or the row is still open and (X, Y) was taken
+    row_open = (g.last[1] == g.Y) & g.row_open & ~g.need_first
+    done = in_flight(row_end) | (row_open & (g.last[0] >= g.X))
+    n = tile.cell_bits
+    count = g.count
+    p = obs.p
+    checks = [
+        (g.background == obs.background, "background"),
+        (obs.acc[:n] == g.prev[:n], "row prefix sum"),
+        (g.flushing == (flush | obs.p_valid), "flushing"),
+        (_When(flush | obs.p_valid | g.need_first, ~busy), "nothing in flight"),
+        (_When(flush | obs.p_valid, g.need_first), "no cell since the flush"),
+        (g.row_open == (~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
+        (
+            _When(obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))),
+            "output position",
+        ),
+        (_When(obs.p_valid, p.last == ~flush), "the last pixel waits after the flush"),
+        (
+            _When(flush, Cat(obs.fx, obs.fy) == (count + obs.p_valid)[: len(count)]),
+            "flush position",
+        ),
+        (
+            _When(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == shown),
+            "frame not yet read",
+        ),
+        (
+            _When(obs.p_valid & (Cat(p.x, p.y) == tracked), g.pixels.payload.value == g.frame),
+            "frame waiting",
+        ),
+        (_When(flush, g.value == g.background), "value in a flush"),
+        (
+            _When(~flush & ~in_flight(tracked), g.value == Mux(done, pixel(tracked), shown)),
+            "value",
+        ),
+    ]
+    for i, st in enumerate(stages):
+        position = Cat(st.x, st.y)
+        checks.append((_When(st.valid, position <= last_pos), f"stage {i} taken"))
+        for older in stages[i + 1 :]:
+            both = st.valid & older.valid
+            checks.append((_When(both, Cat(older.x, older.y) < position), f"stage {i} order"))
+    _state_checks(m, checks, covers)
 
 
 # -- running ---------------------------------------------------------------------------------
@@ -475,29 +784,49 @@ TILE_PROOFS: dict[str, TileProof] = {
             "acc_deltas",
             "accumulator",
             ("deltas",),
-            "bmc",
-            20,
+            "prove",
+            2,
+            TileConfig(),
+            memory_map=False,  # the invariants do not read the banks
             description="every touched cell sent once per end and before the next op, "
-            "untouched rows not sent, order, fields, tile and flush passed on (bounded from "
-            "power-on)",
+            "untouched rows not sent, order, fields, tile and flush passed on (k-induction "
+            "with the scan's invariants)",
         ),
         TileProof(
             "acc_sums",
             "accumulator",
             ("sums",),
-            "bmc",
-            8,
-            description=f"each cell sent carries the sum of its deltas since the last time it "
-            f"was sent, modulo 2**{SUM_BITS} (bounded from power-on)",
+            "prove",
+            2,
+            description="each cell sent carries the sum of its deltas since the last time it "
+            "was sent, modulo 2**cell_bits (k-induction with the banks' and read-modify-write "
+            "stages' invariants)",
         ),
         TileProof(
             "res_pixels",
             "resolve",
             ("pixels",),
-            "bmc",
-            16,
+            "prove",
+            resolve_latency(SMALL_CONFIG) + 1,  # a cell in flight is written within k
             description="pixels equal the model's composite of exact prefix sums within the "
-            "documented range (no overflow; bounded from power-on)",
+            "documented range (no overflow; k-induction with the pipeline's and the pixel "
+            "memory's invariants)",
+        ),
+        *(
+            TileProof(
+                f"{name}_cover",
+                stage,
+                (check,),
+                "cover",
+                depth,
+                description=f"each invariant of {name} (an implication) has its premise reached "
+                "with its conclusion (not vacuous; cover from power-on)",
+            )
+            for name, stage, check, depth in (
+                ("acc_deltas", "accumulator", "deltas", 16),
+                ("acc_sums", "accumulator", "sums", 16),
+                ("res_pixels", "resolve", "pixels", 14),
+            )
         ),
     )
 }
@@ -524,14 +853,23 @@ def run_tile_proof(
     workdir=None,
     timeout: float | None = None,
     tail: int = 40,
+    invariants: bool = True,
 ) -> FormalResult:
     """Build the harness of `proof` (a `TILE_PROOFS` name or a `TileProof`), run sby, return
-    the result (`edgeaa.sim.verification.formal.run.run_proof`'s, for the tile stages)."""
+    the result (`edgeaa.sim.verification.formal.run.run_proof`'s, for the tile stages).
+    ``invariants``: `TileHarness`'s (off: the groups' own assertions only); in ``cover`` mode
+    the harness covers each invariant's premise (`TileHarness` ``covers``)."""
     proof = _lookup(proof)
     mode, depth = mode or proof.mode, proof.depth if depth is None else depth
     tools = find_tools(solver)
     harness = TileHarness(
-        tile or proof.tile, proof.stage, proof.checks, reset=proof.reset, fault=fault
+        tile or proof.tile,
+        proof.stage,
+        proof.checks,
+        reset=proof.reset,
+        fault=fault,
+        invariants=invariants,
+        covers=mode == "cover",
     )
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
@@ -562,9 +900,15 @@ def main(argv=None) -> int:
     parser.add_argument("proofs", nargs="*", default=list(TILE_PROOFS))
     parser.add_argument("--fault", choices=tuple(TILE_FAULTS))
     parser.add_argument("--depth", type=int)
-    parser.add_argument("--mode", choices=("prove", "bmc"))
+    parser.add_argument("--mode", choices=("prove", "bmc", "cover"))
     parser.add_argument("--workdir", help="keep the runs in WORKDIR/<proof>")
     parser.add_argument("--timeout", type=float)
+    parser.add_argument(
+        "--no-invariants",
+        dest="invariants",
+        action="store_false",
+        help="the groups' own assertions only (not inductive)",
+    )
     args = parser.parse_args(argv)
     failures = 0
     for name in args.proofs:
@@ -575,6 +919,7 @@ def main(argv=None) -> int:
             mode=args.mode,
             workdir=Path(args.workdir) / name if args.workdir else None,
             timeout=args.timeout,
+            invariants=args.invariants,
         )
         print(result.summary(), flush=True)
         for entry in result.failed:
