@@ -48,8 +48,12 @@ def delta_registers(config: EdgeConfig) -> dict[str, Signal]:
 
 
 def _clamp(value, hi):
-    """value clamped to [0, hi] (the model's `_clamp`, same order of tests)."""
-    return Mux(value < 0, 0, Mux(value > hi, hi, value))
+    """value clamped to [0, hi] (the model's `_clamp`, same order of tests), in the shape of
+    `hi`: the result is 0, `hi` or a value in [0, hi], so it fits `hi`'s shape whatever the
+    width of `value` (exact, no wrap)."""
+    hi = Value.cast(hi)
+    clamped = Mux(value < 0, 0, Mux(value > hi, hi, value))[: len(hi)]
+    return clamped.as_signed() if hi.shape().signed else clamped
 
 
 def _stage(m, en, prefix: str, values: dict) -> types.SimpleNamespace:
@@ -156,7 +160,7 @@ def _estimate(config: EdgeConfig, p1):
     for j in range(1, n):
         line = (const_mul(p1.depth, 2 * j + 1) >> shift) - getattr(p1, f"icpt{j}")
         t = Mux(segment == j, line, t)
-    return Mux(t > 0, t, 0)
+    return Mux(t > 0, t, 0)[: len(t) - 1]  # clamped at 0: no sign bit
 
 
 def _covers(config: EdgeConfig, p1) -> dict:
