@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Mux, Signal, Value, signed
+from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed
 
 from ..model.config import EdgeConfig
 from .layouts import const_mul, log2, register_shape
@@ -88,7 +88,9 @@ def _piece_end(m, st, last):
     carry = (st.jr + st.khr) >= st.du
     full = st.jq + st.khq + carry
     adj = regs["adj"]
-    at_end = st.end_height + Mux(adj > 0, st.ifix, Mux(adj < 0, -st.ifix, 0))
+    # end_height + sign(adj) ifix in one add (-ifix = ~ifix + 1 on ifix made signed)
+    ifix = Cat(st.ifix, Const(0, 1)).as_signed()
+    at_end = st.end_height + Mux(adj < 0, ~ifix, Mux(adj > 0, ifix, 0)) + (adj < 0)
     he = Signal(register_shape(st.config.register_widths()["height"]), name="he")
     m.d.comb += he.eq(Mux(last & st.last_partial, at_end, full))
     return he
@@ -121,7 +123,10 @@ def _stage0(st, last, he) -> dict:
     first = regs["first_col"] & st.first_partial
     end = last & st.last_partial
     x_major = st.col_dx != 0
-    total1 = Mux(adj > 0, st.total1 + st.band1, Mux(adj < 0, st.total1 - st.band1, st.total1))
+    # total1 + sign(adj) band1 in one add (-band1 = ~band1 + 1, band1 signed), in the width
+    # of the sum of two of its registers' values (exact)
+    total1 = st.total1 + Mux(adj < 0, ~st.band1, Mux(adj > 0, st.band1, 0)) + (adj < 0)
+    total1 = total1[: max(len(st.total1), len(st.band1)) + 1].as_signed()
     interior = Mux(x_major, st.khq, st.jq)
     low = he > ifix
     values = dict(
@@ -137,7 +142,7 @@ def _stage0(st, last, he) -> dict:
         he=he,
         ifix=ifix,
         low=low,
-        depth=Mux(low, he - ifix, -hs),
+        depth=_depth(low, he, hs, ifix),
         total=Mux(first, st.total0, Mux(end, total1, interior)),
         band=Mux(first, st.band0, Mux(end, st.band1, ifix)),
         rect_up=Mux(first, st.rect0, 0),
@@ -147,6 +152,16 @@ def _stage0(st, last, he) -> dict:
     values.update({f"icpt{j}": icpt for j, icpt in enumerate(st.seg_intercepts)})
     assert len(st.seg_intercepts) == n
     return values
+
+
+def _depth(low, he, hs, ifix):
+    """The depth of the piece's crossing part, he - ifix when it crosses into the row below,
+    else -hs, in one add: he + ~ifix + 1 or ~hs + 0 + 1 (both made signed), in the width of
+    the wider of the two (exact)."""
+    ifix = Cat(ifix, Const(0, 1)).as_signed()
+    depth = Mux(low, he, ~hs) + Mux(low, ~ifix, 0) + 1
+    width = max(len(he), len(hs), len(ifix)) + 1
+    return depth[:width].as_signed()
 
 
 def _estimate(config: EdgeConfig, p1):
@@ -160,7 +175,12 @@ def _estimate(config: EdgeConfig, p1):
     for j in range(1, n):
         line = (const_mul(p1.depth, 2 * j + 1) >> shift) - getattr(p1, f"icpt{j}")
         t = Mux(segment == j, line, t)
-    return Mux(t > 0, t, 0)[: len(t) - 1]  # clamped at 0: no sign bit
+    # Clamped at 0 it is at most the largest line's slope term (the intercepts are unsigned):
+    # no sign bit and only that term's width (exact).
+    assert not any(getattr(p1, f"icpt{j}").shape().signed for j in range(n))
+    top = (1 << (len(p1.depth) - 1)) - 1
+    width = max((top * (2 * j + 1)) >> shift for j in range(n)).bit_length()
+    return Mux(t > 0, t, 0)[:width]
 
 
 def _covers(config: EdgeConfig, p1) -> dict:
@@ -168,15 +188,18 @@ def _covers(config: EdgeConfig, p1) -> dict:
     hs, he, ifix = p1.hs, p1.he, p1.ifix
     carried = ("valid", "last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg")
     carried += ("low", "total", "band", "rect_up", "rect_low")
+    # One compare of each end with ifix: p1's low is he > ifix; hs >= ifix selects as
+    # hs > ifix does (they differ only where hs = ifix).
+    up, low, hs_ge = hs < 0, p1.low, hs >= ifix
     return dict(
         {name: getattr(p1, name) for name in carried},
         t=_estimate(config, p1),
-        up=hs < 0,
-        hs_ge=hs >= ifix,
+        up=up,
+        hs_ge=hs_ge,
         he_le0=he <= 0,
-        cov_up=Mux(he < 0, he, 0) - Mux(hs < 0, hs, 0),
-        cov_mid=_clamp(he, ifix) - _clamp(hs, ifix),
-        cov_low=Mux(he > ifix, he, ifix) - Mux(hs > ifix, hs, ifix),
+        cov_up=Mux(he < 0, he, 0) - Mux(up, hs, 0),
+        cov_mid=Mux(he < 0, 0, Mux(low, ifix, he)) - Mux(up, 0, Mux(hs_ge, ifix, hs)),
+        cov_low=Mux(low, he, ifix) - Mux(hs_ge, hs, ifix),
     )
 
 
