@@ -260,18 +260,13 @@ def _output(m, st, en, p2) -> list:
     for k in range(4):
         pair, right = divmod(k, 2)  # x-major: row a or b, column x or x + 1
         value_x = Mux(p2.neg, cx[2 * pair + 1 - right], cx[k])
-        row = pair - up  # -1, 0 or +1 rows along +v
-        y_x = Mux(p2.minor_neg, p2.y - row, p2.y + row)
-        # y-major: v offset k - up, one cell lower along -v
-        x_y = Mux(p2.minor_neg, p2.x + 1 + up - k, p2.x + k - up)
+        row = pair - up  # x-major: -1, 0 or +1 rows along +v, one row_dy each on screen
+        # y-major: v offset k - up, one cell lower along -v. Each coordinate is one add of
+        # a small offset (selects of constants and up).
+        dx = Mux(p2.x_major, right, Mux(p2.minor_neg, 1 + up - k, k - up))
+        dy = Mux(p2.x_major, Mux(p2.minor_neg, -row, row), 0)
         value = Mux(p2.x_major, value_x, cy[k])
-        cells.append(
-            (
-                Mux(p2.x_major, p2.x + right, x_y),
-                Mux(p2.x_major, y_x, p2.y),
-                Mux(p2.sigma_neg, -value, value),
-            )
-        )
+        cells.append((p2.x + dx, p2.y + dy, Mux(p2.sigma_neg, -value, value)))
     with m.If(en):
         m.d.sync += [st.out.valid.eq(p2.valid), beat.last.eq(p2.last)]
         for k, (x, y, delta) in enumerate(cells):
