@@ -18,11 +18,12 @@ column per clock:
 * the output register: the cells of `column_deltas` and their screen cells (`delta_cells`).
 
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
-intermediate wraps; a value is cut narrower only where its operands' shapes bound it, for
-every input (a clamp has its bound's shape, a sum of two registers one bit more than the
-wider, the clamped estimate its largest slope term's width); only the payload's fields are
-cut to the width table's ``x``, ``y`` and ``delta``, which the model checks. No multiplier:
-adds, compares, selects and fixed shifts.
+intermediate wraps; a value is cut narrower only where its operands' shapes bound it (a
+clamp has its bound's shape, a sum of two registers one bit more than the wider, the clamped
+estimate its largest slope term's width, the covers of rows r and r + 1 their clamped
+heights' difference); only the payload's fields are cut to the width table's ``x``, ``y``
+and ``delta``, which the model checks. No multiplier: adds, compares, selects and fixed
+shifts.
 
 Observation points for the formal harness (attributes of the stepper, set when it is
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
@@ -216,6 +217,8 @@ def _covers(config: EdgeConfig, p1) -> dict:
     # One compare of each end with ifix: p1's low is he > ifix; hs >= ifix selects as
     # hs > ifix does (they differ only where hs = ifix).
     up, low, hs_ge = hs < 0, p1.low, hs >= ifix
+    cov_mid = Mux(he < 0, 0, Mux(low, ifix, he)) - Mux(up, 0, Mux(hs_ge, ifix, hs))
+    cov_low = Mux(low, he, ifix) - Mux(hs_ge, hs, ifix)
     return dict(
         {name: getattr(p1, name) for name in carried},
         t=_estimate(config, p1),
@@ -223,8 +226,8 @@ def _covers(config: EdgeConfig, p1) -> dict:
         hs_ge=hs_ge,
         he_le0=he <= 0,
         cov_up=Mux(he < 0, he, 0) - Mux(up, hs, 0),
-        cov_mid=Mux(he < 0, 0, Mux(low, ifix, he)) - Mux(up, 0, Mux(hs_ge, ifix, hs)),
-        cov_low=Mux(low, he, ifix) - Mux(hs_ge, hs, ifix),
+        cov_mid=cov_mid[: len(ifix) + 1].as_signed(),  # two heights in [0, ifix]
+        cov_low=cov_low[: max(len(he), len(hs), len(ifix) + 1)].as_signed(),  # two heights >= 0
     )
 
 
