@@ -6,17 +6,24 @@ folded row minus the loop's row, one less per row step) and ``first_col`` (colum
 The column's piece end ``he`` (`piece_end`) is formed in the stepping clock; then, one
 column per clock:
 
-* p1: the piece's heights, the depth of its crossing part, the column's total, band and
-  rectangles (selects of per-edge constants by first / last column), and the per-edge values
-  the later stages need (a new edge may be loaded while its predecessor's last column is
-  still in the pipeline, so nothing after the stepping clock reads the bank registers);
+* p1: the piece's heights, the depth of its crossing part (with one segment, less the
+  intercept << 2: the estimate's numerator, so p1 holds no intercept), the column's total,
+  band and rectangles (selects of per-edge constants by first / last column; the y-major
+  band and the x-major upper rectangle share a register, an edge being one or the other),
+  and the per-edge values the later stages need (a new edge may be loaded while its
+  predecessor's last column is still in the pipeline, so nothing after the stepping clock
+  reads the bank registers);
 * p2: the clamped triangle estimate of the depth (`triangle_estimate`, shift-adds by the
   small odd constants) and the piece's cover in each row;
 * the output register: the cells of `column_deltas` and their screen cells (`delta_cells`).
 
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
-intermediate wraps; only the payload's fields are cut to the width table's ``x``, ``y`` and
-``delta``, which the model checks. No multiplier: adds, compares, selects and fixed shifts.
+intermediate wraps; a value is cut narrower only where its operands' shapes bound it (a
+clamp has its bound's shape, a sum of two registers one bit more than the wider, the clamped
+estimate its largest slope term's width, the covers of rows r and r + 1 their clamped
+heights' difference); only the payload's fields are cut to the width table's ``x``, ``y``
+and ``delta``, which the model checks. No multiplier: adds, compares, selects and fixed
+shifts.
 
 Observation points for the formal harness (attributes of the stepper, set when it is
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
@@ -28,7 +35,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Mux, Signal, Value, signed
+from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed
 
 from ..model.config import EdgeConfig
 from .layouts import const_mul, log2, register_shape
@@ -48,8 +55,12 @@ def delta_registers(config: EdgeConfig) -> dict[str, Signal]:
 
 
 def _clamp(value, hi):
-    """value clamped to [0, hi] (the model's `_clamp`, same order of tests)."""
-    return Mux(value < 0, 0, Mux(value > hi, hi, value))
+    """value clamped to [0, hi] (the model's `_clamp`, same order of tests), in the shape of
+    `hi`: the result is 0, `hi` or a value in [0, hi], so it fits `hi`'s shape whatever the
+    width of `value` (exact, no wrap)."""
+    hi = Value.cast(hi)
+    clamped = Mux(value < 0, 0, Mux(value > hi, hi, value))[: len(hi)]
+    return clamped.as_signed() if hi.shape().signed else clamped
 
 
 def _stage(m, en, prefix: str, values: dict) -> types.SimpleNamespace:
@@ -84,7 +95,9 @@ def _piece_end(m, st, last):
     carry = (st.jr + st.khr) >= st.du
     full = st.jq + st.khq + carry
     adj = regs["adj"]
-    at_end = st.end_height + Mux(adj > 0, st.ifix, Mux(adj < 0, -st.ifix, 0))
+    # end_height + sign(adj) ifix in one add (-ifix = ~ifix + 1 on ifix made signed)
+    ifix = Cat(st.ifix, Const(0, 1)).as_signed()
+    at_end = st.end_height + Mux(adj < 0, ~ifix, Mux(adj > 0, ifix, 0)) + (adj < 0)
     he = Signal(register_shape(st.config.register_widths()["height"]), name="he")
     m.d.comb += he.eq(Mux(last & st.last_partial, at_end, full))
     return he
@@ -117,7 +130,10 @@ def _stage0(st, last, he) -> dict:
     first = regs["first_col"] & st.first_partial
     end = last & st.last_partial
     x_major = st.col_dx != 0
-    total1 = Mux(adj > 0, st.total1 + st.band1, Mux(adj < 0, st.total1 - st.band1, st.total1))
+    # total1 + sign(adj) band1 in one add (-band1 = ~band1 + 1, band1 signed), in the width
+    # of the sum of two of its registers' values (exact)
+    total1 = st.total1 + Mux(adj < 0, ~st.band1, Mux(adj > 0, st.band1, 0)) + (adj < 0)
+    total1 = total1[: max(len(st.total1), len(st.band1)) + 1].as_signed()
     interior = Mux(x_major, st.khq, st.jq)
     low = he > ifix
     values = dict(
@@ -133,16 +149,41 @@ def _stage0(st, last, he) -> dict:
         he=he,
         ifix=ifix,
         low=low,
-        depth=Mux(low, he - ifix, -hs),
         total=Mux(first, st.total0, Mux(end, total1, interior)),
-        band=Mux(first, st.band0, Mux(end, st.band1, ifix)),
-        rect_up=Mux(first, st.rect0, 0),
+        # an edge is x-major or y-major: the y-major band and the x-major upper rectangle
+        # share a register
+        band_rect=Mux(
+            x_major, Mux(first, st.rect0, 0), Mux(first, st.band0, Mux(end, st.band1, ifix))
+        ),
         rect_low=Mux(end, st.rect1, 0),
     )
-    values.update({f"thr{j}": thr for j, thr in enumerate(st.seg_thresholds, start=1)})
-    values.update({f"icpt{j}": icpt for j, icpt in enumerate(st.seg_intercepts)})
     assert len(st.seg_intercepts) == n
+    assert not any(icpt.shape().signed for icpt in st.seg_intercepts)  # see `_estimate`
+    depth = _depth(low, he, hs, ifix)
+    if n == 1:
+        # t = (depth >> 2) - intercept = (depth - (intercept << 2)) >> 2: the intercept
+        # folded into the depth here, p1 holds no intercept
+        icpt = st.seg_intercepts[0] << 2
+        values["depth_icpt"] = (depth - icpt)[: max(len(depth), len(icpt)) + 1].as_signed()
+    elif n:
+        values["depth"] = depth
+        values.update({f"thr{j}": thr for j, thr in enumerate(st.seg_thresholds, start=1)})
+        values.update({f"icpt{j}": icpt for j, icpt in enumerate(st.seg_intercepts)})
     return values
+
+
+def _depth(low, he, hs, ifix):
+    """The depth of the piece's crossing part, he - ifix when it crosses into the row below,
+    else -hs, in one add: he + ~ifix + 1 or ~hs + 0 + 1 (both made signed), in the width of
+    the wider of the two (exact)."""
+    ifix = Cat(ifix, Const(0, 1)).as_signed()
+    depth = Mux(low, he, ~hs) + Mux(low, ~ifix, 0) + 1
+    return depth[: _depth_width(he, hs, ifix)].as_signed()
+
+
+def _depth_width(he, hs, ifix) -> int:
+    """The width of `_depth`: of the wider of he - ifix and -hs (ifix signed)."""
+    return max(len(he), len(hs), len(ifix)) + 1
 
 
 def _estimate(config: EdgeConfig, p1):
@@ -151,28 +192,42 @@ def _estimate(config: EdgeConfig, p1):
     if n == 0:
         return 0
     shift = 2 + log2(n)
-    segment = sum(p1.depth >= getattr(p1, f"thr{j}") for j in range(1, n))
-    t = (const_mul(p1.depth, 1) >> shift) - p1.icpt0
-    for j in range(1, n):
-        line = (const_mul(p1.depth, 2 * j + 1) >> shift) - getattr(p1, f"icpt{j}")
-        t = Mux(segment == j, line, t)
-    return Mux(t > 0, t, 0)
+    if n == 1:  # the intercept folded into p1's depth
+        t = p1.depth_icpt >> shift
+    else:
+        segment = sum(p1.depth >= getattr(p1, f"thr{j}") for j in range(1, n))
+        t = (const_mul(p1.depth, 1) >> shift) - p1.icpt0
+        for j in range(1, n):
+            line = (const_mul(p1.depth, 2 * j + 1) >> shift) - getattr(p1, f"icpt{j}")
+            t = Mux(segment == j, line, t)
+        assert not any(getattr(p1, f"icpt{j}").shape().signed for j in range(n))
+    # Clamped at 0 it is at most the largest line's slope term (the intercepts are unsigned):
+    # no sign bit and only that term's width (exact).
+    depth_width = _depth_width(p1.he, p1.hs, Cat(p1.ifix, Const(0, 1)).as_signed())
+    top = (1 << (depth_width - 1)) - 1
+    width = max((top * (2 * j + 1)) >> shift for j in range(n)).bit_length()
+    return Mux(t > 0, t, 0)[:width]
 
 
 def _covers(config: EdgeConfig, p1) -> dict:
     """What p2 loads: the estimate and the piece's cover of rows r - 1, r and r + 1."""
     hs, he, ifix = p1.hs, p1.he, p1.ifix
     carried = ("valid", "last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg")
-    carried += ("low", "total", "band", "rect_up", "rect_low")
+    carried += ("low", "total", "band_rect", "rect_low")
+    # One compare of each end with ifix: p1's low is he > ifix; hs >= ifix selects as
+    # hs > ifix does (they differ only where hs = ifix).
+    up, low, hs_ge = hs < 0, p1.low, hs >= ifix
+    cov_mid = Mux(he < 0, 0, Mux(low, ifix, he)) - Mux(up, 0, Mux(hs_ge, ifix, hs))
+    cov_low = Mux(low, he, ifix) - Mux(hs_ge, hs, ifix)
     return dict(
         {name: getattr(p1, name) for name in carried},
         t=_estimate(config, p1),
-        up=hs < 0,
-        hs_ge=hs >= ifix,
+        up=up,
+        hs_ge=hs_ge,
         he_le0=he <= 0,
-        cov_up=Mux(he < 0, he, 0) - Mux(hs < 0, hs, 0),
-        cov_mid=_clamp(he, ifix) - _clamp(hs, ifix),
-        cov_low=Mux(he > ifix, he, ifix) - Mux(hs > ifix, hs, ifix),
+        cov_up=Mux(he < 0, he, 0) - Mux(up, hs, 0),
+        cov_mid=cov_mid[: len(ifix) + 1].as_signed(),  # two heights in [0, ifix]
+        cov_low=cov_low[: max(len(he), len(hs), len(ifix) + 1)].as_signed(),  # two heights >= 0
     )
 
 
@@ -180,7 +235,7 @@ def _cells_x_major(p2):
     """`_deltas_x_major`: areas on the +u side, row by row."""
     total, t = p2.total, p2.t
     r_low = Mux(p2.hs_ge, total, Mux(p2.low, _clamp(t + p2.rect_low, p2.cov_low), 0))
-    r_up = Mux(p2.he_le0, total, Mux(p2.up, _clamp(p2.cov_up - t - p2.rect_up, p2.cov_up), 0))
+    r_up = Mux(p2.he_le0, total, Mux(p2.up, _clamp(p2.cov_up - t - p2.band_rect, p2.cov_up), 0))
     r_mid = _clamp(total - r_low - r_up, p2.cov_mid)
     r_a, cov_a = Mux(p2.up, r_up, r_mid), Mux(p2.up, p2.cov_up, p2.cov_mid)
     r_b, cov_b = Mux(p2.up, r_mid, r_low), Mux(p2.up, p2.cov_mid, p2.cov_low)
@@ -189,7 +244,7 @@ def _cells_x_major(p2):
 
 def _cells_y_major(p2):
     """`_deltas_y_major`: areas on the smaller-v side, differenced along +v."""
-    total, band, t = p2.total, p2.band, p2.t
+    total, band, t = p2.total, p2.band_rect, p2.t
     a_low = _clamp(Mux(p2.hs_ge, total - band, Mux(p2.low, t, 0)), band)
     a_up = _clamp(Mux(p2.he_le0, total + band, Mux(p2.up, band - t, band)), band)
     a_mid = _clamp(total + band - a_up - a_low, band)
@@ -208,18 +263,13 @@ def _output(m, st, en, p2) -> list:
     for k in range(4):
         pair, right = divmod(k, 2)  # x-major: row a or b, column x or x + 1
         value_x = Mux(p2.neg, cx[2 * pair + 1 - right], cx[k])
-        row = pair - up  # -1, 0 or +1 rows along +v
-        y_x = Mux(p2.minor_neg, p2.y - row, p2.y + row)
-        # y-major: v offset k - up, one cell lower along -v
-        x_y = Mux(p2.minor_neg, p2.x + 1 + up - k, p2.x + k - up)
+        row = pair - up  # x-major: -1, 0 or +1 rows along +v, one row_dy each on screen
+        # y-major: v offset k - up, one cell lower along -v. Each coordinate is one add of
+        # a small offset (selects of constants and up).
+        dx = Mux(p2.x_major, right, Mux(p2.minor_neg, 1 + up - k, k - up))
+        dy = Mux(p2.x_major, Mux(p2.minor_neg, -row, row), 0)
         value = Mux(p2.x_major, value_x, cy[k])
-        cells.append(
-            (
-                Mux(p2.x_major, p2.x + right, x_y),
-                Mux(p2.x_major, y_x, p2.y),
-                Mux(p2.sigma_neg, -value, value),
-            )
-        )
+        cells.append((p2.x + dx, p2.y + dy, Mux(p2.sigma_neg, -value, value)))
     with m.If(en):
         m.d.sync += [st.out.valid.eq(p2.valid), beat.last.eq(p2.last)]
         for k, (x, y, delta) in enumerate(cells):

@@ -207,6 +207,8 @@ def _p1_values(s, c) -> dict:
     band1 = Mux(c.adj > 0, s.band1, Mux(c.adj < 0, -s.band1, 0))
     interior = Mux(x_major, s.khq, s.jq)
     last_total = s.total1 + band1
+    band = Mux(c.first, s.band0, Mux(c.last, s.band1, ifix))
+    rect_up = Mux(c.first, s.rect0, 0)
     values = {
         "last": s.remaining == 0,
         "x": s.x,
@@ -219,14 +221,18 @@ def _p1_values(s, c) -> dict:
         "he": he,
         "ifix": ifix,
         "low": low,
-        "depth": Mux(low, he - ifix, -hs),
         "total": Mux(c.first, s.total0, Mux(c.last, last_total, interior)),
-        "band": Mux(c.first, s.band0, Mux(c.last, s.band1, ifix)),
-        "rect_up": Mux(c.first, s.rect0, 0),
+        # one register: the y-major band, the x-major upper rectangle
+        "band_rect": Mux(x_major, rect_up, band),
         "rect_low": Mux(c.last, s.rect1, 0),
     }
-    values.update({f"thr{j}": t for j, t in enumerate(s.seg_thresholds, start=1)})
-    values.update({f"icpt{j}": icpt for j, icpt in enumerate(s.seg_intercepts)})
+    depth = Mux(low, he - ifix, -hs)
+    if len(s.seg_intercepts) == 1:  # the intercept folded into the depth (t's numerator)
+        values["depth_icpt"] = depth - (s.seg_intercepts[0] << 2)
+    elif s.seg_intercepts:
+        values["depth"] = depth
+        values.update({f"thr{j}": t for j, t in enumerate(s.seg_thresholds, start=1)})
+        values.update({f"icpt{j}": icpt for j, icpt in enumerate(s.seg_intercepts)})
     return values
 
 
@@ -236,7 +242,7 @@ def _p2_values(s, c) -> dict:
     (restated from `column_deltas`)."""
     p1 = _p1_values(s, c)
     carried = ("last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg")
-    carried += ("low", "total", "band", "rect_up", "rect_low")
+    carried += ("low", "total", "band_rect", "rect_low")
     hs, he, ifix = s.hs, c.he, s.ifix
     return dict(
         {name: p1[name] for name in carried},
