@@ -8,14 +8,18 @@ count are known by then) and FINAL forms the two that need the accumulator's sta
 Everything is in half sub-pixel steps as in the model (``2 S`` per pixel, so a pixel's edges
 are whole numbers): ``mg`` (from the first column's start to P0) and ``me`` (from P1 to the
 last column's end) are the low ``s + 1`` bits of ``2 u0 + S`` and ``S - 2 u1`` (both in
-``[0, 2 S)`` by the choice of c0 and c1), zero for a column the clip window cut;
-``e1 = (2 v1 + S) mod 2 S`` gives P1's height in its row. The products by ``|I_d|`` are
-small (a few sub-pixel bits). The products of ``kq`` by a square of them are formed one
-quotient digit per clock beside lane B (`kq_product_steps`, Horner: ``P = 2 P + d M`` for
-lane B's digit ``d`` of ``khq``, then ``P = 2 P + k_bit M`` when ``kq = 2 khq + k_bit`` is
-registered), so no wide multiplier is needed: ``k_me = kq me^2`` (x-major; ``kq w1^2``
-y-major) and ``k_mg = kq (2 S - mg)^2``. Their multiplicands depend only on registers loaded
-by WINDOW (the fold, ``cut_end``, ``start_clip``), constant through RUN.
+``[0, 2 S)`` by the choice of c0 and c1), zero for a column the clip window cut; ``e1 = (2
+v1 + S) mod 2 S`` gives P1's height in its row. The products of ``kq`` by a square of them
+are formed one quotient digit per clock beside lane B (`kq_product_steps`, Horner: ``P = 2 P
++ d M`` for lane B's digit ``d`` of ``khq``, then ``P = 2 P + k_bit M`` when ``kq = 2 khq +
+k_bit`` is registered), so no wide multiplier is needed: ``k_me = kq me^2`` (x-major; ``kq
+w1^2`` y-major) and ``k_mg = kq (2 S - mg)^2``. Their multiplicands depend only on registers
+loaded by WINDOW (the fold, ``cut_end``, ``start_clip``), constant through RUN. The products
+by ``|I_d|`` (times ``h0``, ``e1``, ``w1`` and two products of them) are formed one bit a
+clock (`id_product_steps`) over the first ``I`` clocks of lane A's second pass, whose
+multiplier bits are ``|I_d|``'s, MSB first; their multiplicands are constant from the clock
+after the fix-up (``h0`` reads ``row0``). The proofs' invariants of the half-formed products
+are `edgeaa.sim.verification.formal.bounds`' ``_products``.
 """
 
 from __future__ import annotations
