@@ -8,9 +8,18 @@ count are known by then) and FINAL forms the two that need the accumulator's sta
 Everything is in half sub-pixel steps as in the model (``2 S`` per pixel, so a pixel's edges
 are whole numbers): ``mg`` (from the first column's start to P0) and ``me`` (from P1 to the
 last column's end) are the low ``s + 1`` bits of ``2 u0 + S`` and ``S - 2 u1`` (both in
-``[0, 2 S)`` by the choice of c0 and c1), zero for a column the clip window cut;
-``e1 = (2 v1 + S) mod 2 S`` gives P1's height in its row. The products are small: ``|I_d|``
-by a few sub-pixel bits, or ``kq`` by a square of them (setup only, multiplies allowed).
+``[0, 2 S)`` by the choice of c0 and c1), zero for a column the clip window cut; ``e1 = (2
+v1 + S) mod 2 S`` gives P1's height in its row. The products of ``kq`` by a square of them
+are formed one quotient digit per clock beside lane B (`kq_product_steps`, Horner: ``P = 2 P
++ d M`` for lane B's digit ``d`` of ``khq``, then ``P = 2 P + k_bit M`` when ``kq = 2 khq +
+k_bit`` is registered), so no wide multiplier is needed: ``k_me = kq me^2`` (x-major; ``kq
+w1^2`` y-major) and ``k_mg = kq (2 S - mg)^2``. Their multiplicands depend only on registers
+loaded by WINDOW (the fold, ``cut_end``, ``start_clip``), constant through RUN. The products
+by ``|I_d|`` (times ``h0``, ``e1``, ``w1`` and two products of them) are formed one bit a
+clock (`id_product_steps`) over the first ``I`` clocks of lane A's second pass, whose
+multiplier bits are ``|I_d|``'s, MSB first; their multiplicands are constant from the clock
+after the fix-up (``h0`` reads ``row0``). The proofs' invariants of the half-formed products
+are `edgeaa.sim.verification.formal.bounds`' ``_products``.
 """
 
 from __future__ import annotations
@@ -22,7 +31,16 @@ from amaranth.hdl import Const, Mux, Signal, signed, unsigned
 from ..model.config import EdgeConfig
 from .layouts import register_shape
 
-__all__ = ["final_pieces", "pieces_registers", "run_end_loads"]
+__all__ = [
+    "final_pieces",
+    "id_product_clear",
+    "id_product_steps",
+    "id_products",
+    "kq_product_steps",
+    "kq_products",
+    "pieces_registers",
+    "run_end_loads",
+]
 
 # The pieces registered at the end of RUN (bank fields of the same name), then FINAL's own.
 _EARLY = ("end_row", "end_height", "total1", "rect0", "rect1", "band0", "band1")
@@ -30,10 +48,12 @@ _EARLY = ("end_row", "end_height", "total1", "rect0", "rect1", "band0", "band1")
 
 def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
     """The setup's registers of the end pieces: ``cut_end`` (WINDOW: the window cut the last
-    column), the `_EARLY` bank fields and the operands FINAL needs (``single``, ``w0``,
-    ``hs0_fp`` and ``square0``, the x-major first piece's squared width)."""
+    column), the `_EARLY` bank fields, the operands FINAL needs (``single``, ``w0``,
+    ``hs0_fp``), the products by kq (``k_me``, ``k_mg``: `kq_product_steps`) and by
+    ``|I_d|`` (``id_*``: `id_product_steps`)."""
     widths = config.register_widths()
-    s = config.subpixel_bits
+    s, I = config.subpixel_bits, config.intensity_bits  # noqa: E741
+    product = unsigned(widths["kq"].bits + 2 * s + 3)  # kq times at most (2 S)**2
     height = register_shape(widths["height"])
     regs = {name: Signal(height, name=f"pc_{name}") for name in _EARLY}
     regs["end_row"] = Signal(register_shape(widths["y"]), name="pc_end_row")
@@ -42,49 +62,128 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         single=Signal(name="pc_single"),  # one partial column holds both vertices
         w0=Signal(unsigned(s + 2), name="pc_w0"),  # the first piece's width (2 S per pixel)
         hs0_fp=Signal(height, name="pc_hs0_fp"),  # hs0 of a partial first column
-        square0=Signal(unsigned(2 * s + 3), name="pc_square0"),  # <= (2 S)**2
+        k_me=Signal(product, name="pc_k_me"),
+        k_mg=Signal(product, name="pc_k_mg"),
+        m_me=Signal(unsigned(2 * s + 3), name="pc_m_me"),  # their multiplicands (comb)
+        m_mg=Signal(unsigned(2 * s + 3), name="pc_m_mg"),
+        # |I_d| times h0, e1, w1, first, end (`id_product_steps`)
+        id_h0=Signal(signed(I + s + 4), name="pc_id_h0"),  # h0 in [-S, 3 S)
+        id_e1=Signal(unsigned(I + s + 1), name="pc_id_e1"),  # e1 < 2 S
+        id_w1=Signal(unsigned(I + s + 2), name="pc_id_w1"),  # w1 <= 2 S
+        id_first=Signal(unsigned(I + 2 * s + 3), name="pc_id_first"),  # < 6 S^2
+        id_end=Signal(unsigned(I + 2 * s + 2), name="pc_id_end"),  # < 4 S^2
     )
     return types.SimpleNamespace(**regs)
+
+
+def _end_widths(unit) -> types.SimpleNamespace:
+    """``mg``, ``me`` (the first and last columns' cut parts) and ``w1 = 2 S - me``: from
+    registers loaded by WINDOW, so constant through RUN."""
+    s = unit.config.subpixel_bits
+    S = 1 << s
+    r, cmd, pc = unit.regs, unit.cmd, unit.pieces
+    fp, lp = ~r.start_clip, ~pc.cut_end  # the first and last columns hold the vertices
+    p0, p1 = Mux(r.x_major, cmd.x0, cmd.y0), Mux(r.x_major, cmd.x1, cmd.y1)
+    mg = Mux(fp, Mux(r.major_neg, S - (p0 << 1), (p0 << 1) + S)[: s + 1], 0)
+    me = Mux(lp, Mux(r.major_neg, S + (p1 << 1), S - (p1 << 1))[: s + 1], 0)
+    return types.SimpleNamespace(fp=fp, lp=lp, mg=mg, me=me, w1=(2 * S - me)[: s + 2])
+
+
+def kq_product_steps(unit, twice, once) -> list:
+    """One Horner step of the products by kq: ``P = 2 P + d M`` with ``d = 2 twice + once``
+    (lane B's quotient digit, or ``k_bit`` with ``twice = 0`` for the last step). After
+    lane B's ``I + F - 1`` digits and the ``k_bit`` step, ``k_me = kq Mux(x_major, me^2,
+    w1^2)`` and ``k_mg = kq (2 S - mg)^2`` exactly (``kq = 2 khq + k_bit``)."""
+    loads = []
+    for product, value in kq_products(unit):
+        addend = Mux(twice, value << 1, Mux(once, value, 0))
+        loads.append(product.eq((product << 1) + addend))
+    return loads
+
+
+def kq_products(unit) -> list:
+    """(register, multiplicand) of each product by kq (`kq_product_steps`)."""
+    pc = unit.pieces
+    return [(pc.k_me, pc.m_me), (pc.k_mg, pc.m_mg)]
+
+
+def _end_factors(unit) -> types.SimpleNamespace:
+    """The sub-pixel factors of the pieces (combinational, valid from the clock after lane
+    A's fix-up: ``h0`` needs ``row0``), and the flag ``single``."""
+    s = unit.config.subpixel_bits
+    S = 1 << s
+    r, w = unit.regs, _end_widths(unit)
+    single = (r.columns == 1) & w.fp & w.lp
+    v1_2 = ((r.v0_r + r.dv) << 1) + S  # 2 v1 + S
+    e1 = v1_2[: s + 1]  # P1's height in its row, half sub-pixel steps
+    # h0 = 2 v0 - (2 row0 - 1) S = m - q in [-S, 3 S) when the first column holds P0 (row0's
+    # digit m in [0, 2 S), |q| <= S): s + 3 bits; it is used only then (mg = 0 otherwise).
+    h0 = ((r.v0_r << 1) + S - (r.row0 << (s + 1)))[: s + 3].as_signed()
+    w0 = 2 * S - w.mg - Mux(single, w.me, 0)
+    xm = r.x_major
+    return types.SimpleNamespace(
+        single=single,
+        v1_2=v1_2,
+        w0=w0,
+        # the multiplicands of the products by |I_d| (`id_product_steps`)
+        h0=h0,
+        e1=e1,
+        w1=w.w1,
+        # x: max(-h0, 0) mg (rect0); y: w0 (band0)
+        first=Mux(xm, Mux(h0 < 0, -h0, 0)[: s + 2] * w.mg, w0),
+        # x: e1 me (rect1); y: e1 w1 (the first term of total1)
+        end=e1 * Mux(xm, w.me, w.w1),
+    )
+
+
+ID_PRODUCTS = ("h0", "e1", "w1", "first", "end")  # `id_product_steps`: |I_d| times these
+
+
+def id_product_steps(unit, bit) -> list:
+    """One Horner step of the products by ``|I_d|``: ``P = 2 P + bit M`` for each
+    multiplicand of `ID_PRODUCTS`, `bit` the next bit of ``|I_d|`` (MSB first: lane A's
+    multiplier bit in the first ``I`` clocks of its second pass; `unit` clears them at the
+    fix-up)."""
+    return [product.eq((product << 1) + Mux(bit, value, 0)) for product, value in id_products(unit)]
+
+
+def id_products(unit) -> list:
+    """(register, multiplicand) of each product by ``|I_d|`` (`ID_PRODUCTS`; the
+    multiplicands are combinational, constant from the clock after the fix-up)."""
+    f, pc = _end_factors(unit), unit.pieces
+    return [(getattr(pc, f"id_{name}"), getattr(f, name)) for name in ID_PRODUCTS]
+
+
+def id_product_clear(unit) -> list:
+    return [getattr(unit.pieces, f"id_{name}").eq(0) for name in ID_PRODUCTS]
 
 
 def run_end_loads(unit) -> list:
     """The loads of RUN's last clock: the pieces that need no lane result (`unit` is the
     `EdgeSetupUnit`; its regs, command and ``pieces`` registers). x-major edges use rect
     and y-major ones band, so one product serves both where the shift allows; the products
-    by ``|I_d|`` multiply the sub-pixel factors first (``half`` is ``|I_d|`` shifted)."""
+    by ``|I_d|`` are done (``id_*``), shifted by ``k`` they are in ``ifix`` units."""
     config = unit.config
     s, F = config.subpixel_bits, config.F
-    S, k = 1 << s, F - s - 1  # half = |I_d| << k: ifix per half sub-pixel step
-    r, cmd, pc = unit.regs, unit.cmd, unit.pieces
-    fp, lp = ~r.start_clip, ~pc.cut_end  # the first and last columns hold the vertices
-    p0, p1 = Mux(r.x_major, cmd.x0, cmd.y0), Mux(r.x_major, cmd.x1, cmd.y1)
-    mg = Mux(fp, Mux(r.major_neg, S - (p0 << 1), (p0 << 1) + S)[: s + 1], 0)
-    me = Mux(lp, Mux(r.major_neg, S + (p1 << 1), S - (p1 << 1))[: s + 1], 0)
-    single = (r.columns == 1) & fp & lp
-    v1_2 = ((r.v0_r + r.dv) << 1) + S  # 2 v1 + S
-    e1 = v1_2[: s + 1]  # P1's height in its row, half sub-pixel steps
-    h0 = (r.v0_r << 1) + S - (r.row0 << (s + 1))  # 2 v0 - (2 row0 - 1) S
-    w0 = 2 * S - mg - Mux(single, me, 0)
-    w1 = 2 * S - me
+    k = F - s - 1  # |I_d| << k: ifix per half sub-pixel step
+    r, pc, f = unit.regs, unit.pieces, _end_factors(unit)
     xm = r.x_major
-    # x: rect0 = (max(-hs0, 0) mg) >> (s + 1) (mg = 0 unless hs0 = half h0); y: band0.
-    first_rect = (r.i_d * Mux(xm, Mux(h0 < 0, -h0, 0) * mg, w0)) << k
-    # x: rect1 = (end_height me) >> (s + 1); y: the first term of total1.
-    end_rect = ((r.i_d * (e1 * Mux(xm, me, w1))) << k) >> (s + 1)
+    first_rect = pc.id_first << k  # x: rect0 << (s + 1); y: band0
+    end_rect = (pc.id_end << k) >> (s + 1)  # x: rect1; y: the first term of total1
     sq = 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
-    slope_area = (r.kq * Mux(xm, 4 * S * S - me * me, w1 * w1)) >> sq
+    # kq (4 S^2 - me^2) for x-major, kq w1^2 for y-major (`kq_product_steps`)
+    slope_area = Mux(xm, (r.kq << (2 * s + 2)) - pc.k_me, pc.k_me) >> sq
     return [
-        pc.single.eq(single),
-        pc.w0.eq(w0),
-        pc.hs0_fp.eq((r.i_d * h0) << k),
-        pc.square0.eq((2 * S - mg) * (2 * S - mg) - Mux(single, me * me, 0)),
-        pc.end_row.eq(v1_2 >> (s + 1)),
-        pc.end_height.eq((r.i_d * e1) << k),
+        pc.single.eq(f.single),
+        pc.w0.eq(f.w0),
+        pc.hs0_fp.eq(pc.id_h0 << k),
+        pc.end_row.eq(f.v1_2 >> (s + 1)),
+        pc.end_height.eq(pc.id_e1 << k),
         pc.total1.eq(Mux(xm, slope_area, end_rect - slope_area)),
         pc.rect0.eq(Mux(xm, first_rect >> (s + 1), 0)),
         pc.rect1.eq(Mux(xm, end_rect, 0)),
         pc.band0.eq(Mux(xm, 0, first_rect)),
-        pc.band1.eq(Mux(xm, 0, (r.i_d * w1) << k)),
+        pc.band1.eq(Mux(xm, 0, pc.id_w1 << k)),
     ]
 
 
@@ -92,8 +191,11 @@ def final_pieces(m, unit) -> None:
     """The end pieces of ``next_bank`` (combinational, FINAL): the registered ones, the
     flags, the winding sign, and ``hs0``, ``total0``, which need ``jq`` (lane A's result;
     one product: ``kq`` by the squared width for x-major, the height sum by the width for
-    y-major)."""
+    y-major; the x-major one, kq times the first piece's squared width, is ``k_mg`` less
+    ``k_me`` when one column holds both vertices), and the multiplicands of
+    `kq_product_steps`."""
     s = unit.config.subpixel_bits
+    S, w = 1 << s, _end_widths(unit)
     r, cmd, pc, nb = unit.regs, unit.cmd, unit.pieces, unit.next_bank
     fp = ~r.start_clip
     borrow = nb.jr < nb.khr
@@ -103,7 +205,8 @@ def final_pieces(m, unit) -> None:
     at_end = pc.end_height + Mux(adj > 0, nb.ifix, Mux(adj < 0, -nb.ifix, 0))
     he_first = Mux(pc.single, at_end, nb.jq + nb.khq + carry)
     xm = r.x_major
-    area0 = Mux(xm, nb.kq, hs0 + he_first) * Mux(xm, pc.square0, pc.w0)
+    k_area0 = pc.k_mg - Mux(pc.single, pc.k_me, 0)  # kq ((2 S - mg)^2 - single me^2)
+    y_area0 = (hs0 + he_first) * pc.w0
     # Travelling down the screen with the inside on the left puts the inside on the +x side.
     dy_pos, inside_left = ~unit.accepted["dy_le0"], cmd.inside == 0
     plus, minus = Const(1, signed(2)), Const(-1, signed(2))
@@ -113,6 +216,8 @@ def final_pieces(m, unit) -> None:
         nb.first_partial.eq(fp),
         nb.last_partial.eq(~pc.cut_end),
         nb.hs0.eq(hs0),
-        nb.total0.eq(Mux(xm, area0 >> (2 * s + 3), area0 >> (s + 2))),
+        nb.total0.eq(Mux(xm, k_area0 >> (2 * s + 3), y_area0 >> (s + 2))),
+        pc.m_me.eq(Mux(xm, w.me * w.me, w.w1 * w.w1)),  # `kq_product_steps`
+        pc.m_mg.eq((2 * S - w.mg) * (2 * S - w.mg)),
         *(nb[name].eq(getattr(pc, name)) for name in _EARLY),
     ]

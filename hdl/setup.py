@@ -84,7 +84,14 @@ from .layouts import (
     register_shape,
     setup_layout,
 )
-from .pieces import final_pieces, pieces_registers, run_end_loads
+from .pieces import (
+    final_pieces,
+    id_product_clear,
+    id_product_steps,
+    kq_product_steps,
+    pieces_registers,
+    run_end_loads,
+)
 
 __all__ = ["ERRORS_BITS", "EdgeSetupUnit", "accept_values"]
 
@@ -235,6 +242,7 @@ class EdgeSetupUnit(wiring.Component):
         self._final(m)
         if self.pieces is not None:
             window.append(self.pieces.cut_end.eq(r_cut_end(self.regs)))
+            window += [self.pieces.k_me.eq(0), self.pieces.k_mg.eq(0)]
             final_pieces(m, self)
         self._fsm(m, accept, fold, window, lanes)
         return m
@@ -503,6 +511,13 @@ class EdgeSetupUnit(wiring.Component):
             a_step=lane_a.step(m, r.neg_du, "lane_a"),
             b_step=lane_b.step(m, r.neg_du, "lane_b"),
             b_bits=I + F - 1,  # lane B is done at counter I + F - 1
+            # the first I clocks of pass 2 (or before the fix-up): |I_d|'s bits
+            id_bits=Mux(
+                r.start_clip,
+                counter <= self.pass1_long + I,
+                counter <= self.pass1_bits + I,
+            ),
+            k_bit=k_bit,
             k_loads=[
                 r.kq.eq((lane_b.q << 1) + k_bit),
                 r.kr.eq(Mux(k_bit, khr_less, lane_b.r << 1)),
@@ -595,10 +610,19 @@ class EdgeSetupUnit(wiring.Component):
             m.d.sync += lanes.fixup_loads
         with m.Else():
             m.d.sync += lanes.a_step
+        if self.pieces is not None:  # the products by |I_d|: its bits lead lane A's pass 2
+            with m.If(lanes.fixup):
+                m.d.sync += id_product_clear(self)
+            with m.Elif(lanes.id_bits):
+                m.d.sync += id_product_steps(self, self.lane_a.a[-1])
         with m.If(counter < lanes.b_bits):
             m.d.sync += lanes.b_step
+            if self.pieces is not None:  # the products by kq, one quotient digit a clock
+                m.d.sync += kq_product_steps(self, self.lane_b.twice, self.lane_b.once)
         with m.If(counter == lanes.b_bits):  # lane B is done
             m.d.sync += lanes.k_loads
+            if self.pieces is not None:
+                m.d.sync += kq_product_steps(self, 0, lanes.k_bit)
         with m.If(lanes.done):
             m.next = "FINAL"
             if self.pieces is not None:  # kq, row0 and the column count are known
@@ -673,6 +697,7 @@ class _MulDivLane:
             less_2du.eq((self.r << 1) + Mux(bit, self.x_2du, neg_du << 1)),
         ]
         twice, once = ~less_2du[-1], ~less_du[-1]
+        self.twice, self.once = twice, once  # the step's quotient digit d (2, 1 or 0)
         # 2 Q + b digit + d: the low bits (where b digit + d lands) for each d, and the high
         # bits of 2 Q plus the carry out of the low bits (Q's high part, or it plus one).
         low_bits = len(self.digit2) + 1

@@ -317,6 +317,36 @@ def test_deltas_stepper_has_no_multiplier(name):
     assert muldiv_cells(EdgeStepper(CORE_CONFIGS[name], OUTPUT)) == {}
 
 
+def _mul_widths(design) -> list[tuple[int, int]]:
+    """(A_WIDTH, B_WIDTH) of every $mul cell of `design`'s RTLIL."""
+    import re
+
+    from amaranth.back import rtlil
+
+    text = rtlil.convert(design)
+    cells = re.findall(r"cell \$mul .*?\n(.*?)\n\s*end", text, flags=re.S)
+    widths = []
+    for body in cells:
+        a = int(re.search(r"parameter \\A_WIDTH (\d+)", body)[1])
+        widths.append((a, int(re.search(r"parameter \\B_WIDTH (\d+)", body)[1])))
+    return widths
+
+
+@pytest.mark.parametrize("name", ["default", "small", "wide"])
+def test_deltas_setup_has_no_wide_product(name):
+    """The products by kq and by |I_d| are shift-adds over the lanes' clocks
+    (`edgeaa.hdl.pieces`): every $mul left has a factor of sub-pixel bits, and only the
+    y-major first area (the height sum times the first piece's width) a wide one."""
+    from edgeaa.hdl.setup import EdgeSetupUnit
+
+    config = CORE_CONFIGS[name]
+    widths = _mul_widths(EdgeSetupUnit(config, output=OUTPUT))
+    small = config.subpixel_bits + 3
+    assert widths and all(min(a, b) <= small for a, b in widths), widths
+    assert sum(max(a, b) > small for a, b in widths) <= 1, widths
+    assert len(widths) <= 6, widths
+
+
 def test_the_writes_core_keeps_its_bank():
     config = CORE_CONFIGS["default"]
     writes = {f.name for f in bank_fields(config)}

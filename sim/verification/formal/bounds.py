@@ -27,6 +27,7 @@ import types
 from amaranth.hdl import Mux, Signal, Value, signed, unsigned
 
 from ....hdl.layouts import setup_layout
+from ....hdl.pieces import id_products, kq_products
 from ....hdl.setup import accept_values
 from ....model import timing
 from ....model.bank import bank_fields
@@ -41,7 +42,9 @@ def check(ctx):
 
     s = _setup(ctx, add)
     ctx.setup_spec = s  # the latched command's fold and window, the next bank (deltas checks)
-    _lanes(ctx, s, add)
+    lanes = _lanes(ctx, s, add)
+    if ctx.setup.pieces is not None:
+        _products(ctx, s, lanes, add)
     _bank(ctx, s, add)
     _stepper(ctx, add)
     for condition, message in asserts:
@@ -240,6 +243,62 @@ def _lanes(ctx, s, add):
     k_ready = final | (run & (counter > I + F - 1))
     k_ok = (r.kq == (b_q << 1) + k_bit) & (r.kr == (b_r << 1) - Mux(k_bit, r.du, 0))
     add(implies(k_ready, k_ok), "kq, kr registered from lane B")
+    return types.SimpleNamespace(in_pass2=in_pass2, steps_a=steps_a, k_ready=k_ready)
+
+
+def _products(ctx, spec, lanes, add):
+    """The deltas setup's Horner products (`edgeaa.hdl.pieces`), formed over the lanes'
+    clocks. Their multiplicands are constant from the clock each product starts (they read
+    registers loaded by WINDOW, and ``row0`` at the fix-up), so each step keeps a linear
+    relation between the product and the digits formed so far; only the two products the
+    model's `end_pieces` states exactly (``end_height``, ``hs0``) need an exact one.
+
+    By ``|I_d|``, one bit a clock MSB first over the first ``I`` clocks of lane A's second
+    pass (cleared at the fix-up), with ``digits`` the bits of ``|I_d|`` consumed so far:
+    ``id_e1``, ``id_h0`` are the multiplicand times ``digits`` (modulo the register; P = 2 P
+    + bit M keeps that), ``id_w1`` and y-major ``id_first`` (times ``w1``, ``w0``, both at
+    most ``2 S``) at most ``digits << (s + 1)``, which bounds the bands by ifix.
+
+    By kq, one quotient digit a clock beside lane B, then ``k_bit`` (cleared by WINDOW), with
+    ``formed`` lane B's quotient and then kq: each at most ``formed << (2 s + 2)`` (its
+    multiplicand is at most ``(2 S)^2``), which keeps them in their registers and the
+    x-major slope area ``(kq << (2 s + 2)) - k_me`` positive; ``k_me <= k_mg`` while their
+    multiplicands are so ordered, so the x-major first area ``k_mg - k_me`` of one column
+    is positive too. (An exact invariant would need the wide products again.)
+
+    Both order facts (``w0 >= 0``; ``me^2 <= (2 S - mg)^2`` in one column) need the last
+    column's cut, which WINDOW registers (c1 > hi)."""
+    config, setup, win, f = ctx.config, ctx.setup, spec.win, spec.fold
+    r, run, final = setup.regs, setup.in_run, setup.in_final
+    cut_end = setup.pieces.cut_end == (win.last != f.c1)
+    add(implies(run | final, cut_end), "cut end")
+    s, I = config.subpixel_bits, config.intensity_bits  # noqa: E741
+    # The top steps_a bits of |I_d| (all I of them from then on), I bits wide.
+    unread = Mux(lanes.steps_a >= I, 0, I - lanes.steps_a)[: I.bit_length()]
+    digits = r.i_d >> unread
+    products = {reg.name: (reg, value) for reg, value in id_products(setup)}
+    id_ok = {}
+    for name in ("pc_id_e1", "pc_id_h0"):
+        reg, value = products[name]
+        want = Signal(reg.shape(), name=f"want_{name}")  # modulo the register (`eq`)
+        ctx.m.d.comb += want.eq(digits * value)
+        id_ok[name] = reg == want
+    wide = digits << (s + 1)
+    id_ok["pc_id_w1"] = products["pc_id_w1"][0] <= wide
+    id_ok["pc_id_first"] = r.x_major | (products["pc_id_first"][0] <= wide)
+    for name, condition in id_ok.items():
+        add(implies(lanes.in_pass2, condition), f"product {name}")
+    formed = Mux(lanes.k_ready, r.kq, setup.lane_b.q) << (2 * s + 2)
+    (k_me, m_me), (k_mg, m_mg) = kq_products(setup)
+    square = 1 << (2 * s + 2)  # (2 S)**2
+    k_ok = [
+        m_me <= square,
+        m_mg <= square,
+        k_me <= formed,
+        k_mg <= formed,
+        implies(m_me <= m_mg, k_me <= k_mg),
+    ]
+    add(implies(run | final, all_(k_ok)), "products by kq")
 
 
 # -- the bank ----------------------------------------------------------------------------------
