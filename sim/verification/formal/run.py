@@ -30,6 +30,7 @@ __all__ = [
     "find_tools",
     "harness_rtlil",
     "main",
+    "report",
     "run_harness",
     "run_proof",
     "sby_script",
@@ -493,9 +494,8 @@ def main(argv=None) -> int:
     parser.add_argument("--workdir", help="keep the runs in WORKDIR/<proof>")
     parser.add_argument("--timeout", type=float)
     args = parser.parse_args(argv)
-    failures = 0
-    for name in args.proofs:
-        result = run_proof(
+    return report(
+        run_proof(
             name,
             fault=args.fault,
             depth=args.depth,
@@ -505,6 +505,15 @@ def main(argv=None) -> int:
             workdir=Path(args.workdir) / name if args.workdir else None,
             timeout=args.timeout,
         )
+        for name in args.proofs
+    )
+
+
+def report(results) -> int:
+    """Print each `FormalResult` as it comes (its summary and failed checks); the exit
+    status of a proof command: 1 when any failed."""
+    failures = 0
+    for result in results:
         print(result.summary(), flush=True)
         for entry in result.failed:
             print(f"  {entry}")

@@ -119,7 +119,7 @@ from ....model.accumulate import composite, intensity_offset
 from ....model.beat import CELLS
 from ....model.config import EdgeConfig
 from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig, resolve_latency
-from .run import FormalResult, find_tools, harness_rtlil, run_harness, sby_script
+from .run import FormalResult, find_tools, harness_rtlil, report, run_harness, sby_script
 
 __all__ = [
     "SMALL_TILE",
@@ -910,9 +910,8 @@ def main(argv=None) -> int:
         help="the groups' own assertions only (not inductive)",
     )
     args = parser.parse_args(argv)
-    failures = 0
-    for name in args.proofs:
-        result = run_tile_proof(
+    return report(
+        run_tile_proof(
             name,
             fault=args.fault,
             depth=args.depth,
@@ -921,11 +920,8 @@ def main(argv=None) -> int:
             timeout=args.timeout,
             invariants=args.invariants,
         )
-        print(result.summary(), flush=True)
-        for entry in result.failed:
-            print(f"  {entry}")
-        failures += not result.passed
-    return 1 if failures else 0
+        for name in args.proofs
+    )
 
 
 if __name__ == "__main__":
