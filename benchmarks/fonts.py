@@ -46,6 +46,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import os
 import sys
 import time
 import warnings
@@ -57,7 +58,14 @@ from edgeaa.model import EdgeConfig
 from edgeaa.render import plan_scene, render_scene
 from edgeaa.render.compare import _polygon_points, agg_scene, skia_scene
 from edgeaa.render.corpus import FONT_TEXT as TEXT
-from edgeaa.render.corpus import FONTS, ICONS, adversarial_scenes, font_scene, icon_scene
+from edgeaa.render.corpus import (
+    FONTS,
+    ICONS,
+    adversarial_scenes,
+    font_file,
+    font_scene,
+    icon_scene,
+)
 from edgeaa.render.exact import crossed_cells, edges_per_pixel, error_rows, exact_image
 from edgeaa.render.render import Plan
 from edgeaa.render.scene import Scene
@@ -308,6 +316,20 @@ def worst(rows: list[dict]) -> dict[str, tuple[float, str]]:
     return out
 
 
+FONT_NAMES = ", ".join(name for name, _ in FONTS) + ", ..."
+
+
+def _sizes(parser: argparse.ArgumentParser, flag: str, text: str) -> list[int]:
+    """A comma-separated list of sizes in px, each an integer in [4, 256]."""
+    try:
+        sizes = [int(s) for s in text.split(",") if s]
+    except ValueError:
+        sizes = None
+    if sizes is None or not all(4 <= s <= 256 for s in sizes):
+        parser.error(f"{flag} {text!r}: expected comma-separated px sizes in [4, 256]")
+    return sizes
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(
         description=__doc__.splitlines()[0],
@@ -322,7 +344,11 @@ def main() -> int:
     config = EdgeConfig()
     kinds = dict(FONTS)
     fonts = [f for f in args.fonts.split(",") if f]
-    sizes = [int(s) for s in args.sizes.split(",") if s]
+    unknown = [f for f in fonts if not os.path.exists(font_file(f))]
+    if unknown:
+        parser.error(f"--fonts: no such font {unknown[0]!r}; matplotlib ships {FONT_NAMES}")
+    sizes = _sizes(parser, "--sizes", args.sizes)
+    icon_sizes = _sizes(parser, "--icon-sizes", args.icon_sizes)
     start = time.perf_counter()
     out = {"machine": machine_info(), "config": str(config), "text": TEXT, "fonts": []}
     for name in fonts:
@@ -334,7 +360,7 @@ def main() -> int:
             out["fonts"].append(row)
     out["fonts"].sort(key=lambda r: (-r["methods"]["paper"]["max"], r["scene"]))
     out["icons"] = []
-    for size in [int(s) for s in args.icon_sizes.split(",") if s]:
+    for size in icon_sizes:
         for name in ICONS:
             print(f"icon {name} {size} px", file=sys.stderr, flush=True)
             out["icons"].append(evaluate(icon_scene(name, size, config.full_scale), config))
