@@ -308,8 +308,8 @@ def test_capacity_is_reached_in_simulation():
 
     A long edge, then one-column edges offered back to back; the sink takes beats until the
     long edge's last beat reaches the output register and then stalls: every stage of the
-    core fills (setup, bank, stepper, each pipeline stage holding an edge's last column) and
-    the core stops accepting. Once the sink takes beats again, every edge finishes.
+    core fills (the setup holding its bank, the stepper, each pipeline stage holding an edge's
+    last column) and the core stops accepting. Once the sink takes beats again, every edge finishes.
     """
     config = EdgeConfig()
     long_edge, short_edge = Edge(0, 0, 640, 5, i_in=200, i_out=10), Edge(0, 0, 8, 3, i_in=9)
