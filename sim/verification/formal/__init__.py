@@ -36,7 +36,7 @@ Check groups (``checks``):
     machine, the bank, the stepper, an edge's last column in a stage of the stepper's output
     pipeline or in the output register, a pending ``error``), is within [0, `capacity`] and
     is 0 when the core is idle; the columns of an edge are contiguous in the pipeline. A tag
-    bit rides along each command (setup -> bank -> stepper -> pipeline stages -> output
+    bit rides along each command (setup and its bank -> stepper -> pipeline stages -> output
     register): a bad command never reaches the bank, the stepper or a beat. ``errors``
     equals the saturating count of ``error`` pulses.
 ``bounds``
