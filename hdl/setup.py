@@ -602,7 +602,7 @@ class EdgeSetupUnit(wiring.Component):
                 m.next = "RUN"
             with m.State("RUN"):
                 self._run(m, lanes)
-            with m.State("FINAL"):
+            with m.State("FINAL"):  # next_bank complete; the clock keeps `setup_latency`
                 m.next = "HOLD"
             with m.State("HOLD"):
                 with m.If(bank.ready):
