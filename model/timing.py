@@ -241,7 +241,8 @@ def stall_window(first_beat: int, sink_ready: int) -> tuple[int, int]:
     valid (clock `first_beat` with an always-ready sink) and from `sink_ready` on; the beat
     waits in the output register in between, and the loop and the pipeline hold. So the
     stepper's clocks are every clock but ``[first_beat, sink_ready)``, while the setup runs
-    on: a bank is loaded in the window only while the loop is idle (``~active``)."""
+    on until its bank waits: a bank is loaded in the window only while the loop is idle
+    (``~active``)."""
     return first_beat, max(0, sink_ready - first_beat)
 
 
