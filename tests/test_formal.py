@@ -21,7 +21,7 @@ from amaranth.sim import Simulator
 from edgeaa.hdl import EdgeAntialiaser, setup_layout
 from edgeaa.hdl import deltas as hdl_deltas
 from edgeaa.hdl.setup import STATES, accept_values
-from edgeaa.model import Edge, EdgeConfig, setup
+from edgeaa.model import Edge, EdgeConfig, setup, timing
 from edgeaa.sim.verification.formal import (
     DELTA_PROOFS,
     PROOFS,
@@ -232,6 +232,18 @@ def test_deltas_changed_stalled_payload_is_caught(tools):
     )
     assert result.status == "FAIL", _explain(result)
     assert any(entry.startswith("stream: a held beat keeps") for entry in result.failed)
+
+
+def test_changed_held_bank_is_caught(tools):
+    """The setup's bank stream keeps the hold rule too (its payload is the setup's registers):
+    a bank that changes while held is caught (bounded, from reset, small configuration). The
+    second edge's bank is the first that can be held: valid 2 P clocks after reset, while the
+    stepper is still on the first edge (the sink may stall)."""
+    config = DELTA_CONFIGS["small"]
+    depth = 2 * timing.setup_interval(config) + 4
+    result = run_proof("stream", config, fault="stall_bank", mode="bmc", depth=depth)
+    assert result.status == "FAIL", _explain(result)
+    assert "stream: a held bank keeps its payload (bmc)" in result.failed, _explain(result)
 
 
 # -- the plumbing ----------------------------------------------------------------------------
