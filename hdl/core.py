@@ -2,13 +2,14 @@
 """The edge antialiaser core: a multi-cycle per-edge setup and a one-column-per-clock stepper.
 
 `EdgeAntialiaser` reproduces `edgeaa.model.step.run_edge` bit for bit. It joins two
-components through a one-edge register bank:
+components through a one-edge bank stream:
 
 * **Setup** (`edgeaa.hdl.setup.EdgeSetupUnit`): a small state machine that folds the edge
   into the first octant, cuts its columns to the clip window and computes the `EdgeSetup`
   fields the loop needs with two lanes of a sequential multiply-divide unit. Its latency is
   fixed per configuration, and ``W + 1`` clocks longer for an edge whose start the clip
-  window cuts. Its ``bank`` stream holds the result until the stepper takes it.
+  window cuts. Its ``bank`` stream is the result, formed from its registers, which it holds
+  until the stepper takes it (it accepts the next command in that clock).
 * **Stepping** (`edgeaa.hdl.stepper.EdgeStepper`): one column per clock with an always-ready
   sink, using only adds, subtracts, compares, fixed shifts and shift-add multiplies by the
   small odd constants of the segment estimate; the column's writes are computed in a

@@ -122,7 +122,8 @@ class SetupArray(wiring.Component):
         for index, unit in enumerate(self.units):
             m.d.comb += [
                 unit.edges.payload.eq(self.edges.payload),
-                # A busy unit is in IDLE while its bank waits: it must not see the command.
+                # A busy unit must not see the command: back in IDLE after a dropped command,
+                # or in HOLD in the clock its bank is taken, it would accept it.
                 unit.edges.valid.eq(self.edges.valid & self.edges.ready & (d == index)),
             ]
         with m.If(self.edges.valid & self.edges.ready):

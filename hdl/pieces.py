@@ -2,8 +2,9 @@
 
 Only the setup of a core with output ``"deltas"`` has them. No new clock: the values that
 need no lane result are registered in RUN's last clock (``kq``, ``row0`` and the column
-count are known by then) and FINAL forms the two that need the accumulator's start ``jq``
-(``hs0`` of a whole first column, ``total0`` of a y-major edge) when it writes the bank.
+count are known by then) and ``next_bank`` forms the two that need the accumulator's start
+``jq`` (``hs0`` of a whole first column, ``total0`` of a y-major edge), combinational from
+FINAL on.
 
 Everything is in half sub-pixel steps as in the model (``2 S`` per pixel, so a pixel's edges
 are whole numbers): ``mg`` (from the first column's start to P0) and ``me`` (from P1 to the
@@ -188,7 +189,7 @@ def run_end_loads(unit) -> list:
 
 
 def final_pieces(m, unit) -> None:
-    """The end pieces of ``next_bank`` (combinational, FINAL): the registered ones, the
+    """The end pieces of ``next_bank`` (combinational, from FINAL on): the registered ones, the
     flags, the winding sign, and ``hs0``, ``total0``, which need ``jq`` (lane A's result;
     one product: ``kq`` by the squared width for x-major, the height sum by the width for
     y-major; the x-major one, kq times the first piece's squared width, is ``k_mg`` less

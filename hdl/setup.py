@@ -11,8 +11,10 @@ and samples ``clip`` with it), FOLD (``a + 1``: the fold; a bad command is dropp
 again in ``a + 2``), WINDOW (``a + 2``: the columns cut to the window, lane A loaded), RUN
 (``R = I + F + 1`` clocks from ``a + 3``, ``W + 1`` more when the window cuts the start; an
 edge with no column inside the window leaves RUN after its second clock, IDLE again in
-``a + 5``, no bank write), FINAL (writes the bank as soon as it is free; IDLE the clock
-after).
+``a + 5``, no bank write), FINAL (``a + R + 3``: ``next_bank`` is formed), HOLD (from
+``a + R + 4``: ``bank.valid``; the bank is ``next_bank`` of the registers HOLD keeps, so the
+setup has no bank register; it ends in the clock the stepper takes the bank, and the setup
+accepts the next command in that clock).
 
 Timing structure (for the clock rate; no path carries more than about one wide carry chain):
 the accept clock registers the command with its deltas ``x1 - x0``, ``x0 - x1`` (and for y),
@@ -96,7 +98,7 @@ from .pieces import (
 __all__ = ["ERRORS_BITS", "EdgeSetupUnit", "accept_values"]
 
 ERRORS_BITS = 16
-STATES = ("IDLE", "FOLD", "WINDOW", "RUN", "FINAL")
+STATES = ("IDLE", "FOLD", "WINDOW", "RUN", "FINAL", "HOLD")
 
 
 def accept_values(config: EdgeConfig, command) -> dict:
@@ -157,7 +159,8 @@ class EdgeSetupUnit(wiring.Component):
     """The per-edge setup: edge commands in, one bank of stepper constants per good edge out.
 
     ``edges`` (in stream, `edge_layout`), ``clip`` (in, `clip_layout`, sampled with the
-    command), ``bank`` (out stream, `setup_layout`: written in FINAL, held until taken),
+    command), ``bank`` (out stream, `setup_layout`: valid in HOLD, ``next_bank`` of the held
+    registers),
     ``errors`` (saturating count of bad commands) and ``error`` (a one-clock pulse per bad
     command). See the module docstring for the states and the arithmetic.
 
@@ -172,8 +175,10 @@ class EdgeSetupUnit(wiring.Component):
       ``value_base``, ``value_neg``, ``row0``, ``counter``, ``kq``, ``kr``);
     * ``lane_a``, ``lane_b``: the two multiply-divide lanes (`_MulDivLane`: ``q``, ``r``,
       ``a``, ``x``, ``digit``, ``x_du``, ``x_2du``, ``digit2``);
-    * ``in_idle``, ``in_fold``, ``in_window``, ``in_run``, ``in_final``: the state;
-    * ``next_bank`` (`setup_layout`): the value FINAL writes into the bank, combinational.
+    * ``in_idle``, ``in_fold``, ``in_window``, ``in_run``, ``in_final``, ``in_hold``: the
+      state;
+    * ``next_bank`` (`setup_layout`): the bank's payload, combinational, complete from
+      FINAL on.
     """
 
     def __init__(
@@ -527,7 +532,7 @@ class EdgeSetupUnit(wiring.Component):
     # -- FINAL: the bank contents ------------------------------------------------------------
 
     def _final(self, m):
-        """``next_bank``, the bank FINAL writes, from the registers and both lanes' results."""
+        """``next_bank``, the bank's payload, from the registers and both lanes' results."""
         config = self._config
         W, F, n = config.coord_bits, config.F, config.segments
         r, lane_a, lane_b, nb = self.regs, self.lane_a, self.lane_b, self.next_bank
@@ -570,16 +575,19 @@ class EdgeSetupUnit(wiring.Component):
     # -- the state machine -------------------------------------------------------------------
 
     def _fsm(self, m, accept, fold, window, lanes):
-        bank = self.bank
-        with m.If(bank.ready):
-            m.d.sync += bank.valid.eq(0)
+        bank, edges = self.bank, self.edges
+        # The bank is ``next_bank`` of the registers HOLD keeps: no register of its own. The
+        # next command is accepted in the clock the stepper takes the bank (the registers it
+        # reads and the ones the command loads change on the same clock edge).
+        m.d.comb += [
+            bank.payload.eq(self.next_bank),
+            bank.valid.eq(self.in_hold),
+            edges.ready.eq(self.in_idle | (self.in_hold & bank.ready)),
+        ]
         m.d.sync += self.error.eq(0)
         with m.FSM(name="setup") as fsm:
             with m.State("IDLE"):
-                m.d.comb += self.edges.ready.eq(1)
-                with m.If(self.edges.valid):
-                    m.d.sync += accept
-                    m.next = "FOLD"
+                self._take(m, accept)
             with m.State("FOLD"):
                 with m.If(self.accepted["bad"]):
                     m.d.sync += self.error.eq(1)
@@ -594,11 +602,21 @@ class EdgeSetupUnit(wiring.Component):
                 m.next = "RUN"
             with m.State("RUN"):
                 self._run(m, lanes)
-            with m.State("FINAL"), m.If(~bank.valid | bank.ready):
-                m.d.sync += [bank.valid.eq(1), bank.payload.eq(self.next_bank)]
-                m.next = "IDLE"
+            with m.State("FINAL"):  # next_bank complete; the clock keeps `setup_latency`
+                m.next = "HOLD"
+            with m.State("HOLD"):
+                with m.If(bank.ready):
+                    m.next = "IDLE"
+                self._take(m, accept)
         for state in STATES:
             m.d.comb += getattr(self, f"in_{state.lower()}").eq(fsm.ongoing(state))
+
+    def _take(self, m, accept):
+        """Accept the command offered while ``edges.ready`` is high (IDLE, or HOLD's last
+        clock)."""
+        with m.If(self.edges.valid & self.edges.ready):
+            m.d.sync += accept
+            m.next = "FOLD"
 
     def _run(self, m, lanes):
         r = self.regs

@@ -3,8 +3,9 @@
 Clocks are numbered from 0, the first clock after reset. A stream transfer "happens in clock
 c" when valid and ready are both high in clock c (it completes at the clock edge ending c).
 
-Structure. The core has a setup state machine (IDLE -> FOLD -> WINDOW -> RUN -> FINAL) and a
-stepper, joined by a one-edge register bank:
+Structure. The core has a setup state machine (IDLE -> FOLD -> WINDOW -> RUN -> FINAL ->
+HOLD) and a stepper, joined by the bank stream (the setup's registers, held until the stepper
+loads them):
 
 * IDLE: ``edges.ready`` is high; an edge offered in clock ``a`` is accepted in clock ``a``,
   and the ``clip`` port is sampled with it.
@@ -21,8 +22,11 @@ stepper, joined by a one-edge register bank:
   clocks for the slope. So ``R = I + F + 1``, plus ``W + 1`` for a start-clipped edge: fixed
   per configuration otherwise. An edge with no column inside the window leaves RUN after its
   second clock (``a + 4``) without writing the bank: back in IDLE in clock ``a + 5``.
-* FINAL (from clock ``a + R + 3``): writes the bank as soon as it is free, i.e. it is empty or
-  the stepper takes the old contents in the same clock; IDLE again the clock after.
+* FINAL (clock ``a + R + 3``): the bank's contents are complete (combinational, from the
+  registers).
+* HOLD (from clock ``a + R + 4``): the bank is valid, the registers hold, until the stepper
+  loads it; in that clock the setup accepts the next command if one is offered (IDLE after
+  it otherwise).
 * The stepper loads the bank in the first clock ``t`` where the bank is valid and the
   stepper is idle or stepping the previous edge's last column (the handover has no bubble).
   Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
@@ -37,27 +41,34 @@ accepted in clock ``a`` by an idle core has its first beat in clock ``a + L`` (`
 1`` if clipped at its start). For edge ``n`` (good edges only, always-ready sink, source
 offering edges back to back from clock 0)::
 
-    a[0] = 0, a[n + 1] = f[n] + 1     (after a bad command accepted in a: next at a + 2;
+    a[0] = 0, a[n + 1] = t[n]         (after a bad command accepted in a: next at a + 2;
                                        after an edge with no visible column: next at a + 5)
-    f[n] = max(a[n] + R[n] + 3, t[n - 1])        clock FINAL writes the bank
+    f[n] = a[n] + R[n] + 3                       clock of FINAL (the bank valid from f + 1)
     t[n] = max(f[n] + 1, t[n - 1] + C[n - 1])    clock the stepper loads edge n
     beat of column c of edge n: t[n] + 1 + D + c     (C[n] = visible columns of edge n)
+
+The setup has no bank register of its own: it holds edge n until the stepper loads it, so the
+next edge is accepted in that clock at the earliest (``a[n + 1] = t[n]``; a setup with its
+own bank register could accept it in ``f[n] + 1`` and wait in FINAL for ``t[n - 1]`` only).
+While the stepper keeps up (``t[n] = f[n] + 1``) both give the same clocks; a setup that
+finishes while the stepper is still on a long edge waits for it.
 
 ``R + 3 = L - D - 2``. ``L = I + F + 6 + D``: 37 clocks for the default configuration (and
 its pw and truncated variants, F = 21), 38 for seg2 and seg4; 22 for coord_bits=4
 subpixel_bits=0 intensity_bits=4 (F = 10), 41 for coord_bits=15 subpixel_bits=8 (F = 25).
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 4`` clocks at
-most (``P = L - D - 1``: 34 for the default configuration); the stepper takes ``C`` clocks
-per edge. A stream of edges of ``C`` columns therefore sustains ``C / max(C, P)`` columns per
-clock: exactly one column per clock (no gap between edges) when every edge has at least
-``P`` columns. From an idle core, a stream of such edges (total ``T`` columns) has its last
-beat in clock ``L + T - 1``: the mean over the whole run is ``T / (L + T)`` (`stream_rate`),
-at least 0.95 once ``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks.
-A stalled sink delays the stepper and its pipeline (and, once the bank is full, the setup)
-clock for clock; nothing else depends on the data. `schedule`'s ``sink_ready`` models a sink
-first ready in clock T (the polygon pipeline's accumulator after a scan, `stall_window`),
-its ``idle`` a source that idles before some commands.
+most (``P = L - D - 1``: 34 for the default configuration; accept to load, the next accept
+in the load's clock); the stepper takes ``C`` clocks per edge. A stream of edges of ``C``
+columns therefore sustains ``C / max(C, P)`` columns per clock: exactly one column per clock
+(no gap between edges) when every edge has at least ``P`` columns. From an idle core, a
+stream of such edges (total ``T`` columns) has its last beat in clock ``L + T - 1``: the
+mean over the whole run is ``T / (L + T)`` (`stream_rate`), at least 0.95 once
+``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. A stalled sink
+delays the stepper and its pipeline (and, once its bank waits, the setup) clock for clock;
+nothing else depends on the data. `schedule`'s ``sink_ready`` models a sink first ready in
+clock T (the polygon pipeline's accumulator after a scan, `stall_window`), its ``idle`` a
+source that idles before some commands.
 
 Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
 One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
@@ -134,9 +145,9 @@ def setup_latency(config: EdgeConfig, output: str = "writes") -> int:
 
 def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
     """Clocks per edge the setup sustains, rounded up: edges of at least this many columns
-    keep the stepper busy (one column per clock). One unit: accept, FOLD, WINDOW, RUN and
-    FINAL, ``R + 4`` (its bank register lets it start the next edge while the bank waits).
-    ``N >= 2`` units (`SetupArray`): each holds an edge from its accept to the stepper's load
+    keep the stepper busy (one column per clock). One unit: accept, FOLD, WINDOW, RUN,
+    FINAL, then the load, in whose clock it accepts the next edge: ``R + 4``. ``N >= 2``
+    units (`SetupArray`): each holds an edge from its accept to the stepper's load
     of its bank and retires it then, ``R + 5`` clocks, so ``ceil((R + 5) / N)``."""
     if setup_units == 1:
         return run_cycles(config) + 4
@@ -144,8 +155,9 @@ def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -
 
 
 def unit_cycles(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
-    """Clocks one setup unit spends per edge in steady state: ``R + 4`` alone, ``R + 5`` in
-    an array (accept to retirement, then free the clock after)."""
+    """Clocks one setup unit spends per edge in steady state: ``R + 4`` alone (accept to the
+    load, the next accept in the load's clock), ``R + 5`` in an array (accept to retirement,
+    then free the clock after)."""
     return run_cycles(config) + (4 if setup_units == 1 else 5)
 
 
@@ -156,7 +168,7 @@ class EdgeTiming:
 
     edge: Edge
     accepted: int  # clock the command was accepted
-    bank: int | None  # clock FINAL wrote the bank
+    bank: int | None  # clock of FINAL (the bank is valid from the next clock)
     load: int | None  # clock the stepper loaded the bank
     beats: tuple[int, ...]  # clock of each column's beat (valid and ready)
 
@@ -229,7 +241,8 @@ def stall_window(first_beat: int, sink_ready: int) -> tuple[int, int]:
     valid (clock `first_beat` with an always-ready sink) and from `sink_ready` on; the beat
     waits in the output register in between, and the loop and the pipeline hold. So the
     stepper's clocks are every clock but ``[first_beat, sink_ready)``, while the setup runs
-    on: a bank is loaded in the window only while the loop is idle (``~active``)."""
+    on until its bank waits: a bank is loaded in the window only while the loop is idle
+    (``~active``)."""
     return first_beat, max(0, sink_ready - first_beat)
 
 
@@ -245,11 +258,12 @@ def _enabled(clock: int, count: int, stall: tuple[int, int]) -> list[int]:
 def _schedule_one(
     config: EdgeConfig, shapes, edges, latency: int, depth: int, idle=None, sink_ready=0
 ):
-    """`schedule` of the core with one setup unit (its bank register decouples it)."""
+    """`schedule` of the core with one setup unit: it holds an edge from its accept to the
+    stepper's load of its bank and accepts the next command from that clock on."""
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     accept = 0  # the setup's first free clock, then the accept
-    prev_load = prev_last = None  # load and last step clocks of the previous good edge
+    prev_last = None  # the clock the stepper steps the previous good edge's last column
     stall = None  # the stepper's stall window, from the first beat on
     for k, shape in enumerate(shapes):
         edge = None if edges is None else edges[k]
@@ -265,16 +279,13 @@ def _schedule_one(
             accept += EMPTY_EDGE_CYCLES
             continue
         bank = accept + latency - depth - 2 + (extra if clipped_start else 0)
-        load = bank + 1
-        if prev_load is not None:
-            bank = max(bank, prev_load)
-            load = max(bank + 1, prev_last)
+        load = bank + 1 if prev_last is None else max(bank + 1, prev_last)
         if stall is None:
             stall = stall_window(load + 1 + depth, sink_ready)
         steps = _enabled(load + 1, columns + depth, stall)  # step c, then the pipeline's
         out.append(EdgeTiming(edge, accept, bank, load, tuple(steps[depth:])))
-        accept = bank + 1
-        prev_load, prev_last = load, steps[columns - 1]
+        accept = load
+        prev_last = steps[columns - 1]
     return out
 
 

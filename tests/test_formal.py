@@ -21,7 +21,7 @@ from amaranth.sim import Simulator
 from edgeaa.hdl import EdgeAntialiaser, setup_layout
 from edgeaa.hdl import deltas as hdl_deltas
 from edgeaa.hdl.setup import STATES, accept_values
-from edgeaa.model import Edge, EdgeConfig, setup
+from edgeaa.model import Edge, EdgeConfig, setup, timing
 from edgeaa.sim.verification.formal import (
     DELTA_PROOFS,
     PROOFS,
@@ -234,6 +234,18 @@ def test_deltas_changed_stalled_payload_is_caught(tools):
     assert any(entry.startswith("stream: a held beat keeps") for entry in result.failed)
 
 
+def test_changed_held_bank_is_caught(tools):
+    """The setup's bank stream keeps the hold rule too (its payload is the setup's registers):
+    a bank that changes while held is caught (bounded, from reset, small configuration). The
+    second edge's bank is the first that can be held: valid 2 P clocks after reset, while the
+    stepper is still on the first edge (the sink may stall)."""
+    config = DELTA_CONFIGS["small"]
+    depth = 2 * timing.setup_interval(config) + 4
+    result = run_proof("stream", config, fault="stall_bank", mode="bmc", depth=depth)
+    assert result.status == "FAIL", _explain(result)
+    assert "stream: a held bank keeps its payload (bmc)" in result.failed, _explain(result)
+
+
 # -- the plumbing ----------------------------------------------------------------------------
 
 
@@ -308,8 +320,8 @@ def test_capacity_is_reached_in_simulation():
 
     A long edge, then one-column edges offered back to back; the sink takes beats until the
     long edge's last beat reaches the output register and then stalls: every stage of the
-    core fills (setup, bank, stepper, each pipeline stage holding an edge's last column) and
-    the core stops accepting. Once the sink takes beats again, every edge finishes.
+    core fills (the setup holding its bank, the stepper, each pipeline stage holding an edge's
+    last column) and the core stops accepting. Once the sink takes beats again, every edge finishes.
     """
     config = EdgeConfig()
     long_edge, short_edge = Edge(0, 0, 640, 5, i_in=200, i_out=10), Edge(0, 0, 8, 3, i_in=9)

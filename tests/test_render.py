@@ -16,7 +16,7 @@ import pytest
 from fixtures import TINY_SCENE
 
 from edgeaa.cli import main
-from edgeaa.model import Edge, EdgeConfig, exact_coverage
+from edgeaa.model import Edge, EdgeConfig, exact_coverage, setup
 from edgeaa.model.reference import error_bound
 from edgeaa.model.vector import run_edges_deltas
 from edgeaa.render import Polygon, Scene, SceneError, builtin, parse_path, parse_scene, render_scene
@@ -455,9 +455,15 @@ def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, mod
 
 
 def test_every_skipping_rule_saves_work_and_leaves_the_image_unchanged(plans, model_renders):
-    totals = {}
+    """Each rule saves cycles or deltas on the built-ins, but the projection: it saves stepped
+    columns (the starburst's), and there the setup of the next edges hides them (it holds an
+    edge until the stepper loads it, `edgeaa.model.timing`)."""
+    totals, projected_columns = {}, 0
     for name in BUILTINS:
         skipping, full = model_renders[name], render_scene(plans[name], skip=False)
+        for e in (int(e) for e in skipping.projected):
+            whole, moved = plans[name].edge(e), plans[name].edge(e, clip=True)
+            projected_columns += setup(DEFAULT, whole).columns - setup(DEFAULT, moved).columns
         assert np.array_equal(skipping.image, full.image), name
         assert skipping.cycles < full.cycles and len(skipping.sent) < len(full.sent), name
         assert skipping.cells_scanned < full.cells_scanned, name
@@ -471,9 +477,10 @@ def test_every_skipping_rule_saves_work_and_leaves_the_image_unchanged(plans, mo
         assert "images identical: yes" in report and "partly outside" in report, report
         assert "projected" in report and "culled" in report and "horizontal" in report
     assert len(totals) == 5, totals
+    projection = totals.pop("edges left of the viewport (projected to its edge)")
+    assert projection[0] > 0 and projection[1] >= 0 and projected_columns > 0, projection
     for rule, (edges, cycles, deltas) in totals.items():
-        assert edges > 0 and (cycles > 0 or deltas > 0), (rule, edges, cycles, deltas)
-    assert all(cycles > 0 for _, cycles, _ in totals.values()), totals
+        assert edges > 0 and cycles > 0, (rule, edges, cycles, deltas)
 
 
 @pytest.mark.parametrize(

@@ -96,7 +96,8 @@ def test_a_wrong_unit_count_in_the_model_is_caught():
 
 def test_an_ungated_dispatch_is_caught(monkeypatch):
     """The order check can fail: a dispatcher that offers the command to a busy unit (in
-    IDLE with its bank waiting, it accepts it and overwrites the bank) loses edges."""
+    HOLD, it accepts it in the clock the stepper takes its bank, which the array does not
+    count) loses edges."""
 
     def ungated(self, m):
         d = self.dispatch
@@ -126,8 +127,8 @@ def test_setup_units_is_checked():
 
 
 def test_timing_model_is_the_single_unit_schedule_for_one():
-    """`schedule` with one unit is the single unit's (its own bank register), and an array
-    of one would be slower: a unit in an array holds its edge until the stepper loads it."""
+    """`schedule` with one unit is the single unit's (the next accept in the clock of the
+    load), and an array of one would be slower: a unit in an array is free the clock after."""
     config = CORE_CONFIGS["default"]
     edges = [run_of(config, 3 + n, 7 + n, 2) for n in range(5)]
     one = timing_model.beat_cycles(config, edges, setup_units=1)

@@ -25,8 +25,9 @@ full width), `harness` (`FormalHarness`), one module per property family (`strea
 Check groups (``checks``):
 
 ``stream``
-    The ``writes`` hold rule: a beat that is valid and not taken stays valid with the same
-    payload in the next clock (unless the reset is asserted in between).
+    The hold rule of ``writes`` and of the setup's ``bank`` stream (writes core only: the
+    deltas proof checks its output alone): a beat that is valid and not taken stays valid
+    with the same payload in the next clock (unless the reset is asserted in between).
 ``count``
     No accepted command is lost. The harness counts good commands accepted minus edges
     finished (beats with ``last & valid & ready``) minus edges with no column in their window
@@ -36,7 +37,7 @@ Check groups (``checks``):
     machine, the bank, the stepper, an edge's last column in a stage of the stepper's output
     pipeline or in the output register, a pending ``error``), is within [0, `capacity`] and
     is 0 when the core is idle; the columns of an edge are contiguous in the pipeline. A tag
-    bit rides along each command (setup -> bank -> stepper -> pipeline stages -> output
+    bit rides along each command (setup and its bank -> stepper -> pipeline stages -> output
     register): a bad command never reaches the bank, the stepper or a beat. ``errors``
     equals the saturating count of ``error`` pulses.
 ``bounds``
@@ -115,7 +116,8 @@ change, not the property.
 `python -m edgeaa.sim.verification.formal [proof ...]` runs proofs from the command line.
 
 Faults (``fault``, to show the checks can fail): ``stall_payload`` flips a payload bit the
-harness observes while a beat is held (a core that changes a stalled beat), ``silent_drop``
+harness observes while a beat is held (a core that changes a stalled beat), ``stall_bank``
+the same on the setup's bank, ``silent_drop``
 hides the ``error`` pulse (a core that drops a bad command without reporting it),
 ``tight_jq`` asserts the false invariant jq < ifix / 2, ``tight_hs`` (deltas core, group
 ``dloop``) the false invariant hs >= 0. The deltas proofs (`DELTA_PROOFS`) and their times:

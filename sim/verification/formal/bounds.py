@@ -315,9 +315,8 @@ def _bank(ctx, s, add):
     for name, condition in constants_ok(config, bk).items():
         add(implies(bank.valid, condition), f"bank {name}")
     add(implies(bank.valid, major_ok(config, bk_axes)), "bank major axis")
-    moved_bank, moved_stepper = Signal(name="start_moved_bank"), Signal(name="start_moved")
-    with m.If(setup.in_final & (~bank.valid | bank.ready)):
-        m.d.sync += moved_bank.eq(setup.regs.start_clip)
+    # The bank is the setup's: its start moved when the setup's window did (``start_clip``).
+    moved_bank, moved_stepper = setup.regs.start_clip, Signal(name="start_moved")
     with m.If(bank.valid & bank.ready):
         m.d.sync += moved_stepper.eq(moved_bank)
     bank_row = (bk_axes.minor >= 0) & (bk_axes.minor <= top)

@@ -7,10 +7,11 @@ model's), and bad commands accepted minus ``error`` pulses. Each count equals th
 derived from the core's state (the setup's state, the bank, the stepper, an edge's last
 column in a stage of the stepper's output pipeline or in the output register, a pending
 ``error``), is within [0, `capacity`] and is 0 when the core is idle; the columns of an edge
-are contiguous in the pipeline. A tag bit rides along each command (setup -> bank -> stepper
--> pipeline stages -> output register): a bad command never reaches the bank, the stepper or
-a beat. ``errors`` equals the saturating count of ``error`` pulses. The registers the setup
-loads with a command equal `accept_values` of the latched command while it is not idle.
+are contiguous in the pipeline. A tag bit rides along each command (setup and its bank ->
+stepper -> pipeline stages -> output register): a bad command never reaches the bank, the
+stepper or a beat. ``errors`` equals the saturating count of ``error`` pulses. The registers
+the setup loads with a command equal `accept_values` of the latched command while it is not
+idle.
 """
 
 from __future__ import annotations
@@ -25,10 +26,11 @@ from .spec import all_, fold, implies
 
 
 def capacity(core) -> int:
-    """Commands the core can hold: one in the setup (or its pending error), one in the bank,
-    one in the stepper and one per stage of the stepper's output pipeline (its last column
-    there while the stepper already steps the next edge): ``3 + stepper.latency``."""
-    return 3 + core.stepper.latency
+    """Commands the core can hold: one in the setup (in work, its bank waiting, or its
+    pending error), one in the stepper and one per stage of the stepper's output pipeline
+    (its last column there while the stepper already steps the next edge): ``2 +
+    stepper.latency``."""
+    return 2 + core.stepper.latency
 
 
 def check(ctx):
@@ -76,7 +78,7 @@ def check(ctx):
         (implies(error, setup.in_idle), "count: error only in IDLE"),
         (all_(occupancy.contiguous), "count: columns of an edge are contiguous"),
         (implies(in_window | in_run | in_final, ~cmd_bad), "count: bad command in the setup"),
-        (implies(bank.valid, ~tags.bank), "count: bad command in the bank"),
+        (implies(bank.valid, ~cmd_bad), "count: bad command in the bank"),
         (implies(stepper.active, ~tags.stepper), "count: bad command stepped"),
         (all_(tags.positions), "count: column or beat of a bad command"),
         (core.errors == saturated, "count: errors counts error pulses"),
@@ -126,19 +128,18 @@ def _occupancy(ctx, positions, cmd_bad, error) -> types.SimpleNamespace:
 
 
 def _tags(ctx, positions, cmd_bad):
-    """The command's badness, carried by the harness from FINAL to the bank, the stepper and
-    along the pipeline; ``positions``: each pipeline position holds no bad command's column."""
+    """The command's badness, carried by the harness from the bank (the setup's latched
+    command while the bank is valid) to the stepper and along the pipeline; ``positions``:
+    each pipeline position holds no bad command's column."""
     m, out, bank = ctx.m, ctx.out, ctx.setup.bank
     en = ~out.valid | out.ready
-    tag_bank, tag_stepper = Signal(), Signal()
+    tag_stepper = Signal()
     tags = [Signal(name=f"tag_p{index + 1}") for index in range(len(positions))]
-    with m.If(ctx.setup.in_final & (~bank.valid | bank.ready)):
-        m.d.sync += tag_bank.eq(cmd_bad)
     with m.If(bank.valid & bank.ready):
-        m.d.sync += tag_stepper.eq(tag_bank)
+        m.d.sync += tag_stepper.eq(cmd_bad)
     with m.If(en):
         m.d.sync += [
             tag.eq(older) for tag, older in zip(tags, [tag_stepper, *tags[:-1]], strict=True)
         ]
     tagged = [implies(valid, ~tag) for (valid, _), tag in zip(positions, tags, strict=True)]
-    return types.SimpleNamespace(bank=tag_bank, stepper=tag_stepper, positions=tagged)
+    return types.SimpleNamespace(stepper=tag_stepper, positions=tagged)

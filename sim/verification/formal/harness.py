@@ -27,7 +27,7 @@ __all__ = ["CHECKS", "COVERS", "DELTA_CHECKS", "FAULTS", "LINE_CHECKS", "FormalH
 LINE_CHECKS = ("pipe", "beat", "minor")  # the writes core's pipeline
 CHECKS = ("stream", "count", "bounds", *LINE_CHECKS, *DELTA_CHECKS)
 COVERS = ("drop", "stepper", "deltas")
-FAULTS = ("stall_payload", "silent_drop", "tight_jq", "tight_hs")
+FAULTS = ("stall_payload", "stall_bank", "silent_drop", "tight_jq", "tight_hs")
 
 
 def _choose(name: str, value, allowed) -> tuple[str, ...]:
