@@ -32,10 +32,12 @@ least and greatest column of the polygon's kept cells (``lo``, ``hi``), a bit pe
 rows scanned since the tile started (``seen``: the resolve has written them whole). A seen
 row is read from ``lo``; at ``hi`` (below the last column) the row may stop: its sum through
 ``hi`` (``rsum``, the row's cells as they leave the output register, plus the cell waiting
-there) is known the clock after ``hi`` is read, and decides that clock's read, ``hi + 1``
-when it is nonzero, else the next row's first cell; after the last row the scan ends that
-clock, one later than after a last column. A row not seen yet is read whole. The output's
-``start`` marks a row's first cell, where the resolve's prefix sum restarts.
+there) is known once ``hi`` waits in the output register. The scan reads ``hi + 1`` as ``hi``
+is taken; when the sum is zero that cell (zero: no delta lies right of ``hi``) is not sent
+and the next row is chosen, so a row that stops at ``hi`` costs a clock more than its cells.
+A row not seen yet is read whole. The output's ``start`` marks a row's first cell, where the
+resolve's prefix sum restarts. The decision only loads registers (no read address depends on
+a sum).
 """
 
 from __future__ import annotations
@@ -288,7 +290,7 @@ class TileAccumulator(wiring.Component):
             ]
 
         def done():
-            m.d.sync += [lo.eq(last), hi.eq(0), decide.eq(0)]
+            m.d.sync += [lo.eq(last), hi.eq(0)]
             m.next = "ACC"
 
         with m.State("WAIT"):  # the last beat's write landed in the clock before
@@ -297,32 +299,28 @@ class TileAccumulator(wiring.Component):
             with m.If(touched != 0):
                 m.next = "SCAN"
         with m.State("SCAN"):
-            # a zero sum through hi ends the row: read the next row's first cell instead
-            skip = decide & (total == 0)
-            x, y = Mux(skip, next_x, scan_x), Mux(skip, next_y, scan_y)
-            m.d.comb += [self.scanning.eq(1), self._scan_addr.eq(Cat(x[2:], y))]
-            with m.If(skip & (touched == 0)):
-                done()
-            with m.Elif(advance):
-                bank = bank_of(x, y)
+            m.d.comb += [self.scanning.eq(1), self._scan_addr.eq(Cat(scan_x[2:], scan_y))]
+            with m.If(advance):
+                # the cell waiting is the row's hi and the sum through it is 0: the row stops,
+                # and this clock's read (hi + 1, a zero cell: its clear changes nothing) is
+                # not sent
+                stop = decide & (total == 0)
+                bank = bank_of(scan_x, scan_y)
                 m.d.comb += self._clear.eq(1 << bank)
                 m.d.sync += [
-                    o_valid.eq(1),
+                    o_valid.eq(~stop),
                     o["op"].eq(CELL_OP["cell"]),
-                    o["x"].eq(x),
-                    o["y"].eq(y),
+                    o["x"].eq(scan_x),
+                    o["y"].eq(scan_y),
                     o["first"].eq(first),
-                    o["start"].eq(row_start | skip),
+                    o["start"].eq(row_start),
                     o["sel"].eq(bank),
                     first.eq(0),
                     row_start.eq(0),
-                    scan_x.eq(x + 1),
-                    decide.eq(Mux(skip, next_seen, partial) & (x == hi) & (hi != last)),
+                    scan_x.eq(scan_x + 1),
+                    decide.eq(partial & (scan_x == hi) & (hi != last)),
                 ]
-                with m.If(skip):  # the next row, chosen here (never at its last column)
-                    choose()
-                    m.d.sync += [scan_x.eq(x + 1), row_start.eq(0)]
-                with m.If(x == last):
+                with m.If(stop | (scan_x == last)):
                     choose()
                     with m.If(touched == 0):
                         done()

@@ -196,12 +196,19 @@ def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> in
 
 
 class Scan(NamedTuple):
-    """What a `PolygonEnd` read (the cycle model's input): touched rows, cells, and whether the
-    last row ended at ``hi`` on a zero sum (the accumulator learns it a clock after the read)."""
+    """What a `PolygonEnd` read (the cycle model's input): per touched row, the cells read and
+    whether the row stopped at ``hi`` on a zero sum (the accumulator then reads one more cell,
+    and does not send it)."""
 
-    rows: int
-    cells: int
-    late: bool
+    runs: tuple[tuple[int, bool], ...] = ()
+
+    @property
+    def rows(self) -> int:
+        return len(self.runs)
+
+    @property
+    def cells(self) -> int:
+        return sum(n for n, _ in self.runs)
 
 
 class TileModel:
@@ -256,7 +263,7 @@ class TileModel:
 
     def span(self, row: int) -> tuple[int, int, bool]:
         """The columns `first .. last` an end reads of touched `row` (module docstring) and
-        whether the read stops at ``hi`` for a zero sum (decided a clock after reading it)."""
+        whether the read stops at ``hi`` for a zero sum."""
         last = self.tile.width - 1
         if not self.seen[row]:
             return 0, last, False
@@ -273,10 +280,10 @@ class TileModel:
         ifix = d << F
         limit = self.tile.winding_limit * ifix
         rows = np.flatnonzero(self.touched)
-        cells, late = 0, False
+        runs = []
         for row in rows:
-            first, last, late = self.span(row)
-            cells += last - first + 1
+            first, last, stop = self.span(row)
+            runs.append((last - first + 1, stop))
             sums = np.cumsum(self.cells[row])
             self.cells[row] = 0
             if d == 0:
@@ -293,7 +300,7 @@ class TileModel:
         self.seen |= self.touched
         self.touched[:] = False
         self.lo, self.hi = self.tile.width - 1, 0
-        return Scan(len(rows), cells, late)
+        return Scan(tuple(runs))
 
 
 # -- cycle model ----------------------------------------------------------------------------
@@ -302,11 +309,10 @@ class TileModel:
 # are offered back to back (each from the clock after the previous one was taken) and the
 # pixel sink is always ready. The accumulator takes a beat per clock. An end taken in clock
 # a reads the first touched cell in a + 2 (the last beat's read-modify-write lands in a + 1)
-# and offers it to the resolve in a + 3, then one cell per clock (the cells of `Scan`), the
-# next read as a cell is taken; it takes the next op once the last cell is taken and the
-# scan is over: the clock after the last read, or two clocks after it when the scan ended
-# on a row's zero sum at ``hi`` (`Scan.late`); with no touched row it takes the next op in
-# a + 2. Tile and flush pass through its output register (offered in
+# and offers it to the resolve in a + 3, then one cell per clock (the runs of `Scan`), the
+# next read as a cell is taken; a row that stops at ``hi`` leaves a clock with no cell after
+# it (the read of ``hi + 1``, not sent). It takes the next op once the last cell is taken and
+# the scan is over (the clock after its last read); with no touched row in a + 2. Tile and flush pass through its output register (offered in
 # a + 1). The resolve takes a cell per clock; a cell taken in r writes its pixel in clock
 # r + `resolve_latency`. A polygon's first cell, a tile and a flush wait until no cell is in
 # flight (the pixels they read must be written). A flush taken in f sends pixel k in
@@ -371,19 +377,21 @@ class TileClock:
         if isinstance(op, PolygonEnd):
             out.rows_scanned += result.rows
             out.cells_scanned += result.cells
-            n = result.cells
-            if not n:
+            if not result.cells:
                 self.ready = a + EMPTY_END
                 return a
-            r = max(a + SCAN_START, self.free, self.quiet)
-            out.cells.extend(range(r, r + n))
+            r = t = max(a + SCAN_START, self.free, self.quiet)
+            for n, stop in result.runs:  # a row that stops at hi: its next clock sends nothing
+                out.cells.extend(range(t, t + n))
+                t += n + stop
+            last, stop = out.cells[-1], result.runs[-1][1]
             # the first read in a + 2, the next ones as the cells are taken; SCAN ends after
-            # the last read, or a clock later (`Scan.late`)
-            stop = (r + n - 2 if n > 1 else a + SCAN_START - 1) + 1 + result.late
-            self.ready, self.quiet = max(r + n - 1, stop), r + n + self.latency
-            self.scanning += stop - (a + SCAN_START - 1)
+            # the last read, or after the one as the last cell is taken (a row that stops)
+            end = last + 1 if stop else (last if result.cells > 1 else a + SCAN_START)
+            self.ready, self.quiet = max(last, end), last + 1 + self.latency
+            self.scanning += end - (a + SCAN_START - 1)
             self.acc_stall += r - a - SCAN_START
-            self.resolve_ops += n
+            self.resolve_ops += result.cells
             return a
         r = max(a + 1, self.free, self.quiet)  # tile or flush: the output register
         self.ready = r

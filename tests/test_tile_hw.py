@@ -22,6 +22,7 @@ from edgeaa.model.tile import (
     Beats,
     Flush,
     PolygonEnd,
+    Scan,
     TileConfig,
     TileModel,
     TileOverflow,
@@ -163,8 +164,8 @@ def test_the_scan_stops_at_the_polygons_last_column_on_a_zero_sum():
     check_exact(tile, ops)
     model = TileModel(tile)
     scans = [model.feed(op) for op in ops]
-    assert [s.cells for s in scans if hasattr(s, "late")] == [16, 4, 14, 1, 2, 4, 16, 4]
-    assert [s.late for s in scans if hasattr(s, "late")] == [0, 1, 0, 1, 1, 1, 0, 1]
+    assert [s.cells for s in scans if isinstance(s, Scan)] == [16, 4, 14, 1, 2, 4, 16, 4]
+    assert [s.runs[-1][1] for s in scans if isinstance(s, Scan)] == [0, 1, 0, 1, 1, 1, 0, 1]
 
 
 def test_a_scene_through_the_stages_is_the_renderers_image():
