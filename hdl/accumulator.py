@@ -324,7 +324,9 @@ class TileAccumulator(wiring.Component):
                     choose()
                     with m.If(touched == 0):
                         done()
-        obs.__dict__.update(scan_x=scan_x, scan_y=scan_y, partial=partial, decide=decide)
+        obs.__dict__.update(
+            scan_x=scan_x, scan_y=scan_y, partial=partial, row_start=row_start, decide=decide
+        )
 
     def _take(self, m, p, o, o_valid, params, background, first):
         """An op taken in ACC: an end keeps the polygon's fields; tile and flush go out."""

@@ -312,11 +312,12 @@ class TileModel:
 # and offers it to the resolve in a + 3, then one cell per clock (the runs of `Scan`), the
 # next read as a cell is taken; a row that stops at ``hi`` leaves a clock with no cell after
 # it (the read of ``hi + 1``, not sent). It takes the next op once the last cell is taken and
-# the scan is over (the clock after its last read); with no touched row in a + 2. Tile and flush pass through its output register (offered in
-# a + 1). The resolve takes a cell per clock; a cell taken in r writes its pixel in clock
-# r + `resolve_latency`. A polygon's first cell, a tile and a flush wait until no cell is in
-# flight (the pixels they read must be written). A flush taken in f sends pixel k in
-# f + 2 + k (row by row) and the resolve takes its next op in f + width * height + 1.
+# the scan is over (the clock after its last read); with no touched row in a + 2. Tile and
+# flush pass through its output register (offered in a + 1). The resolve takes a cell per
+# clock; a cell taken in r writes its pixel in clock r + `resolve_latency`. A polygon's first
+# cell, a tile and a flush wait until no cell is in flight (the pixels they read must be
+# written). A flush taken in f sends pixel k in f + 2 + k (row by row) and the resolve takes
+# its next op in f + width * height + 1.
 
 SCAN_START = 3  # end taken in a: its first cell offered in a + 3
 EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
