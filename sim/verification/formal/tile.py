@@ -22,11 +22,11 @@ taken stays valid with the same payload); the output's ready is free. Check grou
     (nothing lost, nothing doubled); the cells come in rows, each row's cells in consecutive
     columns from its first (``start``), the rows ascending; a row's first pass since the
     last tile or flush op starts at column 0 and goes on to the last column (what the
-    resolve's written rows need); ``first`` on the polygon's first cell only, a row's first,
-    with the end's intensity, I_out and fill rule; each tile and flush op comes out once, in
-    order, with its background; no other op code is sent. (That the columns a scan leaves
-    out have a zero prefix sum is the model's claim, `edgeaa.model.tile` "Scan span",
-    checked against the renderer in simulation.)
+    resolve's written rows need); a row stops before its last column only when the sums it
+    sent add to zero (modulo ``2**cell_bits``), so right of it the prefix sum is zero;
+    ``first`` on the polygon's first cell only, a row's first, with the end's intensity,
+    I_out and fill rule; each tile and flush op comes out once, in order, with its
+    background; no other op code is sent.
 ``accumulator`` ``sums``
     The shadow of cell (X, Y): the exact sum of every delta of an accepted beat placed there
     (several cells of one beat merged, back-to-back beats through the read-modify-write
@@ -83,7 +83,9 @@ scan position follows the waiting cell; ``decide`` only with that cell at ``hi``
 last column; the accumulator's ``seen`` is the ghost's rows plus the row whose start is
 still to send; the waiting cell's ``first`` is the ghost's, a row's start, and follows the
 last cell sent; a row's first pass goes on (the waiting cell is the next column, and the
-scan stays in that row and reads it whole); the end's fields are the ghost's; a tile or
+scan stays in that row and reads it whole); ``rsum`` is the ghost's sum of the row's cells
+sent, and the last row sent is closed (at its last column, or that sum zero) whenever no
+cell of it is still to come; the end's fields are the ghost's; a tile or
 flush op waits exactly when the ghost's does, with its code and background. Both: the
 origin is the ghost's. Each follows from all of them in the clock before (`TILE_PROOFS`
 runs k = 2). ``pixels`` (`_resolve_invariants`): (X, Y)
@@ -372,6 +374,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
         first=Signal(name="first_due"),
         seen=Signal(tile.height, name="rows_seen"),  # rows begun since the tile or flush op
         open=Signal(name="row_open"),  # a row's first pass, not yet at its last column
+        row_sum=Signal(tile.cell_bits, name="row_sum"),  # the row's sums sent, from its start
         params={n: Signal.like(src[n], name=f"end_{n}") for n in ("intensity", "i_out", "evenodd")},
         passing=Signal(name="pass_pending"),
         code=Signal.like(cells.payload.op, name="pass_code"),
@@ -515,6 +518,12 @@ def _bit(tile, y):
     return (Const(1, tile.height) << y)[: tile.height]
 
 
+def _closed(tile, s):
+    """The last row sent ended at its last column or its cells sent sum to zero (modulo
+    ``2**cell_bits``): right of it the prefix sum is zero, so the row may stop there."""
+    return (s.last[0] == tile.width - 1) | (s.row_sum == 0)
+
+
 def _scan_state(m, tile, dut, s, covers):
     """Invariants of the accumulator's control against the ``deltas`` ghost: while the
     accumulator takes ops, a cell hit lies in a touched row and in the span ``lo .. hi``;
@@ -579,6 +588,16 @@ def _scan_state(m, tile, dut, s, covers):
             "scan after the output",
         ),
         (obs.seen == (s.seen | due), "rows seen"),
+        (obs.rsum.as_unsigned() == s.row_sum, "row sum"),
+        (_When(obs.in_acc & pending, o["x"] == last), "the scan's last cell at the last column"),
+        (
+            _When(
+                (obs.in_acc & ~pending) | obs.in_wait | (scan & ~obs.o_valid) | passing,
+                _closed(tile, s),
+            ),
+            "rows closed",
+        ),
+        (_When(pending & o["start"], _closed(tile, s)), "rows closed before a start"),
         (_When(pending, o["first"] == s.first), "output first"),
         (_When(pending & o["first"], o["start"]), "output first starts a row"),
         (
@@ -636,6 +655,10 @@ def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
             _implies(sent & ~is_cell, s.passing & ~s.owed & ~s.open),
             "deltas: tile or flush not taken",
         ),
+        (
+            _implies((is_cell & out.start) | (sent & ~is_cell), _closed(tile, s)),
+            "deltas: a row stopped before its last column on a nonzero sum",
+        ),
         (_implies(sent & ~is_cell, out.op == s.code), "deltas: tile or flush code"),
         (
             _implies(sent & (out.op == CELL_OP["tile"]), out.background == s.background),
@@ -649,6 +672,7 @@ def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
         m.d.sync += [s.first.eq(0), s.last[0].eq(out.x), s.last[1].eq(out.y)]
         whole = Mux(out.start, ~seen, s.open)
         m.d.sync += s.open.eq(whole & (out.x != tile.width - 1))
+        m.d.sync += s.row_sum.eq(Mux(out.start, 0, s.row_sum) + out.sum)
         with m.If(out.start):
             m.d.sync += s.seen.eq(s.seen | _bit(tile, out.y))
     with m.If(sent & ~is_cell):
