@@ -26,6 +26,18 @@ port (the read returns the old value), so the clear costs no pass. The read port
 the output's advance: a stalled cell stays in the bank's output register, and the output
 payload's sum is the selected bank's read data. Tile and flush ops go out through the same
 output register, in order. Latency: a cell read in clock s is offered in s + 1.
+
+Scan span (`edgeaa.model.tile`, "Scan span", where it is shown exact). Two registers hold the
+least and greatest column of the polygon's kept cells (``lo``, ``hi``), a bit per row the
+rows scanned since the tile started (``seen``: the resolve has written them whole). A seen
+row is read from ``lo``; at ``hi`` (below the last column) the row may stop: its sum through
+``hi`` (``rsum``, the row's cells as they leave the output register, plus the cell waiting
+there) is known once ``hi`` waits in the output register. The scan reads ``hi + 1`` as ``hi``
+is taken; when the sum is zero that cell (zero: no delta lies right of ``hi``) is not sent
+and the next row is chosen, so a row that stops at ``hi`` costs a clock more than its cells.
+A row not seen yet is read whole. The output's ``start`` marks a row's first cell, where the
+resolve's prefix sum restarts. The decision only loads registers (no read address depends on
+a sum).
 """
 
 from __future__ import annotations
@@ -129,6 +141,11 @@ class TileAccumulator(wiring.Component):
         self._touched_set = Signal(tile.height)
         rows = [Mux(keep, Const(1, tile.height) << cy, 0) for keep, _, cy, _ in raw]
         m.d.comb += self._touched_set.eq(rows[0] | rows[1] | rows[2] | rows[3])
+        # the least and greatest kept column (width - 1 and 0 when none is kept)
+        self._beat_lo, self._beat_hi = Const(tile.width - 1, tile.x_bits), Const(0, tile.x_bits)
+        for keep, cx, _, _ in raw:
+            self._beat_lo = Mux(keep & (cx < self._beat_lo), cx, self._beat_lo)
+            self._beat_hi = Mux(keep & (cx > self._beat_hi), cx, self._beat_hi)
         out = []
         for j, (keep, cx, cy, delta) in enumerate(raw):
             same = [raw[k][0] & (raw[k][1] == cx) & (raw[k][2] == cy) for k in range(4)]
@@ -192,21 +209,48 @@ class TileAccumulator(wiring.Component):
             ]
 
     def _control(self, m, ports, o_valid, advance, accept):
-        """Input acceptance, the scan of the touched rows, and the output register."""
+        """Input acceptance, the polygon's span and the rows it touched, the scan, and the
+        output register."""
         tile, p = self._tile, self.ops.payload
-        touched = Signal(tile.height)
-        scan_x, scan_y = Signal(tile.x_bits), Signal(tile.y_bits)
         first = Signal()
         out = self.cells.payload
-        o = {name: Signal.like(out[name]) for name in ("op", "x", "y", "first")}
+        o = {name: Signal.like(out[name]) for name in ("op", "x", "y", "first", "start")}
         o["sel"] = Signal(range(BANKS))  # the bank whose read data is the cell's sum
         params = {name: Signal.like(p[name]) for name in ("intensity", "i_out", "evenodd")}
         background = Signal.like(p.background)
         m.d.comb += [self._read_en.eq(advance), self.cells.valid.eq(o_valid)]
         with m.If(advance):
             m.d.sync += o_valid.eq(0)
+        # the polygon's kept columns (lo > hi: none yet) and rows; rows scanned since the tile
+        # started (the resolve has written them whole)
+        lo = Signal(tile.x_bits, init=tile.width - 1)
+        hi = Signal(tile.x_bits)
+        touched, seen = Signal(tile.height), Signal(tile.height)
         with m.If(accept & (p.op == OP["beat"])):
-            m.d.sync += touched.eq(touched | self._touched_set)
+            m.d.sync += [
+                touched.eq(touched | self._touched_set),
+                lo.eq(Mux(self._beat_lo < lo, self._beat_lo, lo)),
+                hi.eq(Mux(self._beat_hi > hi, self._beat_hi, hi)),
+            ]
+        with m.If(accept & ((p.op == OP["tile"]) | (p.op == OP["flush"]))):
+            m.d.sync += seen.eq(0)
+        self.observe.__dict__.update(
+            o_valid=o_valid,
+            o=o,
+            touched=touched,
+            seen=seen,
+            lo=lo,
+            hi=hi,
+            first=first,
+            params=params,
+            background=background,
+        )
+        rsum = Signal(signed(tile.cell_bits))  # the row's sum through the cells sent
+        total = Signal(signed(tile.cell_bits))  # ... and through the cell waiting
+        m.d.comb += total.eq(Mux(o["start"], 0, rsum) + self.cells.payload.sum)
+        with m.If(advance & o_valid & (o["op"] == CELL_OP["cell"])):
+            m.d.sync += rsum.eq(total)
+        self.observe.__dict__.update(rsum=rsum, total=total)
         with m.FSM() as fsm:
             with m.State("ACC"):
                 m.d.comb += self.ops.ready.eq(advance)
@@ -214,49 +258,75 @@ class TileAccumulator(wiring.Component):
                     self._take(m, p, o, o_valid, params, background, first)
                     with m.If(p.op == OP["end"]):
                         m.next = "WAIT"
-            # the next row to scan and its bit, taken out of `touched` when it is chosen
-            next_y, next_bit = lowest_set(touched, tile.height)
-            with m.State("WAIT"):  # the last beat's write landed in the clock before
-                m.d.sync += [scan_x.eq(0), scan_y.eq(next_y), touched.eq(touched & ~next_bit)]
-                m.next = "ACC"
-                with m.If(touched != 0):
-                    m.next = "SCAN"
-            with m.State("SCAN"):
-                m.d.comb += [
-                    self.scanning.eq(1),
-                    self._scan_addr.eq(Cat(scan_x[2:], scan_y)),
-                ]
-                with m.If(advance):
-                    bank = bank_of(scan_x, scan_y)
-                    m.d.comb += self._clear.eq(1 << bank)
-                    m.d.sync += [
-                        o_valid.eq(1),
-                        o["op"].eq(CELL_OP["cell"]),
-                        o["x"].eq(scan_x),
-                        o["y"].eq(scan_y),
-                        o["first"].eq(first),
-                        o["sel"].eq(bank),
-                        first.eq(0),
-                        scan_x.eq(scan_x + 1),
-                    ]
-                    with m.If(scan_x == tile.width - 1):  # `touched`: the rows still to scan
-                        m.d.sync += [scan_y.eq(next_y), touched.eq(touched & ~next_bit)]
-                        with m.If(touched == 0):
-                            m.next = "ACC"
-            in_acc, in_wait = fsm.ongoing("ACC"), fsm.ongoing("WAIT")
-        self.observe.__dict__.update(
-            o_valid=o_valid,
-            o=o,
-            in_acc=in_acc,
-            in_wait=in_wait,
-            scan_x=scan_x,
-            scan_y=scan_y,
-            touched=touched,
-            first=first,
-            params=params,
-            background=background,
-        )
+            self._scan(m, o, o_valid, advance, first)
+            self.observe.in_acc, self.observe.in_wait = fsm.ongoing("ACC"), fsm.ongoing("WAIT")
         self._output(m, ports, o, params, background)
+
+    def _scan(self, m, o, o_valid, advance, first):
+        """WAIT and SCAN: the touched rows in ascending order, a row seen since the tile
+        started from ``lo`` to ``hi`` and on to the last column when its sum through ``hi``
+        is nonzero (`edgeaa.model.tile`, "Scan span"), a row not seen yet whole."""
+        tile, obs = self._tile, self.observe
+        lo, hi, touched, seen = obs.lo, obs.hi, obs.touched, obs.seen
+        last = tile.width - 1
+        scan_x, scan_y = Signal(tile.x_bits), Signal(tile.y_bits)
+        partial = Signal()  # the row is read from lo (it was seen)
+        row_start = Signal()  # the next read is the row's first
+        decide = Signal()  # the cell waiting is the row's hi: the row may stop there
+        total = obs.total
+        # the next row to scan and its bit, taken out of `touched` when it is chosen
+        next_y, next_bit = lowest_set(touched, tile.height)
+        next_seen = (seen & next_bit).any()
+        next_x = Mux(next_seen, lo, 0)
+
+        def choose():
+            m.d.sync += [
+                scan_x.eq(next_x),
+                scan_y.eq(next_y),
+                partial.eq(next_seen),
+                row_start.eq(1),
+                touched.eq(touched & ~next_bit),
+                seen.eq(seen | next_bit),
+            ]
+
+        def done():
+            m.d.sync += [lo.eq(last), hi.eq(0)]
+            m.next = "ACC"
+
+        with m.State("WAIT"):  # the last beat's write landed in the clock before
+            choose()
+            m.next = "ACC"
+            with m.If(touched != 0):
+                m.next = "SCAN"
+        with m.State("SCAN"):
+            m.d.comb += [self.scanning.eq(1), self._scan_addr.eq(Cat(scan_x[2:], scan_y))]
+            with m.If(advance):
+                # the cell waiting is the row's hi and the sum through it is 0: the row stops,
+                # and this clock's read (hi + 1, a zero cell: its clear changes nothing) is
+                # not sent
+                stop = decide & (total == 0)
+                bank = bank_of(scan_x, scan_y)
+                m.d.comb += self._clear.eq(1 << bank)
+                m.d.sync += [
+                    o_valid.eq(~stop),
+                    o["op"].eq(CELL_OP["cell"]),
+                    o["x"].eq(scan_x),
+                    o["y"].eq(scan_y),
+                    o["first"].eq(first),
+                    o["start"].eq(row_start),
+                    o["sel"].eq(bank),
+                    first.eq(0),
+                    row_start.eq(0),
+                    scan_x.eq(scan_x + 1),
+                    decide.eq(partial & (scan_x == hi) & (hi != last)),
+                ]
+                with m.If(stop | (scan_x == last)):
+                    choose()
+                    with m.If(touched == 0):
+                        done()
+        obs.__dict__.update(
+            scan_x=scan_x, scan_y=scan_y, partial=partial, row_start=row_start, decide=decide
+        )
 
     def _take(self, m, p, o, o_valid, params, background, first):
         """An op taken in ACC: an end keeps the polygon's fields; tile and flush go out."""
@@ -279,6 +349,7 @@ class TileAccumulator(wiring.Component):
             out.x.eq(o["x"]),
             out.y.eq(o["y"]),
             out.first.eq(o["first"]),
+            out.start.eq(o["start"]),
             out.sum.eq(data),
             out.background.eq(background),
             *(out[name].eq(reg) for name, reg in params.items()),

@@ -169,7 +169,8 @@ def tile_op_layout(tile: TileConfig) -> data.StructLayout:
 
 def tile_cell_layout(tile: TileConfig) -> data.StructLayout:
     """The resolve's input: ``op`` (an index of `RESOLVE_OPS`), a cell's tile pixel and sum
-    (``first``: the polygon's first cell), and the polygon's fields or the background."""
+    (``first``: the polygon's first cell; ``start``: its row's first cell, where the prefix
+    sum restarts), and the polygon's fields or the background."""
     return data.StructLayout(
         {
             "op": unsigned(_code_bits(RESOLVE_OPS)),
@@ -177,6 +178,7 @@ def tile_cell_layout(tile: TileConfig) -> data.StructLayout:
             "y": unsigned(tile.y_bits),
             "sum": signed(tile.cell_bits),
             "first": unsigned(1),
+            "start": unsigned(1),
             **_polygon_fields(tile.config),
         }
     )

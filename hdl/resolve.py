@@ -6,9 +6,9 @@ One cell per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks fr
 cell to writing its pixel:
 
 * take (clock r): the pixel's read is issued;
-* s1: the row's prefix sum (restarting at column 0) and whether the pixel row was written
-  since the tile started (a row is written whole, so one bit per row: rows never written
-  read as the background and no clear pass is needed);
+* s1: the row's prefix sum (restarting at the row's first cell, ``start``) and whether
+  the pixel row was written since the tile started (a row is first written whole, so one
+  bit per row: rows never written read as the background and no clear pass is needed);
 * s2: the fill rule (`edgeaa.model.accumulate.fill`; even-odd by h + 1 compare-subtract
   steps, exact within the cells' range) and the pixel below;
 * s3: the intensity offset q (a shift; 0 when I_in == I_out) and the unsigned numerator of
@@ -100,7 +100,7 @@ class TileResolve(wiring.Component):
         take = self.cells.valid & self.cells.ready & (c.op == OP["cell"])
         self._take_cell = take
         acc = Signal.like(c.sum)  # the row's prefix sum, wrapping like the cells
-        total = (Mux(c.x == 0, 0, acc) + c.sum)[: tile.cell_bits].as_signed()
+        total = (Mux(c.start, 0, acc) + c.sum)[: tile.cell_bits].as_signed()
         s1 = _stage(
             m,
             "s1",

@@ -10,10 +10,10 @@ order, a stream of *ops* (the accumulator's input):
   column (the prefix sum carries it), one right of, above or below it is dropped, as
   `edgeaa.model.accumulate.resolve_rows` does. A row holding a nonzero delta is *touched*.
 * `PolygonEnd` (intensity, I_out, fill rule): the resolve. Every touched row, in ascending
-  order, is read cell by cell and cleared (the clear costs no extra pass), prefix-summed
-  along +x, the fill rule applied (`fill`), the coverage rounded to intensity steps
-  (`intensity_offset`, a shift) and composited over the tile's pixel (`composite`, the
-  renderer's operator). Untouched rows are not read.
+  order, is read cell by cell over its *scan span* (below) and cleared (the clear costs no
+  extra pass), prefix-summed along +x, the fill rule applied (`fill`), the coverage rounded
+  to intensity steps (`intensity_offset`, a shift) and composited over the tile's pixel
+  (`composite`, the renderer's operator). Untouched rows are not read.
 * `Flush`: the tile's pixels go out row by row, and the tile is the background again.
 
 Widths. A cell holds its sum modulo ``2**cell_bits`` (``cell_bits`` = the delta register +
@@ -28,6 +28,16 @@ the new pixel is ``b + floor((2 n + D) / (2 D))`` when ``I >= b``, else
 ``b - floor((2 n + D - 1) / (2 D))`` (the same half-up rounding of a negative quotient); the
 quotient is at most ``|I - b|``, so ``intensity_bits`` restoring-division steps give it.
 A polygon with ``D = 0`` changes no pixel.
+
+Scan span (`TileModel.span`). ``lo`` and ``hi`` are the least and greatest column of the
+polygon's kept cells (over all its rows). A row *seen* since the tile started (or the last
+flush) is read from ``lo`` to ``hi``, and on to ``width - 1`` when its sum through ``hi``
+is nonzero (modulo ``2**cell_bits``, as the cells hold it); a row not seen yet is read
+whole. Exact: left of ``lo`` the row has no delta, so its prefix sum is 0; right of ``hi``
+it has none either, so the prefix sum is the sum through ``hi`` there; a prefix sum of 0
+gives coverage 0 under both fill rules and ``composite`` leaves the pixel as it is. A row
+not seen yet is read whole because the resolve marks a pixel row written only once all its
+pixels are (its unwritten rows read as the background, so a tile start costs one clock).
 """
 
 from __future__ import annotations
@@ -48,6 +58,7 @@ __all__ = [
     "PolygonEnd",
     "TileConfig",
     "TileModel",
+    "Scan",
     "TileOverflow",
     "TileStart",
     "composite_steps",
@@ -184,10 +195,25 @@ def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> in
     return below - quotient if neg else below + quotient
 
 
-class TileModel:
-    """The tile's stages on integers: `feed` an op, get a frame (height x width) on Flush.
+class Scan(NamedTuple):
+    """What a `PolygonEnd` read (the cycle model's input): per touched row, the cells read and
+    whether the row stopped at ``hi`` on a zero sum (the accumulator then reads one more cell,
+    and does not send it)."""
 
-    `scanned` counts the rows each `PolygonEnd` read (the cycle model's input)."""
+    runs: tuple[tuple[int, bool], ...] = ()
+
+    @property
+    def rows(self) -> int:
+        return len(self.runs)
+
+    @property
+    def cells(self) -> int:
+        return sum(n for n, _ in self.runs)
+
+
+class TileModel:
+    """The tile's stages on integers: `feed` an op, get a frame (height x width) on Flush, the
+    `Scan` on a PolygonEnd."""
 
     def __init__(self, tile: TileConfig):
         self.tile = tile
@@ -195,6 +221,8 @@ class TileModel:
         self._dtype = object if big else np.int64
         self.cells = np.zeros((tile.height, tile.width), dtype=self._dtype)
         self.touched = np.zeros(tile.height, dtype=bool)
+        self.seen = np.zeros(tile.height, dtype=bool)  # rows scanned since the tile started
+        self.lo, self.hi = tile.width - 1, 0  # the polygon's kept columns (lo > hi: none)
         self.origin = (0, 0)
         self.background = 0
         self.pixels = np.zeros((tile.height, tile.width), dtype=np.int64)
@@ -211,10 +239,12 @@ class TileModel:
         if isinstance(op, TileStart):
             self.origin, self.background = (op.x0, op.y0), op.background
             self.pixels[:] = op.background
+            self.seen[:] = False
             return None
         if isinstance(op, Flush):
             frame = self.pixels.copy()
             self.pixels[:] = self.background
+            self.seen[:] = False
             return frame
         raise TypeError(f"not a tile op: {op!r}")
 
@@ -228,8 +258,21 @@ class TileModel:
         tx, ty, delta = tile_cells(self.tile, self.origin, cells[:, 0], cells[:, 1], cells[:, 2])
         np.add.at(self.cells, (ty, tx), delta.astype(self._dtype))
         self.touched[ty] = True
+        if len(tx):
+            self.lo, self.hi = min(self.lo, int(tx.min())), max(self.hi, int(tx.max()))
 
-    def _resolve(self, end: PolygonEnd) -> int:
+    def span(self, row: int) -> tuple[int, int, bool]:
+        """The columns `first .. last` an end reads of touched `row` (module docstring) and
+        whether the read stops at ``hi`` for a zero sum."""
+        last = self.tile.width - 1
+        if not self.seen[row]:
+            return 0, last, False
+        if self.hi == last:
+            return self.lo, last, False
+        total = int(self.cells[row, : self.hi + 1].sum()) % (1 << self.tile.cell_bits)
+        return self.lo, last if total else self.hi, not total
+
+    def _resolve(self, end: PolygonEnd) -> Scan:
         if end.rule not in FILL_RULES:
             raise ValueError(f"fill rule must be one of {', '.join(FILL_RULES)}, not {end.rule!r}")
         F = self.tile.config.F
@@ -237,7 +280,10 @@ class TileModel:
         ifix = d << F
         limit = self.tile.winding_limit * ifix
         rows = np.flatnonzero(self.touched)
+        runs = []
         for row in rows:
+            first, last, stop = self.span(row)
+            runs.append((last - first + 1, stop))
             sums = np.cumsum(self.cells[row])
             self.cells[row] = 0
             if d == 0:
@@ -248,10 +294,13 @@ class TileModel:
                     f"outside the {self.tile.cell_bits}-bit cells' exact range "
                     f"[-{limit}, {limit}) ({self.tile.winding_limit} ifix)"
                 )
-            q = intensity_offset(fill(sums, end.rule, ifix), F).astype(np.int64)
-            self.pixels[row] = composite(self.pixels[row], q, end.intensity, d)
+            read = slice(first, last + 1)  # outside it the sum is 0: the pixel stays
+            q = intensity_offset(fill(sums[read], end.rule, ifix), F).astype(np.int64)
+            self.pixels[row, read] = composite(self.pixels[row, read], q, end.intensity, d)
+        self.seen |= self.touched
         self.touched[:] = False
-        return len(rows)
+        self.lo, self.hi = self.tile.width - 1, 0
+        return Scan(tuple(runs))
 
 
 # -- cycle model ----------------------------------------------------------------------------
@@ -260,12 +309,15 @@ class TileModel:
 # are offered back to back (each from the clock after the previous one was taken) and the
 # pixel sink is always ready. The accumulator takes a beat per clock. An end taken in clock
 # a reads the first touched cell in a + 2 (the last beat's read-modify-write lands in a + 1)
-# and offers it to the resolve in a + 3, then one cell per clock; with no touched row it
-# takes the next op in a + 2. Tile and flush pass through its output register (offered in
-# a + 1). The resolve takes a cell per clock; a cell taken in r writes its pixel in clock
-# r + `resolve_latency`. A polygon's first cell, a tile and a flush wait until no cell is in
-# flight (the pixels they read must be written). A flush taken in f sends pixel k in
-# f + 2 + k (row by row) and the resolve takes its next op in f + width * height + 1.
+# and offers it to the resolve in a + 3, then one cell per clock (the runs of `Scan`), the
+# next read as a cell is taken; a row that stops at ``hi`` leaves a clock with no cell after
+# it (the read of ``hi + 1``, not sent). It takes the next op once the last cell is taken and
+# the scan is over (the clock after its last read); with no touched row in a + 2. Tile and
+# flush pass through its output register (offered in a + 1). The resolve takes a cell per
+# clock; a cell taken in r writes its pixel in clock r + `resolve_latency`. A polygon's first
+# cell, a tile and a flush wait until no cell is in flight (the pixels they read must be
+# written). A flush taken in f sends pixel k in f + 2 + k (row by row) and the resolve takes
+# its next op in f + width * height + 1.
 
 SCAN_START = 3  # end taken in a: its first cell offered in a + 3
 EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
@@ -287,6 +339,7 @@ class TileTiming:
     pixels: list[int] = field(default_factory=list)  # pixel output transfers
     frames: list[np.ndarray] = field(default_factory=list)
     rows_scanned: int = 0
+    cells_scanned: int = 0
 
     @property
     def clocks(self) -> int:
@@ -323,18 +376,23 @@ class TileClock:
         out, tile = self.timing, self.tile
         out.accepts.append(a)
         if isinstance(op, PolygonEnd):
-            out.rows_scanned += result
-            n = result * tile.width
-            if not n:
+            out.rows_scanned += result.rows
+            out.cells_scanned += result.cells
+            if not result.cells:
                 self.ready = a + EMPTY_END
                 return a
-            r = max(a + SCAN_START, self.free, self.quiet)
-            out.cells.extend(range(r, r + n))
-            self.ready, self.quiet = r + n - 1, r + n + self.latency
-            # SCAN from the first read (the clock before its offer) to the last, r + n - 2
-            self.scanning += r + n - 1 - (a + SCAN_START - 1)
+            r = t = max(a + SCAN_START, self.free, self.quiet)
+            for n, stop in result.runs:  # a row that stops at hi: its next clock sends nothing
+                out.cells.extend(range(t, t + n))
+                t += n + stop
+            last, stop = out.cells[-1], result.runs[-1][1]
+            # the first read in a + 2, the next ones as the cells are taken; SCAN ends after
+            # the last read, or after the one as the last cell is taken (a row that stops)
+            end = last + 1 if stop else (last if result.cells > 1 else a + SCAN_START)
+            self.ready, self.quiet = max(last, end), last + 1 + self.latency
+            self.scanning += end - (a + SCAN_START - 1)
             self.acc_stall += r - a - SCAN_START
-            self.resolve_ops += n
+            self.resolve_ops += result.cells
             return a
         r = max(a + 1, self.free, self.quiet)  # tile or flush: the output register
         self.ready = r

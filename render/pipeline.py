@@ -193,15 +193,15 @@ def pipeline_savings(plan: Plan, tile: TileConfig) -> list[PipelineSaving]:
     """The savings of `scene_commands` and the tile stages on `plan`."""
     sent = len(edges_to_send(plan, skip=True)["sent"])
     model = TileModel(tile)
-    edges_not_sent = polygons_not_sent = ends = rows_scanned = 0
+    edges_not_sent = polygons_not_sent = ends = rows = cells = 0
     for job in tile_jobs(plan, tile):
         edges_not_sent += sent - len(job.edges)
         polygons_not_sent += len(plan.polygons) - len(job.polygons)
         for op in tile_ops(plan, tile, job):
             result = model.feed(op)
             if isinstance(op, PolygonEnd):
-                ends, rows_scanned = ends + 1, rows_scanned + result
-    unscanned = ends * tile.height - rows_scanned
+                ends, rows, cells = ends + 1, rows + result.rows, cells + result.cells
+    unscanned = ends * tile.height - rows
     return [
         PipelineSaving(
             "edges not meeting a tile (not sent to it; each would take the setup)",
@@ -217,10 +217,11 @@ def pipeline_savings(plan: Plan, tile: TileConfig) -> list[PipelineSaving]:
             "tile rows with no delta (not scanned at an end)", unscanned, unscanned * tile.width
         ),
         PipelineSaving(
-            "clear as each cell is read (no clear pass)",
-            rows_scanned,
-            rows_scanned * tile.width,
+            "columns of a touched row outside the scan span (not scanned at an end)",
+            rows * tile.width - cells,
+            rows * tile.width - cells,
         ),
+        PipelineSaving("clear as each cell is read (no clear pass)", cells, cells),
     ]
 
 

@@ -86,7 +86,7 @@ def test_fault_is_caught(tools, name, fault, depth, message):
 @pytest.mark.parametrize(
     ("name", "fault", "depth", "message"),
     [
-        ("acc_sums", "lost_delta", None, "state: shadow (basecase)"),
+        ("acc_sums", "lost_delta", None, "state: acc rows (basecase)"),
         ("acc_deltas", "lost_delta", None, "state: acc rows (basecase)"),
         ("acc_deltas", "stale_origin", None, "state: origin (basecase)"),
         ("res_pixels", "lost_first", None, "state: stage 0 order (basecase)"),

@@ -268,7 +268,7 @@ def test_cocotb_catches_a_wrong_model(monkeypatch):
 @pytest.mark.parametrize("name", ["text", "starburst"])
 def test_the_savings_rows_are_what_the_hardware_scanned(name):
     """The resolve is busy one clock per cell scanned, per pixel flushed, and one per tile
-    and flush op: the model's rows scanned (`pipeline_savings`) match the hardware's counter."""
+    and flush op: the model's cells scanned (`pipeline_savings`) match the hardware's counter."""
     plan = plan_scene(builtin(name, DEFAULT), DEFAULT)
     run = render_pipeline(plan, "verilator", TILE).pipeline
     savings = {s.rule.split(" (")[0]: s for s in pipeline_savings(plan, TILE)}
@@ -276,3 +276,4 @@ def test_the_savings_rows_are_what_the_hardware_scanned(name):
     scanned = savings["clear as each cell is read"].clocks
     assert run.stats["resolve_busy"] == scanned + tiles * (TILE.pixels + 2)
     assert savings["tile rows with no delta"].skipped > 0
+    assert savings["columns of a touched row outside the scan span"].skipped > 0

@@ -1,6 +1,7 @@
 """The tile model (`edgeaa.model.tile`): the renderer's image through tiles of every size on
 the built-ins and on hypothesis scenes, the resolve's integer composite against the
-renderer's operator, the cells' exact range."""
+renderer's operator, a zero prefix sum leaving a pixel (the scan span), the cells' exact
+range."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from edgeaa.model import EdgeConfig
-from edgeaa.model.accumulate import composite
+from edgeaa.model.accumulate import FILL_RULES, composite, fill, intensity_offset
 from edgeaa.model.tile import (
     Beats,
     Flush,
@@ -81,6 +82,20 @@ def _ops(tile: TileConfig, cells, end: PolygonEnd):
         end,
         Flush(),
     ]
+
+
+@pytest.mark.parametrize("rule", FILL_RULES)
+def test_a_zero_prefix_sum_leaves_every_pixel_as_it_is(rule):
+    """What the scan span relies on: the columns it does not read (prefix sum 0) would have
+    been composited with coverage 0, which changes no pixel."""
+    for config in (SMALL, DEFAULT):
+        full, F = config.full_scale, config.F
+        for d in range(1, full + 1):
+            q = int(intensity_offset(fill(np.zeros(1, np.int64), rule, d << F), F)[0])
+            assert q == 0
+            below = np.arange(full + 1)
+            for intensity in {0, d, full - d, full}:
+                assert np.array_equal(composite(below, q, intensity, d), below)
 
 
 def test_a_cell_left_of_the_tile_goes_into_the_first_column_and_others_are_dropped():

@@ -3,7 +3,8 @@
 `edgeaa.model.tile`: with an eager source and an always-ready sink every transfer in the
 clock `tile_cycles` gives and every frame equal; with random source idles and sink stalls
 the same frames, a stalled pixel held. Ops from random beats (back-to-back deltas to one
-cell, cells left of the tile, every fill rule, empty polygons, D = 0) and from scenes."""
+cell, cells left of the tile, rows summing to zero, every fill rule, empty polygons, D = 0)
+and from scenes."""
 
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from edgeaa.model.tile import (
     Beats,
     Flush,
     PolygonEnd,
+    Scan,
     TileConfig,
     TileModel,
     TileOverflow,
@@ -60,6 +62,9 @@ def _polygon(rng: random.Random, tile: TileConfig, config: EdgeConfig, origin):
         rng.shuffle(places)
         deltas = [rng.choice([0, rng.randint(-ifix // 8, ifix // 8), ifix, -ifix]) for _ in places]
         beats.append([(px, py, d) for (px, py), d in zip(places, deltas, strict=True)])
+    if rng.random() < 0.5:  # closed rows: each delta taken back further right (the scan
+        shift = rng.randint(1, 2)  # may stop at the polygon's last column)
+        beats += [[(px + shift, py, -d) for px, py, d in beat] for beat in beats]
     rule = rng.choice(["nonzero", "evenodd"])
     return Beats(np.array(beats, dtype=np.int64).reshape(-1, 4, 3)), PolygonEnd(
         intensity, i_out, rule
@@ -134,6 +139,33 @@ def test_back_to_back_polygons_with_no_gap_wait_for_the_pixels_below():
     ops = [TileStart(0, 0, 0), one, PolygonEnd(15, 0), one, PolygonEnd(7, 0), PolygonEnd(3, 9)]
     ops += [one, PolygonEnd(9, 9), Flush(), TileStart(1, 0, 5), Flush()]
     check_exact(tile, ops)
+
+
+def _block(x, y, deltas):
+    """A beat of a 2 x 2 block at (x, y): deltas of (x, y), (x + 1, y), (x, y + 1), (x + 1,
+    y + 1)."""
+    places = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)]
+    return [(px, py, d) for (px, py), d in zip(places, deltas, strict=True)]
+
+
+def test_the_scan_stops_at_the_polygons_last_column_on_a_zero_sum():
+    """Rows seen before read from lo to hi, on to the last column when the sum through hi is
+    nonzero: a stop in a middle row, on the last row (a clock later), at lo == hi, cells left
+    of the tile, a flush making rows unseen again."""
+    tile = TileConfig(SMALL, 8, 4)
+    a, b = 15 << SMALL.F, 7 << SMALL.F
+    closed = Beats(np.array([_block(3, 0, [a, -a, b, -b])]))
+    ops = [TileStart(2, 0, 3), closed, PolygonEnd(15, 0), closed, PolygonEnd(9, 0)]
+    ops += [Beats(np.array([_block(4, 1, [a, a, b, -b])])), PolygonEnd(12, 2, "evenodd")]
+    once = [Beats(np.array([_block(6, 0, [a, 0, 0, 0]), _block(6, 0, [-a, 0, 0, 0])]))]
+    ops += [*once, PolygonEnd(15, 0), Beats(np.array([_block(0, 1, [a, -a, b, -b])]))]
+    ops += [PolygonEnd(5, 11), closed, PolygonEnd(4, 4), Flush(), closed, PolygonEnd(15, 0)]
+    ops += [closed, PolygonEnd(0, 15), Flush()]
+    check_exact(tile, ops)
+    model = TileModel(tile)
+    scans = [model.feed(op) for op in ops]
+    assert [s.cells for s in scans if isinstance(s, Scan)] == [16, 4, 14, 1, 2, 4, 16, 4]
+    assert [s.runs[-1][1] for s in scans if isinstance(s, Scan)] == [0, 1, 0, 1, 1, 1, 0, 1]
 
 
 def test_a_scene_through_the_stages_is_the_renderers_image():

@@ -16,13 +16,17 @@ taken stays valid with the same payload); the output's ready is free. Check grou
 ``accumulator`` ``deltas``
     One symbolic cell (X, Y) of the tile (``AnyConst``). Beats are assumed to have a shape
     of `BEAT_SHAPES` (what the stepper emits and the model checks). Asserted: (X, Y) is sent
-    once after an end if and only if a nonzero delta was kept in row Y since the previous
-    end (the model's `tile_cells`: the origin of the last tile op subtracted, a cell left of
-    the tile moved into column 0), and before the accumulator takes another op (nothing
-    lost, nothing doubled, untouched rows not scanned); the cells come in row-major order,
-    whole rows, ``first`` on the polygon's first cell only, with the end's intensity, I_out
-    and fill rule; each tile and flush op comes out once, in order, with its background; no
-    other op code is sent.
+    after an end, before the accumulator takes another op, when a nonzero delta was kept
+    there since the previous end (the model's `tile_cells`: the origin of the last tile op
+    subtracted, a cell left of the tile moved into column 0), and at most once per end
+    (nothing lost, nothing doubled); the cells come in rows, each row's cells in consecutive
+    columns from its first (``start``), the rows ascending; a row's first pass since the
+    last tile or flush op starts at column 0 and goes on to the last column (what the
+    resolve's written rows need); a row stops before its last column only when the sums it
+    sent add to zero (modulo ``2**cell_bits``), so right of it the prefix sum is zero;
+    ``first`` on the polygon's first cell only, a row's first, with the end's intensity,
+    I_out and fill rule; each tile and flush op comes out once, in order, with its
+    background; no other op code is sent.
 ``accumulator`` ``sums``
     The shadow of cell (X, Y): the exact sum of every delta of an accepted beat placed there
     (several cells of one beat merged, back-to-back beats through the read-modify-write
@@ -32,11 +36,12 @@ taken stays valid with the same payload); the output's ready is free. Check grou
 ``resolve`` ``stream``
     The ``pixels`` hold rule (as ``accumulator`` ``stream``).
 ``resolve`` ``pixels``
-    The resolve's input is assumed to be what the accumulator is proved to send (cells in
-    row-major order, whole rows, ``first`` on a polygon's first, the polygon's fields
-    constant). Each cell's sum is the residue modulo ``2**cell_bits`` of a difference of two
-    exact prefix sums chosen by the harness (``AnySeq``): the exact prefix sum of the row up
-    to the cell, assumed within the documented range ``[-L, L)``, ``L = 2**(h + 1) ifix``
+    The resolve's input is assumed to be what the accumulator is proved to send (rows of
+    consecutive cells from a ``start``, ascending, a row's first pass since the tile or flush
+    op whole, ``first`` on a polygon's first, the polygon's fields constant). Each cell's
+    sum is the residue modulo ``2**cell_bits`` of a difference of two exact prefix sums
+    chosen by the harness (``AnySeq``): the exact prefix sum of the row up to the cell (from
+    the row's ``start``), assumed within the documented range ``[-L, L)``, ``L = 2**(h + 1) ifix``
     (`TileConfig.winding_limit`; polygons with ``I_in == I_out`` are not limited, as in the
     model). One symbolic pixel (X, Y) and its shadow: the background of the last tile op,
     then for each cell (X, Y) taken the model's own `composite` of `intensity_offset` of the
@@ -62,20 +67,33 @@ equals the shadow; stage C's sum is in its bank (written the clock before), stag
 is its bank's row unless stage C wrote that row the clock before (then B takes C's sum: the
 forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register is
 cleared in its bank (its ``sel`` its bank) and stage B is then empty, stage B's delta is
-zero when it is empty (a clear adds it). ``deltas`` (`_scan_state`): in ACC the touched
-rows are the ghost's, in WAIT and SCAN the ghost saw no beat; (X, Y) is owed exactly while
-it waits in the output register (ACC), its row is touched (WAIT), or its row is still to
-scan, it is ahead of the scan in the current row or it waits (SCAN); the rows left to scan
-are above the scan row; SCAN's first read has not happened exactly while the ``first``
-register is set (then nothing is in the output register and the scan is in column 0), else
-a cell waits there, and the scan position follows it; the waiting cell's ``first`` is the
-ghost's and follows the last cell sent; the end's fields are the ghost's; a tile or flush
-op waits exactly when the ghost's does, with its code and background. Both: the origin is
-the ghost's. Each follows from all of them in the clock before (both groups pass at k = 1;
-`TILE_PROOFS` runs k = 2, which is faster). ``pixels`` (`_resolve_invariants`): (X, Y)
+zero when it is empty (a clear adds it), and a nonzero (X, Y) is hit (ACC) or owed (after
+an end) or waits in the output register (so the read past a row's ``hi``, not sent, clears
+a zero). The scan's (`_scan_state`, in both groups): in ACC a hit (X, Y) lies in a touched
+row and in the span ``lo .. hi``, and any row is touched exactly when the ghost kept a
+delta; in WAIT and SCAN the ghost saw no beat; (X, Y) owed waits in the output register
+(ACC), lies in the span of a touched row (WAIT), or waits, or lies in the span of a row
+still to scan or ahead of the scan in the current row (SCAN), and a cell still to read has
+not been sent since the end; the rows left to scan are above the scan row; SCAN's first
+read has not happened exactly while the ``first`` register is set (nothing in the output
+register, a row's start due), else a cell waits there or, after a row stopped at ``hi``,
+the next row's start is due above the last cell sent; a row's start is at ``lo`` if the
+row was seen (the ghost's rows begun since the tile or flush op), else at column 0; the
+scan position follows the waiting cell; ``decide`` only with that cell at ``hi`` below the
+last column; the accumulator's ``seen`` is the ghost's rows plus the row whose start is
+still to send; the waiting cell's ``first`` is the ghost's, a row's start, and follows the
+last cell sent; a row's first pass goes on (the waiting cell is the next column, and the
+scan stays in that row and reads it whole); ``rsum`` is the ghost's sum of the row's cells
+sent, and the last row sent is closed (at its last column, or that sum zero) whenever no
+cell of it is still to come; the end's fields are the ghost's; a tile or
+flush op waits exactly when the ghost's does, with its code and background. Both: the
+origin is the ghost's. Each follows from all of them in the clock before (`TILE_PROOFS`
+runs k = 2). ``pixels`` (`_resolve_invariants`): (X, Y)
 not in flight holds the shadow: its pixel memory row if its row was written since the tile
-started or in the row's current pass ((X, Y) taken while the row is open, or the row's end
-in flight), else the background; in a flush the frame equals that until (X, Y) is read and
+started or in the row's first pass ((X, Y) taken while the row is open, or the row's end
+in flight), else the background; a row begun since the tile or flush op (not in a flush)
+is written unless its first pass is open or its end in flight, and the last cell's row
+was begun; in a flush the frame equals that until (X, Y) is read and
 the waiting pixel (X, Y) equals the frame, the shadow being the background; the row's
 prefix sum register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells in
 taken order, none after the last taken and none in a flush, with a pixel waiting or before a
@@ -349,10 +367,14 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
         Y=Signal(tile.y_bits, name="track_y"),
         origin=[Signal.like(src.x0, name="origin_x"), Signal.like(src.y0, name="origin_y")],
         shadow=Signal(tile.cell_bits, name="shadow"),  # modulo 2**cell_bits, as a cell
-        row=Signal(name="row_touched"),
+        hit=Signal(name="cell_hit"),  # a kept delta placed at (X, Y) since the last end
         any=Signal(name="any_touched"),
         owed=Signal(name="owed"),
+        may=Signal(name="may_send"),  # (X, Y) not sent since the last end, no op taken since
         first=Signal(name="first_due"),
+        seen=Signal(tile.height, name="rows_seen"),  # rows begun since the tile or flush op
+        open=Signal(name="row_open"),  # a row's first pass, not yet at its last column
+        row_sum=Signal(tile.cell_bits, name="row_sum"),  # the row's sums sent, from its start
         params={n: Signal.like(src[n], name=f"end_{n}") for n in ("intensity", "i_out", "evenodd")},
         passing=Signal(name="pass_pending"),
         code=Signal.like(cells.payload.op, name="pass_code"),
@@ -373,11 +395,11 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
     m.d.sync += s.shadow.eq((base + Mux(is_op["beat"], hits, 0))[: tile.cell_bits])
     with m.If(is_op["beat"]):
         m.d.sync += [
-            s.row.eq(s.row | _any(k & (y == s.Y) for k, _, y, _ in placed)),
+            s.hit.eq(s.hit | _any(k & (x == s.X) & (y == s.Y) for k, x, y, _ in placed)),
             s.any.eq(s.any | _any(k for k, _, _, _ in placed)),
         ]
     with m.If(is_op["end"]):
-        m.d.sync += [s.owed.eq(s.row), s.first.eq(s.any), s.row.eq(0), s.any.eq(0)]
+        m.d.sync += [s.owed.eq(s.hit), s.first.eq(s.any), s.hit.eq(0), s.any.eq(0)]
         m.d.sync += [reg.eq(src[name]) for name, reg in s.params.items()]
     with m.If(is_op["tile"]):
         m.d.sync += [s.origin[0].eq(src.x0), s.origin[1].eq(src.y0)]
@@ -387,10 +409,11 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
     if "sums" in checks:
         same = out.sum[: tile.cell_bits] == s.shadow
         m.d.comb += Assert(_implies(tracked, same), "sums: cell sum")
-    if "deltas" in checks:
-        _accumulator_outputs(m, tile, s, out, sent, tracked)
+    _accumulator_outputs(m, tile, s, out, sent, tracked, "deltas" in checks)
     with m.If(tracked):
         m.d.sync += s.owed.eq(0)
+    # a cell sent with an end taken is the scan's before
+    m.d.sync += s.may.eq(is_op["end"] | (s.may & ~tracked & ~take))
     passing = is_op["tile"] | is_op["flush"]
     if "deltas" in checks:
         overtaken = _implies(passing, ~s.passing | (sent & (out.op != CELL_OP["cell"])))
@@ -398,6 +421,7 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
     with m.If(passing):
         code = Mux(src.op == OP["tile"], CELL_OP["tile"], CELL_OP["flush"])
         m.d.sync += [s.passing.eq(1), s.code.eq(code), s.background.eq(src.background)]
+        m.d.sync += s.seen.eq(0)
     return s
 
 
@@ -407,8 +431,7 @@ def _accumulator_invariants(m, tile, dut, rows, s, checks, covers):
     m.d.comb += Assert(_all(a == b for a, b in origin), "state: origin")
     if "sums" in checks:
         _memory_state(m, tile, dut, rows, s, covers)
-    if "deltas" in checks:
-        _scan_state(m, tile, dut, s, covers)
+    _scan_state(m, tile, dut, s, covers)  # the sums group needs it too (a scan's extra read)
 
 
 def _memory_rows(m, dut):
@@ -479,53 +502,125 @@ def _memory_state(m, tile, dut, rows, s, covers):
     waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
     total = _row(rows, t_bank, t_addr) + stage_b + Mux(waiting, out.sum, 0)
     checks.append((s.shadow == total[: len(s.shadow)], "state: shadow"))
+    # so a cell outside the scan span is zero (the read after a row's hi clears one)
+    owed = Mux(obs.in_acc, s.hit, s.owed) | waiting
+    checks.append((_When(s.shadow != 0, owed), "state: a nonzero cell is owed"))
     _state_checks(m, checks, covers, prefix="")
 
 
-def _follows(tile, x, y, last_x, last_y):
-    """Cell (x, y) comes right after (last_x, last_y) in a scan of whole rows."""
-    return ((x == last_x + 1) & (y == last_y)) | (
-        (last_x == tile.width - 1) & (x == 0) & (y > last_y)
-    )
+def _follows(x, y, start, last_x, last_y):
+    """Cell (x, y) comes right after (last_x, last_y): the next column, or a later row's first
+    cell (`start`)."""
+    return Mux(start, y > last_y, (x == last_x + 1) & (y == last_y))
+
+
+def _bit(tile, y):
+    return (Const(1, tile.height) << y)[: tile.height]
+
+
+def _closed(tile, s):
+    """The last row sent ended at its last column or its cells sent sum to zero (modulo
+    ``2**cell_bits``): right of it the prefix sum is zero, so the row may stop there."""
+    return (s.last[0] == tile.width - 1) | (s.row_sum == 0)
 
 
 def _scan_state(m, tile, dut, s, covers):
-    """Invariants of the accumulator's control against the ``deltas`` ghost: the touched rows
-    are the ghost's while the accumulator takes ops; after an end, the tracked cell is owed
-    exactly while its row is still to scan, or it is ahead of the scan in the current row, or
-    it waits in the output register; the scan moves up through whole rows in order, the
-    output register holds the cell before the scan position, and a tile or flush op waiting
-    there is the ghost's. Each follows from all of them in the clock before."""
+    """Invariants of the accumulator's control against the ``deltas`` ghost: while the
+    accumulator takes ops, a cell hit lies in a touched row and in the span ``lo .. hi``;
+    after an end, an owed cell waits in the output register or lies in the span of a row still
+    to scan or ahead of the scan in the current row, and a cell still to read has not been
+    sent; the scan moves up through the rows in order, a row from column 0 (not seen since the
+    tile started) or from ``lo`` (seen), the output register holding the cell before the scan
+    position; a row's first pass goes on to the last column; ``seen`` is the ghost's rows
+    plus a row whose first cell is still to send; a tile or flush op waiting there is the
+    ghost's. Each follows from all of them in the clock before."""
     obs, o = dut.observe, dut.observe.o
-    scan = dut.scanning
-    touched, scan_x, scan_y = obs.touched, obs.scan_x, obs.scan_y
+    scan, last = dut.scanning, tile.width - 1
+    touched, scan_x, scan_y, lo, hi = obs.touched, obs.scan_x, obs.scan_y, obs.lo, obs.hi
+    row_start, partial, decide = obs.row_start, obs.partial, obs.decide
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
     passing = obs.o_valid & (o["op"] != CELL_OP["cell"])
     row_left = touched.bit_select(s.Y, 1)
+    in_span = (lo <= s.X) & (hi >= s.X)
     ahead = (scan_y == s.Y) & (scan_x <= s.X)
     waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
     above = _all(~touched[r] | (scan_y < r) for r in range(tile.height))
+    due = Mux(scan & row_start, _bit(tile, scan_y), 0) | Mux(
+        pending & o["start"], _bit(tile, o["y"]), 0
+    )
+    current = scan & ~row_start & (scan_y == o["y"]) & ~decide  # the waiting cell's row goes on
     checks = [
-        (_When(obs.in_acc, (row_left == s.row) & (s.any == (touched != 0))), "acc rows"),
-        (_When(~obs.in_acc, ~s.row & ~s.any), "no beat after an end"),
-        (_When(obs.in_acc, s.owed == waiting), "owed in ACC"),
+        (
+            _When(obs.in_acc, _implies(s.hit, row_left & in_span) & (s.any == (touched != 0))),
+            "acc rows",
+        ),
+        (_When(~obs.in_acc, ~s.hit & ~s.any), "no beat after an end"),
+        (_When(obs.in_acc, _implies(s.owed, waiting)), "owed in ACC"),
         (_When(obs.in_acc & ~pending, ~s.first), "first in ACC"),
         (_When(obs.in_acc & pending, touched == 0), "no beat while the last cell waits"),
-        (_When(obs.in_wait, ~obs.o_valid & obs.first), "WAIT output"),
-        (_When(obs.in_wait, (s.owed == row_left) & (s.first == (touched != 0))), "WAIT"),
-        (_When(scan, s.owed == (row_left | ahead | waiting)), "owed in SCAN"),
+        (_When(obs.in_wait, ~obs.o_valid & obs.first & s.may), "WAIT output"),
+        (_When(obs.in_wait, _implies(s.owed, row_left & in_span)), "owed in WAIT"),
+        (_When(obs.in_wait, s.first == (touched != 0)), "WAIT"),
+        (_When(scan, _implies(s.owed, waiting | ((row_left | ahead) & in_span))), "owed in SCAN"),
+        (_When(scan & (row_left | ahead), s.may), "not sent yet in SCAN"),
+        (_When(waiting, s.may), "waiting, not sent"),
         (_When(scan, above), "rows above the scan"),
-        (_When(scan & obs.first, ~obs.o_valid & s.first & (scan_x == 0)), "SCAN start"),
-        (_When(scan & ~obs.first, pending), "SCAN output"),
+        (_When(decide, scan & pending & partial & (o["x"] == hi) & (hi != last)), "decide"),
+        (_When(scan & obs.first, ~obs.o_valid & s.first & row_start), "SCAN start"),
+        (_When(scan & ~obs.first, pending | (~obs.o_valid & row_start)), "SCAN output"),
+        (_When(scan & ~obs.o_valid & ~obs.first, scan_y > s.last[1]), "scan after a stop"),
         (
-            _When(scan & pending, _follows(tile, scan_x, scan_y, o["x"], o["y"])),
+            _When(
+                scan & row_start,
+                (scan_x == Mux(partial, lo, 0)) & (partial == s.seen.bit_select(scan_y, 1)),
+            ),
+            "row start",
+        ),
+        (
+            _When(
+                scan & pending,
+                Mux(
+                    row_start,
+                    (o["x"] == last) & (scan_y > o["y"]),
+                    (scan_x == o["x"] + 1) & (scan_y == o["y"]),
+                ),
+            ),
             "scan after the output",
         ),
-        (_When(pending, o["first"] == s.first), "output first"),
-        (_When(pending & o["first"], o["x"] == 0), "output first in column 0"),
+        (obs.seen == (s.seen | due), "rows seen"),
+        (obs.rsum.as_unsigned() == s.row_sum, "row sum"),
+        (_When(obs.in_acc & pending, o["x"] == last), "the scan's last cell at the last column"),
         (
-            _When(pending & ~o["first"], _follows(tile, o["x"], o["y"], *s.last)),
+            _When(
+                (obs.in_acc & ~pending) | obs.in_wait | (scan & ~obs.o_valid) | passing,
+                _closed(tile, s),
+            ),
+            "rows closed",
+        ),
+        (_When(pending & o["start"], _closed(tile, s)), "rows closed before a start"),
+        (_When(pending, o["first"] == s.first), "output first"),
+        (_When(pending & o["first"], o["start"]), "output first starts a row"),
+        (
+            _When(
+                pending & o["start"] & ~s.seen.bit_select(o["y"], 1),
+                (o["x"] == 0) & current & ~partial,
+            ),
+            "first pass from column 0",
+        ),
+        (
+            _When(pending & ~o["first"], _follows(o["x"], o["y"], o["start"], *s.last)),
             "output after the last sent",
+        ),
+        (
+            _When(
+                s.open,
+                pending
+                & ~o["start"]
+                & (o["y"] == s.last[1])
+                & (o["x"] == s.last[0] + 1)
+                & _implies(o["x"] != last, current & ~partial),
+            ),
+            "first pass goes on",
         ),
         (_all(obs.params[n] == r for n, r in s.params.items()), "polygon fields"),
         (_When(obs.o_valid, o["op"] < len(RESOLVE_OPS)), "output op"),
@@ -540,17 +635,30 @@ def _scan_state(m, tile, dut, s, covers):
     _state_checks(m, checks, covers)
 
 
-def _accumulator_outputs(m, tile, s, out, sent, tracked):
-    """What each output transfer must be (the ``deltas`` group's output side)."""
+def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
+    """What each output transfer must be (the ``deltas`` group's output side, asserted when
+    `check`), and the ghost's record of it."""
     is_cell = sent & (out.op == CELL_OP["cell"])
-    follows = _follows(tile, out.x, out.y, *s.last)
+    follows = _follows(out.x, out.y, out.start, *s.last)
+    seen = s.seen.bit_select(out.y, 1)
     checks = [
-        (_implies(tracked, s.owed), "deltas: a cell sent twice or not after an end"),
+        (_implies(tracked, s.may), "deltas: a cell sent twice or not after an end"),
         (_implies(is_cell, out.first == s.first), "deltas: first flag"),
-        (_implies(is_cell & out.first, out.x == 0), "deltas: first cell not in column 0"),
+        (_implies(is_cell & out.first, out.start), "deltas: first cell not a row's first"),
         (_implies(is_cell & ~out.first, follows), "deltas: cells out of order"),
+        (
+            _implies(is_cell & out.start, ~s.open & (seen | (out.x == 0))),
+            "deltas: a row's first pass not whole",
+        ),
         (_implies(is_cell, _all(out[k] == r for k, r in s.params.items())), "deltas: fields"),
-        (_implies(sent & ~is_cell, s.passing & ~s.owed), "deltas: tile or flush not taken"),
+        (
+            _implies(sent & ~is_cell, s.passing & ~s.owed & ~s.open),
+            "deltas: tile or flush not taken",
+        ),
+        (
+            _implies((is_cell & out.start) | (sent & ~is_cell), _closed(tile, s)),
+            "deltas: a row stopped before its last column on a nonzero sum",
+        ),
         (_implies(sent & ~is_cell, out.op == s.code), "deltas: tile or flush code"),
         (
             _implies(sent & (out.op == CELL_OP["tile"]), out.background == s.background),
@@ -558,10 +666,15 @@ def _accumulator_outputs(m, tile, s, out, sent, tracked):
         ),
         (_implies(sent, out.op < len(RESOLVE_OPS)), "deltas: unknown op code sent"),
     ]
-    for condition, message in checks:
+    for condition, message in checks if check else ():
         m.d.comb += Assert(condition, message)
     with m.If(is_cell):
         m.d.sync += [s.first.eq(0), s.last[0].eq(out.x), s.last[1].eq(out.y)]
+        whole = Mux(out.start, ~seen, s.open)
+        m.d.sync += s.open.eq(whole & (out.x != tile.width - 1))
+        m.d.sync += s.row_sum.eq(Mux(out.start, 0, s.row_sum) + out.sum)
+        with m.If(out.start):
+            m.d.sync += s.seen.eq(s.seen | _bit(tile, out.y))
     with m.If(sent & ~is_cell):
         m.d.sync += s.passing.eq(0)
 
@@ -588,15 +701,15 @@ def _resolve_source(m, tile, cells, src, wide):
     is_cell = c.op == CELL_OP["cell"]
     last = [Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")]
     params = {n: Signal.like(c[n], name=f"poly_{n}") for n in ("intensity", "i_out", "evenodd")}
-    row_open = Signal(name="row_open")  # a polygon's row not yet sent whole
+    seen = Signal(tile.height, name="rows_seen")  # rows passed since the tile or flush op
+    row_open = Signal(name="row_open")  # a row's first pass, not yet at its last column
     need_first = Signal(init=1, name="need_first")
-    follows = ((c.x == last[0] + 1) & (c.y == last[1])) | (
-        (last[0] == tile.width - 1) & (c.x == 0) & (c.y > last[1])
-    )
+    follows = Mux(c.start, c.y > last[1], (c.x == last[0] + 1) & (c.y == last[1]))
     well_formed = [
         c.op < len(RESOLVE_OPS),
         _implies(is_cell, c.first | (~need_first & follows)),
-        _implies(is_cell & c.first, (c.x == 0) & ~row_open),
+        _implies(is_cell & c.first, c.start),
+        _implies(is_cell & c.start, ~row_open & (seen.bit_select(c.y, 1) | (c.x == 0))),
         _implies(is_cell & ~c.first, _all(c[n] == r for n, r in params.items())),
         _implies(~is_cell, ~row_open),
     ]
@@ -604,24 +717,27 @@ def _resolve_source(m, tile, cells, src, wide):
         m.d.comb += Assume(_all(well_formed), "source: cells as the accumulator sends them")
     with m.If(take & is_cell):
         m.d.sync += [last[0].eq(c.x), last[1].eq(c.y), need_first.eq(0)]
-        m.d.sync += row_open.eq(c.x != tile.width - 1)
+        whole = Mux(c.start, ~seen.bit_select(c.y, 1), row_open)
+        m.d.sync += row_open.eq(whole & (c.x != tile.width - 1))
+        with m.If(c.start):
+            m.d.sync += seen.eq(seen | (Const(1, tile.height) << c.y)[: tile.height])
         with m.If(c.first):
             m.d.sync += [r.eq(c[n]) for n, r in params.items()]
     with m.If(take & ~is_cell):
-        m.d.sync += need_first.eq(1)
+        m.d.sync += [need_first.eq(1), seen.eq(0)]
     n = tile.cell_bits
     exact, prev = Signal(signed(n + 4), name="exact"), Signal(signed(n + 4), name="exact_prev")
     m.d.comb += exact.eq(AnySeq(n + 4))
     d = Mux(c.intensity >= c.i_out, c.intensity - c.i_out, c.i_out - c.intensity)
     limit = (tile.winding_limit * (2 if wide else 1)) * (d << tile.config.F)
-    residue = (exact - Mux(c.x == 0, 0, prev))[:n]
+    residue = (exact - Mux(c.start, 0, prev))[:n]
     in_range = (d == 0) | ((exact >= -limit) & (exact < limit))
     with m.If(cells.valid & is_cell):
         m.d.comb += Assume(in_range & (c.sum[:n] == residue), "source: exact sums")
     with m.If(take & is_cell):
         m.d.sync += prev.eq(exact)
     ghost = types.SimpleNamespace(
-        last=last, row_open=row_open, need_first=need_first, prev=prev, exact=exact
+        last=last, seen=seen, row_open=row_open, need_first=need_first, prev=prev, exact=exact
     )
     return ghost, d, take & is_cell
 
@@ -695,6 +811,7 @@ def _resolve_invariants(m, tile, dut, pixel_rows, g, covers):
     # flight, or the row is still open and (X, Y) was taken
     row_open = (g.last[1] == g.Y) & g.row_open & ~g.need_first
     done = in_flight(row_end) | (row_open & (g.last[0] >= g.X))
+    seen_y = g.seen.bit_select(g.Y, 1)
     n = tile.cell_bits
     count = g.count
     p = obs.p
@@ -704,7 +821,10 @@ def _resolve_invariants(m, tile, dut, pixel_rows, g, covers):
         (g.flushing == (flush | obs.p_valid), "flushing"),
         (_When(flush | obs.p_valid | g.need_first, ~busy), "nothing in flight"),
         (_When(flush | obs.p_valid, g.need_first), "no cell since the flush"),
-        (g.row_open == (~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
+        (_When(g.row_open, ~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
+        (_When(~g.need_first, g.seen.bit_select(g.last[1], 1)), "last row seen"),
+        (_When(g.flushing, g.seen == 0), "no row seen in a flush"),
+        (_When(seen_y & ~row_open & ~in_flight(row_end) & ~flush, written_y), "seen row written"),
         (
             _When(obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))),
             "output position",
