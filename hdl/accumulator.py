@@ -38,6 +38,15 @@ and the next row is chosen, so a row that stops at ``hi`` costs a clock more tha
 A row not seen yet is read whole. The output's ``start`` marks a row's first cell, where the
 resolve's prefix sum restarts. The decision only loads registers (no read address depends on
 a sum).
+
+Reset. A reset clears the registers but not the memory, so deltas written before a reset in
+the middle of a polygon (between its first kept delta and the end of its scan) would add to a
+later polygon's. ``dirty`` is kept through reset (``reset_less``): set by a kept delta,
+cleared when its polygon's scan ends. In the first clock after a reset (``check``, whose
+reset value is 1) a dirty memory sends the accumulator through CLEAR, which writes zero to
+the four banks' cells at one address a clock, ``width x height / 4`` clocks (512 by
+default), before it takes an op; a clean one takes ops from that first clock, so power-up and
+a reset when idle cost no clock.
 """
 
 from __future__ import annotations
@@ -226,8 +235,12 @@ class TileAccumulator(wiring.Component):
         lo = Signal(tile.x_bits, init=tile.width - 1)
         hi = Signal(tile.x_bits)
         touched, seen = Signal(tile.height), Signal(tile.height)
+        # kept deltas not yet scanned, through reset; the first clock after a reset
+        dirty, check = Signal(reset_less=True), Signal(init=1)
+        m.d.sync += check.eq(0)
         with m.If(accept & (p.op == OP["beat"])):
             m.d.sync += [
+                dirty.eq(dirty | (self._touched_set != 0)),
                 touched.eq(touched | self._touched_set),
                 lo.eq(Mux(self._beat_lo < lo, self._beat_lo, lo)),
                 hi.eq(Mux(self._beat_hi > hi, self._beat_hi, hi)),
@@ -241,6 +254,8 @@ class TileAccumulator(wiring.Component):
             seen=seen,
             lo=lo,
             hi=hi,
+            dirty=dirty,
+            check=check,
             first=first,
             params=params,
             background=background,
@@ -253,7 +268,9 @@ class TileAccumulator(wiring.Component):
         self.observe.__dict__.update(rsum=rsum, total=total)
         with m.FSM() as fsm:
             with m.State("ACC"):
-                m.d.comb += self.ops.ready.eq(advance)
+                m.d.comb += self.ops.ready.eq(advance & ~(check & dirty))
+                with m.If(check & dirty):  # deltas left by a reset mid-polygon
+                    m.next = "CLEAR"
                 with m.If(accept):
                     self._take(m, p, o, o_valid, params, background, first)
                     with m.If(p.op == OP["end"]):
@@ -270,6 +287,7 @@ class TileAccumulator(wiring.Component):
         lo, hi, touched, seen = obs.lo, obs.hi, obs.touched, obs.seen
         last = tile.width - 1
         scan_x, scan_y = Signal(tile.x_bits), Signal(tile.y_bits)
+        scan_addr = Cat(scan_x[2:], scan_y)  # the cell's address in its bank
         partial = Signal()  # the row is read from lo (it was seen)
         row_start = Signal()  # the next read is the row's first
         decide = Signal()  # the cell waiting is the row's hi: the row may stop there
@@ -290,7 +308,7 @@ class TileAccumulator(wiring.Component):
             ]
 
         def done():
-            m.d.sync += [lo.eq(last), hi.eq(0)]
+            m.d.sync += [lo.eq(last), hi.eq(0), obs.dirty.eq(0)]
             m.next = "ACC"
 
         with m.State("WAIT"):  # the last beat's write landed in the clock before
@@ -299,7 +317,7 @@ class TileAccumulator(wiring.Component):
             with m.If(touched != 0):
                 m.next = "SCAN"
         with m.State("SCAN"):
-            m.d.comb += [self.scanning.eq(1), self._scan_addr.eq(Cat(scan_x[2:], scan_y))]
+            m.d.comb += [self.scanning.eq(1), self._scan_addr.eq(scan_addr)]
             with m.If(advance):
                 # the cell waiting is the row's hi and the sum through it is 0: the row stops,
                 # and this clock's read (hi + 1, a zero cell: its clear changes nothing) is
@@ -324,6 +342,14 @@ class TileAccumulator(wiring.Component):
                     choose()
                     with m.If(touched == 0):
                         done()
+        with m.State("CLEAR"):  # after a reset: zero to every cell, four a clock, no output
+            m.d.comb += [self._clear.eq((1 << BANKS) - 1), self._scan_addr.eq(scan_addr)]
+            m.d.sync += scan_x.eq(scan_x + BANKS)
+            with m.If(scan_x == tile.width - BANKS):
+                m.d.sync += scan_y.eq(scan_y + 1)
+                with m.If(scan_y == tile.height - 1):
+                    m.d.sync += [scan_x.eq(0), scan_y.eq(0), obs.dirty.eq(0)]
+                    m.next = "ACC"
         obs.__dict__.update(
             scan_x=scan_x, scan_y=scan_y, partial=partial, row_start=row_start, decide=decide
         )

@@ -21,8 +21,9 @@ a tile or flush op the resolve has not taken: from the polygon's begin it is rea
 `TileClock.ready` (T) on, and then stays ready until the polygon's end (the only other op,
 sent when the core is idle). So the core sees a sink first ready in clock T:
 `schedule(..., sink_ready=T)`. The stepper's one enable freezes the loop and its pipeline
-from the clock its first beat would be valid until T, while the setup runs on and the
-stepper loads a bank in the freeze only while its loop is idle (`stall_window`).
+from the clock its first beat would be valid until T, while the setup runs on until its bank
+waits and the stepper loads a bank in the freeze only while its loop is idle
+(`stall_window`).
 """
 
 from __future__ import annotations

@@ -27,8 +27,8 @@ from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge
 from edgeaa.model.column import IntArith
 from edgeaa.model.edge import fold, window
-from edgeaa.model.pipeline import CODE, Command
-from edgeaa.model.tile import TileConfig
+from edgeaa.model.pipeline import CODE, Command, command_ops
+from edgeaa.model.tile import TileConfig, TileModel
 from edgeaa.sim.verification.commands import edge_command
 from edgeaa.sim.verification.scoreboard import edge_beats
 
@@ -170,6 +170,72 @@ def test_pipeline_reset_takes_nothing_and_clears_the_counters():
     # After the reset the pipeline works: a flushed tile is its background.
     assert result["pixels"] == [6] * (tile.width * tile.height)
     assert result["errors"] == 0
+
+
+def _reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result):
+    """Offer `first`, wait `wait` clocks, reset for RESET_CLOCKS, then offer `second`;
+    collect the pixels after the reset."""
+    layout = command_layout(tile)
+
+    async def offer(ctx, commands):
+        for command in commands:
+            ctx.set(dut.commands.valid, 1)
+            ctx.set(dut.commands.payload, layout.const(command._asdict()))
+            while True:
+                *_, taken, valid, pixel = await ctx.tick().sample(
+                    dut.commands.ready, dut.pixels.valid, dut.pixels.payload
+                )
+                if valid:
+                    result["pixels"].append(int(pixel.value))
+                if taken:
+                    break
+        ctx.set(dut.commands.valid, 0)
+
+    async def bench(ctx):
+        ctx.set(dut.pixels.ready, 1)
+        await offer(ctx, first)
+        await ctx.tick().repeat(wait)
+        ctx.set(domain.rst, 1)
+        for _ in range(RESET_CLOCKS):  # (`repeat` would raise DomainReset)
+            await ctx.tick()
+        ctx.set(domain.rst, 0)
+        result["pixels"] = []
+        await offer(ctx, second)
+        for _ in range(4 * tile.pixels + 200):
+            *_, valid, pixel = await ctx.tick().sample(
+                dut.commands.ready, dut.pixels.valid, dut.pixels.payload
+            )
+            if valid:
+                result["pixels"].append(int(pixel.value))
+
+    return bench
+
+
+@pytest.mark.parametrize(
+    "ended, wait",
+    [(False, 200), (True, 6)],
+    ids=["open polygon, its beats in the memory", "in the end's scan"],
+)
+def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(ended, wait):
+    """A reset while a polygon's deltas are in the accumulation memory (the polygon open, or
+    its scan under way): they are cleared, so the next scene is the model's image of that
+    scene alone."""
+    tile = TileConfig(CONFIG, 8, 4)
+    tri = [(1, 0, 7, 3), (7, 3, 0, 3), (0, 3, 1, 0)]
+    first = [Command.tile(0, 0, 3), Command.begin(15, 3)]
+    first += [Command.edge(*e) for e in tri] + [Command.end()] * ended
+    second = [Command.tile(0, 0, 2), Command.begin(12, 2)]
+    second += [Command.edge(*e) for e in [(2, 0, 6, 3), (6, 3, 2, 3), (2, 3, 2, 0)]]
+    second += [Command.end(), Command.flush()]
+    (frame,) = TileModel(tile).run(command_ops(tile, second).ops)
+    dut = EdgePipeline(tile)
+    top, domain = _with_domain(dut)
+    result = {"pixels": []}
+    sim = Simulator(top)
+    sim.add_clock(1e-6)
+    sim.add_testbench(_reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result))
+    sim.run()
+    assert result["pixels"] == [int(v) for v in frame.ravel()]
 
 
 # -- clip port values past 2**W --------------------------------------------------------------

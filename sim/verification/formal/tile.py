@@ -103,9 +103,9 @@ resolve's latency every cell the induction step sees written was taken within th
 it assumes, from a state where the invariants held.
 
 All groups are proved by k-induction for every reachable state (``deltas``, ``sums`` and
-``pixels`` from power-on, the memories and registers at their initial values, no reset: a
-reset does not clear the accumulation memory). `TILE_PROOFS` lists the runs and their
-configurations; `run_tile_proof` runs one (``python -m
+``pixels`` from power-on, the memories and registers at their initial values, no reset: the
+clear pass after a reset mid-polygon is tested in simulation). `TILE_PROOFS` lists the runs
+and their configurations; `run_tile_proof` runs one (``python -m
 edgeaa.sim.verification.formal.tile [proof ...]``).
 """
 
