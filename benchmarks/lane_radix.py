@@ -3,9 +3,10 @@ radix 2: one quotient bit a clock) against a radix-4 lane (two bits a clock), bo
 ``khq, khr = divmod(|I_d| dv 2**(F - 1), du)`` for the default configuration.
 
 Each lane is checked against Python's divmod in Amaranth simulation (seeded random operands,
-the seed printed), then synthesised alone for the iCE40 HX8K (Yosys LUT4 and flip-flops, the
-I/O harness subtracted; nextpnr Fmax). ``python benchmarks/lane_radix.py [--count N]
-[--seed S] [--no-synth]``. The radix-4 lane is an experiment kept here, not part of the core.
+the seed printed), then synthesised alone for the iCE40 HX8K and the ECP5 25F (Yosys LUT4
+and flip-flops, the I/O harness subtracted; nextpnr Fmax). ``python
+benchmarks/lane_radix.py [--count N] [--seed S] [--no-synth]``. The radix-4 lane is an
+experiment kept here, not part of the core.
 """
 
 from __future__ import annotations
@@ -162,15 +163,16 @@ def main(argv=None) -> int:
         return 0
     from edgeaa.sim.synthesis import synthesize
 
-    print("| lane | clocks per division | LUT4 | FF | Fmax (MHz) |")
-    print("| --- | ---: | ---: | ---: | ---: |")
-    for lane_cls in (Radix2Lane, Radix4Lane):
-        lane = lane_cls(config)
-        result = synthesize(lane, "ice40", wrap=True)
-        print(
-            f"| {lane_cls.__name__} | {lane.clocks} | {result.core_luts} | {result.core_ffs} "
-            f"| {result.fmax_mhz:.1f} |"
-        )
+    print("| lane | target | clocks per division | LUT4 | FF | Fmax (MHz) |")
+    print("| --- | --- | ---: | ---: | ---: | ---: |")
+    for target in ("ice40", "ecp5"):
+        for lane_cls in (Radix2Lane, Radix4Lane):
+            lane = lane_cls(config)
+            result = synthesize(lane, target, wrap=True)
+            print(
+                f"| {lane_cls.__name__} | {result.device} | {lane.clocks} | {result.core_luts} "
+                f"| {result.core_ffs} | {result.fmax_mhz:.1f} |"
+            )
     return 0
 
 
