@@ -1,4 +1,4 @@
-"""Issue 12's higher-radix option, measured on one lane: the setup's lane B (`_MulDivLane`,
+"""Issue 12's higher-radix option, measured on one lane: the setup's lane B (`MulDivLane`,
 radix 2: one quotient bit a clock) against a radix-4 lane (two bits a clock), both computing
 ``khq, khr = divmod(|I_d| dv 2**(F - 1), du)`` for the default configuration.
 
@@ -21,7 +21,7 @@ from amaranth.lib.wiring import In, Out
 from amaranth.sim import Simulator
 
 from edgeaa.hdl.layouts import register_shape
-from edgeaa.hdl.setup import _MulDivLane
+from edgeaa.hdl.setup import MulDivLane
 from edgeaa.model.config import EdgeConfig
 
 
@@ -39,7 +39,7 @@ def _ports(config: EdgeConfig, a_bits: int) -> dict:
 
 
 class Radix2Lane(wiring.Component):
-    """The core's lane B as it is: `_MulDivLane` with no digit, one multiplier bit a clock."""
+    """The core's lane B as it is: `MulDivLane` with no digit, one multiplier bit a clock."""
 
     def __init__(self, config: EdgeConfig):
         self._config = config
@@ -50,7 +50,7 @@ class Radix2Lane(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         du_bits = self._config.register_widths()["du"].bits
-        lane = _MulDivLane("lane", self._config, self.a_bits, 0)
+        lane = MulDivLane("lane", self._config, self.a_bits, 0)
         neg_du = Signal(signed(du_bits + 1))
         m.d.sync += neg_du.eq(-self.du)
         step = lane.step(m, neg_du, "lane")

@@ -95,7 +95,7 @@ from .pieces import (
     run_end_loads,
 )
 
-__all__ = ["ERRORS_BITS", "EdgeSetupUnit", "accept_values"]
+__all__ = ["ERRORS_BITS", "EdgeSetupUnit", "MulDivLane", "accept_values"]
 
 ERRORS_BITS = 16
 STATES = ("IDLE", "FOLD", "WINDOW", "RUN", "FINAL", "HOLD")
@@ -173,7 +173,7 @@ class EdgeSetupUnit(wiring.Component):
       ``minor_neg``, ``du``, ``dv``, ``neg_du``, ``first``, ``last``, ``lo``, ``hi``,
       ``start_clip``, ``v0_r``, ``columns``, ``e_neg``, ``e_mag_r``, ``i_d``,
       ``value_base``, ``value_neg``, ``row0``, ``counter``, ``kq``, ``kr``);
-    * ``lane_a``, ``lane_b``: the two multiply-divide lanes (`_MulDivLane`: ``q``, ``r``,
+    * ``lane_a``, ``lane_b``: the two multiply-divide lanes (`MulDivLane`: ``q``, ``r``,
       ``a``, ``x``, ``digit``, ``x_du``, ``x_2du``, ``digit2``);
     * ``in_idle``, ``in_fold``, ``in_window``, ``in_run``, ``in_final``, ``in_hold``: the
       state;
@@ -217,8 +217,8 @@ class EdgeSetupUnit(wiring.Component):
             raise ValueError("lane A's long first pass is not the timing model's extra clocks")
         # Lane A's quotient holds floor(2 e dv / du) <= 2 e < 2**(W + s + 2) after pass 1.
         a_bits = max(self.pass1_long, self.pass2_bits)
-        self.lane_a = _MulDivLane("lane_a", config, a_bits, s + 1, q_bits=self.pass1_long)
-        self.lane_b = _MulDivLane("lane_b", config, I + F - 1, 0)  # |I_d| << (F - 1)
+        self.lane_a = MulDivLane("lane_a", config, a_bits, s + 1, q_bits=self.pass1_long)
+        self.lane_b = MulDivLane("lane_b", config, I + F - 1, 0)  # |I_d| << (F - 1)
         for state in STATES:
             setattr(self, f"in_{state.lower()}", Signal(name=f"in_{state.lower()}"))
         self.next_bank = Signal(setup_layout(config, output), name="next_bank")
@@ -655,7 +655,7 @@ def r_cut_end(r):
     return r.last > r.hi
 
 
-class _MulDivLane:
+class MulDivLane:
     """Registers of one lane of the sequential multiply-divide unit.
 
     One clock of `step` performs ``V = 2 V + b X`` (b the next bit of the multiplier, MSB first)

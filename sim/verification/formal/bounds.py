@@ -173,7 +173,7 @@ def _lane(ctx, lane, a_bits, multiplier, bits, steps, *, x_at_most, digit=None):
         ]
     else:
         conds.append((q < (consumed << (s + 1))) | ((consumed == 0) & (q == 0) & (r == 0)))
-    # The next step in full width (`_MulDivLane.step`).
+    # The next step in full width (`MulDivLane.step`).
     bit = a[-1]
     total = (r << 1) + Mux(bit, x, 0)
     quotient_digit = Mux(total >= (du << 1), 2, Mux(total >= du, 1, 0))
