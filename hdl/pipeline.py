@@ -12,7 +12,8 @@ accumulator's input is the core's beats or the command stage's op, never both at
 
 Counters (``stats``, 32 bits each, wrapping): per stage, clocks busy and clocks stalled
 (output valid, not taken): ``core_*`` (not idle; beats waiting), ``acc_*`` (taking an op or
-scanning; cells waiting), ``resolve_*`` (taking a cell or flushing; pixels waiting).
+a beat's cell, or scanning; cells waiting), ``resolve_*`` (taking a cell or flushing; pixels
+waiting).
 """
 
 from __future__ import annotations
@@ -175,7 +176,7 @@ class EdgePipeline(wiring.Component):
         events = {
             "core_busy": ~core.idle,
             "core_stall": core.deltas.valid & ~core.deltas.ready,
-            "acc_busy": (acc.ops.valid & acc.ops.ready) | acc.scanning,
+            "acc_busy": acc.busy,
             "acc_stall": acc.cells.valid & ~acc.cells.ready,
             "resolve_busy": (res.cells.valid & res.cells.ready) | res.flushing,
             "resolve_stall": res.pixels.valid & ~res.pixels.ready,

@@ -18,12 +18,12 @@ It composes the stages' own cycle models, command by command (`decode_commands`)
 
 The stall. The accumulator is not ready while it scans the previous polygon's rows or holds
 a tile or flush op the resolve has not taken: from the polygon's begin it is ready from
-`TileClock.ready` (T) on, and then stays ready until the polygon's end (the only other op,
-sent when the core is idle). So the core sees a sink first ready in clock T:
-`schedule(..., sink_ready=T)`. The stepper's one enable freezes the loop and its pipeline
-from the clock its first beat would be valid until T, while the setup runs on until its bank
-waits and the stepper loads a bank in the freeze only while its loop is idle
-(`stall_window`).
+`TileClock.ready` (T) on, and then takes the polygon's beats until its end (the only other
+op, sent when the core is idle), each over `beat_clocks` clocks (a nonzero cell a clock). So
+the core sees a sink first ready in clock T that holds each beat that long:
+`schedule(..., sink_ready=T, holds=...)`. The stepper's one enable freezes the loop and its
+pipeline while a beat waits (`edgeaa.model.timing.beat_wait`), while the setup runs on until
+its bank waits and the stepper loads a bank in a freeze only while its loop is idle.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 from .edge import EdgeError, setup
 from .pipeline import Decoded, decode_commands
-from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming
+from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming, beat_clocks
 from .timing import BAD_COMMAND_CYCLES, EMPTY_EDGE_CYCLES, pipeline_depth, schedule
 
 __all__ = ["PipelineTiming", "pipeline_cycles"]
@@ -80,7 +80,7 @@ class _Top:
         if self.polygon is not None and not isinstance(d.op, PolygonEnd):  # an edge or unknown
             if d.op is not None:
                 self.model.feed(d.op)
-            self.polygon.append((k, self.shape(d)))
+            self.polygon.append((k, self.shape(d), d.op))
             return
         if isinstance(d.op, PolygonEnd):
             self.taken[k] = self.end(d.op)
@@ -112,20 +112,23 @@ class _Top:
         when the accumulator is): set their clocks and the next offer, count the core's busy
         and stalled clocks; returns the first clock the core is idle after them."""
         items, self.polygon = self.polygon or [], None
-        shapes, idle, extra = [], [], 0
-        for _, shape in items:
+        shapes, idle, holds, extra = [], [], [], 0
+        for _, shape, op in items:
             if shape is OTHER:
                 extra += 1
             else:
                 shapes.append(shape)
                 idle.append(extra + (0 if idle else self.first))
+                holds.append(beat_clocks(op.cells) if shape else ())
                 extra = 0
         config = self.tile.config
         timings = iter(
-            schedule(config, shapes, output="deltas", idle=idle, sink_ready=self.clock.ready)
+            schedule(
+                config, shapes, output="deltas", idle=idle, sink_ready=self.clock.ready, holds=holds
+            )
         )
-        last, free, stalled = self.first - 1, 0, None
-        for k, shape in items:
+        last, free, stalled, first_beat = self.first - 1, 0, 0, True
+        for (k, shape, _), hold in zip(items, self._per_item(items, holds), strict=True):
             if shape is OTHER:
                 last = self.taken[k] = last + 1
                 continue
@@ -133,17 +136,28 @@ class _Top:
             last = self.taken[k] = t.accepted
             if t.beats:
                 stop = t.beats[-1] + 1
-                self.clock.beats(t.beats)
+                self.clock.beats(t.beats, hold)
                 self.beats.extend(t.beats)
-                if stalled is None:
-                    stalled = t.beats[0] - (t.load + 1 + pipeline_depth(config, "deltas"))
+                # each beat waits hold - 1 clocks; the polygon's first until the sink is ready
+                stalled += int(sum(hold)) - len(hold)
+                if first_beat:
+                    stalled += (
+                        t.beats[0] - hold[0] + 1 - (t.load + 1 + pipeline_depth(config, "deltas"))
+                    )
+                    first_beat = False
             else:
                 stop = t.accepted + (BAD_COMMAND_CYCLES if shape is None else EMPTY_EDGE_CYCLES)
             self.busy += max(0, stop - max(t.accepted + 1, free))  # the union of busy spans
             free = max(free, stop)
-        self.stall += stalled or 0
+        self.stall += stalled
         self.offer = last + 1
         return free
+
+    @staticmethod
+    def _per_item(items, holds):
+        """`holds` (one per edge) aligned with `items` (None for an unknown code)."""
+        edges = iter(holds)
+        return [None if shape is OTHER else next(edges) for _, shape, _ in items]
 
     def result(self) -> PipelineTiming:
         if self.polygon is not None:  # a polygon the stream left open: its beats go in
@@ -152,7 +166,7 @@ class _Top:
         stats = {
             "core_busy": self.busy,
             "core_stall": self.stall,
-            "acc_busy": len(tile.accepts) + clock.scanning,
+            "acc_busy": len(tile.accepts) + clock.holding + clock.scanning,
             "acc_stall": clock.acc_stall,
             "resolve_busy": clock.resolve_ops + len(tile.pixels),
             "resolve_stall": 0,

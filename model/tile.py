@@ -5,9 +5,10 @@ A tile is ``width`` x ``height`` pixels at an origin in engine pixels. Its stage
 order, a stream of *ops* (the accumulator's input):
 
 * `TileStart` (origin, background): the tile's pixels become the background.
-* `Beats`: delta beats of the stepper (`edgeaa.model.beat.DeltaBeat`), one per clock. A cell
-  is moved into the tile (origin subtracted); one left of it is added into its row's first
-  column (the prefix sum carries it), one right of, above or below it is dropped, as
+* `Beats`: delta beats of the stepper (`edgeaa.model.beat.DeltaBeat`), one cell a clock: a
+  beat takes a clock per nonzero cell, one when it has none (`beat_clocks`). A cell is moved
+  into the tile (origin subtracted); one left of it is added into its row's first column (the
+  prefix sum carries it), one right of, above or below it is dropped, as
   `edgeaa.model.accumulate.resolve_rows` does. A row holding a nonzero delta is *touched*.
 * `PolygonEnd` (intensity, I_out, fill rule): the resolve. Every touched row, in ascending
   order, is read cell by cell over its *scan span* (below) and cleared (the clear costs no
@@ -61,6 +62,7 @@ __all__ = [
     "Scan",
     "TileOverflow",
     "TileStart",
+    "beat_clocks",
     "composite_steps",
     "tile_cells",
 ]
@@ -124,7 +126,7 @@ class TileStart(NamedTuple):
 
 
 class Beats(NamedTuple):
-    """Delta beats, one per clock: ``cells[k, j]`` is (x, y, delta) of cell j of beat k."""
+    """Delta beats: ``cells[k, j]`` is (x, y, delta) of cell j of beat k."""
 
     cells: np.ndarray  # (n, 4, 3) int64
 
@@ -158,28 +160,10 @@ def tile_cells(tile: TileConfig, origin, x, y, delta):
     return np.maximum(tx[keep], 0), ty[keep], delta[keep]
 
 
-# A beat's cells, as offsets (x + 4 y) from their least x and y: a 2 x 2 block (x-major) or
-# four cells of a row (y-major), as `edgeaa.model.column.delta_cells` places them. So they lie
-# in distinct banks of (x + 2 y) mod 4 (`edgeaa.hdl.accumulator.bank_of`), and the cells left of
-# the tile are in one row.
-BEAT_SHAPES = (0b00110011, 0b00001111)
-
-
-def check_beat_shapes(cells: np.ndarray) -> None:
-    """Raise unless every beat of `cells` (n, 4, 3) has a shape of `BEAT_SHAPES`."""
-    if not len(cells):
-        return
-    x, y = cells[:, :, 0], cells[:, :, 1]
-    dx, dy = x - x.min(axis=1, keepdims=True), y - y.min(axis=1, keepdims=True)
-    inside = (dx < 4) & (dy < 2)
-    codes = np.where(inside, 1 << np.minimum(dx + 4 * dy, 7), 256)
-    masks = np.bitwise_or.reduce(codes, axis=1)
-    bad = np.flatnonzero(~np.isin(masks, BEAT_SHAPES))
-    if len(bad):
-        raise ValueError(
-            f"beat {bad[0]}: cells {cells[bad[0], :, :2].tolist()} are neither a 2 x 2 block "
-            "nor four cells of a row"
-        )
+def beat_clocks(cells: np.ndarray) -> np.ndarray:
+    """Clocks the accumulator takes for each beat of `cells` (n, 4, 3): one per nonzero
+    cell, one for a beat with none (it takes a cell a clock and skips the zero ones)."""
+    return np.maximum(np.count_nonzero(np.asarray(cells)[:, :, 2], axis=1), 1)
 
 
 def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> int:
@@ -253,7 +237,6 @@ class TileModel:
         return [out for op in ops if isinstance(out := self.feed(op), np.ndarray)]
 
     def _accumulate(self, cells: np.ndarray) -> None:
-        check_beat_shapes(cells.reshape(-1, 4, 3))
         cells = cells.reshape(-1, 3)
         tx, ty, delta = tile_cells(self.tile, self.origin, cells[:, 0], cells[:, 1], cells[:, 2])
         np.add.at(self.cells, (ty, tx), delta.astype(self._dtype))
@@ -307,7 +290,8 @@ class TileModel:
 #
 # Clocks from 0; a transfer happens in a clock where valid and ready are both high. The ops
 # are offered back to back (each from the clock after the previous one was taken) and the
-# pixel sink is always ready. The accumulator takes a beat per clock. An end taken in clock
+# pixel sink is always ready. The accumulator takes a beat in `beat_clocks` clocks (its
+# nonzero cells one a clock), the beat's transfer in the last of them. An end taken in clock
 # a reads the first touched cell in a + 2 (the last beat's read-modify-write lands in a + 1)
 # and offers it to the resolve in a + 3, then one cell per clock (the runs of `Scan`), the
 # next read as a cell is taken; a row that stops at ``hi`` leaves a clock with no cell after
@@ -360,13 +344,17 @@ class TileClock:
         self.quiet = 0  # first clock no cell is in flight in the resolve
         self.free = 0  # first clock the resolve is not flushing
         self.scanning = self.acc_stall = self.resolve_ops = 0
+        self.holding = 0  # clocks a beat's cells were taken before its transfer
 
-    def beats(self, clocks) -> None:
-        """Beats taken in `clocks` (each at or after `ready`, ascending)."""
-        clocks = list(clocks)
+    def beats(self, clocks, holds) -> None:
+        """Beats transferred in `clocks` (ascending), beat k taken over its ``holds[k]``
+        clocks (`beat_clocks`) up to its transfer, the first at or after `ready`."""
+        clocks, holds = list(clocks), [int(h) for h in holds]
+        assert len(clocks) == len(holds), "a hold per beat"
         if clocks:
-            assert clocks[0] >= self.ready, "a beat before the accumulator is ready"
+            assert clocks[0] - holds[0] + 1 >= self.ready, "a beat before the accumulator is ready"
             self.timing.accepts.extend(clocks)
+            self.holding += sum(holds) - len(holds)
             self.ready = clocks[-1] + 1
 
     def take(self, op, result, clock: int | None = None) -> int:
@@ -412,8 +400,8 @@ def tile_cycles(tile: TileConfig, ops) -> TileTiming:
     for op in ops:
         result = model.feed(op)
         if isinstance(op, (Beats, DeltaBeat)):
-            n = 1 if isinstance(op, DeltaBeat) else len(op)
-            clock.beats(range(clock.ready, clock.ready + n))
+            holds = beat_clocks((Beats.of([op]) if isinstance(op, DeltaBeat) else op).cells)
+            clock.beats(clock.ready - 1 + np.cumsum(holds), holds)
         else:
             clock.take(op, result)
     return clock.timing

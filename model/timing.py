@@ -66,9 +66,10 @@ stream of such edges (total ``T`` columns) has its last beat in clock ``L + T - 
 mean over the whole run is ``T / (L + T)`` (`stream_rate`), at least 0.95 once
 ``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. A stalled sink
 delays the stepper and its pipeline (and, once its bank waits, the setup) clock for clock;
-nothing else depends on the data. `schedule`'s ``sink_ready`` models a sink first ready in
-clock T (the polygon pipeline's accumulator after a scan, `stall_window`), its ``idle`` a
-source that idles before some commands.
+nothing else depends on the data. `schedule`'s ``sink_ready`` and ``holds`` model the polygon
+pipeline's accumulator: first ready in clock T (after a scan), then taking each beat over
+``holds`` clocks, a nonzero cell a clock (`beat_wait`); its ``idle`` a source that idles
+before some commands.
 
 Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
 One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
@@ -78,6 +79,7 @@ clocks show only when the setup is the bottleneck.
 
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 
 from .bank import check_output
@@ -96,7 +98,7 @@ __all__ = [
     "setup_interval",
     "setup_latency",
     "start_clip_cycles",
-    "stall_window",
+    "beat_wait",
     "stream_rate",
     "sustained_rate",
     "unit_cycles",
@@ -215,6 +217,7 @@ def schedule(
     *,
     idle=None,
     sink_ready: int = 0,
+    holds=None,
 ) -> list[EdgeTiming]:
     """`write_cycles` from each edge's (columns, clipped_start) as setup gives them (None for
     a command the core drops as bad), for callers that hold the setups already
@@ -223,40 +226,58 @@ def schedule(
     `idle` (one unit only): clocks the source idles before offering each command: command k
     is offered ``idle[k]`` clocks after the clock following command k - 1's accept, the first
     in clock ``idle[0]`` (default: back to back from clock 0). `sink_ready` (one unit only):
-    the sink is not ready before this clock and always ready from it (`stall_window`).
+    the sink is not ready before this clock and ready from it (`beat_wait`). `holds` (one unit
+    only): per command, the clocks the sink takes each of its beats (`beat_wait`; default one).
     """
     latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, output)
     if setup_units == 1:
-        return _schedule_one(config, shapes, edges, latency, depth, idle, sink_ready)
-    if idle is not None or sink_ready:
-        raise ValueError("idle and sink_ready are modelled for one setup unit only")
+        return _schedule_one(config, shapes, edges, latency, depth, idle, sink_ready, holds)
+    if idle is not None or sink_ready or holds is not None:
+        raise ValueError("idle, sink_ready and holds are modelled for one setup unit only")
     return _schedule_units(config, shapes, edges, latency, depth, setup_units)
 
 
-def stall_window(first_beat: int, sink_ready: int) -> tuple[int, int]:
-    """The stepper's stall (start, clocks) under a sink first ready in clock `sink_ready`.
-
-    The stepper's one enable (``~out.valid | out.ready``) is high until its first beat is
-    valid (clock `first_beat` with an always-ready sink) and from `sink_ready` on; the beat
-    waits in the output register in between, and the loop and the pipeline hold. So the
-    stepper's clocks are every clock but ``[first_beat, sink_ready)``, while the setup runs
-    on until its bank waits: a bank is loaded in the window only while the loop is idle
-    (``~active``)."""
-    return first_beat, max(0, sink_ready - first_beat)
+def beat_wait(valid: int, sink_ready: int, hold: int) -> int:
+    """Clocks a beat valid in clock `valid` waits in the stepper's output register: until the
+    sink is ready (`sink_ready`, the polygon pipeline's accumulator after a scan), then
+    ``hold - 1`` more while the sink takes it (the accumulator takes a beat's nonzero cells
+    one a clock, `edgeaa.model.tile.beat_clocks`, and the beat in the last of them)."""
+    return max(0, sink_ready - valid) + hold - 1
 
 
-def _enabled(clock: int, count: int, stall: tuple[int, int]) -> list[int]:
-    """The first `count` stepper clocks (`stall_window`) from `clock` on."""
-    start, length = stall
-    if start <= clock < start + length:
-        clock = start + length
-    index = clock if clock < start else clock - length  # stepper clocks before `clock`
-    return [i if i < start else i + length for i in range(index, index + count)]
+class _Enabled:
+    """The stepper's clocks: its one enable (``~out.valid | out.ready``) is low while a beat
+    waits in the output register, which freezes the loop and the pipeline (the setup runs on
+    until its bank waits, and a bank is loaded in a freeze only while the loop is idle). A
+    wait is added at the enabled clock of index ``j`` where its beat is valid (``wait``, in
+    ascending ``j``); every enabled clock from that index on moves ``length`` clocks later."""
+
+    def __init__(self):
+        self.starts: list[int] = []  # index of each wait
+        self.shifts: list[int] = [0]  # total length of the waits before and at each
+
+    def clock(self, index: int) -> int:
+        """The enabled clock of `index` (clock `index` when nothing waited)."""
+        return index + self.shifts[bisect.bisect_right(self.starts, index)]
+
+    def index(self, clock: int) -> int:
+        """Index of the first enabled clock at or after `clock`."""
+        lo, hi = clock - self.shifts[-1], clock  # clock(i) >= i and grows by at least 1
+        while lo < hi:
+            mid = (lo + hi) // 2
+            lo, hi = (mid + 1, hi) if self.clock(mid) < clock else (lo, mid)
+        return lo
+
+    def wait(self, index: int, length: int) -> None:
+        if length:
+            assert not self.starts or index > self.starts[-1], "waits in ascending order"
+            self.starts.append(index)
+            self.shifts.append(self.shifts[-1] + length)
 
 
 def _schedule_one(
-    config: EdgeConfig, shapes, edges, latency: int, depth: int, idle=None, sink_ready=0
+    config: EdgeConfig, shapes, edges, latency: int, depth: int, idle=None, sink_ready=0, holds=None
 ):
     """`schedule` of the core with one setup unit: it holds an edge from its accept to the
     stepper's load of its bank and accepts the next command from that clock on."""
@@ -264,7 +285,7 @@ def _schedule_one(
     out: list[EdgeTiming] = []
     accept = 0  # the setup's first free clock, then the accept
     prev_last = None  # the clock the stepper steps the previous good edge's last column
-    stall = None  # the stepper's stall window, from the first beat on
+    enabled, ready = _Enabled(), sink_ready  # the sink first ready (for the first beat)
     for k, shape in enumerate(shapes):
         edge = None if edges is None else edges[k]
         if idle is not None:
@@ -280,12 +301,17 @@ def _schedule_one(
             continue
         bank = accept + latency - depth - 2 + (extra if clipped_start else 0)
         load = bank + 1 if prev_last is None else max(bank + 1, prev_last)
-        if stall is None:
-            stall = stall_window(load + 1 + depth, sink_ready)
-        steps = _enabled(load + 1, columns + depth, stall)  # step c, then the pipeline's
-        out.append(EdgeTiming(edge, accept, bank, load, tuple(steps[depth:])))
+        first = enabled.index(load + 1)  # column c stepped at enabled index first + c
+        beats = []
+        for c in range(columns):  # the beat of column c: valid depth enabled clocks later
+            j = first + c + depth
+            hold = 1 if holds is None else int(holds[k][c])
+            enabled.wait(j, beat_wait(enabled.clock(j), ready, hold))
+            beats.append(enabled.clock(j))
+            ready = 0
+        out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
         accept = load
-        prev_last = steps[columns - 1]
+        prev_last = enabled.clock(first + columns - 1)
     return out
 
 

@@ -211,23 +211,26 @@ def wrong_model_run():
     return commands, run_transfers(SMALL_TILE, commands)
 
 
-def no_stall(first_beat: int, sink_ready: int) -> tuple[int, int]:
-    return first_beat, 0
+WRONG_WAITS = {
+    "no_wait": lambda valid, sink_ready, hold: 0,  # beats before the accumulator is ready
+    "beat_a_clock": lambda valid, sink_ready, hold: max(0, sink_ready - valid),  # no cell a clock
+}
 
 
-# A constant one clock off, or the stall not modelled (beats before the accumulator is ready).
+# A constant one clock off, or the stall not modelled (beats before the accumulator is ready,
+# or taken a beat a clock, not a nonzero cell a clock).
 WRONG = ["SCAN_START", "EMPTY_END", "FLUSH_START", "DELTAS_PIPELINE_DEPTH", "BAD_COMMAND_CYCLES"]
 WRONG += ["EMPTY_EDGE_CYCLES"]
 
 
-@pytest.mark.parametrize("wrong", [*WRONG, "resolve_latency", "stall_window"])
+@pytest.mark.parametrize("wrong", [*WRONG, "resolve_latency", *WRONG_WAITS])
 def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
     commands, hw = wrong_model_run
     check_clock_for_clock(SMALL_TILE, commands, hw, "the right model")
     latency = tile_model.resolve_latency(SMALL) + 1
     for module in (timing, tile_model, pipeline_timing):
-        if wrong == "stall_window" and hasattr(module, wrong):
-            monkeypatch.setattr(module, wrong, no_stall)
+        if wrong in WRONG_WAITS and hasattr(module, "beat_wait"):
+            monkeypatch.setattr(module, "beat_wait", WRONG_WAITS[wrong])
         elif wrong == "resolve_latency" and hasattr(module, wrong):
             monkeypatch.setattr(module, wrong, lambda config: latency)
         elif hasattr(module, wrong):

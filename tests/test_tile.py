@@ -123,11 +123,3 @@ def test_bad_tile_sizes_are_refused():
     for kwargs in ({"width": 6}, {"width": 2}, {"height": 1}, {"headroom_bits": -1}):
         with pytest.raises(ValueError, match="must be"):
             TileConfig(DEFAULT, **kwargs)
-
-
-def test_a_beat_that_is_not_a_block_or_a_row_is_refused():
-    tile = TileConfig(SMALL, 4, 2)
-    with pytest.raises(ValueError, match="neither a 2 x 2 block"):
-        TileModel(tile).run(
-            _ops(tile, [(0, 0, 1), (1, 0, 1), (0, 2, 1), (1, 2, 1)], PolygonEnd(15, 0))
-        )

@@ -40,7 +40,7 @@ DEFAULT = EdgeConfig()
 def test_the_interfaces():
     tile = TileConfig(SMALL, 8, 4)
     acc, res = TileAccumulator(tile), TileResolve(tile)
-    assert set(acc.signature.members) == {"ops", "cells", "scanning"}
+    assert set(acc.signature.members) == {"ops", "cells", "scanning", "busy"}
     assert set(res.signature.members) == {"cells", "pixels", "flushing"}
     assert acc.cells.signature.flip() == res.cells.signature
     assert res.latency == resolve_latency(SMALL) == SMALL.intensity_bits + 3
@@ -55,10 +55,13 @@ def _polygon(rng: random.Random, tile: TileConfig, config: EdgeConfig, origin):
     beats = []
     for _ in range(rng.choice([0, 1, 3, 8, 14])):
         x, y = rng.choice(anchors) if rng.random() < 0.6 else _anchor(rng, tile, origin)
-        if rng.random() < 0.5:  # x-major: a 2 x 2 block; y-major: four cells of a row
+        shape = rng.random()
+        if shape < 0.4:  # x-major: a 2 x 2 block; y-major: four cells of a row
             places = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)]
-        else:
+        elif shape < 0.8:
             places = [(x + k, y) for k in range(4)]
+        else:  # any four cells, repeats included (back-to-back deltas to one cell)
+            places = [(x + rng.randint(-1, 1), y + rng.randint(0, 1)) for _ in range(4)]
         rng.shuffle(places)
         deltas = [rng.choice([0, rng.randint(-ifix // 8, ifix // 8), ifix, -ifix]) for _ in places]
         beats.append([(px, py, d) for (px, py), d in zip(places, deltas, strict=True)])

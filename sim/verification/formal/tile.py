@@ -3,7 +3,7 @@
 `edgeaa.hdl.resolve.TileResolve`) with SymbiYosys. The ``stream`` and ``pixels`` groups
 are black-box (only the stages' ports); the accumulator's ``deltas`` and ``sums`` groups
 also state invariants of its internals (its observation points, ``TileAccumulator.observe``,
-and its bank memories read through combinational read ports the harness adds), which make
+and its memory read through combinational read ports the harness adds), which make
 them inductive.
 
 `TileHarness` wraps one stage of a `TileConfig`. Its input stream is free in every clock
@@ -14,8 +14,8 @@ taken stays valid with the same payload); the output's ready is free. Check grou
     The ``cells`` hold rule: a valid output not taken stays valid with the same payload in
     the next clock (the reset is a free input; a reset in between lifts the rule).
 ``accumulator`` ``deltas``
-    One symbolic cell (X, Y) of the tile (``AnyConst``). Beats are assumed to have a shape
-    of `BEAT_SHAPES` (what the stepper emits and the model checks). Asserted: (X, Y) is sent
+    One symbolic cell (X, Y) of the tile (``AnyConst``). Beats are any four cells (repeats
+    included). Asserted: (X, Y) is sent
     after an end, before the accumulator takes another op, when a nonzero delta was kept
     there since the previous end (the model's `tile_cells`: the origin of the last tile op
     subtracted, a cell left of the tile moved into column 0), and at most once per end
@@ -61,19 +61,23 @@ with ``first`` cleared (a stage that takes a polygon's first cell while the prev
 polygon's cells are in flight, so its pixel read may miss their writes).
 
 Invariants (``invariants``, on by default; each an assertion, so the proofs show they hold
-in every reachable state). ``sums`` (`_memory_state`): the bank's row of (X, Y) plus stage
-B's delta for its address plus the output's sum while (X, Y) waits in the output register
-equals the shadow; stage C's sum is in its bank (written the clock before), stage B's read
-is its bank's row unless stage C wrote that row the clock before (then B takes C's sum: the
-forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register is
-cleared in its bank (its ``sel`` its bank) and stage B is then empty, stage B's delta is
-zero when it is empty (a clear adds it), and a nonzero (X, Y) is hit (ACC) or owed (after
-an end) or waits in the output register (so the read past a row's ``hi``, not sent, clears
-a zero). The scan's (`_scan_state`, in both groups): in ACC a hit (X, Y) lies in a touched
-row and in the span ``lo .. hi``, and any row is touched exactly when the ghost kept a
-delta; in WAIT and SCAN the ghost saw no beat; (X, Y) owed waits in the output register
-(ACC), lies in the span of a touched row (WAIT), or waits, or lies in the span of a row
-still to scan or ahead of the scan in the current row (SCAN), and a cell still to read has
+in every reachable state). ``sums`` (`_memory_state`): the memory's row of (X, Y) plus
+stage B's delta for its address plus the output's sum while (X, Y) waits in the output
+register equals the shadow plus the deltas at (X, Y) of the beat's cells taken before the
+beat (`_partial_beat`: the accumulator takes a beat's cells one a clock, the ghost the beat
+whole in its last); stage C's sum is in the memory (written the clock before), stage B's
+read is the memory's row unless stage C wrote that row the clock before (then B takes C's
+sum: the forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output
+register is cleared in the memory and stage B is then empty, stage B's delta is zero when
+it is empty (a clear adds it), and a nonzero (X, Y) is hit (ACC) or owed (after an end) or
+waits in the output register (so the read past a row's ``hi``, not sent, clears a zero).
+The scan's (`_scan_state`, in both groups): a beat taken in part (``done``) is held by the
+source in ACC; in ACC a hit (X, Y) (by the ghost or a cell taken in part) lies in a touched
+row and in the span ``lo .. hi``, and any row is touched exactly when the ghost or a cell
+taken in part kept a delta; in WAIT and SCAN the ghost saw no beat and no beat is taken in
+part; (X, Y) owed waits in the output register (ACC), lies in the span of a touched row
+(WAIT), or waits, or lies in the span of a row still to scan
+or ahead of the scan in the current row (SCAN), and a cell still to read has
 not been sent since the end; the rows left to scan are above the scan row; SCAN's first
 read has not happened exactly while the ``first`` register is set (nothing in the output
 register, a row's start due), else a cell waits there or, after a row stopped at ``hi``,
@@ -131,12 +135,12 @@ from amaranth.hdl import (
     signed,
 )
 
-from ....hdl.accumulator import TileAccumulator, bank_of
+from ....hdl.accumulator import TileAccumulator
 from ....hdl.resolve import TileResolve
 from ....model.accumulate import composite, intensity_offset
 from ....model.beat import CELLS
 from ....model.config import EdgeConfig
-from ....model.tile import BEAT_SHAPES, OPS, RESOLVE_OPS, TileConfig, resolve_latency
+from ....model.tile import OPS, RESOLVE_OPS, TileConfig, resolve_latency
 from .run import FormalResult, find_tools, harness_rtlil, report, run_harness, sby_script
 
 __all__ = [
@@ -162,8 +166,8 @@ TILE_FAULTS = {
 OP = {name: code for code, name in enumerate(OPS)}
 CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
 
-# The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels (one
-# cell per accumulator bank), 18-bit cells.
+# The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels, 18-bit
+# cells.
 SMALL_CONFIG = EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4)
 SMALL_TILE = TileConfig(SMALL_CONFIG, width=4, height=2)
 
@@ -269,7 +273,7 @@ class TileHarness(Elaboratable):
             m.d.comb += self.domain.rst.eq(AnySeq(1))
         source, sink = (dut.ops, dut.cells) if self.stage == "accumulator" else (dut.cells, None)
         sink = sink if sink is not None else dut.pixels
-        payload = _free_source(m, source, self.fault)
+        payload, held_in = _free_source(m, source, self.fault)
         m.d.comb += sink.ready.eq(AnySeq(1))
         seen = Value.cast(sink.payload)
         held = _held(m, sink, "held_out")
@@ -279,13 +283,14 @@ class TileHarness(Elaboratable):
             _hold_rule(m, sink, seen, held)
         if groups:
             s = _accumulator_deltas(m, self.tile, source, payload, sink, self.checks)
+            s.held_in = held_in
             if self.invariants:
                 _accumulator_invariants(m, self.tile, dut, rows, s, self.checks, self.covers)
         if "pixels" in self.checks:
             wide = self.fault == "wide_range"
             g = _resolve_pixels(m, self.tile, source, payload, sink, wide=wide)
             if self.invariants:
-                _resolve_invariants(m, self.tile, dut, rows[0], g, self.covers)
+                _resolve_invariants(m, self.tile, dut, rows, g, self.covers)
         return m
 
 
@@ -301,8 +306,9 @@ def _held(m, stream, name):
 
 def _free_source(m, stream, fault):
     """Drive `stream` from a free source that keeps the hold rule; returns the source's
-    payload (a view). Faults ``lost_delta``, ``stale_origin``, ``lost_first``: the stage gets
-    cell 3's delta, x0 or ``first`` zeroed."""
+    payload (a view) and the flag of a held transfer (the payload is the clock before's).
+    Faults ``lost_delta``, ``stale_origin``, ``lost_first``: the stage gets cell 3's delta,
+    x0 or ``first`` zeroed."""
     layout = stream.payload.shape()
     free = Signal(layout, name="source")
     m.d.comb += [stream.valid.eq(AnySeq(1)), Value.cast(free).eq(AnySeq(layout.size))]
@@ -319,7 +325,7 @@ def _free_source(m, stream, fault):
     m.d.sync += prev.eq(free.as_value())
     with m.If(held):
         m.d.comb += Assume(stream.valid & (free.as_value() == prev), "source: hold rule")
-    return free
+    return free, held
 
 
 def _hold_rule(m, stream, seen, held):
@@ -333,20 +339,6 @@ def _hold_rule(m, stream, seen, held):
 
 
 # -- the accumulator: one symbolic cell ------------------------------------------------------
-
-
-def _beat_shape(beat):
-    """The four cells form a shape of `BEAT_SHAPES` (a 2 x 2 block or four of a row)."""
-    cells = [beat[name] for name in CELLS]
-    lo_x, lo_y = cells[0].x, cells[0].y
-    for cell in cells[1:]:
-        lo_x, lo_y = Mux(cell.x < lo_x, cell.x, lo_x), Mux(cell.y < lo_y, cell.y, lo_y)
-    mask = 0
-    for cell in cells:
-        dx, dy = cell.x - lo_x, cell.y - lo_y
-        inside = (dx < 4) & (dy < 2)
-        mask = mask | Mux(inside, Const(1, 9) << (dx[:2] + 4 * dy[:1]), 1 << 8)
-    return _any(mask == shape for shape in BEAT_SHAPES)
 
 
 def _placed(tile, beat, origin):
@@ -385,8 +377,6 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
     s.cells = cells
     take = ops.valid & ops.ready
     is_op = {name: take & (src.op == code) for name, code in OP.items()}
-    with m.If(ops.valid & (src.op == OP["beat"])):
-        m.d.comb += Assume(_beat_shape(src.beat), "source: beat shape")
     placed = _placed(tile, src.beat, s.origin)
     hits = sum(Mux(k & (x == s.X) & (y == s.Y), d, 0) for k, x, y, d in placed)
     out, sent = cells.payload, cells.valid & cells.ready
@@ -435,73 +425,68 @@ def _accumulator_invariants(m, tile, dut, rows, s, checks, covers):
 
 
 def _memory_rows(m, dut):
-    """Per bank of the accumulator, its rows as values: a combinational read port per row
-    (the harness's; the accumulator's own ports are untouched)."""
-    rows = []
-    banks = getattr(dut.observe, "banks", None) or [dut.observe.memory]
-    for mem in banks:
-        bank = []
-        for address in range(mem.depth):
-            port = mem.read_port(domain="comb")
-            m.d.comb += port.addr.eq(address)
-            bank.append(port.data)
-        rows.append(bank)
+    """The stage's memory (``observe.memory``) as values, one per row: a combinational read
+    port per row (the harness's; the stage's own ports are untouched)."""
+    mem, rows = dut.observe.memory, []
+    for address in range(mem.depth):
+        port = mem.read_port(domain="comb")
+        m.d.comb += port.addr.eq(address)
+        rows.append(port.data)
     return rows
 
 
-def _row(rows, bank, address):
-    """The row at `address` of bank `bank` (both values)."""
-    value = rows[0][0]
-    for b, bank_rows in enumerate(rows):
-        for a, row in enumerate(bank_rows):
-            value = Mux((bank == b) & (address == a), row, value)
+def _row(rows, address):
+    """The row at `address` (a value)."""
+    value = rows[0]
+    for a, row in enumerate(rows):
+        value = Mux(address == a, row, value)
     return value
 
 
-def _cell_address(tile, x, y):
-    return Cat(x[2:], y) if tile.x_bits > 2 else y
+def _partial_beat(tile, dut, s):
+    """The cells of the beat being taken that the accumulator took in earlier clocks (its
+    ``done``; the ghost counts a beat in the clock it is taken whole): any of them kept, one
+    kept at (X, Y), and the sum of their deltas at (X, Y)."""
+    done = dut.observe.cell.done
+    placed = _placed(tile, dut.ops.payload.beat, s.origin)
+    kept = [done[j] & keep for j, (keep, _, _, _) in enumerate(placed)]
+    at = [k & (x == s.X) & (y == s.Y) for k, (_, x, y, _) in zip(kept, placed, strict=True)]
+    delta = sum(Mux(a, d, 0) for a, (_, _, _, d) in zip(at, placed, strict=True))
+    return types.SimpleNamespace(any=_any(kept), hit=_any(at), delta=delta)
 
 
 def _memory_state(m, tile, dut, rows, s, covers):
     """Invariants of the accumulator's state (what makes the groups inductive): the read-
-    modify-write stages agree with the banks, the output register's cell was cleared, and the
-    tracked cell's shadow is the bank's row plus stage B's delta for it plus the output's sum
-    while the cell waits there. Each is implied by the ones before in the clock before."""
-    obs, out = dut.observe, s.cells.payload
+    modify-write stages agree with the memory, the output register's cell was cleared, and
+    the tracked cell's shadow plus the deltas of its beat's cells taken before (`_partial_beat`)
+    is the memory's row plus stage B's delta for it plus the output's sum while the cell waits
+    there. Each is implied by the ones before in the clock before."""
+    obs, out, st = dut.observe, s.cells.payload, dut.observe.stage
     o = obs.o
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
-    o_bank, o_addr = bank_of(o["x"], o["y"]), _cell_address(tile, o["x"], o["y"])
-    t_bank, t_addr = bank_of(s.X, s.Y), _cell_address(tile, s.X, s.Y)
+    o_addr, t_addr = Cat(o["x"], o["y"]), Cat(s.X, s.Y)
+    forwarded = st.c_valid & (st.c_addr == st.b_addr)
     checks = [
         (obs.in_acc | obs.in_wait | dut.scanning, "state: a known state"),
-        (_When(pending, o["sel"] == o_bank), "state: output bank"),
-        (_When(pending, _row(rows, o_bank, o_addr) == 0), "state: output cell cleared"),
+        (_When(pending, _row(rows, o_addr) == 0), "state: output cell cleared"),
+        (_When(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
+        (_When(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty"),
+        (_When(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
+        (_When(st.c_valid, _row(rows, st.c_addr) == st.c_sum), "state: stage C written"),
+        (
+            _When(st.b_valid & ~forwarded, obs.reads[0].data == _row(rows, st.b_addr)),
+            "state: stage B read",
+        ),
+        # a cell is taken only as the output advances
+        (_When(pending, ~st.b_valid), "state: stage B empty while a cell waits"),
     ]
-    stage_b = 0
-    for b, st in enumerate(obs.stages):
-        forwarded = st.c_valid & (st.c_addr == st.b_addr)
-        checks += [
-            (_When(st.b_valid, obs.in_acc), f"state: stage B outside ACC (bank {b})"),
-            (_When(~st.b_valid, st.b_delta == 0), f"state: stage B's delta when empty (bank {b})"),
-            (_When(st.c_valid, ~dut.scanning), f"state: stage C in SCAN (bank {b})"),
-            (
-                _When(st.c_valid, _row(rows, b, st.c_addr) == st.c_sum),
-                f"state: stage C written (bank {b})",
-            ),
-            (
-                _When(st.b_valid & ~forwarded, obs.reads[b].data == _row(rows, b, st.b_addr)),
-                f"state: stage B read (bank {b})",
-            ),
-            (
-                _When(pending, ~st.b_valid),  # a beat is taken only as the output advances
-                f"state: stage B empty while a cell waits (bank {b})",
-            ),
-        ]
-        mine = st.b_valid & (t_bank == b) & (st.b_addr == t_addr)
-        stage_b = stage_b + Mux(mine, st.b_delta, 0)
+    stage_b = Mux(st.b_valid & (st.b_addr == t_addr), st.b_delta, 0)
     waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
-    total = _row(rows, t_bank, t_addr) + stage_b + Mux(waiting, out.sum, 0)
-    checks.append((s.shadow == total[: len(s.shadow)], "state: shadow"))
+    total = _row(rows, t_addr) + stage_b + Mux(waiting, out.sum, 0)
+    partial = _partial_beat(tile, dut, s)
+    checks.append(
+        ((s.shadow + partial.delta)[: len(s.shadow)] == total[: len(s.shadow)], "state: shadow")
+    )
     # so a cell outside the scan span is zero (the read after a row's hi clears one)
     owed = Mux(obs.in_acc, s.hit, s.owed) | waiting
     checks.append((_When(s.shadow != 0, owed), "state: a nonzero cell is owed"))
@@ -549,12 +534,18 @@ def _scan_state(m, tile, dut, s, covers):
         pending & o["start"], _bit(tile, o["y"]), 0
     )
     current = scan & ~row_start & (scan_y == o["y"]) & ~decide  # the waiting cell's row goes on
+    taken, done, src = _partial_beat(tile, dut, s), obs.cell.done, dut.ops
+    hit, touching = s.hit | taken.hit, s.any | taken.any
     checks = [
         (
-            _When(obs.in_acc, _implies(s.hit, row_left & in_span) & (s.any == (touched != 0))),
+            _When(done != 0, s.held_in & obs.in_acc & src.valid & (src.payload.op == OP["beat"])),
+            "a beat taken in part is held",
+        ),
+        (
+            _When(obs.in_acc, _implies(hit, row_left & in_span) & (touching == (touched != 0))),
             "acc rows",
         ),
-        (_When(~obs.in_acc, ~s.hit & ~s.any), "no beat after an end"),
+        (_When(~obs.in_acc, ~s.hit & ~s.any & (done == 0)), "no beat after an end"),
         (_When(obs.in_acc, _implies(s.owed, waiting)), "owed in ACC"),
         (_When(obs.in_acc & ~pending, ~s.first), "first in ACC"),
         (_When(obs.in_acc & pending, touched == 0), "no beat while the last cell waits"),
@@ -907,7 +898,7 @@ TILE_PROOFS: dict[str, TileProof] = {
             "prove",
             2,
             TileConfig(),
-            memory_map=False,  # the invariants do not read the banks
+            memory_map=False,  # the invariants do not read the memory
             description="every touched cell sent once per end and before the next op, "
             "untouched rows not sent, order, fields, tile and flush passed on (k-induction "
             "with the scan's invariants)",
@@ -919,7 +910,7 @@ TILE_PROOFS: dict[str, TileProof] = {
             "prove",
             2,
             description="each cell sent carries the sum of its deltas since the last time it "
-            "was sent, modulo 2**cell_bits (k-induction with the banks' and read-modify-write "
+            "was sent, modulo 2**cell_bits (k-induction with the memory's and read-modify-write "
             "stages' invariants)",
         ),
         TileProof(
