@@ -66,8 +66,8 @@ def test_slow_proofs(tools, name):
     [
         ("acc_stream", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
         ("res_stream", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
-        ("acc_sums", "lost_delta", 6, "sums: cell sum (bmc)"),
-        ("acc_deltas", "lost_delta", 8, "deltas: op taken before a cell (bmc)"),
+        ("acc_sums", "lost_delta", 6, "cells: a beat taken with its last cell (bmc)"),
+        ("acc_deltas", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         ("acc_sums", "stale_origin", 8, "sums: cell sum (bmc)"),
         ("res_pixels", "wide_range", 16, "pixels: value (bmc)"),
     ],
@@ -86,8 +86,8 @@ def test_fault_is_caught(tools, name, fault, depth, message):
 @pytest.mark.parametrize(
     ("name", "fault", "depth", "message"),
     [
-        ("acc_sums", "lost_delta", None, "state: acc rows (basecase)"),
-        ("acc_deltas", "lost_delta", None, "state: acc rows (basecase)"),
+        ("acc_sums", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
+        ("acc_deltas", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
         ("acc_deltas", "stale_origin", None, "state: origin (basecase)"),
         ("res_pixels", "lost_first", None, "state: stage 0 order (basecase)"),
         # the wrong pixel is written 8 clocks from power-on: one past the proof's k

@@ -29,8 +29,8 @@ taken stays valid with the same payload); the output's ready is free. Check grou
     background; no other op code is sent.
 ``accumulator`` ``sums``
     The shadow of cell (X, Y): the exact sum of every delta of an accepted beat placed there
-    (several cells of one beat merged, back-to-back beats through the read-modify-write
-    forwarding) since (X, Y) was last sent, modulo ``2**cell_bits`` (a cell's width).
+    (back-to-back cells to one address through the read-modify-write forwarding) since
+    (X, Y) was last sent, modulo ``2**cell_bits`` (a cell's width).
     Asserted: each (X, Y) sent carries the shadow, all ``cell_bits`` bits, and the shadow
     restarts from 0 (the clear).
 ``resolve`` ``stream``
@@ -61,47 +61,43 @@ with ``first`` cleared (a stage that takes a polygon's first cell while the prev
 polygon's cells are in flight, so its pixel read may miss their writes).
 
 Invariants (``invariants``, on by default; each an assertion, so the proofs show they hold
-in every reachable state). ``sums`` (`_memory_state`): the memory's row of (X, Y) plus
-stage B's delta for its address plus the output's sum while (X, Y) waits in the output
-register equals the shadow plus the deltas at (X, Y) of the beat's cells taken before the
-beat (`_partial_beat`: the accumulator takes a beat's cells one a clock, the ghost the beat
-whole in its last); stage C's sum is in the memory (written the clock before), stage B's
-read is the memory's row unless stage C wrote that row the clock before (then B takes C's
-sum: the forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output
-register is cleared in the memory and stage B is then empty, stage B's delta is zero when
-it is empty (a clear adds it), and a nonzero (X, Y) is hit (ACC) or owed (after an end) or
-waits in the output register (so the read past a row's ``hi``, not sent, clears a zero).
-The scan's (`_scan_state`, in both groups): a beat taken in part (``done``) is held by the
-source in ACC; in ACC a hit (X, Y) (by the ghost or a cell taken in part) lies in a touched
-row and in the span ``lo .. hi``, and any row is touched exactly when the ghost or a cell
-taken in part kept a delta; in WAIT and SCAN the ghost saw no beat and no beat is taken in
-part; (X, Y) owed waits in the output register (ACC), lies in the span of a touched row
-(WAIT), or waits, or lies in the span of a row still to scan
-or ahead of the scan in the current row (SCAN), and a cell still to read has
-not been sent since the end; the rows left to scan are above the scan row; SCAN's first
+in every reachable state). ``sums`` (`_memory_state`): the memory's row of (X, Y) plus stage
+B's delta for its address plus the output's sum while (X, Y) waits in the output register
+equals the shadow; stage C's sum is in the memory (written the clock before), stage B's read
+is the memory's row unless stage C wrote that row the clock before (then B takes C's sum:
+the forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register
+is cleared in the memory and stage B is then empty, stage B's delta is zero when it is empty
+(a clear adds it), and a nonzero (X, Y) is hit (ACC) or owed (after an end) or waits in the
+output register (so the read past a row's ``hi``, not sent, clears a zero). The scan's
+(`_scan_state`, in both groups): a beat taken in part (``done``) is held by the source in
+ACC, and its cells taken are the ghost's; in ACC a hit (X, Y) lies in a touched row and in
+the span ``lo .. hi``, and any row is touched exactly when the ghost kept a delta; in WAIT
+and SCAN the ghost saw no beat and no beat is taken in part; (X, Y) owed waits in the output
+register (ACC), lies in the span of a touched row (WAIT), or waits, or lies in the span of a
+row still to scan or ahead of the scan in the current row (SCAN), and a cell still to read
+has not been sent since the end; the rows left to scan are above the scan row; SCAN's first
 read has not happened exactly while the ``first`` register is set (nothing in the output
-register, a row's start due), else a cell waits there or, after a row stopped at ``hi``,
-the next row's start is due above the last cell sent; a row's start is at ``lo`` if the
-row was seen (the ghost's rows begun since the tile or flush op), else at column 0; the
-scan position follows the waiting cell; ``decide`` only with that cell at ``hi`` below the
-last column; the accumulator's ``seen`` is the ghost's rows plus the row whose start is
-still to send; the waiting cell's ``first`` is the ghost's, a row's start, and follows the
-last cell sent; a row's first pass goes on (the waiting cell is the next column, and the
-scan stays in that row and reads it whole); ``rsum`` is the ghost's sum of the row's cells
-sent, and the last row sent is closed (at its last column, or that sum zero) whenever no
-cell of it is still to come; the end's fields are the ghost's; a tile or
-flush op waits exactly when the ghost's does, with its code and background. Both: the
-origin is the ghost's. Each follows from all of them in the clock before (`TILE_PROOFS`
-runs k = 2). ``pixels`` (`_resolve_invariants`): (X, Y)
-not in flight holds the shadow: its pixel memory row if its row was written since the tile
-started or in the row's first pass ((X, Y) taken while the row is open, or the row's end
-in flight), else the background; a row begun since the tile or flush op (not in a flush)
-is written unless its first pass is open or its end in flight, and the last cell's row
-was begun; in a flush the frame equals that until (X, Y) is read and
-the waiting pixel (X, Y) equals the frame, the shadow being the background; the row's
-prefix sum register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells in
-taken order, none after the last taken and none in a flush, with a pixel waiting or before a
-polygon's first cell; the flush and output positions and ``last`` follow the pixel count; the
+register, a row's start due), else a cell waits there or, after a row stopped at ``hi``, the
+next row's start is due above the last cell sent; a row's start is at ``lo`` if the row was
+seen (the ghost's rows begun since the tile or flush op), else at column 0; the scan
+position follows the waiting cell; ``decide`` only with that cell at ``hi`` below the last
+column; the accumulator's ``seen`` is the ghost's rows plus the row whose start is still to
+send; the waiting cell's ``first`` is the ghost's, a row's start, and follows the last cell
+sent; a row's first pass goes on (the waiting cell is the next column, and the scan stays in
+that row and reads it whole); ``rsum`` is the ghost's sum of the row's cells sent, and the
+last row sent is closed (at its last column, or that sum zero) whenever no cell of it is
+still to come; the end's fields are the ghost's; a tile or flush op waits exactly when the
+ghost's does, with its code and background. Both: the origin is the ghost's. Each follows
+from all of them in the clock before (`TILE_PROOFS` runs k = 2). ``pixels``
+(`_resolve_invariants`): (X, Y) not in flight holds the shadow: its pixel memory row if its
+row was written since the tile started or in the row's first pass ((X, Y) taken while the
+row is open, or the row's end in flight), else the background; a row begun since the tile or
+flush op (not in a flush) is written unless its first pass is open or its end in flight, and
+the last cell's row was begun; in a flush the frame equals that until (X, Y) is read and the
+waiting pixel (X, Y) equals the frame, the shadow being the background; the row's prefix sum
+register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells in taken order,
+none after the last taken and none in a flush, with a pixel waiting or before a polygon's
+first cell; the flush and output positions and ``last`` follow the pixel count; the
 background is the shadow's. A cell in flight has no invariant of its own: with k above the
 resolve's latency every cell the induction step sees written was taken within the k clocks
 it assumes, from a state where the invariants held.
@@ -259,13 +255,13 @@ class TileHarness(Elaboratable):
         m = Module()
         dut = self.dut
         groups = {"deltas", "sums"} & set(self.checks)
-        rows = None
+        read = None
         if self.invariants and (groups or "pixels" in self.checks):
             # elaborated here: the invariants read its observation points, and the harness
             # adds read ports to its memories
             m.submodules.dut = dut.elaborate(platform)
             if {"sums", "pixels"} & set(self.checks):
-                rows = _memory_rows(m, dut)
+                read = _memory_reader(m, dut)
         else:
             m.submodules.dut = dut
         m.domains.sync = self.domain
@@ -282,15 +278,15 @@ class TileHarness(Elaboratable):
         if "stream" in self.checks:
             _hold_rule(m, sink, seen, held)
         if groups:
-            s = _accumulator_deltas(m, self.tile, source, payload, sink, self.checks)
+            s = _accumulator_deltas(m, self.tile, dut, payload, sink, self.checks)
             s.held_in = held_in
             if self.invariants:
-                _accumulator_invariants(m, self.tile, dut, rows, s, self.checks, self.covers)
+                _accumulator_invariants(m, self.tile, dut, read, s, self.checks, self.covers)
         if "pixels" in self.checks:
             wide = self.fault == "wide_range"
             g = _resolve_pixels(m, self.tile, source, payload, sink, wide=wide)
             if self.invariants:
-                _resolve_invariants(m, self.tile, dut, rows, g, self.covers)
+                _resolve_invariants(m, self.tile, dut, read, g, self.covers)
         return m
 
 
@@ -352,8 +348,32 @@ def _placed(tile, beat, origin):
     return out
 
 
-def _accumulator_deltas(m, tile, ops, src, cells, checks):
+def _ghost_cells(m, tile, dut, src, s, checks):
+    """The ghost takes a beat's nonzero cells (of the source's payload `src`) one a clock, in
+    cell order, in the clocks the accumulator takes a cell (``busy`` outside a scan with a
+    beat offered; the port's meaning), and asserts that the beat is taken with its last: so
+    it counts every cell of every beat taken, once. Returns, per cell, whether the ghost
+    counts it this clock and where it lands (kept, x, y, delta: `_placed`)."""
+    ops = dut.ops
+    done = Signal(4, name="ghost_done")
+    pending = Signal(4, name="ghost_pending")
+    m.d.comb += pending.eq(Cat(*(src.beat[c].delta != 0 for c in CELLS)) & ~done)
+    sel = (pending & -pending)[:4]
+    last = (pending & ~sel) == 0
+    taking = dut.busy & ~dut.scanning & ops.valid & (src.op == OP["beat"])
+    with m.If(taking):
+        m.d.sync += done.eq(Mux(last, 0, done | sel))
+    take_beat = ops.valid & ops.ready & (src.op == OP["beat"])
+    if "deltas" in checks or "sums" in checks:
+        m.d.comb += Assert(take_beat == (taking & last), "cells: a beat taken with its last cell")
+    s.ghost_done = done
+    placed = _placed(tile, src.beat, s.origin)
+    return [(taking & sel[j] & keep, x, y, d) for j, (keep, x, y, d) in enumerate(placed)]
+
+
+def _accumulator_deltas(m, tile, dut, src, cells, checks):
     """The ``deltas`` group (module docstring); `src` is the source's payload."""
+    ops = dut.ops
     s = types.SimpleNamespace(
         X=Signal(tile.x_bits, name="track_x"),
         Y=Signal(tile.y_bits, name="track_y"),
@@ -377,17 +397,16 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
     s.cells = cells
     take = ops.valid & ops.ready
     is_op = {name: take & (src.op == code) for name, code in OP.items()}
-    placed = _placed(tile, src.beat, s.origin)
-    hits = sum(Mux(k & (x == s.X) & (y == s.Y), d, 0) for k, x, y, d in placed)
+    counted = _ghost_cells(m, tile, dut, src, s, checks)
+    hits = sum(Mux(k & (x == s.X) & (y == s.Y), d, 0) for k, x, y, d in counted)
     out, sent = cells.payload, cells.valid & cells.ready
     tracked = sent & (out.op == CELL_OP["cell"]) & (out.x == s.X) & (out.y == s.Y)
     base = Mux(tracked, 0, s.shadow)
-    m.d.sync += s.shadow.eq((base + Mux(is_op["beat"], hits, 0))[: tile.cell_bits])
-    with m.If(is_op["beat"]):
-        m.d.sync += [
-            s.hit.eq(s.hit | _any(k & (x == s.X) & (y == s.Y) for k, x, y, _ in placed)),
-            s.any.eq(s.any | _any(k for k, _, _, _ in placed)),
-        ]
+    m.d.sync += [
+        s.shadow.eq((base + hits)[: tile.cell_bits]),
+        s.hit.eq(s.hit | _any(k & (x == s.X) & (y == s.Y) for k, x, y, _ in counted)),
+        s.any.eq(s.any | _any(k for k, _, _, _ in counted)),
+    ]
     with m.If(is_op["end"]):
         m.d.sync += [s.owed.eq(s.hit), s.first.eq(s.any), s.hit.eq(0), s.any.eq(0)]
         m.d.sync += [reg.eq(src[name]) for name, reg in s.params.items()]
@@ -415,52 +434,36 @@ def _accumulator_deltas(m, tile, ops, src, cells, checks):
     return s
 
 
-def _accumulator_invariants(m, tile, dut, rows, s, checks, covers):
+def _accumulator_invariants(m, tile, dut, read, s, checks, covers):
     """The invariants of the groups in `checks` (`_memory_state`, `_scan_state`)."""
     origin = zip(dut.observe.origin, s.origin, strict=True)
     m.d.comb += Assert(_all(a == b for a, b in origin), "state: origin")
     if "sums" in checks:
-        _memory_state(m, tile, dut, rows, s, covers)
+        _memory_state(m, tile, dut, read, s, covers)
     _scan_state(m, tile, dut, s, covers)  # the sums group needs it too (a scan's extra read)
 
 
-def _memory_rows(m, dut):
-    """The stage's memory (``observe.memory``) as values, one per row: a combinational read
-    port per row (the harness's; the stage's own ports are untouched)."""
-    mem, rows = dut.observe.memory, []
-    for address in range(mem.depth):
+def _memory_reader(m, dut):
+    """A reader of the stage's memory (``observe.memory``): ``read(address)`` adds a
+    combinational read port at `address` (the harness's; the stage's own ports are
+    untouched) and returns its data. A port per address the invariants name, not per row, so
+    the memory stays an array for the solver at any tile size."""
+    mem = dut.observe.memory
+
+    def read(address):
         port = mem.read_port(domain="comb")
         m.d.comb += port.addr.eq(address)
-        rows.append(port.data)
-    return rows
+        return port.data
+
+    return read
 
 
-def _row(rows, address):
-    """The row at `address` (a value)."""
-    value = rows[0]
-    for a, row in enumerate(rows):
-        value = Mux(address == a, row, value)
-    return value
-
-
-def _partial_beat(tile, dut, s):
-    """The cells of the beat being taken that the accumulator took in earlier clocks (its
-    ``done``; the ghost counts a beat in the clock it is taken whole): any of them kept, one
-    kept at (X, Y), and the sum of their deltas at (X, Y)."""
-    done = dut.observe.cell.done
-    placed = _placed(tile, dut.ops.payload.beat, s.origin)
-    kept = [done[j] & keep for j, (keep, _, _, _) in enumerate(placed)]
-    at = [k & (x == s.X) & (y == s.Y) for k, (_, x, y, _) in zip(kept, placed, strict=True)]
-    delta = sum(Mux(a, d, 0) for a, (_, _, _, d) in zip(at, placed, strict=True))
-    return types.SimpleNamespace(any=_any(kept), hit=_any(at), delta=delta)
-
-
-def _memory_state(m, tile, dut, rows, s, covers):
+def _memory_state(m, tile, dut, read, s, covers):
     """Invariants of the accumulator's state (what makes the groups inductive): the read-
     modify-write stages agree with the memory, the output register's cell was cleared, and
-    the tracked cell's shadow plus the deltas of its beat's cells taken before (`_partial_beat`)
-    is the memory's row plus stage B's delta for it plus the output's sum while the cell waits
-    there. Each is implied by the ones before in the clock before."""
+    the tracked cell's shadow is the memory's row plus stage B's delta for it plus the
+    output's sum while the cell waits there. Each is implied by the ones before in the clock
+    before."""
     obs, out, st = dut.observe, s.cells.payload, dut.observe.stage
     o = obs.o
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
@@ -468,13 +471,13 @@ def _memory_state(m, tile, dut, rows, s, covers):
     forwarded = st.c_valid & (st.c_addr == st.b_addr)
     checks = [
         (obs.in_acc | obs.in_wait | dut.scanning, "state: a known state"),
-        (_When(pending, _row(rows, o_addr) == 0), "state: output cell cleared"),
+        (_When(pending, read(o_addr) == 0), "state: output cell cleared"),
         (_When(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
         (_When(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty"),
         (_When(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
-        (_When(st.c_valid, _row(rows, st.c_addr) == st.c_sum), "state: stage C written"),
+        (_When(st.c_valid, read(st.c_addr) == st.c_sum), "state: stage C written"),
         (
-            _When(st.b_valid & ~forwarded, obs.reads[0].data == _row(rows, st.b_addr)),
+            _When(st.b_valid & ~forwarded, obs.reads[0].data == read(st.b_addr)),
             "state: stage B read",
         ),
         # a cell is taken only as the output advances
@@ -482,11 +485,8 @@ def _memory_state(m, tile, dut, rows, s, covers):
     ]
     stage_b = Mux(st.b_valid & (st.b_addr == t_addr), st.b_delta, 0)
     waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
-    total = _row(rows, t_addr) + stage_b + Mux(waiting, out.sum, 0)
-    partial = _partial_beat(tile, dut, s)
-    checks.append(
-        ((s.shadow + partial.delta)[: len(s.shadow)] == total[: len(s.shadow)], "state: shadow")
-    )
+    total = read(t_addr) + stage_b + Mux(waiting, out.sum, 0)
+    checks.append((s.shadow == total[: len(s.shadow)], "state: shadow"))
     # so a cell outside the scan span is zero (the read after a row's hi clears one)
     owed = Mux(obs.in_acc, s.hit, s.owed) | waiting
     checks.append((_When(s.shadow != 0, owed), "state: a nonzero cell is owed"))
@@ -534,15 +534,15 @@ def _scan_state(m, tile, dut, s, covers):
         pending & o["start"], _bit(tile, o["y"]), 0
     )
     current = scan & ~row_start & (scan_y == o["y"]) & ~decide  # the waiting cell's row goes on
-    taken, done, src = _partial_beat(tile, dut, s), obs.cell.done, dut.ops
-    hit, touching = s.hit | taken.hit, s.any | taken.any
+    done, src = obs.cell.done, dut.ops
     checks = [
         (
             _When(done != 0, s.held_in & obs.in_acc & src.valid & (src.payload.op == OP["beat"])),
             "a beat taken in part is held",
         ),
+        (done == s.ghost_done, "the beat's cells taken"),
         (
-            _When(obs.in_acc, _implies(hit, row_left & in_span) & (touching == (touched != 0))),
+            _When(obs.in_acc, _implies(s.hit, row_left & in_span) & (s.any == (touched != 0))),
             "acc rows",
         ),
         (_When(~obs.in_acc, ~s.hit & ~s.any & (done == 0)), "no beat after an end"),
@@ -776,7 +776,7 @@ def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
     return g
 
 
-def _resolve_invariants(m, tile, dut, pixel_rows, g, covers):
+def _resolve_invariants(m, tile, dut, read, g, covers):
     """Invariants of the resolve's state against the ``pixels`` ghost (what makes the group
     inductive, with k above the pipeline's latency: a cell in flight is written within it)."""
     obs = dut.observe
@@ -789,14 +789,9 @@ def _resolve_invariants(m, tile, dut, pixel_rows, g, covers):
     def in_flight(position):
         return _any(st.valid & (Cat(st.x, st.y) == position) for st in stages)
 
-    def pixel(position):
-        value = pixel_rows[0]
-        for address, row in enumerate(pixel_rows):
-            value = Mux(position == address, row, value)
-        return value
-
     written_y = written.bit_select(g.Y, 1)
-    shown = Mux(written_y, pixel(tracked), obs.background)  # what a read of (X, Y) gives
+    pixel = read(tracked)
+    shown = Mux(written_y, pixel, obs.background)  # what a read of (X, Y) gives
     row_end = Cat(Const(tile.width - 1, tile.x_bits), g.Y)
     # written in this pass of its row, the row not yet marked written: the row's end is in
     # flight, or the row is still open and (X, Y) was taken
@@ -835,7 +830,7 @@ def _resolve_invariants(m, tile, dut, pixel_rows, g, covers):
         ),
         (_When(flush, g.value == g.background), "value in a flush"),
         (
-            _When(~flush & ~in_flight(tracked), g.value == Mux(done, pixel(tracked), shown)),
+            _When(~flush & ~in_flight(tracked), g.value == Mux(done, pixel, shown)),
             "value",
         ),
     ]
