@@ -269,6 +269,7 @@ class TileAccumulator(wiring.Component):
                         m.next = "WAIT"
             self._scan(m, o, o_valid, advance, first)
             self.observe.in_acc, self.observe.in_wait = fsm.ongoing("ACC"), fsm.ongoing("WAIT")
+            self.observe.in_clear = fsm.ongoing("CLEAR")
         self._output(m, rd, o, params, background)
 
     def _scan(self, m, o, o_valid, advance, first):

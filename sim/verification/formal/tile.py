@@ -469,9 +469,25 @@ def _memory_state(m, tile, dut, read, s, covers):
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
     o_addr, t_addr = Cat(o["x"], o["y"]), Cat(s.X, s.Y)
     forwarded = st.c_valid & (st.c_addr == st.b_addr)
+    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    # after a reset with deltas in the memory (``check`` and ``dirty``, then CLEAR) the
+    # memory holds what the reset left until the clear pass has zeroed it
+    clearing = obs.in_clear | (obs.check & obs.dirty)
+    cleared_to = Cat(obs.scan_x, obs.scan_y)  # CLEAR has zeroed the cells below
     checks = [
-        (obs.in_acc | obs.in_wait | dut.scanning, "state: a known state"),
+        (obs.in_acc | obs.in_wait | dut.scanning | obs.in_clear, "state: a known state"),
         (_When(pending, read(o_addr) == 0), "state: output cell cleared"),
+        (_When(clearing, ~st.b_valid & ~st.c_valid), "state: no write pending in a clear"),
+        (
+            _When(obs.in_clear & (t_addr < cleared_to), read(t_addr) == 0),
+            "state: the clear pass zeroed the cells below it",
+        ),
+        (
+            _When(~obs.dirty & ~obs.in_clear, ~st.b_valid & ~st.c_valid & (read(t_addr) == 0)),
+            "state: a clean memory",
+        ),
+        (_When(obs.check | obs.in_clear, s.shadow == 0), "state: no delta since a reset"),
+        (_When(s.shadow != 0, obs.dirty | waiting), "state: a delta kept is dirty"),
         (_When(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
         (_When(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty"),
         (_When(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
@@ -484,9 +500,8 @@ def _memory_state(m, tile, dut, read, s, covers):
         (_When(pending, ~st.b_valid), "state: stage B empty while a cell waits"),
     ]
     stage_b = Mux(st.b_valid & (st.b_addr == t_addr), st.b_delta, 0)
-    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
     total = read(t_addr) + stage_b + Mux(waiting, out.sum, 0)
-    checks.append((s.shadow == total[: len(s.shadow)], "state: shadow"))
+    checks.append((_When(~clearing, s.shadow == total[: len(s.shadow)]), "state: shadow"))
     # so a cell outside the scan span is zero (the read after a row's hi clears one)
     owed = Mux(obs.in_acc, s.hit, s.owed) | waiting
     checks.append((_When(s.shadow != 0, owed), "state: a nonzero cell is owed"))
@@ -535,7 +550,15 @@ def _scan_state(m, tile, dut, s, covers):
     )
     current = scan & ~row_start & (scan_y == o["y"]) & ~decide  # the waiting cell's row goes on
     done, src = obs.cell.done, dut.ops
+    # the ghost and the accumulator as a reset leaves them: nothing kept, owed or waiting
+    quiet = _all(
+        [~s.hit, ~s.any, ~s.owed, ~s.first, ~s.passing, ~s.open, done == 0, ~obs.o_valid]
+        + [touched == 0, obs.seen == 0, s.seen == 0, _closed(tile, s)]
+    )
     checks = [
+        (_When(obs.check, quiet & obs.in_acc & (scan_x == 0) & (scan_y == 0)), "after a reset"),
+        (_When(obs.in_clear, quiet & obs.dirty), "in the clear pass"),
+        (_When((touched != 0) | scan | s.hit, obs.dirty), "dirty"),
         (
             _When(done != 0, s.held_in & obs.in_acc & src.valid & (src.payload.op == OP["beat"])),
             "a beat taken in part is held",
@@ -621,7 +644,7 @@ def _scan_state(m, tile, dut, s, covers):
             _When(passing & (o["op"] == CELL_OP["tile"]), obs.background == s.background),
             "tile background",
         ),
-        (obs.in_acc | obs.in_wait | scan, "a known state"),
+        (obs.in_acc | obs.in_wait | scan | obs.in_clear, "a known state"),
     ]
     _state_checks(m, checks, covers)
 
@@ -893,7 +916,8 @@ TILE_PROOFS: dict[str, TileProof] = {
             "prove",
             2,
             TileConfig(),
-            memory_map=False,  # the invariants do not read the memory
+            reset=True,
+            memory_map=False,
             description="every touched cell sent once per end and before the next op, "
             "untouched rows not sent, order, fields, tile and flush passed on (k-induction "
             "with the scan's invariants)",
@@ -904,9 +928,13 @@ TILE_PROOFS: dict[str, TileProof] = {
             ("sums",),
             "prove",
             2,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
             description="each cell sent carries the sum of its deltas since the last time it "
-            "was sent, modulo 2**cell_bits (k-induction with the memory's and read-modify-write "
-            "stages' invariants)",
+            "was sent or the last reset (a reset with deltas kept sends the accumulator through "
+            "its clear pass), modulo 2**cell_bits (k-induction with the memory's and "
+            "read-modify-write stages' invariants), default tile",
         ),
         TileProof(
             "res_pixels",
@@ -925,8 +953,10 @@ TILE_PROOFS: dict[str, TileProof] = {
                 (check,),
                 "cover",
                 depth,
+                reset=stage == "accumulator",  # the clear pass's invariants reached too
                 description=f"each invariant of {name} (an implication) has its premise reached "
-                "with its conclusion (not vacuous; cover from power-on)",
+                "with its conclusion (not vacuous; cover from power-on, with resets for the "
+                "accumulator)",
             )
             for name, stage, check, depth in (
                 ("acc_deltas", "accumulator", "deltas", 16),
