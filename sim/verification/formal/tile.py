@@ -102,11 +102,11 @@ background is the shadow's. A cell in flight has no invariant of its own: with k
 resolve's latency every cell the induction step sees written was taken within the k clocks
 it assumes, from a state where the invariants held.
 
-All groups are proved by k-induction for every reachable state (``deltas``, ``sums`` and
-``pixels`` from power-on, the memories and registers at their initial values, no reset: the
-clear pass after a reset mid-polygon is tested in simulation). `TILE_PROOFS` lists the runs
-and their configurations; `run_tile_proof` runs one (``python -m
-edgeaa.sim.verification.formal.tile [proof ...]``).
+All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
+the memories and registers at their initial values, no reset; the accumulator's from
+power-on under a free reset, so its clear pass after a reset mid-polygon is proved).
+`TILE_PROOFS` lists the runs and their configurations; `run_tile_proof` runs one
+(``python -m edgeaa.sim.verification.formal.tile [proof ...]``).
 """
 
 from __future__ import annotations
