@@ -13,8 +13,10 @@ cell to writing its pixel:
   steps, exact within the cells' range) and the pixel below;
 * s3: the intensity offset q (a shift; 0 when I_in == I_out) and the unsigned numerator of
   `edgeaa.model.tile.composite_steps` (one I x I product);
-* s4 .. s(I + 3): one quotient bit each, restoring division by 2 D; the last stage writes
-  ``below +- quotient`` (or ``below`` when q = 0).
+* s4 .. s(I + 3): one quotient bit each, restoring division by 2 D (one register: every
+  cell in flight is one polygon's), the partial remainder shifted left with the dividend's
+  next bit, the quotient's bits shifting into the dividend's low bits as they go; the last
+  stage writes ``below +- quotient`` (or ``below`` when q = 0).
 
 The pipeline never stalls: nothing leaves it but the write. A polygon's first cell, a tile op
 and a flush are taken only when no cell is in flight (the pixels they read must be written
@@ -135,6 +137,15 @@ class TileResolve(wiring.Component):
         q = Mux(s2.d == 0, 0, (s2.cov + (1 << (F - 1))) >> F)[: bits + 1]
         neg = s2.intensity < s2.below
         diff = Mux(neg, s2.below - s2.intensity, s2.intensity - s2.below)[:bits]
+        num = (((q * diff) << 1) + s2.d - neg)[: 2 * bits + 2]  # >= 0 unless q = 0
+        # 2 D: one register, as every cell in flight is one polygon's (its first cell waits
+        # for the pipeline to empty)
+        d2 = Signal(bits + 1, name="d2")
+        with m.If(s2.valid):
+            m.d.sync += d2.eq(s2.d << 1)
+        self.observe.d2 = d2
+        # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
+        # bits) and the dividend's low bits, which the quotient's bits replace one a stage
         s3 = _stage(
             m,
             "s3",
@@ -144,31 +155,27 @@ class TileResolve(wiring.Component):
             below=s2.below,
             zero=q == 0,
             neg=neg,
-            num=(((q * diff) << 1) + s2.d - neg)[: 2 * bits + 2],  # >= 0 unless q = 0
-            d2=s2.d << 1,
-            quot=Const(0, bits),
+            rem=num[bits:][: bits + 1],
+            low=num[:bits],
         )
         stages = [s1, s2, s3]
         for j in reversed(range(bits)):  # quotient bit j
             prev = stages[-1]
-            step = prev.d2 << j
-            fits = prev.num >= step
-            fields = {
-                k: getattr(prev, k) for k in ("valid", "x", "y", "below", "zero", "neg", "d2")
-            }
+            trial = Cat(prev.low[-1], prev.rem)  # rem << 1 | the dividend's next bit
+            fits = trial >= d2
+            fields = {k: getattr(prev, k) for k in ("valid", "x", "y", "below", "zero", "neg")}
             stages.append(
                 _stage(
                     m,
                     f"q{j}",
                     **fields,
-                    num=Mux(fits, prev.num - step, prev.num)[: len(prev.num)],
-                    quot=prev.quot | Mux(fits, 1 << j, 0),
+                    rem=Mux(fits, trial - d2, trial)[: bits + 1],
+                    low=Cat(fits, prev.low[:-1]),
                 )
             )
         last = stages[-1]
-        new = Mux(
-            last.zero, last.below, Mux(last.neg, last.below - last.quot, last.below + last.quot)
-        )
+        quot = last.low
+        new = Mux(last.zero, last.below, Mux(last.neg, last.below - quot, last.below + quot))
         m.d.comb += [
             wr.addr.eq(Cat(last.x, last.y)),
             wr.data.eq(new[:bits]),
