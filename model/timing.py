@@ -227,11 +227,12 @@ def schedule(
     """
     latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, output)
+    live = check_output(output) == "deltas"  # the stepper takes the bank at the edge's end
     if setup_units == 1:
-        return _schedule_one(config, shapes, edges, latency, depth, idle, sink_ready)
+        return _schedule_one(config, shapes, edges, latency, depth, live, idle, sink_ready)
     if idle is not None or sink_ready:
         raise ValueError("idle and sink_ready are modelled for one setup unit only")
-    return _schedule_units(config, shapes, edges, latency, depth, setup_units)
+    return _schedule_units(config, shapes, edges, latency, depth, live, setup_units)
 
 
 def stall_window(first_beat: int, sink_ready: int) -> tuple[int, int]:
@@ -256,10 +257,12 @@ def _enabled(clock: int, count: int, stall: tuple[int, int]) -> list[int]:
 
 
 def _schedule_one(
-    config: EdgeConfig, shapes, edges, latency: int, depth: int, idle=None, sink_ready=0
+    config: EdgeConfig, shapes, edges, latency: int, depth: int, live: bool, idle=None, sink_ready=0
 ):
     """`schedule` of the core with one setup unit: it holds an edge from its accept to the
-    stepper's load of its bank and accepts the next command from that clock on."""
+    stepper's transfer of its bank and accepts the next command from that clock on. The
+    transfer is the load (line writes), or with `live` (deltas) the step of the edge's last
+    column, the next edge starting in a later clock."""
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     accept = 0  # the setup's first free clock, then the accept
@@ -279,24 +282,28 @@ def _schedule_one(
             accept += EMPTY_EDGE_CYCLES
             continue
         bank = accept + latency - depth - 2 + (extra if clipped_start else 0)
-        load = bank + 1 if prev_last is None else max(bank + 1, prev_last)
+        load = bank + 1 if prev_last is None else max(bank + 1, prev_last + live)
         if stall is None:
             stall = stall_window(load + 1 + depth, sink_ready)
         steps = _enabled(load + 1, columns + depth, stall)  # step c, then the pipeline's
         out.append(EdgeTiming(edge, accept, bank, load, tuple(steps[depth:])))
-        accept = load
         prev_last = steps[columns - 1]
+        accept = prev_last if live else load
     return out
 
 
-def _schedule_units(config: EdgeConfig, shapes, edges, latency: int, depth: int, units: int):
+def _schedule_units(
+    config: EdgeConfig, shapes, edges, latency: int, depth: int, live: bool, units: int
+):
     """`schedule` of the core with `units` setup units (`edgeaa.hdl.dispatch.SetupArray`).
 
     Command k goes to unit k mod N when that unit has retired its previous command; a good
     edge's unit writes its bank ``R + 3`` clocks after accepting it (never waiting: a unit
     holds one command); the stepper loads it once the collector points at it and the stepper
     is free; a dropped command retires once its unit is back in IDLE and the collector points
-    at it. The collector points at the next unit the clock after a retirement."""
+    at it. The collector points at the next unit the clock after a retirement. A good edge
+    retires when the stepper takes its bank: at the load (line writes), or with `live`
+    (deltas) in the clock its last column is stepped, the next edge starting after it."""
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     free = [0] * units  # first clock each unit may accept in
@@ -317,7 +324,8 @@ def _schedule_units(config: EdgeConfig, shapes, edges, latency: int, depth: int,
             load = max(bank + 1, collector, stepper_free)
             beats = range(load + 1 + depth, load + 1 + depth + columns)
             out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
-            retire, stepper_free = load, load + columns
+            retire = load + columns if live else load
+            stepper_free = load + columns + live
         collector = retire + 1
         free[unit] = retire + 1
     return out
