@@ -5,7 +5,7 @@ c" when valid and ready are both high in clock c (it completes at the clock edge
 
 Structure. The core has a setup state machine (IDLE -> FOLD -> WINDOW -> RUN -> FINAL ->
 HOLD) and a stepper, joined by the bank stream (the setup's registers, held until the stepper
-loads them):
+takes them):
 
 * IDLE: ``edges.ready`` is high; an edge offered in clock ``a`` is accepted in clock ``a``,
   and the ``clip`` port is sampled with it.
@@ -25,10 +25,14 @@ loads them):
 * FINAL (clock ``a + R + 3``): the bank's contents are complete (combinational, from the
   registers).
 * HOLD (from clock ``a + R + 4``): the bank is valid, the registers hold, until the stepper
-  loads it; in that clock the setup accepts the next command if one is offered (IDLE after
+  takes it; in that clock the setup accepts the next command if one is offered (IDLE after
   it otherwise).
-* The stepper loads the bank in the first clock ``t`` where the bank is valid and the
-  stepper is idle or stepping the previous edge's last column (the handover has no bubble).
+* The line-writes stepper loads (copies and takes) the bank in the first clock ``t`` where
+  the bank is valid and the stepper is idle or stepping the previous edge's last column
+  (the handover has no bubble). The deltas stepper (output ``"deltas"``) starts the edge
+  (loads its loop registers) in the first clock ``t`` where the bank is valid and it is
+  idle, reads the per-edge constants from the held bank and takes it in the clock it steps
+  the edge's last column, ``t + C``: the setup works on the next edge only after that.
   Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
   pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
   register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
@@ -47,7 +51,12 @@ offering edges back to back from clock 0)::
     t[n] = max(f[n] + 1, t[n - 1] + C[n - 1])    clock the stepper loads edge n
     beat of column c of edge n: t[n] + 1 + D + c     (C[n] = visible columns of edge n)
 
-The setup has no bank register of its own: it holds edge n until the stepper loads it, so the
+and for the deltas core, whose setup holds edge n until its last column is stepped::
+
+    a[n + 1] = t[n] + C[n]                       the clock edge n's bank is taken
+    t[n] = max(f[n] + 1, t[n - 1] + C[n - 1] + 1) = f[n] + 1 (one setup unit)
+
+The setup has no bank register of its own: it holds edge n until the stepper takes it, so the
 next edge is accepted in that clock at the earliest (``a[n + 1] = t[n]``; a setup with its
 own bank register could accept it in ``f[n] + 1`` and wait in FINAL for ``t[n - 1]`` only).
 While the stepper keeps up (``t[n] = f[n] + 1``) both give the same clocks; a setup that
@@ -64,7 +73,9 @@ columns therefore sustains ``C / max(C, P)`` columns per clock: exactly one colu
 (no gap between edges) when every edge has at least ``P`` columns. From an idle core, a
 stream of such edges (total ``T`` columns) has its last beat in clock ``L + T - 1``: the
 mean over the whole run is ``T / (L + T)`` (`stream_rate`), at least 0.95 once
-``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. A stalled sink
+``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. The deltas core
+steps an edge only while its setup holds the bank, so setup and stepping take turns: one
+edge of ``C`` columns per ``C + P`` clocks with one setup unit. A stalled sink
 delays the stepper and its pipeline (and, once its bank waits, the setup) clock for clock;
 nothing else depends on the data. `schedule`'s ``sink_ready`` models a sink first ready in
 clock T (the polygon pipeline's accumulator after a scan, `stall_window`), its ``idle`` a
@@ -352,12 +363,16 @@ def sustained_rate(
 ) -> float:
     """Steady-state columns per clock of an endless stream of edges of `columns` columns
     (`setup_latency_`, if given, is the core's: a unit spends ``L - D - 1`` clocks per edge
-    alone, ``L - D`` in an array): ``C / max(C, unit clocks / N)``."""
+    alone, ``L - D`` in an array): ``C / max(C, unit clocks / N)``. The deltas core's unit
+    also holds the edge while it steps (``C`` more clocks) and its stepper starts an edge
+    the clock after the previous one's last column: ``C / max(C + 1, unit clocks / N)``."""
     if setup_latency_ is None:
         per_unit = unit_cycles(config, setup_units)
     else:
         per_unit = setup_latency_ - pipeline_depth(config, output) - (setup_units == 1)
-    return columns * setup_units / max(columns * setup_units, per_unit)
+    live = check_output(output) == "deltas"
+    per_unit += columns if live else 0
+    return columns * setup_units / max((columns + live) * setup_units, per_unit)
 
 
 @dataclass(frozen=True)

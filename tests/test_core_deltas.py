@@ -301,6 +301,23 @@ def test_handover():
     run_and_check(config, edges, seed=3, idle=0.2, stall=0.3, label="handover")
 
 
+@pytest.mark.parametrize("units", [1, 3])
+def test_setup_and_stepping_take_turns(units):
+    """Equal edges of C columns: the setup works on the next edge only once the stepper has
+    taken the bank (edge done), so one unit gives one edge per C + P clocks; the hardware's
+    spacing is `sustained_rate`'s."""
+    config = CORE_CONFIGS["default"]
+    columns = 5
+    edges = [run_of(config, 10 + n, 20 + n, columns) for n in range(4 * units + 2)]
+    run = run_and_check(config, edges, label="take turns", setup_units=units)
+    firsts = [clock for clock, _ in run.beats][::columns]
+    spacing = firsts[-1] - firsts[-1 - units]  # one round of the units, in steady state
+    rate = timing_model.sustained_rate(config, columns, output=OUTPUT, setup_units=units)
+    assert rate == columns * units / spacing
+    if units == 1:
+        assert spacing == columns + timing_model.setup_interval(config)
+
+
 @pytest.mark.parametrize("units", [2, 3])
 def test_setup_array(units):
     """A deltas core with a `SetupArray`: the collector shows one unit's bank until the

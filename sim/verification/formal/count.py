@@ -29,8 +29,9 @@ def capacity(core) -> int:
     """Commands the core can hold: one in the setup (in work, its bank waiting, or its
     pending error), one in the stepper and one per stage of the stepper's output pipeline
     (its last column there while the stepper already steps the next edge): ``2 +
+    stepper.latency``. The deltas stepper steps the edge whose bank the setup holds: ``1 +
     stepper.latency``."""
-    return 2 + core.stepper.latency
+    return 1 + (core.output == "writes") + core.stepper.latency
 
 
 def check(ctx):
