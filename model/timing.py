@@ -159,7 +159,8 @@ def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -
     keep the stepper busy (one column per clock). One unit: accept, FOLD, WINDOW, RUN,
     FINAL, then the load, in whose clock it accepts the next edge: ``R + 4``. ``N >= 2``
     units (`SetupArray`): each holds an edge from its accept to the stepper's load
-    of its bank and retires it then, ``R + 5`` clocks, so ``ceil((R + 5) / N)``."""
+    of its bank and retires it then, ``R + 5`` clocks, so ``ceil((R + 5) / N)``. (The
+    deltas core's setup also holds each edge while it steps: `sustained_rate`.)"""
     if setup_units == 1:
         return run_cycles(config) + 4
     return -(-(run_cycles(config) + 5) // setup_units)
@@ -168,7 +169,8 @@ def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -
 def unit_cycles(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
     """Clocks one setup unit spends per edge in steady state: ``R + 4`` alone (accept to the
     load, the next accept in the load's clock), ``R + 5`` in an array (accept to retirement,
-    then free the clock after)."""
+    then free the clock after); the deltas core's units hold the edge ``C`` clocks more
+    while it steps."""
     return run_cycles(config) + (4 if setup_units == 1 else 5)
 
 
@@ -180,7 +182,7 @@ class EdgeTiming:
     edge: Edge
     accepted: int  # clock the command was accepted
     bank: int | None  # clock of FINAL (the bank is valid from the next clock)
-    load: int | None  # clock the stepper loaded the bank
+    load: int | None  # clock the stepper loaded the bank (deltas: started the edge)
     beats: tuple[int, ...]  # clock of each column's beat (valid and ready)
 
     @property
