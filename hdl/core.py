@@ -17,9 +17,12 @@ components through a one-edge bank stream:
 
 The next edge's setup runs while the current edge steps, and the stepper loads the bank in
 the same clock as it steps its last column, so edges at least ``setup_interval`` columns long
-leave back to back with no bubble. `edgeaa.model.timing` is the exact cycle model: the first
-beat of an edge accepted by an idle core is valid ``setup_latency`` clocks after it is
-accepted.
+leave back to back with no bubble. The deltas core's stepper keeps no copy of the bank: it
+reads the per-edge constants from the bank the setup holds and takes it in the clock it
+steps the edge's last column, so its setup and its stepping take turns (one edge of ``C``
+columns per ``C + setup_interval`` clocks with one setup unit). `edgeaa.model.timing` is
+the exact cycle model: the first beat of an edge accepted by an idle core is valid
+``setup_latency`` clocks after it is accepted.
 
 Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
 

@@ -10,9 +10,10 @@ column per clock:
   intercept << 2: the estimate's numerator, so p1 holds no intercept), the column's total,
   band and rectangles (selects of per-edge constants by first / last column; the y-major
   band and the x-major upper rectangle share a register, an edge being one or the other),
-  and the per-edge values the later stages need (a new edge may be loaded while its
-  predecessor's last column is still in the pipeline, so nothing after the stepping clock
-  reads the bank registers);
+  and the per-edge values the later stages need (the stepper reads the per-edge constants
+  from the bank payload, which the setup holds until the clock the edge's last column is
+  stepped, and the next edge may start while that column is still in the pipeline, so
+  nothing after the stepping clock reads the bank);
 * p2: the clamped triangle estimate of the depth (`triangle_estimate`, shift-adds by the
   small odd constants) and the piece's cover in each row;
 * the output register: the cells of `column_deltas` and their screen cells (`delta_cells`).
@@ -109,8 +110,8 @@ def _piece_end(m, st, last):
 
 
 def _loop(m, st, he, row_step):
-    """The piece starts where the previous ended (one row less on a row step); the bank load
-    (in the same clock as the last column's step) wins."""
+    """The piece starts where the previous ended (one row less on a row step); an edge's
+    start (``st.start``: bank valid, stepper idle) loads the bank's."""
     regs = st.delta_regs
     with m.If(st.step):
         m.d.sync += [
@@ -119,7 +120,7 @@ def _loop(m, st, he, row_step):
             regs["first_col"].eq(0),
         ]
     bank = st.setup.payload
-    with m.If(st.setup.valid & st.setup.ready):
+    with m.If(st.start):
         m.d.sync += [
             regs["hs"].eq(bank.hs0),
             regs["adj"].eq(bank.end_row - bank.row0),

@@ -16,6 +16,10 @@ their banks in the same turn, so the stepper sees the banks in command order.
   ``c`` moves on, one clock per dropped command.
 * A unit holds at most one command (``busy``), so its FINAL never waits: its bank is valid
   ``R + 4`` clocks after it accepted the command (``W + 1`` more when start-clipped).
+* The ``bank`` stream holds its payload while it is valid and not taken (``collect`` moves
+  only on a retirement, and the unit holds its bank in HOLD): the deltas stepper reads the
+  per-edge constants from it while it steps the edge and takes it (the unit retires) when
+  it steps the edge's last column.
 
 ``errors`` and ``error`` are the units' own counts, joined: a bad command is counted in the
 clock its unit's FOLD ends (as the single unit does) and ``error`` pulses in the next clock.

@@ -37,12 +37,20 @@ _LANE_CONSTS = {
     "obs_ifix": "ifix",
 }
 
+# The bank fields the loop steps: registers loaded from the bank (both outputs). The deltas
+# stepper reads every other field from the bank payload while it steps the edge.
+_LOOP_FIELDS = ("x", "y", "remaining", "jq", "jr")
+
 
 class EdgeStepper(wiring.Component):
     """The per-column loop of `run_edge`: one column per clock, no multiplier or divider.
 
-    ``setup`` (in stream, `setup_layout`): the per-edge constants and start state; taken when
-    the stepper is idle or in the clock it steps the current edge's last column.
+    ``setup`` (in stream, `setup_layout`): the per-edge constants and start state. Line
+    writes: taken when the stepper is idle or in the clock it steps the current edge's last
+    column, the stepper keeping a copy. Deltas: the stepper starts the edge (loads its loop
+    registers) when the bank is valid and it is idle, reads the per-edge constants from the
+    payload (which the stream holds stable while it is valid and not taken) and takes the
+    bank in the clock it steps the edge's last column: the transfer means "edge done".
     ``writes`` (out stream, `write_layout`): one registered beat per column. With ``output =
     "deltas"`` the out stream is ``deltas`` (`delta_layout`, the column's accumulation
     deltas) and the column pipeline is `edgeaa.hdl.deltas`'s; ``out`` is the stream either
@@ -60,7 +68,9 @@ class EdgeStepper(wiring.Component):
 
     Registers (attributes): one per `edgeaa.model.bank.bank_fields` entry, of the same name
     and width, loaded from the bank field (arrays as lists: ``seg_thresholds``,
-    ``seg_intercepts``), and ``active`` (an edge is being stepped).
+    ``seg_intercepts``), and ``active`` (an edge is being stepped). With ``output =
+    "deltas"`` only the loop's (``x, y, remaining, jq, jr``) are registers; the others are
+    wires equal to the payload's fields.
 
     Observation points for the tests and the formal harness (attributes, not ports):
 
@@ -78,9 +88,11 @@ class EdgeStepper(wiring.Component):
       ``ubase``, ``row_dx_``, ``row_dy_``, ``v0``, ``above``, ``below``, ``obs_jq``,
       ``obs_ifix``, and the estimate's: ``t_above``, ``t_below_inv`` with one segment;
       ``dq_``, ``thr_inv{j}``, ``icpt_neg{j}`` in p1 and ``t_clamped`` in p2 with more).
+    * ``start``: high in the clocks the loop registers load from the bank (line writes: the
+      bank's transfer; deltas: bank valid and the stepper idle).
     * ``derived``: per-edge constants derived from the bank at load (a dict name ->
-      register; `derive` gives their defining expressions): while ``active``, each equals
-      `derive` applied to the stepper's own registers.
+      register; for deltas, wires of the payload; `derive` gives their defining
+      expressions): while ``active``, each equals `derive` applied to the stepper's fields.
 
     Arithmetic (exact given the loop invariants ``jq < ifix``, ``jr < du``, ``khr < du``,
     ``ifix = I_d << F``): a mixed number ``q + r / du`` compares and adds as the
@@ -121,6 +133,7 @@ class EdgeStepper(wiring.Component):
         if config.segments == 0:
             self.seg_intercepts = []
         self.active = Signal()
+        self._start = Signal(name="start") if output == "deltas" else None
         self.idle = Signal()  # nothing in the loop or the pipeline (for the pipeline's top)
         self.step = Signal()
         self.latency = timing.pipeline_depth(config, output)
@@ -152,6 +165,15 @@ class EdgeStepper(wiring.Component):
     def output(self) -> str:
         return self._output_name
 
+    @property
+    def start(self):
+        """High in the clocks the loop registers load from the bank: the transfer for line
+        writes, bank valid with the stepper idle for deltas (an expression for line writes,
+        whose Verilog has no such wire)."""
+        if self._start is None:
+            return self.setup.valid & self.setup.ready
+        return self._start
+
     def derive(self, regs) -> dict:
         """The derived per-edge constants as expressions of `regs` (the bank payload, or the
         stepper itself): the fields ``du, ifix, kq, kr, khq, khr, col_dx, col_dy, row_dx,
@@ -166,7 +188,7 @@ class EdgeStepper(wiring.Component):
             valids = delta_pipeline(m, self, en, last, advance)
             self._idle(m, valids)
             self._loop(m, advance, last)
-            self._load(m)
+            self._live(m)
             return m
         col = self._column(m)
         self._stage(m, 1, en, {"valid": self.active, "last": last, **col.consts, **col.p1})
@@ -196,8 +218,14 @@ class EdgeStepper(wiring.Component):
             en.eq(~writes.valid | writes.ready),
             last.eq(self.remaining == 0),
             self.step.eq(self.active & en),
-            setup.ready.eq(~self.active | (self.step & last)),
         ]
+        if self._start is None:
+            m.d.comb += setup.ready.eq(~self.active | (self.step & last))
+        else:  # deltas: start an edge when idle, take its bank when its last column steps
+            m.d.comb += [
+                self._start.eq(setup.valid & ~self.active),
+                setup.ready.eq(self.step & last),
+            ]
         return en, last
 
     # -- advance one column: J += K with the remainder carried; step a row when J >= 1 -------
@@ -442,6 +470,29 @@ class EdgeStepper(wiring.Component):
             fields = _BankFields(bank, self._config.segments)
             for name, value in _derive(self._config, fields).items():
                 m.d.sync += self.derived[name].eq(value)
+
+    def _live(self, m):
+        """Deltas: load the loop registers when an edge starts; every other field, and the
+        derived constants, are wires of the bank payload, which the setup holds until the
+        stepper takes it in the clock it steps the edge's last column (what the output
+        pipeline needs after that clock travels in its stages)."""
+        bank = self.setup.payload
+        with m.If(self._start):
+            m.d.sync += self.active.eq(1)
+        for field in bank_fields(self._config, self._output_name):
+            reg = getattr(self, field.name)
+            if field.array is None:
+                pairs = [(reg, bank[field.name])]
+            else:
+                pairs = [(r, bank[field.name][j]) for j, r in enumerate(reg)]
+            for r, value in pairs:
+                if field.name in _LOOP_FIELDS:
+                    with m.If(self._start):
+                        m.d.sync += r.eq(value)
+                else:
+                    m.d.comb += r.eq(value)
+        for name, value in _derive(self._config, self).items():
+            m.d.comb += self.derived[name].eq(value)
 
 
 def _stage_shapes(config: EdgeConfig) -> list[dict]:

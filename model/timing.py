@@ -5,7 +5,7 @@ c" when valid and ready are both high in clock c (it completes at the clock edge
 
 Structure. The core has a setup state machine (IDLE -> FOLD -> WINDOW -> RUN -> FINAL ->
 HOLD) and a stepper, joined by the bank stream (the setup's registers, held until the stepper
-loads them):
+takes them):
 
 * IDLE: ``edges.ready`` is high; an edge offered in clock ``a`` is accepted in clock ``a``,
   and the ``clip`` port is sampled with it.
@@ -25,10 +25,14 @@ loads them):
 * FINAL (clock ``a + R + 3``): the bank's contents are complete (combinational, from the
   registers).
 * HOLD (from clock ``a + R + 4``): the bank is valid, the registers hold, until the stepper
-  loads it; in that clock the setup accepts the next command if one is offered (IDLE after
+  takes it; in that clock the setup accepts the next command if one is offered (IDLE after
   it otherwise).
-* The stepper loads the bank in the first clock ``t`` where the bank is valid and the
-  stepper is idle or stepping the previous edge's last column (the handover has no bubble).
+* The line-writes stepper loads (copies and takes) the bank in the first clock ``t`` where
+  the bank is valid and the stepper is idle or stepping the previous edge's last column
+  (the handover has no bubble). The deltas stepper (output ``"deltas"``) starts the edge
+  (loads its loop registers) in the first clock ``t`` where the bank is valid and it is
+  idle, reads the per-edge constants from the held bank and takes it in the clock it steps
+  the edge's last column, ``t + C``: the setup works on the next edge only after that.
   Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
   pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
   register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
@@ -47,7 +51,12 @@ offering edges back to back from clock 0)::
     t[n] = max(f[n] + 1, t[n - 1] + C[n - 1])    clock the stepper loads edge n
     beat of column c of edge n: t[n] + 1 + D + c     (C[n] = visible columns of edge n)
 
-The setup has no bank register of its own: it holds edge n until the stepper loads it, so the
+and for the deltas core, whose setup holds edge n until its last column is stepped::
+
+    a[n + 1] = t[n] + C[n]                       the clock edge n's bank is taken
+    t[n] = max(f[n] + 1, t[n - 1] + C[n - 1] + 1) = f[n] + 1 (one setup unit)
+
+The setup has no bank register of its own: it holds edge n until the stepper takes it, so the
 next edge is accepted in that clock at the earliest (``a[n + 1] = t[n]``; a setup with its
 own bank register could accept it in ``f[n] + 1`` and wait in FINAL for ``t[n - 1]`` only).
 While the stepper keeps up (``t[n] = f[n] + 1``) both give the same clocks; a setup that
@@ -64,7 +73,9 @@ columns therefore sustains ``C / max(C, P)`` columns per clock: exactly one colu
 (no gap between edges) when every edge has at least ``P`` columns. From an idle core, a
 stream of such edges (total ``T`` columns) has its last beat in clock ``L + T - 1``: the
 mean over the whole run is ``T / (L + T)`` (`stream_rate`), at least 0.95 once
-``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. A stalled sink
+``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. The deltas core
+steps an edge only while its setup holds the bank, so setup and stepping take turns: one
+edge of ``C`` columns per ``C + P`` clocks with one setup unit. A stalled sink
 delays the stepper and its pipeline (and, once its bank waits, the setup) clock for clock;
 nothing else depends on the data. `schedule`'s ``sink_ready`` and ``holds`` model the polygon
 pipeline's accumulator: first ready in clock T (after a scan), then taking each beat over
@@ -150,7 +161,8 @@ def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -
     keep the stepper busy (one column per clock). One unit: accept, FOLD, WINDOW, RUN,
     FINAL, then the load, in whose clock it accepts the next edge: ``R + 4``. ``N >= 2``
     units (`SetupArray`): each holds an edge from its accept to the stepper's load
-    of its bank and retires it then, ``R + 5`` clocks, so ``ceil((R + 5) / N)``."""
+    of its bank and retires it then, ``R + 5`` clocks, so ``ceil((R + 5) / N)``. (The
+    deltas core's setup also holds each edge while it steps: `sustained_rate`.)"""
     if setup_units == 1:
         return run_cycles(config) + 4
     return -(-(run_cycles(config) + 5) // setup_units)
@@ -159,7 +171,8 @@ def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -
 def unit_cycles(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
     """Clocks one setup unit spends per edge in steady state: ``R + 4`` alone (accept to the
     load, the next accept in the load's clock), ``R + 5`` in an array (accept to retirement,
-    then free the clock after)."""
+    then free the clock after); the deltas core's units hold the edge ``C`` clocks more
+    while it steps."""
     return run_cycles(config) + (4 if setup_units == 1 else 5)
 
 
@@ -171,7 +184,7 @@ class EdgeTiming:
     edge: Edge
     accepted: int  # clock the command was accepted
     bank: int | None  # clock of FINAL (the bank is valid from the next clock)
-    load: int | None  # clock the stepper loaded the bank
+    load: int | None  # clock the stepper loaded the bank (deltas: started the edge)
     beats: tuple[int, ...]  # clock of each column's beat (valid and ready)
 
     @property
@@ -231,11 +244,12 @@ def schedule(
     """
     latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, output)
+    live = check_output(output) == "deltas"  # the stepper takes the bank at the edge's end
     if setup_units == 1:
-        return _schedule_one(config, shapes, edges, latency, depth, idle, sink_ready, holds)
+        return _schedule_one(config, shapes, edges, latency, depth, live, idle, sink_ready, holds)
     if idle is not None or sink_ready or holds is not None:
         raise ValueError("idle, sink_ready and holds are modelled for one setup unit only")
-    return _schedule_units(config, shapes, edges, latency, depth, setup_units)
+    return _schedule_units(config, shapes, edges, latency, depth, live, setup_units)
 
 
 def beat_wait(valid: int, sink_ready: int, hold: int) -> int:
@@ -277,10 +291,20 @@ class _Enabled:
 
 
 def _schedule_one(
-    config: EdgeConfig, shapes, edges, latency: int, depth: int, idle=None, sink_ready=0, holds=None
+    config: EdgeConfig,
+    shapes,
+    edges,
+    latency: int,
+    depth: int,
+    live: bool,
+    idle=None,
+    sink_ready=0,
+    holds=None,
 ):
     """`schedule` of the core with one setup unit: it holds an edge from its accept to the
-    stepper's load of its bank and accepts the next command from that clock on."""
+    stepper's transfer of its bank and accepts the next command from that clock on. The
+    transfer is the load (line writes), or with `live` (deltas) the step of the edge's last
+    column, the next edge starting in a later clock."""
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     accept = 0  # the setup's first free clock, then the accept
@@ -300,7 +324,7 @@ def _schedule_one(
             accept += EMPTY_EDGE_CYCLES
             continue
         bank = accept + latency - depth - 2 + (extra if clipped_start else 0)
-        load = bank + 1 if prev_last is None else max(bank + 1, prev_last)
+        load = bank + 1 if prev_last is None else max(bank + 1, prev_last + live)
         first = enabled.index(load + 1)  # column c stepped at enabled index first + c
         beats = []
         for c in range(columns):  # the beat of column c: valid depth enabled clocks later
@@ -310,19 +334,23 @@ def _schedule_one(
             beats.append(enabled.clock(j))
             ready = 0
         out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
-        accept = load
         prev_last = enabled.clock(first + columns - 1)
+        accept = prev_last if live else load
     return out
 
 
-def _schedule_units(config: EdgeConfig, shapes, edges, latency: int, depth: int, units: int):
+def _schedule_units(
+    config: EdgeConfig, shapes, edges, latency: int, depth: int, live: bool, units: int
+):
     """`schedule` of the core with `units` setup units (`edgeaa.hdl.dispatch.SetupArray`).
 
     Command k goes to unit k mod N when that unit has retired its previous command; a good
     edge's unit writes its bank ``R + 3`` clocks after accepting it (never waiting: a unit
     holds one command); the stepper loads it once the collector points at it and the stepper
     is free; a dropped command retires once its unit is back in IDLE and the collector points
-    at it. The collector points at the next unit the clock after a retirement."""
+    at it. The collector points at the next unit the clock after a retirement. A good edge
+    retires when the stepper takes its bank: at the load (line writes), or with `live`
+    (deltas) in the clock its last column is stepped, the next edge starting after it."""
     extra = start_clip_cycles(config)
     out: list[EdgeTiming] = []
     free = [0] * units  # first clock each unit may accept in
@@ -343,7 +371,8 @@ def _schedule_units(config: EdgeConfig, shapes, edges, latency: int, depth: int,
             load = max(bank + 1, collector, stepper_free)
             beats = range(load + 1 + depth, load + 1 + depth + columns)
             out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
-            retire, stepper_free = load, load + columns
+            retire = load + columns if live else load
+            stepper_free = load + columns + live
         collector = retire + 1
         free[unit] = retire + 1
     return out
@@ -370,12 +399,16 @@ def sustained_rate(
 ) -> float:
     """Steady-state columns per clock of an endless stream of edges of `columns` columns
     (`setup_latency_`, if given, is the core's: a unit spends ``L - D - 1`` clocks per edge
-    alone, ``L - D`` in an array): ``C / max(C, unit clocks / N)``."""
+    alone, ``L - D`` in an array): ``C / max(C, unit clocks / N)``. The deltas core's unit
+    also holds the edge while it steps (``C`` more clocks) and its stepper starts an edge
+    the clock after the previous one's last column: ``C / max(C + 1, unit clocks / N)``."""
     if setup_latency_ is None:
         per_unit = unit_cycles(config, setup_units)
     else:
         per_unit = setup_latency_ - pipeline_depth(config, output) - (setup_units == 1)
-    return columns * setup_units / max(columns * setup_units, per_unit)
+    live = check_output(output) == "deltas"
+    per_unit += columns if live else 0
+    return columns * setup_units / max((columns + live) * setup_units, per_unit)
 
 
 @dataclass(frozen=True)

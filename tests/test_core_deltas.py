@@ -64,6 +64,7 @@ class DeltaRun:
     accepts: list = field(default_factory=list)  # clock of each accepted command
     beats: list = field(default_factory=list)  # (clock, DeltaBeat)
     banks: list = field(default_factory=list)  # (clock, decoded bank) the stepper took
+    setup_units: int = 1
     error_pulses: list = field(default_factory=list)
     errors: int = 0
     final_idle: tuple = ()  # deltas.valid, bank valid, stepper active, edges.ready
@@ -74,13 +75,14 @@ def _as_beat(beat: dict) -> DeltaBeat:
     return DeltaBeat(cells, bool(beat["last"]))
 
 
-def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="") -> DeltaRun:
+def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=1) -> DeltaRun:
     """Offer `edges` in order (each with its window on ``clip``) and drain the deltas; with
     `seed`, random idle source clocks and sink stalls."""
-    dut = EdgeAntialiaser(config, output=OUTPUT)
+    dut = EdgeAntialiaser(config, output=OUTPUT, setup_units=setup_units)
     stepper = dut.stepper
     rng = random.Random(seed) if seed is not None else None
-    run = DeltaRun(config, list(edges), f"[{label} seed={seed} idle={idle} stall={stall} {config}]")
+    tag = f"[{label} seed={seed} idle={idle} stall={stall} units={setup_units} {config}]"
+    run = DeltaRun(config, list(edges), tag, setup_units=setup_units)
     commands = [(edge_payload(config, e), edge_clip(config, e)) for e in edges]
     want = sum(setup(config, e).columns for e in edges if is_good(config, e))
     max_clocks = 200 + (len(edges) + 2) * 4 * (dut.setup_latency + config.coord_bits + 8)
@@ -160,7 +162,9 @@ def check_run(run: DeltaRun, *, exact_timing: bool) -> None:
     assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
     if not exact_timing:
         return
-    timings = timing_model.write_cycles(config, run.edges, output=OUTPUT)
+    timings = timing_model.write_cycles(
+        config, run.edges, output=OUTPUT, setup_units=run.setup_units
+    )
     assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
     want_clocks = [clock for t in timings for clock in t.beats]
     got_clocks = [clock for clock, _ in run.beats]
@@ -168,11 +172,16 @@ def check_run(run: DeltaRun, *, exact_timing: bool) -> None:
         f"{tag} beat clocks differ from the timing model at beat "
         f"{first_difference(got_clocks, want_clocks)}"
     )
-    assert [clock for clock, _ in run.banks] == [t.load for t in timings if not t.dropped]
+    # The stepper takes the bank (edge done) in the clock it steps the edge's last column.
+    depth = timing_model.pipeline_depth(config, OUTPUT)
+    taken = [t.beats[-1] - depth for t in timings if not t.dropped]
+    assert [clock for clock, _ in run.banks] == taken, f"{tag} bank transfer clocks"
 
 
-def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label=""):
-    run = simulate(config, edges, seed=seed, idle=idle, stall=stall, label=label)
+def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=1):
+    run = simulate(
+        config, edges, seed=seed, idle=idle, stall=stall, label=label, setup_units=setup_units
+    )
     check_run(run, exact_timing=seed is None)
     return run
 
@@ -278,8 +287,9 @@ def test_single_columns():
 
 
 def test_handover():
-    """Edge lengths around the setup interval: the bank is loaded in the clock the previous
-    edge's last column is stepped, whose pieces are still in the pipeline."""
+    """Edge lengths around the setup interval: the stepper takes the bank in the clock it
+    steps the edge's last column (whose pieces are still in the pipeline when the next edge
+    starts), and the setup accepts the next command then."""
     config = CORE_CONFIGS["seg4"]
     interval = timing_model.setup_interval(config)
     lengths = [60, 1, 2, 1, interval, interval - 1, 1, interval + 1, 1, 1, 3]
@@ -289,6 +299,35 @@ def test_handover():
     ]
     run_and_check(config, edges, label="handover")
     run_and_check(config, edges, seed=3, idle=0.2, stall=0.3, label="handover")
+
+
+@pytest.mark.parametrize("units", [1, 3])
+def test_setup_and_stepping_take_turns(units):
+    """Equal edges of C columns: the setup works on the next edge only once the stepper has
+    taken the bank (edge done), so one unit gives one edge per C + P clocks; the hardware's
+    spacing is `sustained_rate`'s."""
+    config = CORE_CONFIGS["default"]
+    columns = 5
+    edges = [run_of(config, 10 + n, 20 + n, columns) for n in range(4 * units + 2)]
+    run = run_and_check(config, edges, label="take turns", setup_units=units)
+    firsts = [clock for clock, _ in run.beats][::columns]
+    spacing = firsts[-1] - firsts[-1 - units]  # one round of the units, in steady state
+    rate = timing_model.sustained_rate(config, columns, output=OUTPUT, setup_units=units)
+    assert rate == columns * units / spacing
+    if units == 1:
+        assert spacing == columns + timing_model.setup_interval(config)
+
+
+@pytest.mark.parametrize("units", [2, 3])
+def test_setup_array(units):
+    """A deltas core with a `SetupArray`: the collector shows one unit's bank until the
+    stepper takes it (edge done), so the payload it reads holds; the model's deltas and
+    every clock (`schedule` with ``setup_units``), short edges included, and under stalls."""
+    config = CORE_CONFIGS["default"]
+    edges = mixed_edges(config, seed=20 + units, count=12)
+    edges += [run_of(config, 10 + n, 20 + 3 * n, 1 + n % 3) for n in range(8)]
+    run_and_check(config, edges, label="array", setup_units=units)
+    run_and_check(config, edges, seed=units, idle=0.2, stall=0.5, label="array", setup_units=units)
 
 
 def test_a_wrong_model_is_caught(monkeypatch):

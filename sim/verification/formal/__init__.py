@@ -13,8 +13,9 @@ window, like the registered command ``cmd``. The harness reads only what the cor
 for verification on purpose: the observation attributes of `edgeaa.hdl.EdgeSetupUnit`
 (``cmd``, ``clip_r``, ``accepted`` with `edgeaa.hdl.setup.accept_values`, ``regs``, the
 lanes, ``in_idle`` .. ``in_final``, ``next_bank``) and of `edgeaa.hdl.EdgeStepper` (its
-`bank_fields` registers, ``active``, ``step``, ``jsum``, ``dq``, ``stages``, ``area_step``,
-``area0``, ``area1``, ``derived`` with ``derive``). A rename there is an AttributeError
+`bank_fields` registers, the deltas stepper's per-edge ones wires of the bank payload,
+``active``, ``start``, ``step``, ``jsum``, ``dq``, ``stages``, ``area_step``, ``area0``,
+``area1``, ``derived`` with ``derive``). A rename there is an AttributeError
 when the harness is built, never a vacuous proof.
 
 Files: `spec` (the model-side specification: fold, window, bank invariants, one column in

@@ -317,7 +317,7 @@ def _bank(ctx, s, add):
     add(implies(bank.valid, major_ok(config, bk_axes)), "bank major axis")
     # The bank is the setup's: its start moved when the setup's window did (``start_clip``).
     moved_bank, moved_stepper = setup.regs.start_clip, Signal(name="start_moved")
-    with m.If(bank.valid & bank.ready):
+    with m.If(ctx.stepper.start):  # the stepper loads its loop registers from the bank
         m.d.sync += moved_stepper.eq(moved_bank)
     bank_row = (bk_axes.minor >= 0) & (bk_axes.minor <= top)
     add(implies(bank.valid & ~moved_bank, bank_row), "bank start row")
@@ -330,7 +330,8 @@ _LOOP_FITS = ("jsum", "next_acc", "next_major")  # `spec.column`'s fits of the l
 
 
 def _stepper_registers(config, stepper) -> types.SimpleNamespace:
-    """The stepper's `bank_fields` registers as a bank-like record (arrays as lists)."""
+    """The stepper's `bank_fields` registers as a bank-like record (arrays as lists; the
+    deltas stepper's per-edge constants are wires of the bank payload)."""
     fields = bank_fields(config, stepper.output)
     regs = {field.name: getattr(stepper, field.name) for field in fields}
     regs.update(seg_thresholds=stepper.seg_thresholds, seg_intercepts=stepper.seg_intercepts)
@@ -345,6 +346,8 @@ def _stepper(ctx, add):
     st = _stepper_registers(config, stepper)
     st_axes = axes(st)
     active = stepper.active
+    if ctx.output == "deltas":  # it reads the per-edge constants from the held bank
+        add(implies(active, bank.valid), "stepper: its edge's bank is held")
     for name, condition in constants_ok(config, st).items():
         add(implies(active, condition), f"stepper {name}")
     add(implies(active, major_ok(config, st_axes)), "stepper major axis")
@@ -357,7 +360,7 @@ def _stepper(ctx, add):
     row = Signal(signed(W + 4))
     with m.If(stepper.step):
         m.d.sync += row.eq(row + Mux(col.row_step, st_axes.row_step, 0))
-    with m.If(bank.valid & bank.ready):
+    with m.If(stepper.start):
         m.d.sync += [
             start_row.eq(ctx.bk_axes.minor),
             start_remaining.eq(ctx.bk.remaining),

@@ -29,8 +29,9 @@ def capacity(core) -> int:
     """Commands the core can hold: one in the setup (in work, its bank waiting, or its
     pending error), one in the stepper and one per stage of the stepper's output pipeline
     (its last column there while the stepper already steps the next edge): ``2 +
+    stepper.latency``. The deltas stepper steps the edge whose bank the setup holds: ``1 +
     stepper.latency``."""
-    return 2 + core.stepper.latency
+    return 1 + (core.output == "writes") + core.stepper.latency
 
 
 def check(ctx):
@@ -83,6 +84,8 @@ def check(ctx):
         (all_(tags.positions), "count: column or beat of a bad command"),
         (core.errors == saturated, "count: errors counts error pulses"),
     ]
+    if ctx.output == "deltas":  # the stepper takes the bank when the last column steps
+        properties.append((implies(stepper.active, bank.valid), "count: bank held"))
     # The registers loaded with the command (white-box helpers for the induction).
     for name, value in accept_values(config, setup.cmd).items():
         condition = implies(~setup.in_idle, setup.accepted[name] == value)
@@ -99,14 +102,10 @@ def _occupancy(ctx, positions, cmd_bad, error) -> types.SimpleNamespace:
     in_fold, in_window = setup.in_fold, setup.in_window
     in_run, in_final = setup.in_run, setup.in_final
     last_waiting = sum(valid & is_last for valid, is_last in positions)
+    # The deltas stepper steps the edge whose bank the setup still holds: counted once.
+    stepped = stepper.active if ctx.output == "writes" else 0
     held_good = (
-        (in_fold & ~cmd_bad)
-        + in_window
-        + in_run
-        + in_final
-        + bank.valid
-        + stepper.active
-        + last_waiting
+        (in_fold & ~cmd_bad) + in_window + in_run + in_final + bank.valid + stepped + last_waiting
     )
     held_bad = (in_fold & cmd_bad) + error
     idle = all_(
@@ -131,11 +130,11 @@ def _tags(ctx, positions, cmd_bad):
     """The command's badness, carried by the harness from the bank (the setup's latched
     command while the bank is valid) to the stepper and along the pipeline; ``positions``:
     each pipeline position holds no bad command's column."""
-    m, out, bank = ctx.m, ctx.out, ctx.setup.bank
+    m, out = ctx.m, ctx.out
     en = ~out.valid | out.ready
     tag_stepper = Signal()
     tags = [Signal(name=f"tag_p{index + 1}") for index in range(len(positions))]
-    with m.If(bank.valid & bank.ready):
+    with m.If(ctx.stepper.start):  # the stepper loads the bank's edge
         m.d.sync += tag_stepper.eq(cmd_bad)
     with m.If(en):
         m.d.sync += [

@@ -1,9 +1,10 @@
 """``dbounds``, ``dloop``, ``dpipe``, ``dbeat``: the deltas core (``output="deltas"``).
 
 The model side is `spec.deltas_column`: the model's `piece_end`, `column_deltas`,
-`delta_cells` and `advance` on a loop state. The stepper's loop state is its bank registers,
-``x, y, jq, jr, remaining`` and the deltas registers ``hs``, ``adj`` (P1's row minus the
-loop's: the model's row is ``end_row - adj``) and ``first_col``.
+`delta_cells` and `advance` on a loop state. The stepper's loop state is its loop registers
+``x, y, jq, jr, remaining`` and ``hs``, ``adj`` (P1's row minus the loop's: the model's row is
+``end_row - adj``) and ``first_col``, with the per-edge constants of the bank payload (the
+setup holds the bank while the stepper steps its edge).
 
 ``dbounds``
     The end pieces: what FINAL writes equals the model's `end_pieces` where those are
@@ -16,8 +17,8 @@ loop's: the model's row is ``end_row - adj``) and ``first_col``.
 ``dloop``
     The loop follows the model's: after each step ``x, y, jq, jr, hs, adj, first_col`` and
     ``remaining`` are the model's next state of the column stepped (`advance`, the piece
-    end less a row on a row step, one row further, not the first), after a bank load the
-    bank's (modulo the registers' widths; ``dbounds`` and ``bounds`` show they fit).
+    end less a row on a row step, one row further, not the first), after an edge's start
+    the bank's (modulo the registers' widths; ``dbounds`` and ``bounds`` show they fit).
 ``dpipe``, ``dcells``, ``dbeat``
     Every beat's cells are the model's `delta_cells` of the loop state its column was
     stepped with (modulo the payload's widths, which ``dbounds`` shows the model's values
@@ -121,8 +122,9 @@ def _loop_bounds(ctx, st):
 
 def _loop(ctx, st):
     """Ghost registers with the model's next loop state, loaded when the stepper steps or
-    loads the bank; the stepper's registers must equal them while it is active."""
-    m, stepper, bank = ctx.m, ctx.stepper, ctx.setup.bank
+    starts an edge (``start``); the stepper's registers must equal them while it is
+    active."""
+    m, stepper = ctx.m, ctx.stepper
     live, b = ctx.live, ctx.bk
     regs = {name: getattr(st, name) for name in ("x", "y", "jq", "jr", "remaining")}
     regs.update(stepper.delta_regs)
@@ -144,7 +146,7 @@ def _loop(ctx, st):
         want = Signal(reg.shape(), name=f"want_{name}")
         with m.If(stepper.step):
             m.d.sync += want.eq(stepped[name])
-        with m.If(bank.valid & bank.ready):  # the load wins, as in the stepper
+        with m.If(stepper.start):  # the start wins, as in the stepper
             m.d.sync += want.eq(loaded[name])
         ctx.emit("dloop", implies(stepper.active, reg == want), f"dloop: {name}")
     # The piece end of the column being stepped is the model's (`piece_end`): with ``hs``
