@@ -67,6 +67,7 @@ class DeltaRun:
     error_pulses: list = field(default_factory=list)
     errors: int = 0
     final_idle: tuple = ()  # deltas.valid, bank valid, stepper active, edges.ready
+    setup_units: int = timing_model.DEFAULT_SETUP_UNITS
 
 
 def _as_beat(beat: dict) -> DeltaBeat:
@@ -74,13 +75,17 @@ def _as_beat(beat: dict) -> DeltaBeat:
     return DeltaBeat(cells, bool(beat["last"]))
 
 
-def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="") -> DeltaRun:
+def simulate(
+    config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None
+) -> DeltaRun:
     """Offer `edges` in order (each with its window on ``clip``) and drain the deltas; with
-    `seed`, random idle source clocks and sink stalls."""
-    dut = EdgeAntialiaser(config, output=OUTPUT)
+    `seed`, random idle source clocks and sink stalls; `setup_units` the core's."""
+    units = timing_model.DEFAULT_SETUP_UNITS if setup_units is None else setup_units
+    dut = EdgeAntialiaser(config, output=OUTPUT, setup_units=units)
     stepper = dut.stepper
     rng = random.Random(seed) if seed is not None else None
-    run = DeltaRun(config, list(edges), f"[{label} seed={seed} idle={idle} stall={stall} {config}]")
+    tag = f"[{label} seed={seed} idle={idle} stall={stall} units={units} {config}]"
+    run = DeltaRun(config, list(edges), tag, setup_units=units)
     commands = [(edge_payload(config, e), edge_clip(config, e)) for e in edges]
     want = sum(setup(config, e).columns for e in edges if is_good(config, e))
     max_clocks = 200 + (len(edges) + 2) * 4 * (dut.setup_latency + config.coord_bits + 8)
@@ -160,7 +165,9 @@ def check_run(run: DeltaRun, *, exact_timing: bool) -> None:
     assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
     if not exact_timing:
         return
-    timings = timing_model.write_cycles(config, run.edges, output=OUTPUT)
+    timings = timing_model.write_cycles(
+        config, run.edges, output=OUTPUT, setup_units=run.setup_units
+    )
     assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
     want_clocks = [clock for t in timings for clock in t.beats]
     got_clocks = [clock for clock, _ in run.beats]
@@ -171,8 +178,10 @@ def check_run(run: DeltaRun, *, exact_timing: bool) -> None:
     assert [clock for clock, _ in run.banks] == [t.load for t in timings if not t.dropped]
 
 
-def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label=""):
-    run = simulate(config, edges, seed=seed, idle=idle, stall=stall, label=label)
+def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None):
+    run = simulate(
+        config, edges, seed=seed, idle=idle, stall=stall, label=label, setup_units=setup_units
+    )
     check_run(run, exact_timing=seed is None)
     return run
 
@@ -281,7 +290,7 @@ def test_handover():
     """Edge lengths around the setup interval: the bank is loaded in the clock the previous
     edge's last column is stepped, whose pieces are still in the pipeline."""
     config = CORE_CONFIGS["seg4"]
-    interval = timing_model.setup_interval(config)
+    interval = timing_model.setup_interval(config, output=OUTPUT)
     lengths = [60, 1, 2, 1, interval, interval - 1, 1, interval + 1, 1, 1, 3]
     edges = [
         run_of(config, 10 + n, 20 + 3 * n, c, inside="right" if n % 3 else "left")
@@ -289,6 +298,16 @@ def test_handover():
     ]
     run_and_check(config, edges, label="handover")
     run_and_check(config, edges, seed=3, idle=0.2, stall=0.3, label="handover")
+
+
+@pytest.mark.parametrize("units", [2, 3])
+def test_setup_units(units):
+    """Several setup units (`SetupArray`) before the deltas stepper, each with FINAL's
+    ``s + 2`` clocks of the total0 product: the model's deltas, banks and every clock
+    (`edgeaa.model.timing.schedule` with ``setup_units``)."""
+    config = CORE_CONFIGS["default"]
+    edges = mixed_edges(config, seed=10 + units, count=12)
+    run_and_check(config, edges, label=f"{units} units", setup_units=units)
 
 
 def test_a_wrong_model_is_caught(monkeypatch):
@@ -334,17 +353,16 @@ def _mul_widths(design) -> list[tuple[int, int]]:
 
 @pytest.mark.parametrize("name", ["default", "small", "wide"])
 def test_deltas_setup_has_no_wide_product(name):
-    """The products by kq and by |I_d| are shift-adds over the lanes' clocks
-    (`edgeaa.hdl.pieces`): every $mul left has a factor of sub-pixel bits, and only the
-    y-major first area (the height sum times the first piece's width) a wide one."""
+    """The products by kq and by |I_d| are shift-adds over the lanes' clocks, the y-major
+    first area (the height sum times the first piece's width) one over FINAL's clocks
+    (`edgeaa.hdl.pieces`): every $mul left has both factors of sub-pixel bits."""
     from edgeaa.hdl.setup import EdgeSetupUnit
 
     config = CORE_CONFIGS[name]
     widths = _mul_widths(EdgeSetupUnit(config, output=OUTPUT))
     small = config.subpixel_bits + 3
-    assert widths and all(min(a, b) <= small for a, b in widths), widths
-    assert sum(max(a, b) > small for a, b in widths) <= 1, widths
-    assert len(widths) <= 6, widths
+    assert widths and all(max(a, b) <= small for a, b in widths), widths
+    assert len(widths) <= 5, widths
 
 
 def test_the_writes_core_keeps_its_bank():

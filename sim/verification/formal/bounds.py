@@ -45,6 +45,7 @@ def check(ctx):
     lanes = _lanes(ctx, s, add)
     if ctx.setup.pieces is not None:
         _products(ctx, s, lanes, add)
+        _total0(ctx, add)
     _bank(ctx, s, add)
     _stepper(ctx, add)
     for condition, message in asserts:
@@ -299,6 +300,25 @@ def _products(ctx, spec, lanes, add):
         implies(m_me <= m_mg, k_me <= k_mg),
     ]
     add(implies(run | final, all_(k_ok)), "products by kq")
+
+
+def _total0(ctx, add):
+    """The deltas setup's FINAL product (`edgeaa.hdl.pieces.total0_steps`): FINAL takes one
+    clock a bit of ``w0`` (``s + 2`` bits, MSB first, counted by the counter from 0), so
+    after ``k`` of them ``y_area0`` is the multiplicand ``m_area0 = hs0 + he_first`` times
+    ``w0``'s top ``k`` bits, and in HOLD times ``w0`` (modulo the register: P = 2 P + bit M
+    keeps that, as for ``_products``' exact ones). ``w0`` and the registers ``m_area0``
+    reads hold from RUN's end until the load."""
+    setup = ctx.setup
+    pc, counter = setup.pieces, setup.regs.counter
+    final, hold = setup.in_final, setup.in_hold
+    bits = len(pc.w0)
+    add(implies(final, counter < bits), "FINAL counter")
+    shift = Signal(range(bits + 1), name="w0_unread")  # the bits of w0 not stepped yet
+    ctx.m.d.comb += shift.eq(Mux(hold, 0, bits - counter))
+    want = Signal(pc.y_area0.shape(), name="want_y_area0")  # modulo the register (`eq`)
+    ctx.m.d.comb += want.eq((pc.w0 >> shift) * pc.m_area0)
+    add(implies(final | hold, pc.y_area0 == want), "product pc_y_area0")
 
 
 # -- the bank ----------------------------------------------------------------------------------
