@@ -63,16 +63,16 @@ configuration.
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
 at most (``P = L - D - 1``: 34 for the default configuration's line-writes core, 39 for its
-deltas core; accept to load, the next accept in the load's clock); the stepper takes ``C`` clocks per edge. A stream of edges of ``C``
-columns therefore sustains ``C / max(C, P)`` columns per clock: exactly one column per clock
-(no gap between edges) when every edge has at least ``P`` columns. From an idle core, a
-stream of such edges (total ``T`` columns) has its last beat in clock ``L + T - 1``: the
-mean over the whole run is ``T / (L + T)`` (`stream_rate`), at least 0.95 once
-``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. A stalled sink
-delays the stepper and its pipeline (and, once its bank waits, the setup) clock for clock;
-nothing else depends on the data. `schedule`'s ``sink_ready`` models a sink first ready in
-clock T (the polygon pipeline's accumulator after a scan, `stall_window`), its ``idle`` a
-source that idles before some commands.
+deltas core; accept to load, the next accept in the load's clock); the stepper takes ``C``
+clocks per edge. A stream of edges of ``C`` columns therefore sustains ``C / max(C, P)``
+columns per clock: exactly one column per clock (no gap between edges) when every edge has
+at least ``P`` columns. From an idle core, a stream of such edges (total ``T`` columns) has
+its last beat in clock ``L + T - 1``: the mean over the whole run is ``T / (L + T)``
+(`stream_rate`), at least 0.95 once ``T >= 19 L``. Shorter edges are setup-bound: one edge
+per ``P`` clocks. A stalled sink delays the stepper and its pipeline (and, once its bank
+waits, the setup) clock for clock; nothing else depends on the data. `schedule`'s
+``sink_ready`` models a sink first ready in clock T (the polygon pipeline's accumulator
+after a scan, `stall_window`), its ``idle`` a source that idles before some commands.
 
 Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
 One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
