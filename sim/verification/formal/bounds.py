@@ -4,8 +4,9 @@ The invariants of the setup registers (fold of the latched command, its columns 
 latched window, the column count), of both multiply-divide lanes (remainder below du,
 quotient bounded by the multiplier bits consumed so far, each step's sums within their
 registers; lane A's first pass over ``2 (first S - u0)``, ``W + s + 2`` bits when the window
-moved the first column), of the bank the setup is about to write (``next_bank``), of the bank
-and of the stepper (jq < ifix, jr < du, kq <= ifix, the half increment, segment constants,
+moved the first column), of the deltas setup's Horner products (`_products` over the lanes'
+clocks, `_total0` over FINAL's), of the bank the setup is about to write (``next_bank``), of
+the bank and of the stepper (jq < ifix, jr < du, kq <= ifix, the half increment, segment constants,
 derived constants, value range, the major axis within [0, 2**W] from the first to the last
 column). The start row (the minor axis of the first column) is within [0, 2**W] for edges
 whose start the window did not move; for the others its bound needs the product
@@ -24,7 +25,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Mux, Signal, Value, signed, unsigned
+from amaranth.hdl import Const, Mux, Signal, Value, signed, unsigned
 
 from ....hdl.layouts import setup_layout
 from ....hdl.pieces import id_products, kq_products
@@ -305,20 +306,28 @@ def _products(ctx, spec, lanes, add):
 def _total0(ctx, add):
     """The deltas setup's FINAL product (`edgeaa.hdl.pieces.total0_steps`): FINAL takes one
     clock a bit of ``w0`` (``s + 2`` bits, MSB first, counted by the counter from 0), so
-    after ``k`` of them ``y_area0`` is the multiplicand ``m_area0 = hs0 + he_first`` times
-    ``w0``'s top ``k`` bits, and in HOLD times ``w0`` (modulo the register: P = 2 P + bit M
-    keeps that, as for ``_products``' exact ones). ``w0`` and the registers ``m_area0``
-    reads hold from RUN's end until the load."""
+    after ``k`` of them ``y_area0`` is Horner's ``k``-th partial sum of the multiplicand
+    ``m_area0 = hs0 + he_first`` by those bits (``H[0] = 0``, ``H[k + 1] = 2 H[k] + bit M``,
+    so ``H[k]`` is ``M`` times ``w0``'s top ``k`` bits), and in HOLD the last, ``M w0``
+    (modulo the register). ``w0`` and the registers ``m_area0`` reads hold from RUN's end
+    until the load. The partial sums are stated in Horner's form, which one step of the
+    register keeps as it is (the product form, ``M`` times the top bits as in
+    ``_products``, is the same value, but over a 39 x 6 bit multiplier the solver did not
+    finish its induction step in 30 minutes)."""
     setup = ctx.setup
     pc, counter = setup.pieces, setup.regs.counter
     final, hold = setup.in_final, setup.in_hold
     bits = len(pc.w0)
     add(implies(final, counter < bits), "FINAL counter")
-    shift = Signal(range(bits + 1), name="w0_unread")  # the bits of w0 not stepped yet
-    ctx.m.d.comb += shift.eq(Mux(hold, 0, bits - counter))
-    want = Signal(pc.y_area0.shape(), name="want_y_area0")  # modulo the register (`eq`)
-    ctx.m.d.comb += want.eq((pc.w0 >> shift) * pc.m_area0)
-    add(implies(final | hold, pc.y_area0 == want), "product pc_y_area0")
+    sums = [Const(0, pc.y_area0.shape())]
+    for k in range(bits):
+        partial = Signal(pc.y_area0.shape(), name=f"horner_y_area0_{k + 1}")
+        bit = pc.w0[bits - 1 - k]
+        ctx.m.d.comb += partial.eq((sums[-1] << 1) + Mux(bit, pc.m_area0, 0))
+        sums.append(partial)
+    steps = [implies(counter == k, pc.y_area0 == sums[k]) for k in range(bits)]
+    add(implies(final, all_(steps)), "product pc_y_area0 in FINAL")
+    add(implies(hold, pc.y_area0 == sums[bits]), "product pc_y_area0 in HOLD")
 
 
 # -- the bank ----------------------------------------------------------------------------------
