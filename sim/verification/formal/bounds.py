@@ -312,8 +312,8 @@ def _total0(ctx, add):
     (modulo the register). ``w0`` and the registers ``m_area0`` reads hold from RUN's end
     until the load. The partial sums are stated in Horner's form, which one step of the
     register keeps as it is (the product form, ``M`` times the top bits as in
-    ``_products``, is the same value, but over a 39 x 6 bit multiplier the solver did not
-    finish its induction step in 30 minutes)."""
+    ``_products``, is the same value, but over a 37 x 6 bit multiplier the solver had not
+    finished its induction step after 21 minutes)."""
     setup = ctx.setup
     pc, counter = setup.pieces, setup.regs.counter
     final, hold = setup.in_final, setup.in_hold
