@@ -26,7 +26,7 @@ by ``|I_d|`` (times ``h0``, ``e1``, ``w1`` and two products of them) are formed 
 clock (`id_product_steps`) over the first ``I`` clocks of lane A's second pass, whose
 multiplier bits are ``|I_d|``'s, MSB first; their multiplicands are constant from the clock
 after the fix-up (``h0`` reads ``row0``). The proofs' invariants of the half-formed products
-are `edgeaa.sim.verification.formal.bounds`' ``_products`` (and ``_total0`` for FINAL's).
+are `edgeaa.sim.verification.formal.bounds`' ``_products`` (FINAL's product needs none: see there).
 """
 
 from __future__ import annotations
