@@ -151,7 +151,7 @@ class EdgeAntialiaser(wiring.Component):
     def setup_interval(self) -> int:
         """`edgeaa.model.timing.setup_interval`: clocks per edge the setup sustains (edges of
         at least this many columns keep the stepper busy)."""
-        return timing.setup_interval(self._config, self._setup_units)
+        return timing.setup_interval(self._config, self._setup_units, self._output)
 
     def elaborate(self, platform):
         m = Module()

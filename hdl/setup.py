@@ -11,10 +11,12 @@ and samples ``clip`` with it), FOLD (``a + 1``: the fold; a bad command is dropp
 again in ``a + 2``), WINDOW (``a + 2``: the columns cut to the window, lane A loaded), RUN
 (``R = I + F + 1`` clocks from ``a + 3``, ``W + 1`` more when the window cuts the start; an
 edge with no column inside the window leaves RUN after its second clock, IDLE again in
-``a + 5``, no bank write), FINAL (``a + R + 3``: ``next_bank`` is formed), HOLD (from
-``a + R + 4``: ``bank.valid``; the bank is ``next_bank`` of the registers HOLD keeps, so the
-setup has no bank register; it ends in the clock the stepper takes the bank, and the setup
-accepts the next command in that clock).
+``a + 5``, no bank write), FINAL (``Phi`` clocks from ``a + R + 3``: ``next_bank`` is
+formed; ``Phi = 1``, or ``s + 2`` in the deltas core's setup, which forms the y-major
+``total0`` product there one bit a clock, `edgeaa.hdl.pieces.total0_steps`), HOLD (from
+``a + R + 3 + Phi``: ``bank.valid``; the bank is ``next_bank`` of the registers HOLD
+keeps, so the setup has no bank register; it ends in the clock the stepper takes the bank,
+and the setup accepts the next command in that clock).
 
 Timing structure (for the clock rate; no path carries more than about one wide carry chain):
 the accept clock registers the command with its deltas ``x1 - x0``, ``x0 - x1`` (and for y),
@@ -93,6 +95,7 @@ from .pieces import (
     kq_product_steps,
     pieces_registers,
     run_end_loads,
+    total0_steps,
 )
 
 __all__ = ["ERRORS_BITS", "EdgeSetupUnit", "MulDivLane", "accept_values"]
@@ -178,7 +181,7 @@ class EdgeSetupUnit(wiring.Component):
     * ``in_idle``, ``in_fold``, ``in_window``, ``in_run``, ``in_final``, ``in_hold``: the
       state;
     * ``next_bank`` (`setup_layout`): the bank's payload, combinational, complete from
-      FINAL on.
+      FINAL's last clock on (``final_cycles`` clocks: `edgeaa.model.timing.final_cycles`).
     """
 
     def __init__(
@@ -224,6 +227,10 @@ class EdgeSetupUnit(wiring.Component):
         self.next_bank = Signal(setup_layout(config, output), name="next_bank")
         # The end pieces of the deltas core (`edgeaa.hdl.pieces`); None for line writes.
         self.pieces = pieces_registers(config) if output == "deltas" else None
+        # FINAL's clocks: one, or one a bit of w0 for the deltas core's total0 product.
+        self.final_cycles = 1 if self.pieces is None else len(self.pieces.w0)
+        if self.final_cycles != timing.final_cycles(config, output):
+            raise ValueError("FINAL's clocks are not the timing model's")
 
     @property
     def config(self) -> EdgeConfig:
@@ -602,8 +609,13 @@ class EdgeSetupUnit(wiring.Component):
                 m.next = "RUN"
             with m.State("RUN"):
                 self._run(m, lanes)
-            with m.State("FINAL"):  # next_bank complete; the clock keeps `setup_latency`
-                m.next = "HOLD"
+            with m.State("FINAL"):  # next_bank complete in its last clock
+                if self.pieces is None:
+                    m.next = "HOLD"
+                else:  # the y-major total0 product, one bit of w0 a clock
+                    m.d.sync += total0_steps(self)
+                    with m.If(self.regs.counter == self.final_cycles - 1):
+                        m.next = "HOLD"
             with m.State("HOLD"):
                 with m.If(bank.ready):
                     m.next = "IDLE"

@@ -22,11 +22,13 @@ takes them):
   clocks for the slope. So ``R = I + F + 1``, plus ``W + 1`` for a start-clipped edge: fixed
   per configuration otherwise. An edge with no column inside the window leaves RUN after its
   second clock (``a + 4``) without writing the bank: back in IDLE in clock ``a + 5``.
-* FINAL (clock ``a + R + 3``): the bank's contents are complete (combinational, from the
-  registers).
-* HOLD (from clock ``a + R + 4``): the bank is valid, the registers hold, until the stepper
-  takes it; in that clock the setup accepts the next command if one is offered (IDLE after
-  it otherwise).
+* FINAL (``Phi = final_cycles`` clocks, ``a + R + 3 .. a + R + 2 + Phi``): the bank's
+  contents are complete in its last clock (combinational, from the registers). ``Phi = 1``
+  for the line-writes core; ``s + 2`` for the deltas core, whose setup forms the y-major
+  ``total0`` product there, one bit of the first piece's width a clock.
+* HOLD (from clock ``a + R + 3 + Phi``): the bank is valid, the registers hold, until the
+  stepper takes it; in that clock the setup accepts the next command if one is offered (IDLE
+  after it otherwise).
 * The line-writes stepper loads (copies and takes) the bank in the first clock ``t`` where
   the bank is valid and the stepper is idle or stepping the previous edge's last column
   (the handover has no bubble). The deltas stepper (output ``"deltas"``) starts the edge
@@ -38,16 +40,16 @@ takes them):
   register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
   every mode for the accumulation-delta core, output ``"deltas"``): the beat is valid in
   clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
-  clocks: only D differs between the two outputs.
+  clocks, FINAL's ``s + 2`` included: only D and Phi differ between the two outputs.
 
-With ``L = setup_latency = R + 5 + D`` (R of an edge not clipped at its start): an edge
+With ``L = setup_latency = R + 4 + Phi + D`` (R of an edge not clipped at its start): an edge
 accepted in clock ``a`` by an idle core has its first beat in clock ``a + L`` (``a + L + W +
 1`` if clipped at its start). For edge ``n`` (good edges only, always-ready sink, source
 offering edges back to back from clock 0)::
 
     a[0] = 0, a[n + 1] = t[n]         (after a bad command accepted in a: next at a + 2;
                                        after an edge with no visible column: next at a + 5)
-    f[n] = a[n] + R[n] + 3                       clock of FINAL (the bank valid from f + 1)
+    f[n] = a[n] + R[n] + 2 + Phi                 FINAL's last clock (the bank valid from f + 1)
     t[n] = max(f[n] + 1, t[n - 1] + C[n - 1])    clock the stepper loads edge n
     beat of column c of edge n: t[n] + 1 + D + c     (C[n] = visible columns of edge n)
 
@@ -62,25 +64,27 @@ own bank register could accept it in ``f[n] + 1`` and wait in FINAL for ``t[n - 
 While the stepper keeps up (``t[n] = f[n] + 1``) both give the same clocks; a setup that
 finishes while the stepper is still on a long edge waits for it.
 
-``R + 3 = L - D - 2``. ``L = I + F + 6 + D``: 37 clocks for the default configuration (and
-its pw and truncated variants, F = 21), 38 for seg2 and seg4; 22 for coord_bits=4
-subpixel_bits=0 intensity_bits=4 (F = 10), 41 for coord_bits=15 subpixel_bits=8 (F = 25).
+``R + 2 + Phi = L - D - 2``. ``L = I + F + 5 + Phi + D``: for the line-writes core 37 clocks
+for the default configuration (and its pw and truncated variants, F = 21), 38 for seg2 and
+seg4; 22 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 10), 41 for coord_bits=15
+subpixel_bits=8 (F = 25); for the deltas core (D = 3, Phi = s + 2) 43 in the default
+configuration.
 
-Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 4`` clocks at
-most (``P = L - D - 1``: 34 for the default configuration; accept to load, the next accept
-in the load's clock); the stepper takes ``C`` clocks per edge. A stream of edges of ``C``
-columns therefore sustains ``C / max(C, P)`` columns per clock: exactly one column per clock
-(no gap between edges) when every edge has at least ``P`` columns. From an idle core, a
-stream of such edges (total ``T`` columns) has its last beat in clock ``L + T - 1``: the
-mean over the whole run is ``T / (L + T)`` (`stream_rate`), at least 0.95 once
-``T >= 19 L``. Shorter edges are setup-bound: one edge per ``P`` clocks. The deltas core
-steps an edge only while its setup holds the bank, so setup and stepping take turns: one
-edge of ``C`` columns per ``C + P`` clocks with one setup unit. A stalled sink
-delays the stepper and its pipeline (and, once its bank waits, the setup) clock for clock;
-nothing else depends on the data. `schedule`'s ``sink_ready`` and ``holds`` model the polygon
-pipeline's accumulator: first ready in clock T (after a scan), then taking each beat over
-``holds`` clocks, a nonzero cell a clock (`beat_wait`); its ``idle`` a source that idles
-before some commands.
+Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
+at most (``P = L - D - 1``: 34 for the default configuration's line-writes core, 39 for its
+deltas core; accept to load, the next accept in the load's clock); the stepper takes ``C``
+clocks per edge. A stream of edges of ``C`` columns therefore sustains ``C / max(C, P)``
+columns per clock: exactly one column per clock (no gap between edges) when every edge has
+at least ``P`` columns. From an idle core, a stream of such edges (total ``T`` columns) has
+its last beat in clock ``L + T - 1``: the mean over the whole run is ``T / (L + T)``
+(`stream_rate`), at least 0.95 once ``T >= 19 L``. Shorter edges are setup-bound: one edge
+per ``P`` clocks. The deltas core steps an edge only while its setup holds the bank, so
+setup and stepping take turns: one edge of ``C`` columns per ``C + P`` clocks with one setup
+unit. A stalled sink delays the stepper and its pipeline (and, once its bank waits, the
+setup) clock for clock; nothing else depends on the data. `schedule`'s ``sink_ready`` and
+``holds`` model the polygon pipeline's accumulator: first ready in clock T (after a scan),
+then taking each beat over ``holds`` clocks, a nonzero cell a clock (`beat_wait`); its
+``idle`` a source that idles before some commands.
 
 Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
 One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
@@ -104,6 +108,7 @@ __all__ = [
     "clock_breakdown",
     "EdgeTiming",
     "beat_cycles",
+    "final_cycles",
     "pipeline_depth",
     "run_cycles",
     "setup_interval",
@@ -122,7 +127,8 @@ DELTAS_PIPELINE_DEPTH = 3  # the deltas stepper: p1 (depth), p2 (estimate), outp
 # Setup units of the core by default (`edgeaa.hdl.dispatch.SetupArray`). One: the smallest
 # core (the polygon pipeline must fit an iCE40 HX8K). With R = 30 RUN clocks (the default
 # configuration) nine units accept an edge every ceil(35 / 9) = 4 clocks, at about six times
-# the line core's area (docs/hardware.md, "Setup throughput").
+# the line core's area (docs/hardware.md, "Setup throughput"); ceil(40 / 9) = 5 for the
+# deltas core, whose FINAL takes s + 2 = 6 clocks.
 DEFAULT_SETUP_UNITS = 1
 MAX_SETUP_UNITS = 16
 
@@ -133,6 +139,15 @@ def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:
     return (
         config.intensity_bits + config.F + 1 + (start_clip_cycles(config) if clipped_start else 0)
     )
+
+
+def final_cycles(config: EdgeConfig, output: str = "writes") -> int:
+    """Clocks of the FINAL state: one for the line-writes core; ``s + 2`` for the deltas
+    core, whose setup forms the y-major ``total0`` product there one bit of the first
+    piece's width ``w0`` (``s + 2`` bits) a clock (`edgeaa.hdl.pieces.total0_steps`)."""
+    if check_output(output) == "deltas":
+        return config.subpixel_bits + 2
+    return 1
 
 
 def start_clip_cycles(config: EdgeConfig) -> int:
@@ -151,29 +166,34 @@ def pipeline_depth(config: EdgeConfig, output: str = "writes") -> int:
 
 def setup_latency(config: EdgeConfig, output: str = "writes") -> int:
     """Clocks from accepting an edge (idle core, not clipped at its start) to its first beat:
-    accept, FOLD, WINDOW, RUN, FINAL, bank, stepper load, the step of column 0, then the
-    output pipeline."""
-    return run_cycles(config) + 5 + pipeline_depth(config, output)
+    accept, FOLD, WINDOW, RUN, FINAL (`final_cycles`), bank, stepper load, the step of
+    column 0, then the output pipeline: ``R + 4 + Phi + D``."""
+    return run_cycles(config) + 4 + final_cycles(config, output) + pipeline_depth(config, output)
 
 
-def setup_interval(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
+def setup_interval(
+    config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS, output: str = "writes"
+) -> int:
     """Clocks per edge the setup sustains, rounded up: edges of at least this many columns
     keep the stepper busy (one column per clock). One unit: accept, FOLD, WINDOW, RUN,
-    FINAL, then the load, in whose clock it accepts the next edge: ``R + 4``. ``N >= 2``
-    units (`SetupArray`): each holds an edge from its accept to the stepper's load
-    of its bank and retires it then, ``R + 5`` clocks, so ``ceil((R + 5) / N)``. (The
-    deltas core's setup also holds each edge while it steps: `sustained_rate`.)"""
+    FINAL (``Phi`` clocks, `final_cycles`), then the load, in whose clock it accepts the next
+    edge: ``R + 3 + Phi``. ``N >= 2`` units (`SetupArray`): each holds an edge from its
+    accept to the stepper's load of its bank and retires it then, ``R + 4 + Phi`` clocks,
+    so ``ceil((R + 4 + Phi) / N)``. (The deltas core's setup also holds each edge while it
+    steps: `sustained_rate`.)"""
     if setup_units == 1:
-        return run_cycles(config) + 4
-    return -(-(run_cycles(config) + 5) // setup_units)
+        return unit_cycles(config, 1, output)
+    return -(-unit_cycles(config, setup_units, output) // setup_units)
 
 
-def unit_cycles(config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS) -> int:
-    """Clocks one setup unit spends per edge in steady state: ``R + 4`` alone (accept to the
-    load, the next accept in the load's clock), ``R + 5`` in an array (accept to retirement,
-    then free the clock after); the deltas core's units hold the edge ``C`` clocks more
-    while it steps."""
-    return run_cycles(config) + (4 if setup_units == 1 else 5)
+def unit_cycles(
+    config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS, output: str = "writes"
+) -> int:
+    """Clocks one setup unit spends per edge in steady state: ``R + 3 + Phi`` alone (accept
+    to the load, the next accept in the load's clock), ``R + 4 + Phi`` in an array (accept
+    to retirement, then free the clock after); the deltas core's units hold the edge ``C``
+    clocks more while it steps."""
+    return run_cycles(config) + 3 + final_cycles(config, output) + (setup_units != 1)
 
 
 @dataclass(frozen=True)
@@ -345,7 +365,7 @@ def _schedule_units(
     """`schedule` of the core with `units` setup units (`edgeaa.hdl.dispatch.SetupArray`).
 
     Command k goes to unit k mod N when that unit has retired its previous command; a good
-    edge's unit writes its bank ``R + 3`` clocks after accepting it (never waiting: a unit
+    edge's unit ends FINAL ``R + 2 + Phi`` clocks after accepting it (never waiting: a unit
     holds one command); the stepper loads it once the collector points at it and the stepper
     is free; a dropped command retires once its unit is back in IDLE and the collector points
     at it. The collector points at the next unit the clock after a retirement. A good edge
@@ -403,7 +423,7 @@ def sustained_rate(
     also holds the edge while it steps (``C`` more clocks) and its stepper starts an edge
     the clock after the previous one's last column: ``C / max(C + 1, unit clocks / N)``."""
     if setup_latency_ is None:
-        per_unit = unit_cycles(config, setup_units)
+        per_unit = unit_cycles(config, setup_units, output)
     else:
         per_unit = setup_latency_ - pipeline_depth(config, output) - (setup_units == 1)
     live = check_output(output) == "deltas"

@@ -44,6 +44,31 @@ def test_setup_latency_is_the_timing_model(name):
     assert timing_model.run_cycles(config, True) == dut.run_cycles + dut.start_clip_cycles
 
 
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+def test_deltas_setup_latency_is_the_timing_model(name):
+    """The deltas core's setup spends ``s + 2`` clocks in FINAL (the y-major total0
+    product, one bit of w0 a clock): latency and interval grow by ``s + 1`` over the line
+    core's FINAL clock; its beats' clocks are checked against the model in
+    tests/test_core_deltas.py."""
+    config = CORE_CONFIGS[name]
+    s, R = config.subpixel_bits, timing_model.run_cycles(config)
+    dut = EdgeAntialiaser(config, output="deltas")
+    final = timing_model.final_cycles(config, "deltas")
+    assert dut.setup.final_cycles == final == s + 2
+    assert timing_model.final_cycles(config) == EdgeAntialiaser(config).setup.final_cycles == 1
+    depth = timing_model.pipeline_depth(config, "deltas")
+    assert dut.setup_latency == timing_model.setup_latency(config, "deltas")
+    assert dut.setup_latency == config.intensity_bits + config.F + 5 + final + depth
+    assert dut.setup_interval == timing_model.setup_interval(config, 1, "deltas") == R + 3 + final
+    nine = EdgeAntialiaser(config, output="deltas", setup_units=9)
+    assert nine.setup_interval == timing_model.setup_interval(config, 9, "deltas")
+    assert nine.setup_interval == -(-(R + 4 + final) // 9)
+    assert timing_model.unit_cycles(config, 1, "deltas") == dut.setup_interval
+    rate = timing_model.sustained_rate(config, 10, output="deltas")
+    assert rate == timing_model.sustained_rate(config, 10, dut.setup_latency, "deltas")
+    assert rate == 10 / dut.setup_interval
+
+
 # -- (6) bad commands ------------------------------------------------------------------------
 
 

@@ -4,17 +4,19 @@ The invariants of the setup registers (fold of the latched command, its columns 
 latched window, the column count), of both multiply-divide lanes (remainder below du,
 quotient bounded by the multiplier bits consumed so far, each step's sums within their
 registers; lane A's first pass over ``2 (first S - u0)``, ``W + s + 2`` bits when the window
-moved the first column), of the bank the setup is about to write (``next_bank``), of the bank
-and of the stepper (jq < ifix, jr < du, kq <= ifix, the half increment, segment constants,
-derived constants, value range, the major axis within [0, 2**W] from the first to the last
-column). The start row (the minor axis of the first column) is within [0, 2**W] for edges
-whose start the window did not move; for the others its bound needs the product
-(first - c0) * slope, which SAT-based induction cannot handle: the harness follows those
-edges with a ghost flag and leaves their start row to simulation (the core tests compare
-every bank with the model's `setup`). Every intermediate sum of the column being stepped (the
-exit depths dq/dr, t, the areas, the output values, jsum and the next jq, jr) is computed in
-full width by `spec.column` and must fit the `EdgeConfig.register_widths` entry that
-`run_edge` checks; the stepper's ``jsum`` and ``dq`` wires must equal them.
+moved the first column), of the deltas setup's Horner products over the lanes' clocks
+(`_products`; FINAL's, the y-major ``total0``, needs none: below), of the bank the setup is
+about to write (``next_bank``), of the bank and of the stepper (jq < ifix, jr < du, kq <=
+ifix, the half increment, segment constants, derived constants, value range, the major axis
+within [0, 2**W] from the first to the last column). The start row (the minor axis of the
+first column) is within [0, 2**W] for edges whose start the window did not move; for the
+others its bound needs the product (first - c0) * slope, which SAT-based induction cannot
+handle: the harness follows those edges with a ghost flag and leaves their start row to
+simulation (the core tests compare every bank with the model's `setup`). Every intermediate
+sum of the column being stepped (the exit depths dq/dr, t, the areas, the output values,
+jsum and the next jq, jr) is computed in full width by `spec.column` and must fit the
+`EdgeConfig.register_widths` entry that `run_edge` checks; the stepper's ``jsum`` and ``dq``
+wires must equal them.
 
 `check` leaves in `ctx` what the pipeline checks and the covers read: ``st`` (the stepper's
 registers as a bank-like record), ``st_axes``, ``column`` (`spec.column` of ``st``).
@@ -267,7 +269,15 @@ def _products(ctx, spec, lanes, add):
     is positive too. (An exact invariant would need the wide products again.)
 
     Both order facts (``w0 >= 0``; ``me^2 <= (2 S - mg)^2`` in one column) need the last
-    column's cut, which WINDOW registers (c1 > hi)."""
+    column's cut, which WINDOW registers (c1 > hi).
+
+    FINAL's product (``y_area0``, `edgeaa.hdl.pieces.total0_steps`: the y-major ``total0``
+    by ``w0``'s bits) has no invariant: no check reads a y-major ``total0`` (`spec.pieces_ok`
+    bounds the x-major totals only; the y-major deltas clamp their areas to the bands), so the
+    proofs hold whatever it is, and the core tests compare it in every bank with the model.
+    An exact one (``y_area0`` equal to ``m_area0`` times ``w0``'s top ``counter`` bits, or
+    to Horner's partial sums) kept this proof's induction step from finishing (stopped
+    after 21 and 50 minutes under load; 17 minutes without, 2026-11-25)."""
     config, setup, win, f = ctx.config, ctx.setup, spec.win, spec.fold
     r, run, final = setup.regs, setup.in_run, setup.in_final
     cut_end = setup.pieces.cut_end == (win.last != f.c1)
