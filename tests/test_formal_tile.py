@@ -78,7 +78,7 @@ def test_fault_is_caught(tools, name, fault, depth, message):
     beyond the documented range: each gives a counterexample from power-on to the group's own
     assertions (without the invariants of the unbounded proofs)."""
     result = run_tile_proof(
-        name, fault=fault, mode="bmc", depth=depth, timeout=600, invariants=False
+        name, tile=SMALL_TILE, fault=fault, mode="bmc", depth=depth, timeout=600, invariants=False
     )
     assert result.status == "FAIL", _explain(result)
     assert message in result.failed, _explain(result)
