@@ -1,10 +1,12 @@
 # amaranth: UnusedElaboratable=no
 """Several setup units feeding the stepper in command order (`SetupArray`).
 
-One `edgeaa.hdl.setup.EdgeSetupUnit` accepts an edge every ``P = R + 4`` clocks (34 by
-default); short edges leave the stepper idle. `SetupArray` holds ``N`` units and hands the
-edge commands to them in turn (round robin, every command, bad ones included) and takes
-their banks in the same turn, so the stepper sees the banks in command order.
+One `edgeaa.hdl.setup.EdgeSetupUnit` accepts an edge every ``P = R + 3 + Phi`` clocks
+(`edgeaa.model.timing.setup_interval`: 34 by default, 39 in the deltas core, whose FINAL
+takes ``Phi = s + 2`` clocks); short edges leave the stepper idle. `SetupArray` holds ``N``
+units and hands the edge commands to them in turn (round robin, every command, bad ones
+included) and takes their banks in the same turn, so the stepper sees the banks in command
+order.
 
 * **Dispatch**: a pointer ``d`` names the unit the next command goes to; ``edges.ready`` is
   high when that unit is free (``busy[d]`` low). Accepting a command sets ``busy[d]`` and
@@ -15,7 +17,7 @@ their banks in the same turn, so the stepper sees the banks in command order.
   command (a bad command, or an edge with no column in its window): ``busy[c]`` clears and
   ``c`` moves on, one clock per dropped command.
 * A unit holds at most one command (``busy``), so its FINAL never waits: its bank is valid
-  ``R + 4`` clocks after it accepted the command (``W + 1`` more when start-clipped).
+  ``R + 3 + Phi`` clocks after it accepted the command (``W + 1`` more when start-clipped).
 * The ``bank`` stream holds its payload while it is valid and not taken (``collect`` moves
   only on a retirement, and the unit holds its bank in HOLD): the deltas stepper reads the
   per-edge constants from it while it steps the edge and takes it (the unit retires) when
