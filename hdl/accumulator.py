@@ -113,7 +113,7 @@ class TileAccumulator(wiring.Component):
         mem = memory.Memory(shape=signed(tile.cell_bits), depth=tile.pixels, init=[])
         m.submodules.cells_memory = mem
         rd, wr = mem.read_port(), mem.write_port()
-        self.observe = types.SimpleNamespace(memory=mem, reads=[rd])
+        self.observe = types.SimpleNamespace(memory=mem, read=rd)
         o_valid = Signal()
         advance = ~o_valid | self.cells.ready
         free = Signal()  # in ACC, the output register free and no clear pending: take
@@ -125,7 +125,8 @@ class TileAccumulator(wiring.Component):
     def _route(self, m, free) -> types.SimpleNamespace:
         """The cell taken this clock: the beat's lowest nonzero cell not yet taken, moved into
         the tile (``keep``: it is inside after the move; ``x``, ``y`` tile coordinates),
-        ``last`` when no other waits (the beat is taken with it); and the tile's origin."""
+        ``last`` when no other waits (the beat is taken with it), ``done`` the cells taken in
+        earlier clocks."""
         tile, p = self._tile, self.ops.payload
         x0, y0 = Signal.like(p.x0), Signal.like(p.y0)  # the origin, set by a tile op
         with m.If(self.ops.valid & self.ops.ready & (p.op == OP["tile"])):
@@ -152,7 +153,6 @@ class TileAccumulator(wiring.Component):
             y=Signal(tile.y_bits, name="cell_y"),
             delta=Signal(signed(tile.cell_bits), name="cell_delta"),
             last=last,
-            origin=(x0, y0),
             done=done,
         )
         m.d.comb += [

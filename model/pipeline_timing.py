@@ -128,11 +128,12 @@ class _Top:
             )
         )
         last, free, stalled, first_beat = self.first - 1, 0, 0, True
-        for (k, shape, _), hold in zip(items, self._per_item(items, holds), strict=True):
+        edge_holds = iter(holds)
+        for k, shape, _ in items:
             if shape is OTHER:
                 last = self.taken[k] = last + 1
                 continue
-            t = next(timings)
+            t, hold = next(timings), next(edge_holds)
             last = self.taken[k] = t.accepted
             if t.beats:
                 stop = t.beats[-1] + 1
@@ -152,12 +153,6 @@ class _Top:
         self.stall += stalled
         self.offer = last + 1
         return free
-
-    @staticmethod
-    def _per_item(items, holds):
-        """`holds` (one per edge) aligned with `items` (None for an unknown code)."""
-        edges = iter(holds)
-        return [None if shape is OTHER else next(edges) for _, shape, _ in items]
 
     def result(self) -> PipelineTiming:
         if self.polygon is not None:  # a polygon the stream left open: its beats go in

@@ -349,7 +349,7 @@ class TileClock:
     def beats(self, clocks, holds) -> None:
         """Beats transferred in `clocks` (ascending), beat k taken over its ``holds[k]``
         clocks (`beat_clocks`) up to its transfer, the first at or after `ready`."""
-        clocks, holds = list(clocks), [int(h) for h in holds]
+        clocks, holds = [int(c) for c in clocks], [int(h) for h in holds]
         assert len(clocks) == len(holds), "a hold per beat"
         if clocks:
             assert clocks[0] - holds[0] + 1 >= self.ready, "a beat before the accumulator is ready"

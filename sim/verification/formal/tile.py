@@ -475,7 +475,6 @@ def _memory_state(m, tile, dut, read, s, covers):
     clearing = obs.in_clear | (obs.check & obs.dirty)
     cleared_to = Cat(obs.scan_x, obs.scan_y)  # CLEAR has zeroed the cells below
     checks = [
-        (obs.in_acc | obs.in_wait | dut.scanning | obs.in_clear, "state: a known state"),
         (_When(pending, read(o_addr) == 0), "state: output cell cleared"),
         (_When(clearing, ~st.b_valid & ~st.c_valid), "state: no write pending in a clear"),
         (
@@ -493,7 +492,7 @@ def _memory_state(m, tile, dut, read, s, covers):
         (_When(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
         (_When(st.c_valid, read(st.c_addr) == st.c_sum), "state: stage C written"),
         (
-            _When(st.b_valid & ~forwarded, obs.reads[0].data == read(st.b_addr)),
+            _When(st.b_valid & ~forwarded, obs.read.data == read(st.b_addr)),
             "state: stage B read",
         ),
         # a cell is taken only as the output advances
