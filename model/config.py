@@ -19,6 +19,11 @@ COORD_BITS_RANGE = (2, 16)
 SUBPIXEL_BITS_RANGE = (0, 8)
 INTENSITY_BITS_RANGE = (1, 16)
 
+# Fixed-point units (2**-F of an intensity LSB) one edge adds to a pixel with the exact
+# accumulator, at most (docs/algorithm.md 9.2 and 13.6: 81/32 on a line, about 3.4 measured
+# in a polygon's sums; docs/check_derivations.py [C2]). A power of two: it sets F.
+UNITS_PER_EDGE = 4
+
 
 class ConfigError(ValueError):
     """A configuration value outside what the model and the hardware support."""
@@ -120,16 +125,21 @@ class EdgeConfig:
         return max(self.subpixel_bits + 1, 6 + 2 * max(self.segments.bit_length() - 1, 0))
 
     def derived_frac_bits(self) -> int:
-        """Fraction bits from the error budget of docs/model.md.
+        """Fraction bits from the error budget of docs/model.md: the fixed-point error one
+        edge adds to a pixel's coverage stays within 2**-(I + 1) even at the smallest
+        intensity difference |I_d| = 1, where one unit of 2**-F LSB is 2**-F of coverage.
 
-        Budget: over the longest edge, the truncated slope (which loses less than one unit of
-        2**-F intensity LSB per column) moves the coverage by at most max_columns * 2**-F /
-        |I_d| <= 2**-(I + 1) even at the smallest intensity difference |I_d| = 1; the output
-        value moves by at most max_columns * 2**-F LSB. max_columns is an upper bound on the
-        columns of one edge.
+        exact:     no drift; an edge adds fewer than `UNITS_PER_EDGE` = 4 units to a pixel
+                   (the estimate's floors, the quotient's, the end pieces'), so
+                   4 * 2**-F <= 2**-(I + 1), F = I + 3.
+        truncated: the dropped remainder of the slope drifts by less than one unit a column,
+                   max_columns units over the longest edge: F = ceil(log2(max_columns)) + I + 1.
         """
-        columns_log2 = (self.max_columns - 1).bit_length()  # ceil(log2(max_columns))
-        return max(columns_log2 + self.intensity_bits + 1, self.min_frac_bits)
+        if self.accumulator == "exact":
+            units_log2 = (UNITS_PER_EDGE - 1).bit_length()
+        else:
+            units_log2 = (self.max_columns - 1).bit_length()  # ceil(log2(max_columns))
+        return max(units_log2 + self.intensity_bits + 1, self.min_frac_bits)
 
     def register_widths(self) -> dict[str, RegisterWidth]:
         """The width table of the stepping loop, shared with the hardware."""
