@@ -36,6 +36,7 @@ from edgeaa.model import (
     setup,
 )
 from edgeaa.model import column as column_module
+from edgeaa.model.config import UNITS_PER_EDGE
 from edgeaa.model.edge import segment_constants
 
 FAILED: list[str] = []
@@ -323,7 +324,8 @@ def sweep_edges(config: EdgeConfig, slopes: int, length_px: int, offsets) -> lis
 
 def part_b() -> None:
     section("B1 model vs exact area: coord_bits 11, subpixel_bits 8, I 8, |I_d| = 255, exact")
-    base = EdgeConfig(coord_bits=11, subpixel_bits=8, intensity_bits=8)
+    # F = 21 (set): a unit negligible, so the measured maximum shows the estimate's c_N k
+    base = EdgeConfig(coord_bits=11, subpixel_bits=8, intensity_bits=8, frac_bits=21)
     edges = sweep_edges(base, slopes=64, length_px=300, offsets=[(0, 0), (0, 128), (93, 201)])
     print(f"  F = {base.F}; {len(edges)} edges, slopes k = i/64, 300 columns each, 3 offsets")
     print(
@@ -470,7 +472,7 @@ def triangle_exhaustive() -> None:
 
 def drift_budget() -> None:
     section("B4 truncated drift on the longest edge, |I_d| = 1 (coord_bits 11, s 4, I 8)")
-    base = EdgeConfig(mode="paper")
+    base = EdgeConfig(mode="paper", accumulator="truncated")
     hi, i_bits = base.max_vertex, base.intensity_bits
     budget = 2.0 ** -(i_bits + 1)
     print(f"  max_columns = {base.max_columns}, derived F = {base.F}, 2^-(I+1) = {budget}")
@@ -552,21 +554,35 @@ def extreme_edges(config: EdgeConfig) -> list[Edge]:
 
 
 def part_c() -> None:
-    section("C1 derived frac bits F = ceil(log2(2^W + 1)) + I + 1 (EdgeConfig.F)")
+    section("C1 derived frac bits: truncated W + I + 2, exact I + 3 (EdgeConfig.F)")
     intens = (4, 8, 10, 12)
-    print("  W \\ I " + "".join(f"{i:>5}" for i in intens))
+    print("  truncated, W \\ I " + "".join(f"{i:>5}" for i in intens))
     ok = True
     for w in range(8, 17):
         row = []
         for i in intens:
-            cfg = EdgeConfig(coord_bits=w, intensity_bits=i)
+            cfg = EdgeConfig(coord_bits=w, intensity_bits=i, accumulator="truncated")
             frac_bits = cfg.F
             row.append(frac_bits)
             ok &= cfg.max_columns * Fraction(1, 2**frac_bits) <= Fraction(1, 2 ** (i + 1))
             ok &= cfg.max_columns * Fraction(1, 2 ** (frac_bits - 1)) > Fraction(1, 2 ** (i + 1))
             ok &= frac_bits == w + 1 + i + 1
-        print(f"  {w:5d} " + "".join(f"{v:5d}" for v in row))
-    check("budget max_columns*2^-F <= 2^-(I+1) holds and F-1 breaks it; F = W + I + 2", ok)
+        print(f"  {w:17d} " + "".join(f"{v:5d}" for v in row))
+    check("truncated: max_columns*2^-F <= 2^-(I+1) holds and F-1 breaks it; F = W + I + 2", ok)
+    ok, row = True, []
+    for i in range(1, 17):
+        cfg = EdgeConfig(intensity_bits=i)
+        row.append(cfg.F)
+        ok &= UNITS_PER_EDGE * Fraction(1, 2**cfg.F) <= Fraction(1, 2 ** (i + 1))
+        if cfg.min_frac_bits < cfg.F:  # above the floor, one bit fewer breaks the budget
+            ok &= UNITS_PER_EDGE * Fraction(1, 2 ** (cfg.F - 1)) > Fraction(1, 2 ** (i + 1))
+            ok &= i + 3 == cfg.F
+    print("  exact, I = 1..16:   " + " ".join(str(v) for v in row))
+    check(
+        "exact: 4 units * 2^-F <= 2^-(I+1) holds and F-1 breaks it; F = max(I + 3, floor)",
+        ok,
+        f"every W; floor {EdgeConfig().min_frac_bits} for paper, s = 4",
+    )
 
     section("C2 register widths at the extremes (run_edge raises WidthError on overflow)")
     original = column_module.IntArith.check
@@ -580,14 +596,15 @@ def part_c() -> None:
             print(f"  WidthError {overflows[-1]}")
 
     try:
-        # The default configuration, recording each register's extremes.
+        # The default configuration's width table, recording each register's extremes (both
+        # accumulators at the default F; the truncated one's own derived F runs below).
         Recorder.install()
         default = EdgeConfig()
         rng = random.Random(5)
         runs = 0
         for mode in MODES:
             for acc in ("exact", "truncated"):
-                cfg = default.with_(mode=mode, accumulator=acc)
+                cfg = default.with_(mode=mode, accumulator=acc, frac_bits=default.F)
                 edges = extreme_edges(cfg)
                 for _ in range(5):
                     hi = cfg.max_vertex
@@ -599,6 +616,7 @@ def part_c() -> None:
                     runs += 1
         column_module.IntArith.check = original
         for base in (
+            EdgeConfig(),
             EdgeConfig(coord_bits=2, subpixel_bits=0, intensity_bits=1),
             EdgeConfig(coord_bits=2, subpixel_bits=8, intensity_bits=16),
             EdgeConfig(coord_bits=6, subpixel_bits=3, intensity_bits=4),
@@ -999,12 +1017,66 @@ def part_d_fill() -> None:
     )
 
 
+def part_d_units_per_edge() -> None:
+    section("D7. units one edge adds to a polygon's pixel, F at its floor, |I_d| = 1 (13.6)")
+    from edgeaa.render import Polygon, Scene, render_scene
+    from edgeaa.render import render as render_module
+    from edgeaa.render.exact import edges_per_pixel, exact_coverage
+
+    sums = []  # (window, rows, resolved sums) of the polygon being drawn
+
+    def spy(window, x, y, delta, rule, ifix):
+        for block in resolve_rows(window, x, y, delta, rule, ifix):
+            sums.append((window, block.rows, np.asarray(block.coverage)))
+            yield block
+
+    resolve_rows = render_module.resolve_rows
+    render_module.resolve_rows = spy
+    rng = random.Random(5)
+    worst, uncrossed, pixels = 0.0, 0.0, 0
+    try:
+        for mode in ("paper", "seg4"):
+            config = EdgeConfig(mode=mode, frac_bits=EdgeConfig(mode=mode).min_frac_bits)
+            unit = 1 << config.F  # |I_d| = 1: ifix is 2^F units, one pixel
+            for _ in range(60):
+                size = rng.choice((8, 16, 32))
+                n = rng.choice((3, 4, 5, 7, 9))
+                pts = tuple(
+                    (rng.uniform(0.5, size - 0.5), rng.uniform(0.5, size - 0.5)) for _ in range(n)
+                )
+                rule = rng.choice(("nonzero", "evenodd"))
+                scene = Scene(size, size, (Polygon((pts,), 1, rule),), background=0)
+                sums.clear()
+                result = render_scene(scene, config, skip=False)
+                (x0, y0, x1, y1), area = exact_coverage(result.plan, 0)
+                exact = np.zeros((size, size))
+                exact[y0:y1, x0:x1] = area * unit
+                got = np.zeros((size, size))
+                for window, rows, block in sums:
+                    got[rows, window.x0 : window.x0 + block.shape[1]] = block
+                err = np.abs(got - exact)
+                crossers = edges_per_pixel(result)
+                crossed = crossers > 0
+                worst = max(worst, float((err[crossed] / crossers[crossed]).max(initial=0)))
+                uncrossed = max(uncrossed, float(err[~crossed].max(initial=0)))
+                pixels += err.size
+    finally:
+        render_module.resolve_rows = resolve_rows
+    check(
+        f"|sum - exact| / crossing edges < {UNITS_PER_EDGE} units (estimate included)",
+        worst < UNITS_PER_EDGE,
+        f"max {worst:.3f} units over {pixels} pixels",
+    )
+    check("pixels no edge crosses: exact", uncrossed < 1e-9, f"max {uncrossed:.2g} units")
+
+
 def part_d() -> None:
     part_d_split_tables()
     part_d_no_leak()
     part_d_end_totals()
     part_d_pixel_bound()
     part_d_two_edges()
+    part_d_units_per_edge()
     part_d_fill()
 
 

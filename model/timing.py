@@ -64,14 +64,13 @@ own bank register could accept it in ``f[n] + 1`` and wait in FINAL for ``t[n - 
 While the stepper keeps up (``t[n] = f[n] + 1``) both give the same clocks; a setup that
 finishes while the stepper is still on a long edge waits for it.
 
-``R + 2 + Phi = L - D - 2``. ``L = I + F + 5 + Phi + D``: for the line-writes core 37 clocks
-for the default configuration (and its pw and truncated variants, F = 21), 38 for seg2 and
-seg4; 22 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 10), 41 for coord_bits=15
-subpixel_bits=8 (F = 25); for the deltas core (D = 3, Phi = s + 2) 43 in the default
-configuration.
+``R + 2 + Phi = L - D - 2``. ``L = I + F + 5 + Phi + D``: for the line-writes core 27 clocks
+for the default configuration and its pw variant (F = 11), 28 for seg2 and seg4, 37 for the
+truncated accumulator (F = 21); 19 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 7);
+for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration.
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
-at most (``P = L - D - 1``: 34 for the default configuration's line-writes core, 39 for its
+at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 29 for its
 deltas core; accept to load, the next accept in the load's clock); the stepper takes ``C``
 clocks per edge. A stream of edges of ``C`` columns therefore sustains ``C / max(C, P)``
 columns per clock: exactly one column per clock (no gap between edges) when every edge has

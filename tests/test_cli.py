@@ -108,10 +108,12 @@ def test_demo_reports_each_mode_within_its_bound(capsys, tmp_path):
     assert plot.stat().st_size > 10_000
     rows = {line.split()[0]: line.split() for line in out.splitlines()[2:6]}
     assert set(rows) == {"pw", "paper", "seg2", "seg4"}
-    for mode, (_, writes, _worst, worst_over_k, bound_over_k) in rows.items():
+    for mode, (_, writes, _worst, worst_over_k, c_n, over_bound) in rows.items():
         assert int(writes) > 0
-        # The demo's own figure must respect the bound (fixed-point slack well below 1e-5).
-        assert float(worst_over_k) <= float(bound_over_k) + 1e-5, mode
+        # Every edge within its own bound (c_N k plus the fixed-point units); the estimate's
+        # c_N k is reached to within those units.
+        assert 0.9 < float(over_bound) <= 1, mode
+        assert float(worst_over_k) >= 0.9 * float(c_n), mode
 
 
 def test_verilog_command_writes_the_core_with_stable_ports(capsys, tmp_path):

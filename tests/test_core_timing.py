@@ -183,7 +183,7 @@ def test_timing_model_basics():
 @pytest.mark.parametrize("units", [1, 9])
 def test_short_edges_are_setup_bound(units):
     """Edges shorter than the setup interval: one unit takes R + 4 clocks per edge; nine
-    units take R + 5 clocks per nine edges (one edge every 4 clocks by default)."""
+    units take R + 5 clocks per nine edges (one edge every 3 clocks by default)."""
     config = CORE_CONFIGS["default"]
     interval = timing_model.setup_interval(config, units)
     columns = 10 if units == 1 else 1
@@ -193,10 +193,10 @@ def test_short_edges_are_setup_bound(units):
     gaps = [b - a for a, b in zip(starts, starts[1:], strict=False)]
     if units == 1:
         assert set(gaps) == {interval}, gaps
-    else:  # nine edges (a burst, one a clock) every R + 5 clocks: 35 / 9 <= 4 clocks each
+    else:  # nine edges (a burst, one a clock) every R + 5 clocks: 25 / 9 <= 3 clocks each
         per_unit = timing_model.run_cycles(config) + 5
         assert [starts[n + 9] - starts[n] for n in range(len(starts) - 9)] == [per_unit] * 21
-        assert per_unit / units <= interval == 4, gaps
+        assert per_unit / units <= interval == 3, gaps
     assert timing_model.sustained_rate(config, columns, setup_units=units) == min(
         1, columns * units / timing_model.unit_cycles(config, units)
     )

@@ -222,8 +222,9 @@ def test_seeded_mixed_batch(mode, accumulator):
 
 @pytest.mark.parametrize("mode", MODES)
 def test_int64_overflow_fallback(mode):
-    """coord_bits 16 and intensity_bits 16: long steep edges need U beyond 2**63."""
-    config = EdgeConfig(coord_bits=16, intensity_bits=16, mode=mode)
+    """coord_bits 16 and intensity_bits 16 at F = 34 (the truncated accumulator's derived F
+    there): long steep edges need U beyond 2**63."""
+    config = EdgeConfig(coord_bits=16, intensity_bits=16, mode=mode, frac_bits=34)
     hi = config.max_vertex
     seed = 7 + MODES.index(mode)
     rng = random.Random(seed)
