@@ -20,7 +20,7 @@ SUBPIXEL_BITS_RANGE = (0, 8)
 INTENSITY_BITS_RANGE = (1, 16)
 
 # Fixed-point units (2**-F of an intensity LSB) one edge adds to a pixel with the exact
-# accumulator, at most (docs/algorithm.md 9.2 and 13.6: 81/32 on a line, about 3.4 measured
+# accumulator, at most (docs/algorithm.md 9.2 and 13.6: 81/32 on a line, at most 3.56 measured
 # in a polygon's sums; docs/check_derivations.py [D7]). A power of two: it sets F.
 UNITS_PER_EDGE = 4
 
