@@ -38,7 +38,7 @@ from __future__ import annotations
 import types
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, unsigned
-from amaranth.lib import memory, stream, wiring
+from amaranth.lib import data, memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model.tile import RESOLVE_OPS, TileConfig, resolve_latency
@@ -101,14 +101,18 @@ class TileResolve(wiring.Component):
         F, bits = tile.config.F, tile.config.intensity_bits
         take = self.cells.valid & self.cells.ready & (c.op == OP["cell"])
         self._take_cell = take
+        # the delay lines' free-running address (its value never matters: only differences)
+        ptr = Signal((self.latency - 1).bit_length(), name="delay_ptr", reset_less=True)
+        m.d.sync += ptr.eq(ptr + 1)
+        self.observe.delays = {}
+        # x and y from the take to the last stage
+        xy = _delay_line(m, self.observe, "xy", ptr, self.latency - 1, x=c.x, y=c.y)
         acc = Signal.like(c.sum)  # the row's prefix sum, wrapping like the cells
         total = (Mux(c.start, 0, acc) + c.sum)[: tile.cell_bits].as_signed()
         s1 = _stage(
             m,
             "s1",
             valid=take,
-            x=c.x,
-            y=c.y,
             sum=total,
             written=written.bit_select(c.y, 1),
             intensity=c.intensity,
@@ -127,8 +131,6 @@ class TileResolve(wiring.Component):
             m,
             "s2",
             valid=s1.valid,
-            x=s1.x,
-            y=s1.y,
             cov=self._fill(s1.sum, ifix, s1.evenodd),
             below=Mux(s1.written, rd.data, background),
             intensity=s1.intensity,
@@ -144,36 +146,31 @@ class TileResolve(wiring.Component):
         with m.If(s2.valid):
             m.d.sync += d2.eq(s2.d << 1)
         self.observe.d2 = d2
+        # the pixel below, q = 0 and the sign from s3 to the last stage
+        carry = _delay_line(
+            m, self.observe, "carry", ptr, bits, below=s2.below, zero=q == 0, neg=neg
+        )
         # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
         # bits) and the dividend's low bits, which the quotient's bits replace one a stage
-        s3 = _stage(
-            m,
-            "s3",
-            valid=s2.valid,
-            x=s2.x,
-            y=s2.y,
-            below=s2.below,
-            zero=q == 0,
-            neg=neg,
-            rem=num[bits:][: bits + 1],
-            low=num[:bits],
-        )
+        s3 = _stage(m, "s3", valid=s2.valid, rem=num[bits:][: bits + 1], low=num[:bits])
         stages = [s1, s2, s3]
         for j in reversed(range(bits)):  # quotient bit j
             prev = stages[-1]
             trial = Cat(prev.low[-1], prev.rem)  # rem << 1 | the dividend's next bit
             fits = trial >= d2
-            fields = {k: getattr(prev, k) for k in ("valid", "x", "y", "below", "zero", "neg")}
             stages.append(
                 _stage(
                     m,
                     f"q{j}",
-                    **fields,
+                    valid=prev.valid,
                     rem=Mux(fits, trial - d2, trial)[: bits + 1],
                     low=Cat(fits, prev.low[:-1]),
                 )
             )
+        for k, st in enumerate(stages[:-1], start=1):  # where stage k's values are now
+            st.delayed = {"xy": ptr - k} | ({"carry": ptr - (k - 2)} if k >= 3 else {})
         last = stages[-1]
+        last.__dict__.update(x=xy.x, y=xy.y, below=carry.below, zero=carry.zero, neg=carry.neg)
         quot = last.low
         new = Mux(last.zero, last.below, Mux(last.neg, last.below - quot, last.below + quot))
         m.d.comb += [
@@ -260,3 +257,23 @@ def _stage(m, prefix: str, **values) -> types.SimpleNamespace:
         regs[name] = Signal(value.shape(), name=f"{prefix}_{name}")
         m.d.sync += regs[name].eq(value)
     return types.SimpleNamespace(**regs)
+
+
+def _delay_line(m, observe, name: str, ptr, delay: int, **values) -> data.View:
+    """`values` `delay` clocks later, through a `Memory` (block RAM on an FPGA) written every
+    clock at ``ptr`` and read (synchronous read port) at ``ptr - delay``; returns the read
+    data (a view with a field per value). Its depth, ``2**len(ptr)``, is above `delay`: the
+    word read is never the one being written. In ``observe.delays[name]``."""
+    shapes = {k: Value.cast(v).shape() for k, v in values.items()}
+    assert delay < 1 << len(ptr), (delay, len(ptr))
+    mem = memory.Memory(shape=data.StructLayout(shapes), depth=1 << len(ptr), init=[])
+    m.submodules[f"delay_{name}"] = mem
+    wr, rd = mem.write_port(), mem.read_port()
+    m.d.comb += [
+        wr.addr.eq(ptr),
+        wr.data.eq(Cat(*(values[k] for k in shapes))),
+        wr.en.eq(1),
+        rd.addr.eq(ptr - delay),
+    ]
+    observe.delays[name] = mem
+    return rd.data
