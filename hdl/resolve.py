@@ -18,6 +18,19 @@ cell to writing its pixel:
   next bit, the quotient's bits shifting into the dividend's low bits as they go; the last
   stage writes ``below +- quotient`` (or ``below`` when q = 0).
 
+The values a cell only carries go through two delay lines, not registers: x and y from the
+take to the last stage, the pixel below, q = 0 and the sign from s3 to it (the stages keep
+``valid``, which has a reset, and the fields that change each stage). As the pipeline never
+stalls (every stage loads every clock) a carried value is a fixed delay: each line is a
+`Memory` (a block RAM on an FPGA) written every clock at a free-running address and read by
+a synchronous read port at the address written that many clocks before, so the value is the
+read port's data in the clock the last stage writes. Its depth is the power of two above the
+longest delay (16 words at I = 8; the word read is never the one written). Why: on an iCE40
+a flip-flop whose input is another register (or a port or a memory) takes a logic cell of
+its own, and the carried fields were 211 such flip-flops (the resolve alone: 559 -> 352
+flip-flops with the 4-bit address, 775 -> 781 LUT4), while block RAMs were free (two more,
+256 x 16 each). Timing and every output bit are unchanged.
+
 The pipeline never stalls: nothing leaves it but the write. A polygon's first cell, a tile op
 and a flush are taken only when no cell is in flight (the pixels they read must be written
 first). A flush reads the pixel memory row by row, one pixel per clock while the ``pixels``
@@ -27,10 +40,13 @@ Its first pixel is offered two clocks after the flush is taken.
 
 Observation points for the formal harness (``observe``, a namespace set when the resolve is
 elaborated; no logic of their own): ``memory`` the pixel `Memory`, ``read`` its read port,
-``stages`` the pipeline's stages (s1 first; namespaces of registers, each with ``valid``,
-``x`` and ``y``), ``acc`` the row's prefix sum, ``written``, ``background``, ``p_valid``
-and ``p`` the output register (``x``, ``y``, ``last``, ``written``), ``fx`` and ``fy`` the
-flush position (FLUSH is ``flushing``).
+``stages`` the pipeline's stages (s1 first; namespaces of registers, each with ``valid``;
+the values a stage carries are in the delay lines, ``delays`` (their `Memory` by name,
+``"xy"`` and ``"carry"``), at the address its ``delayed`` names per line (a value, no
+logic); the last stage's are its fields ``x``, ``y``, ``below``, ``zero`` and ``neg``, the
+read ports' data), ``acc`` the row's prefix sum, ``d2``, ``written``, ``background``,
+``p_valid`` and ``p`` the output register (``x``, ``y``, ``last``, ``written``), ``fx`` and
+``fy`` the flush position (FLUSH is ``flushing``).
 """
 
 from __future__ import annotations

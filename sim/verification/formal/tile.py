@@ -97,10 +97,12 @@ the last cell's row was begun; in a flush the frame equals that until (X, Y) is 
 waiting pixel (X, Y) equals the frame, the shadow being the background; the row's prefix sum
 register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells in taken order,
 none after the last taken and none in a flush, with a pixel waiting or before a polygon's
-first cell; the flush and output positions and ``last`` follow the pixel count; the
-background is the shadow's. A cell in flight has no invariant of its own: with k above the
-resolve's latency every cell the induction step sees written was taken within the k clocks
-it assumes, from a state where the invariants held.
+first cell (a cell's position as read from the resolve's delay memory at the address its
+stage names, the last stage's the delay line's read port data: `_resolve_stages`); the
+flush and output positions and ``last`` follow the pixel count; the background is the
+shadow's. A cell in flight has no invariant of its own: with k above the resolve's latency
+every cell the induction step sees written was taken within the k clocks it assumes, from a
+state where the invariants held (the delay lines' words it reads were written in them too).
 
 All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
 the memories and registers at their initial values, no reset; the accumulator's from
