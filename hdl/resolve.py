@@ -18,6 +18,19 @@ cell to writing its pixel:
   next bit, the quotient's bits shifting into the dividend's low bits as they go; the last
   stage writes ``below +- quotient`` (or ``below`` when q = 0).
 
+The values a cell only carries go through two delay lines, not registers: x and y from the
+take to the last stage, the pixel below, q = 0 and the sign from s3 to it (the stages keep
+``valid``, which has a reset, and the fields that change each stage). As the pipeline never
+stalls (every stage loads every clock) a carried value is a fixed delay: each line is a
+`Memory` (a block RAM on an FPGA) written every clock at a free-running address and read by
+a synchronous read port at the address written that many clocks before, so the value is the
+read port's data in the clock the last stage writes. Its depth is the power of two above the
+longest delay (16 words at I = 8; the word read is never the one written). Why: on an iCE40
+a flip-flop whose input is another register (or a port or a memory) takes a logic cell of
+its own, and the carried fields were 211 such flip-flops (the resolve alone: 559 -> 352
+flip-flops with the 4-bit address, 775 -> 781 LUT4), while block RAMs were free (two more,
+256 x 16 each). Timing and every output bit are unchanged.
+
 The pipeline never stalls: nothing leaves it but the write. A polygon's first cell, a tile op
 and a flush are taken only when no cell is in flight (the pixels they read must be written
 first). A flush reads the pixel memory row by row, one pixel per clock while the ``pixels``
@@ -27,10 +40,13 @@ Its first pixel is offered two clocks after the flush is taken.
 
 Observation points for the formal harness (``observe``, a namespace set when the resolve is
 elaborated; no logic of their own): ``memory`` the pixel `Memory`, ``read`` its read port,
-``stages`` the pipeline's stages (s1 first; namespaces of registers, each with ``valid``,
-``x`` and ``y``), ``acc`` the row's prefix sum, ``written``, ``background``, ``p_valid``
-and ``p`` the output register (``x``, ``y``, ``last``, ``written``), ``fx`` and ``fy`` the
-flush position (FLUSH is ``flushing``).
+``stages`` the pipeline's stages (s1 first; namespaces of registers, each with ``valid``;
+the values a stage carries are in the delay lines, ``delays`` (their `Memory` by name,
+``"xy"`` and ``"carry"``), at the address its ``delayed`` names per line (a value, no
+logic); the last stage's are its fields ``x``, ``y``, ``below``, ``zero`` and ``neg``, the
+read ports' data), ``acc`` the row's prefix sum, ``d2``, ``written``, ``background``,
+``p_valid`` and ``p`` the output register (``x``, ``y``, ``last``, ``written``), ``fx`` and
+``fy`` the flush position (FLUSH is ``flushing``).
 """
 
 from __future__ import annotations
@@ -38,7 +54,7 @@ from __future__ import annotations
 import types
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, unsigned
-from amaranth.lib import memory, stream, wiring
+from amaranth.lib import data, memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model.tile import RESOLVE_OPS, TileConfig, resolve_latency
@@ -101,14 +117,18 @@ class TileResolve(wiring.Component):
         F, bits = tile.config.F, tile.config.intensity_bits
         take = self.cells.valid & self.cells.ready & (c.op == OP["cell"])
         self._take_cell = take
+        # the delay lines' free-running address (its value never matters: only differences)
+        ptr = Signal((self.latency - 1).bit_length(), name="delay_ptr", reset_less=True)
+        m.d.sync += ptr.eq(ptr + 1)
+        self.observe.delays = {}
+        # x and y from the take to the last stage
+        xy = _delay_line(m, self.observe, "xy", ptr, self.latency - 1, x=c.x, y=c.y)
         acc = Signal.like(c.sum)  # the row's prefix sum, wrapping like the cells
         total = (Mux(c.start, 0, acc) + c.sum)[: tile.cell_bits].as_signed()
         s1 = _stage(
             m,
             "s1",
             valid=take,
-            x=c.x,
-            y=c.y,
             sum=total,
             written=written.bit_select(c.y, 1),
             intensity=c.intensity,
@@ -127,8 +147,6 @@ class TileResolve(wiring.Component):
             m,
             "s2",
             valid=s1.valid,
-            x=s1.x,
-            y=s1.y,
             cov=self._fill(s1.sum, ifix, s1.evenodd),
             below=Mux(s1.written, rd.data, background),
             intensity=s1.intensity,
@@ -144,36 +162,31 @@ class TileResolve(wiring.Component):
         with m.If(s2.valid):
             m.d.sync += d2.eq(s2.d << 1)
         self.observe.d2 = d2
+        # the pixel below, q = 0 and the sign from s3 to the last stage
+        carry = _delay_line(
+            m, self.observe, "carry", ptr, bits, below=s2.below, zero=q == 0, neg=neg
+        )
         # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
         # bits) and the dividend's low bits, which the quotient's bits replace one a stage
-        s3 = _stage(
-            m,
-            "s3",
-            valid=s2.valid,
-            x=s2.x,
-            y=s2.y,
-            below=s2.below,
-            zero=q == 0,
-            neg=neg,
-            rem=num[bits:][: bits + 1],
-            low=num[:bits],
-        )
+        s3 = _stage(m, "s3", valid=s2.valid, rem=num[bits:][: bits + 1], low=num[:bits])
         stages = [s1, s2, s3]
         for j in reversed(range(bits)):  # quotient bit j
             prev = stages[-1]
             trial = Cat(prev.low[-1], prev.rem)  # rem << 1 | the dividend's next bit
             fits = trial >= d2
-            fields = {k: getattr(prev, k) for k in ("valid", "x", "y", "below", "zero", "neg")}
             stages.append(
                 _stage(
                     m,
                     f"q{j}",
-                    **fields,
+                    valid=prev.valid,
                     rem=Mux(fits, trial - d2, trial)[: bits + 1],
                     low=Cat(fits, prev.low[:-1]),
                 )
             )
+        for k, st in enumerate(stages[:-1], start=1):  # where stage k's values are now
+            st.delayed = {"xy": ptr - k} | ({"carry": ptr - (k - 2)} if k >= 3 else {})
         last = stages[-1]
+        last.__dict__.update(x=xy.x, y=xy.y, below=carry.below, zero=carry.zero, neg=carry.neg)
         quot = last.low
         new = Mux(last.zero, last.below, Mux(last.neg, last.below - quot, last.below + quot))
         m.d.comb += [
@@ -260,3 +273,23 @@ def _stage(m, prefix: str, **values) -> types.SimpleNamespace:
         regs[name] = Signal(value.shape(), name=f"{prefix}_{name}")
         m.d.sync += regs[name].eq(value)
     return types.SimpleNamespace(**regs)
+
+
+def _delay_line(m, observe, name: str, ptr, delay: int, **values) -> data.View:
+    """`values` `delay` clocks later, through a `Memory` (block RAM on an FPGA) written every
+    clock at ``ptr`` and read (synchronous read port) at ``ptr - delay``; returns the read
+    data (a view with a field per value). Its depth, ``2**len(ptr)``, is above `delay`: the
+    word read is never the one being written. In ``observe.delays[name]``."""
+    shapes = {k: Value.cast(v).shape() for k, v in values.items()}
+    assert delay < 1 << len(ptr), (delay, len(ptr))
+    mem = memory.Memory(shape=data.StructLayout(shapes), depth=1 << len(ptr), init=[])
+    m.submodules[f"delay_{name}"] = mem
+    wr, rd = mem.write_port(), mem.read_port()
+    m.d.comb += [
+        wr.addr.eq(ptr),
+        wr.data.eq(Cat(*(values[k] for k in shapes))),
+        wr.en.eq(1),
+        rd.addr.eq(ptr - delay),
+    ]
+    observe.delays[name] = mem
+    return rd.data

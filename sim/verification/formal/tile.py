@@ -97,10 +97,12 @@ the last cell's row was begun; in a flush the frame equals that until (X, Y) is 
 waiting pixel (X, Y) equals the frame, the shadow being the background; the row's prefix sum
 register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells in taken order,
 none after the last taken and none in a flush, with a pixel waiting or before a polygon's
-first cell; the flush and output positions and ``last`` follow the pixel count; the
-background is the shadow's. A cell in flight has no invariant of its own: with k above the
-resolve's latency every cell the induction step sees written was taken within the k clocks
-it assumes, from a state where the invariants held.
+first cell (a cell's position as read from the resolve's delay memory at the address its
+stage names, the last stage's the delay line's read port data: `_resolve_stages`); the
+flush and output positions and ``last`` follow the pixel count; the background is the
+shadow's. A cell in flight has no invariant of its own: with k above the resolve's latency
+every cell the induction step sees written was taken within the k clocks it assumes, from a
+state where the invariants held (the delay lines' words it reads were written in them too).
 
 All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
 the memories and registers at their initial values, no reset; the accumulator's from
@@ -261,7 +263,7 @@ class TileHarness(Elaboratable):
             # adds read ports to its memories
             m.submodules.dut = dut.elaborate(platform)
             if {"sums", "pixels"} & set(self.checks):
-                read = _memory_reader(m, dut)
+                read = _memory_reader(m, dut.observe.memory)
         else:
             m.submodules.dut = dut
         m.domains.sync = self.domain
@@ -443,12 +445,11 @@ def _accumulator_invariants(m, tile, dut, read, s, checks, covers):
     _scan_state(m, tile, dut, s, covers)  # the sums group needs it too (a scan's extra read)
 
 
-def _memory_reader(m, dut):
-    """A reader of the stage's memory (``observe.memory``): ``read(address)`` adds a
-    combinational read port at `address` (the harness's; the stage's own ports are
-    untouched) and returns its data. A port per address the invariants name, not per row, so
-    the memory stays an array for the solver at any tile size."""
-    mem = dut.observe.memory
+def _memory_reader(m, mem):
+    """A reader of a stage's memory `mem` (``observe.memory``, or a resolve's delay line):
+    ``read(address)`` adds a combinational read port at `address` (the harness's; the stage's
+    own ports are untouched) and returns its data. A port per address the invariants name, not
+    per row, so the memory stays an array for the solver at any tile size."""
 
     def read(address):
         port = mem.read_port(domain="comb")
@@ -798,11 +799,29 @@ def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
     return g
 
 
+def _resolve_stages(m, dut):
+    """The resolve's stages as the invariants see them (each with ``valid``, ``x``, ``y``, ...):
+    a stage's own registers, and the values it carries in the resolve's delay lines
+    (``observe.delays``) as read from the delay memory at the address the stage names
+    (``delayed``; a combinational read port of the harness's each). The last stage's carried
+    values are the delay lines' read ports' data, what its write uses."""
+    delays = dut.observe.delays
+    readers = {name: _memory_reader(m, mem) for name, mem in delays.items()}
+    views = []
+    for st in dut.observe.stages:
+        fields = {k: v for k, v in vars(st).items() if k != "delayed"}
+        for name, address in getattr(st, "delayed", {}).items():
+            word = readers[name](address)
+            fields.update((k, word[k]) for k in delays[name].shape.members)
+        views.append(types.SimpleNamespace(**fields))
+    return views
+
+
 def _resolve_invariants(m, tile, dut, read, g, covers):
     """Invariants of the resolve's state against the ``pixels`` ghost (what makes the group
     inductive, with k above the pipeline's latency: a cell in flight is written within it)."""
     obs = dut.observe
-    stages, written = obs.stages, obs.written
+    stages, written = _resolve_stages(m, dut), obs.written
     busy = _any(st.valid for st in stages)
     flush = dut.flushing
     last_pos = Cat(*g.last)
