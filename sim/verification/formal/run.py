@@ -198,10 +198,11 @@ PROOFS: dict[str, Proof] = {
             "minor",
             ("minor",),
             "bmc",
-            37,
+            "latency+0",  # to the first beat of an edge accepted at once (37 at F = 21)
             assumes=("count", "bounds"),
-            skip=34,
-            description="minor-axis rows within the image (bounded, from reset)",
+            skip="latency-3",
+            description="minor-axis rows within the image (bounded, from reset, to the first "
+            "beats)",
         ),
         Proof(
             "cover_drop",
