@@ -174,6 +174,10 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
         f"sub-pixel offsets, {args.length} px), {sweep.pixels} pixels; config {config}"
     )
     print(slope.sweep_table(sweep))
+    print(
+        "c_N k is the estimate's own bound; the fixed-point units add U_N / (|I_d| 2^F) to it "
+        "(docs/algorithm.md 9.1), so at small k the ratio can pass 1 by those units."
+    )
     with atomic_output(SLOPE_PROG, args.output) as temporary:
         slope.plot_sweep(sweep, temporary)
     print(f"wrote {args.output}")

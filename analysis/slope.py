@@ -134,7 +134,7 @@ def sweep_table(sweep: SlopeSweep) -> str:
                 fmt_float(sweep.worst_over_k[name] / bound, 6) if bound else "-",
             ]
         )
-    headers = ["method", "max abs err", "RMS err", "max err/k", "bound/k", "(max err/k)/bound"]
+    headers = ["method", "max abs err", "RMS err", "max err/k", "c_N", "(max err/k)/c_N"]
     return table(headers, rows)
 
 
