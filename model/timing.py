@@ -124,10 +124,10 @@ BAD_COMMAND_CYCLES = 2  # accept + FOLD: a dropped command occupies the setup tw
 EMPTY_EDGE_CYCLES = 5  # accept, FOLD, WINDOW, two RUN clocks: an edge with no visible column
 DELTAS_PIPELINE_DEPTH = 3  # the deltas stepper: p1 (depth), p2 (estimate), output register
 # Setup units of the core by default (`edgeaa.hdl.dispatch.SetupArray`). One: the smallest
-# core (the polygon pipeline must fit an iCE40 HX8K). With R = 30 RUN clocks (the default
-# configuration) nine units accept an edge every ceil(35 / 9) = 4 clocks, at about six times
-# the line core's area (docs/hardware.md, "Setup throughput"); ceil(40 / 9) = 5 for the
-# deltas core, whose FINAL takes s + 2 = 6 clocks.
+# core (the polygon pipeline must fit an iCE40 HX8K). With R = 20 RUN clocks (the default
+# configuration, F = 11) nine units accept an edge every ceil(25 / 9) = 3 clocks, at about
+# six times the line core's area (docs/hardware.md, "Setup throughput"); ceil(30 / 9) = 4
+# for the deltas core, whose FINAL takes s + 2 = 6 clocks.
 DEFAULT_SETUP_UNITS = 1
 MAX_SETUP_UNITS = 16
 

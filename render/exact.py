@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.accumulate import Window, resolve_rows
 from .geometry import fills
 from .render import Plan, Render
 
@@ -173,6 +174,24 @@ def edges_per_pixel(result: Render) -> np.ndarray:
     count = np.zeros((scene.height, scene.width), dtype=np.int64)
     np.add.at(count, (y[crossed], x[crossed]), 1)
     return count
+
+
+def sum_errors(result: Render) -> np.ndarray:
+    """|resolved sum - exact coverage| of each pixel, in fixed-point units (``ifix`` a whole
+    pixel), for a scene of one polygon rendered with ``skip=False``: the accumulation's own
+    error before the fill's clamp is rounded to intensities (docs/algorithm.md 13.6)."""
+    plan, deltas = result.plan, result.deltas
+    scene, poly = plan.scene, plan.polygons[0]
+    assert len(plan.polygons) == 1 and not result.skip, "one polygon, rendered whole"
+    ifix = abs(poly.intensity - poly.i_out) << plan.config.F
+    sums = np.zeros((scene.height, scene.width))
+    window = Window(0, 0, scene.width, scene.height)
+    for block in resolve_rows(window, deltas.x, deltas.y, deltas.delta, poly.rule, ifix):
+        sums[block.rows] = block.coverage
+    (x0, y0, x1, y1), area = exact_coverage(plan, 0)
+    exact = np.zeros_like(sums)
+    exact[y0:y1, x0:x1] = area * ifix
+    return np.abs(sums - exact)
 
 
 def error_rows(result: Render, exact: np.ndarray) -> list[ErrorRow]:

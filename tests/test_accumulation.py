@@ -29,7 +29,7 @@ from edgeaa.model.reference import FIXED_POINT_UNITS, error_bound
 from edgeaa.model.step import run_edge_deltas
 from edgeaa.model.vector import run_edges_deltas
 from edgeaa.render import Polygon, Scene, plan_scene, render_scene
-from edgeaa.render.exact import crossed_cells, edges_per_pixel, exact_coverage, exact_image
+from edgeaa.render.exact import crossed_cells, edges_per_pixel, exact_image, sum_errors
 
 
 def examples(n: int):
@@ -779,14 +779,5 @@ def test_an_edge_adds_fewer_than_units_per_edge_to_a_pixel(case):
     a pixel no edge passes through is exact."""
     config, scene = case
     result = render_scene(scene, config, skip=False)
-    deltas, unit = result.deltas, 1 << config.F
-    sums = np.zeros((16, 16))
-    for block in resolve_rows(
-        Window(0, 0, 16, 16), deltas.x, deltas.y, deltas.delta, scene.polygons[0].fill_rule, unit
-    ):
-        sums[block.rows] = block.coverage
-    (x0, y0, x1, y1), area = exact_coverage(result.plan, 0)
-    exact = np.zeros((16, 16))
-    exact[y0:y1, x0:x1] = area * unit
-    err, crossers = np.abs(sums - exact), edges_per_pixel(result)
+    err, crossers = sum_errors(result), edges_per_pixel(result)
     assert np.all(err < UNITS_PER_EDGE * crossers + 1e-9), (err.max(), crossers[err.argmax()])

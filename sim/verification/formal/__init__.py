@@ -102,7 +102,7 @@ pipe        prove    1                       9 to 10 min
 beat        prove    1                       2.5 to 3.5 min
 cover_drop  cover    4                       a few s
 cover       cover    latency+2   latency-1   1 min: every cover reached
-minor       bmc      37          34          16 min (10 min without the clip window, depth 36)
+minor       bmc      latency+0   latency-3   16 min at F = 21 (depth 37)
 ==========  =======  ==========  ==========  ==========================================
 
 White-box helpers. k-induction needs invariants of every register, so the harness states
