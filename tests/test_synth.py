@@ -359,3 +359,15 @@ def test_synth_top_pipeline_places_a_small_pipeline(capsys):
     rows = _synth_rows(captured.out)
     luts, ffs, fmax, rams = rows["ice40", "pipeline"]
     assert int(luts) > 0 and int(ffs) > 0 and float(fmax) > 10 and int(rams) > 0
+
+
+@pytest.mark.slow
+def test_default_pipeline_fits_the_hx8k():
+    """The default pipeline, in the I/O harness, places and routes on the iCE40 HX8K within
+    95 % of its logic cells, the slack placement needs (issue 11; about 4 minutes)."""
+    from edgeaa.hdl.pipeline import EdgePipeline
+    from edgeaa.model.tile import TileConfig
+
+    result = synthesize(EdgePipeline(TileConfig()), "ice40", wrap=True)
+    assert result.fmax_mhz is not None and result.fmax_mhz > 0
+    assert result.logic_cells <= 0.95 * result.logic_cells_available, str(result)
