@@ -204,17 +204,17 @@ class TileResolve(wiring.Component):
     def _fill(self, s, ifix, evenodd):
         """`fill` on a prefix sum within the cells' range: non-zero min(|s|, ifix); even-odd
         s folded with period 2 ifix (a multiple of it added when negative, then h
-        compare-subtract steps)."""
+        compare-subtract steps, then 2 ifix - r above ifix). The two rules share the last
+        compare with ifix."""
         h = self._tile.headroom_bits
         width = self._tile.cell_bits + 1
         mag = Mux(s < 0, -s, s)
-        nonzero = Mux(mag > ifix, ifix, mag)
         r = Mux(s < 0, s + ((ifix << 1) << h), s)[:width]
         for j in reversed(range(h)):
             step = (ifix << 1) << j
             r = Mux(r >= step, r - step, r)[:width]
-        odd = Mux(r > ifix, (ifix << 1) - r, r)
-        return Mux(evenodd, odd, nonzero)[:width]
+        x = Mux(evenodd, r, mag)
+        return Mux(x > ifix, Mux(evenodd, (ifix << 1) - r, ifix), x)[:width]
 
     def _control(self, m, rd, written, background, p_valid, advance, busy):
         """Taking cells and ops, and the flush."""
