@@ -155,7 +155,7 @@ class TileResolve(wiring.Component):
         q = Mux(s2.d == 0, 0, (s2.cov + (1 << (F - 1))) >> F)[: bits + 1]
         neg = s2.intensity < s2.below
         diff = Mux(neg, s2.below - s2.intensity, s2.intensity - s2.below)[:bits]
-        num = (((q * diff) << 1) + s2.d - neg)[: 2 * bits + 2]  # >= 0 unless q = 0
+        num = ((_product(m, q, diff) << 1) + s2.d - neg)[: 2 * bits + 2]  # >= 0 unless q = 0
         # 2 D: one register, as every cell in flight is one polygon's (its first cell waits
         # for the pipeline to empty)
         d2 = Signal(bits + 1, name="d2")
@@ -188,7 +188,9 @@ class TileResolve(wiring.Component):
         last = stages[-1]
         last.__dict__.update(x=xy.x, y=xy.y, below=carry.below, zero=carry.zero, neg=carry.neg)
         quot = last.low
-        new = Mux(last.zero, last.below, Mux(last.neg, last.below - quot, last.below + quot))
+        # below - quot as below + ~quot + 1: one adder
+        signed_quot = quot ^ last.neg.replicate(bits)
+        new = Mux(last.zero, last.below, last.below + signed_quot + last.neg)
         m.d.comb += [
             wr.addr.eq(Cat(last.x, last.y)),
             wr.data.eq(new[:bits]),
@@ -202,17 +204,17 @@ class TileResolve(wiring.Component):
     def _fill(self, s, ifix, evenodd):
         """`fill` on a prefix sum within the cells' range: non-zero min(|s|, ifix); even-odd
         s folded with period 2 ifix (a multiple of it added when negative, then h
-        compare-subtract steps)."""
+        compare-subtract steps, then 2 ifix - r above ifix). The two rules share the last
+        compare with ifix."""
         h = self._tile.headroom_bits
         width = self._tile.cell_bits + 1
         mag = Mux(s < 0, -s, s)
-        nonzero = Mux(mag > ifix, ifix, mag)
         r = Mux(s < 0, s + ((ifix << 1) << h), s)[:width]
         for j in reversed(range(h)):
             step = (ifix << 1) << j
             r = Mux(r >= step, r - step, r)[:width]
-        odd = Mux(r > ifix, (ifix << 1) - r, r)
-        return Mux(evenodd, odd, nonzero)[:width]
+        x = Mux(evenodd, r, mag)
+        return Mux(x > ifix, Mux(evenodd, (ifix << 1) - r, ifix), x)[:width]
 
     def _control(self, m, rd, written, background, p_valid, advance, busy):
         """Taking cells and ops, and the flush."""
@@ -263,6 +265,18 @@ class TileResolve(wiring.Component):
             out.last.eq(plast),
             out.value.eq(Mux(pwritten, rd.data, background)),
         ]
+
+
+def _product(m, a, b):
+    """``a * b`` (unsigned) as shift-and-add rows, each row's sum a kept signal: so Yosys maps
+    each row to a carry chain rather than the whole product to a full-adder tree in LUT4s
+    (for the resolve's I x I product: 41 LUT4 fewer, 51 carries more)."""
+    total = Mux(b[0], a, 0)
+    for j in range(1, len(b)):
+        row = Signal(len(a) + j + 1, name=f"product_row{j}", attrs={"keep": 1})
+        m.d.comb += row.eq(total + (Mux(b[j], a, 0) << j))
+        total = row
+    return total
 
 
 def _stage(m, prefix: str, **values) -> types.SimpleNamespace:
