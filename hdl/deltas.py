@@ -257,7 +257,8 @@ def _cells_y_major(p2):
     """`_deltas_y_major`: areas on the smaller-v side, differenced along +v."""
     total, band, t = p2.total, p2.band_rect, p2.t
     a_low = _clamp(Mux(p2.hs_ge, total - band, Mux(p2.low, t, 0)), band)
-    # clamped to the band from above only if total > 0 (he <= 0): t >= 0 (exact)
+    # up_value > band only when he <= 0 and total > 0 (band - t > band never: t >= 0): the
+    # clamp's compare without a carry chain (exact)
     up_value = Mux(p2.he_le0, total + band, Mux(p2.up, band - t, band))
     over = p2.he_le0 & (total > 0)
     a_up = Mux(up_value < 0, 0, Mux(over, band, up_value))[: len(band)].as_signed()
