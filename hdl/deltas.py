@@ -241,7 +241,12 @@ def _cells_x_major(p2):
     """`_deltas_x_major`: areas on the +u side, row by row."""
     total, t = p2.total, p2.t
     r_low = Mux(p2.hs_ge, total, Mux(p2.low, _clamp(t + p2.rect_low, p2.cov_low), 0))
-    r_up = Mux(p2.he_le0, total, Mux(p2.up, _clamp(p2.cov_up - t - p2.band_rect, p2.cov_up), 0))
+    # cov_up - t - rect > cov_up iff t + rect < 0: the clamp's compare is the sign of t + rect,
+    # whose complement the subtraction takes (exact: full-width values)
+    t_rect = t + p2.band_rect
+    over = p2.cov_up - t_rect
+    clamped_up = Mux(over < 0, 0, Mux(t_rect < 0, p2.cov_up, over))[: len(p2.cov_up)].as_signed()
+    r_up = Mux(p2.he_le0, total, Mux(p2.up, clamped_up, 0))
     r_mid = _clamp(total - r_low - r_up, p2.cov_mid)
     r_a, cov_a = Mux(p2.up, r_up, r_mid), Mux(p2.up, p2.cov_up, p2.cov_mid)
     r_b, cov_b = Mux(p2.up, r_mid, r_low), Mux(p2.up, p2.cov_mid, p2.cov_low)
@@ -252,19 +257,21 @@ def _cells_y_major(p2):
     """`_deltas_y_major`: areas on the smaller-v side, differenced along +v."""
     total, band, t = p2.total, p2.band_rect, p2.t
     a_low = _clamp(Mux(p2.hs_ge, total - band, Mux(p2.low, t, 0)), band)
-    a_up = _clamp(Mux(p2.he_le0, total + band, Mux(p2.up, band - t, band)), band)
+    # up_value > band only when he <= 0 and total > 0 (band - t > band never: t >= 0): the
+    # clamp's compare without a carry chain (exact)
+    up_value = Mux(p2.he_le0, total + band, Mux(p2.up, band - t, band))
+    over = p2.he_le0 & (total > 0)
+    a_up = Mux(up_value < 0, 0, Mux(over, band, up_value))[: len(band)].as_signed()
     a_mid = _clamp(total + band - a_up - a_low, band)
     q0, q1 = Mux(p2.up, a_up, a_mid), Mux(p2.up, a_mid, a_low)
     return band - q0, q0 - q1, q1, 0
 
 
-def _output(m, st, en, p2) -> list:
-    """`delta_cells`: the four cells on screen, signed by the winding, into the payload;
-    returns them (the values the payload loads)."""
-    widths = st.config.register_widths()
+def _screen_cells(p2) -> list:
+    """The four cells on screen, signed by the winding: ``(x, y, delta)`` expressions of
+    p2's registers."""
     cx, cy = _cells_x_major(p2), _cells_y_major(p2)
     up = p2.up
-    beat = st.out.payload
     cells = []
     for k in range(4):
         pair, right = divmod(k, 2)  # x-major: row a or b, column x or x + 1
@@ -276,6 +283,15 @@ def _output(m, st, en, p2) -> list:
         dy = Mux(p2.x_major, Mux(p2.minor_neg, -row, row), 0)
         value = Mux(p2.x_major, value_x, cy[k])
         cells.append((p2.x + dx, p2.y + dy, Mux(p2.sigma_neg, -value, value)))
+    return cells
+
+
+def _output(m, st, en, p2) -> list:
+    """`delta_cells`: the four cells on screen, signed by the winding, into the payload;
+    returns them (the values the payload loads)."""
+    widths = st.config.register_widths()
+    cells = _screen_cells(p2)
+    beat = st.out.payload
     with m.If(en):
         m.d.sync += [st.out.valid.eq(p2.valid), beat.last.eq(p2.last)]
         for k, (x, y, delta) in enumerate(cells):
