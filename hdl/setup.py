@@ -409,12 +409,16 @@ class EdgeSetupUnit(wiring.Component):
         # row's offset when the window moved the first column (then in (S/2, du + S/2)).
         w_p0 = Mux(r.x_major, cmd.x0, cmd.y0)
         offset = Signal(unsigned(W + s + 1), name="clip_offset")
+        # One carry chain: lo S + p0, or lo S + ~p0 + 1 (~p0 = -p0 - 1 modulo the offset's
+        # bits), the + 1 in lo S's low bit, which is zero.
+        step_up = ~r.major_neg
+        lo_s = Cat(step_up, Const(0, s - 1), r.lo) if s else r.lo + step_up
         r_q0 = Mux(r.x_major, cmd.y0, cmd.x0)
         r_v0 = Signal(signed(W + s + 1), name="v0")
         m.d.comb += [
             w_start_clip.eq(r.first < r.lo),
             w_cut_end.eq(r_cut_end(r)),
-            offset.eq(Mux(r.major_neg, (r.lo << s) + w_p0, (r.lo << s) - w_p0)),
+            offset.eq(lo_s + Mux(r.major_neg, w_p0, ~Cat(w_p0, 0))),
             r_v0.eq(Mux(r.minor_neg, -r_q0, r_q0)),
         ]
         # Lane A's pass-1 multiplier, W + s + 2 bits: 2 (lo S - u0), or 2 |e| followed by
@@ -610,12 +614,15 @@ class EdgeSetupUnit(wiring.Component):
                 m.d.sync += id_product_steps(self, self.lane_a.a[-1])
         with m.If(counter < lanes.b_bits):
             m.d.sync += lanes.b_step
-            if self.pieces is not None:  # the products by kq, one quotient digit a clock
-                m.d.sync += kq_product_steps(self, self.lane_b.twice, self.lane_b.once)
-        with m.If(counter == lanes.b_bits):  # lane B is done
+        b_done = counter == lanes.b_bits
+        with m.If(b_done):  # lane B is done
             m.d.sync += lanes.k_loads
-            if self.pieces is not None:
-                m.d.sync += kq_product_steps(self, 0, lanes.k_bit)
+        if self.pieces is not None:  # the products by kq, one quotient digit a clock, then
+            # k_bit (one adder each: the digit is picked before it)
+            with m.If(counter <= lanes.b_bits):
+                twice = Mux(b_done, 0, self.lane_b.twice)
+                once = Mux(b_done, lanes.k_bit, self.lane_b.once)
+                m.d.sync += kq_product_steps(self, twice, once)
         with m.If(lanes.done):
             m.next = "FINAL"
             if self.pieces is not None:  # kq, row0 and the column count are known
