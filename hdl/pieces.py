@@ -20,22 +20,22 @@ v1 + S) mod 2 S`` gives P1's height in its row. The products of ``kq`` by a squa
 are formed one quotient digit per clock beside lane B (`kq_product_steps`, Horner: ``P = 2 P
 + d M`` for lane B's digit ``d`` of ``khq``, then ``P = 2 P + k_bit M`` when ``kq = 2 khq +
 k_bit`` is registered), so no wide multiplier is needed: ``k_me = kq me^2`` (x-major; ``kq
-w1^2`` y-major) and ``k_mg = kq (2 S - mg)^2``, the squares looked up in tables of constants
-(no adders). Their multiplicands depend only on registers loaded by WINDOW (the fold,
-``cut_end``, ``start_clip``), constant through RUN. The products by ``|I_d|`` (times ``h0``,
-``e1``, ``w1`` and two products of them) are formed one bit a clock (`id_product_steps`) over
-the first ``I`` clocks of lane A's second pass, whose multiplier bits are ``|I_d|``'s, MSB
-first; their multiplicands are constant from the clock after the fix-up (``h0`` reads
-``row0``). For ``s > 0`` ``mg``, ``me``, ``w1`` and ``e1`` are even, and the two products
-among them multiply their halves. The proofs' invariants of the half-formed products
-are `edgeaa.sim.verification.formal.bounds`' ``_products`` (FINAL's product needs none: see there).
+w1^2`` y-major) and ``k_mg = kq (2 S - mg)^2``. Their multiplicands depend only on registers
+loaded by WINDOW (the fold, ``cut_end``, ``start_clip``), constant through RUN. The products
+by ``|I_d|`` (times ``h0``, ``e1``, ``w1`` and two products of them) are formed one bit a
+clock (`id_product_steps`) over the first ``I`` clocks of lane A's second pass, whose
+multiplier bits are ``|I_d|``'s, MSB first; their multiplicands are constant from the clock
+after the fix-up (``h0`` reads ``row0``). For ``s > 0`` ``mg``, ``me``, ``w1`` and ``e1``
+are even, and the two products among them multiply their halves. The proofs' invariants of
+the half-formed products are `edgeaa.sim.verification.formal.bounds`' ``_products`` (FINAL's
+product needs none: see there).
 """
 
 from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Array, Cat, Const, Mux, Signal, signed, unsigned
+from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
 
 from ..model.config import EdgeConfig
 from .layouts import register_shape
@@ -219,13 +219,6 @@ def _not(value):
     return ~Cat(value, Const(0, 1)).as_signed() if not value.shape().signed else ~value
 
 
-def _table(index, function):
-    """``function(index)`` looked up in a table of constants (a function of the few index bits,
-    LUTs with no carry chain, where a multiplier of the index would be adders)."""
-    values = [function(i) for i in range(1 << len(index))]
-    return Array(Const(v, unsigned(max(values).bit_length())) for v in values)[index]
-
-
 def total0_steps(unit) -> list:
     """One clock of FINAL in the deltas setup: ``y_area0 = 2 y_area0 + bit (hs0 +
     he_first)``, `bit` the next bit of ``w0`` (MSB first, the counter's: cleared at the end
@@ -261,11 +254,6 @@ def final_pieces(m, unit) -> None:
     at_end = pc.end_height + Mux(adj > 0, nb.ifix, Mux(down, _not(nb.ifix), 0)) + down
     he_first = Mux(pc.single, at_end, nb.jq + nb.khq + carry)
     xm = r.x_major
-
-    def me_square(index):  # index = Cat(me, x_major)
-        me, x_major = index % (2 * S), index >> (s + 1)
-        return (me if x_major else 2 * S - me) ** 2
-
     k_area0 = pc.k_mg - Mux(pc.single, pc.k_me, 0)  # kq ((2 S - mg)^2 - single me^2)
     # Travelling down the screen with the inside on the left puts the inside on the +x side.
     dy_pos, inside_left = ~unit.accepted["dy_le0"], cmd.inside == 0
@@ -279,7 +267,7 @@ def final_pieces(m, unit) -> None:
         nb.total0.eq(Mux(xm, k_area0 >> (2 * s + 3), pc.y_area0 >> (s + 2))),
         pc.m_area0.eq(hs0 + he_first),  # `total0_steps`
         # `kq_product_steps`: me^2 (x-major) or w1^2 = (2 S - me)^2 (y-major); (2 S - mg)^2
-        pc.m_me.eq(_table(Cat(w.me, xm), me_square)),
-        pc.m_mg.eq(_table(w.mg, lambda mg: (2 * S - mg) ** 2)),
+        pc.m_me.eq(Mux(xm, w.me * w.me, w.w1 * w.w1)),
+        pc.m_mg.eq((2 * S - w.mg) * (2 * S - w.mg)),
         *(nb[name].eq(getattr(pc, name)) for name in _EARLY),
     ]
