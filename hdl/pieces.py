@@ -25,8 +25,10 @@ loaded by WINDOW (the fold, ``cut_end``, ``start_clip``), constant through RUN. 
 by ``|I_d|`` (times ``h0``, ``e1``, ``w1`` and two products of them) are formed one bit a
 clock (`id_product_steps`) over the first ``I`` clocks of lane A's second pass, whose
 multiplier bits are ``|I_d|``'s, MSB first; their multiplicands are constant from the clock
-after the fix-up (``h0`` reads ``row0``). The proofs' invariants of the half-formed products
-are `edgeaa.sim.verification.formal.bounds`' ``_products`` (FINAL's product needs none: see there).
+after the fix-up (``h0`` reads ``row0``). For ``s > 0`` ``mg``, ``me``, ``w1`` and ``e1``
+are even, and the two products among them multiply their halves. The proofs' invariants of
+the half-formed products are `edgeaa.sim.verification.formal.bounds`' ``_products`` (FINAL's
+product needs none: see there).
 """
 
 from __future__ import annotations
@@ -96,9 +98,14 @@ def _end_widths(unit) -> types.SimpleNamespace:
     r, cmd, pc = unit.regs, unit.cmd, unit.pieces
     fp, lp = ~r.start_clip, ~pc.cut_end  # the first and last columns hold the vertices
     p0, p1 = Mux(r.x_major, cmd.x0, cmd.y0), Mux(r.x_major, cmd.x1, cmd.y1)
-    mg = Mux(fp, Mux(r.major_neg, S - (p0 << 1), (p0 << 1) + S)[: s + 1], 0)
-    me = Mux(lp, Mux(r.major_neg, S + (p1 << 1), S - (p1 << 1))[: s + 1], 0)
-    return types.SimpleNamespace(fp=fp, lp=lp, mg=mg, me=me, w1=(2 * S - me)[: s + 2])
+    # 2 u + S = 2 (u + S // 2) + S % 2 (u = +-p): bit 0 is a constant (zero for s > 0),
+    # the rest s bits (mg_h, me_h: even widths are twice them, a multiplier can take those).
+    half = S // 2
+    mg_h = Mux(fp, Mux(r.major_neg, half - p0, p0 + half)[:s], 0)
+    me_h = Mux(lp, Mux(r.major_neg, half + p1, half - p1)[:s], 0)
+    mg, me = Cat(fp & (S % 2), mg_h)[: s + 1], Cat(lp & (S % 2), me_h)[: s + 1]
+    w1 = (2 * S - me)[: s + 2]
+    return types.SimpleNamespace(fp=fp, lp=lp, mg=mg, me=me, w1=w1, mg_h=mg_h, me_h=me_h)
 
 
 def kq_product_steps(unit, twice, once) -> list:
@@ -133,6 +140,12 @@ def _end_factors(unit) -> types.SimpleNamespace:
     h0 = ((r.v0_r << 1) + S - (r.row0 << (s + 1)))[: s + 3].as_signed()
     w0 = 2 * S - w.mg - Mux(single, w.me, 0)
     xm = r.x_major
+    neg_h0 = Mux(h0 < 0, -h0, 0)[: s + 1]  # max(-h0, 0) <= S
+    if s:  # mg, e1, me and w1 are even: products of their halves (narrower multipliers)
+        first_x = (neg_h0 * w.mg_h) << 1
+        end = (e1[1:] * Mux(xm, w.me_h, S - w.me_h)[: s + 1]) << 2
+    else:
+        first_x, end = neg_h0 * w.mg, e1 * Mux(xm, w.me, w.w1)
     return types.SimpleNamespace(
         single=single,
         v1_2=v1_2,
@@ -142,9 +155,9 @@ def _end_factors(unit) -> types.SimpleNamespace:
         e1=e1,
         w1=w.w1,
         # x: max(-h0, 0) mg (rect0); y: w0 (band0)
-        first=Mux(xm, Mux(h0 < 0, -h0, 0)[: s + 2] * w.mg, w0),
+        first=Mux(xm, first_x, w0),
         # x: e1 me (rect1); y: e1 w1 (the first term of total1)
-        end=e1 * Mux(xm, w.me, w.w1),
+        end=end,
     )
 
 
@@ -201,6 +214,11 @@ def run_end_loads(unit) -> list:
     ]
 
 
+def _not(value):
+    """``-value - 1`` (exact: `value` sign-extended by one bit first when unsigned)."""
+    return ~Cat(value, Const(0, 1)).as_signed() if not value.shape().signed else ~value
+
+
 def total0_steps(unit) -> list:
     """One clock of FINAL in the deltas setup: ``y_area0 = 2 y_area0 + bit (hs0 +
     he_first)``, `bit` the next bit of ``w0`` (MSB first, the counter's: cleared at the end
@@ -228,9 +246,12 @@ def final_pieces(m, unit) -> None:
     fp = ~r.start_clip
     borrow = nb.jr < nb.khr
     carry = (nb.jr + nb.khr) >= nb.du
-    hs0 = Mux(fp, pc.hs0_fp, nb.jq - nb.khq - borrow)
+    # a - b = a + ~b + 1 (~b = -b - 1, b sign-extended first): the 1 - borrow and the
+    # negation's + 1 ride as one-bit operands (a carry in), one carry chain each.
+    hs0 = Mux(fp, pc.hs0_fp, nb.jq + _not(nb.khq) + ~borrow)
     adj = pc.end_row - r.row0  # P1's row from the first column's: -1, 0 or +1 when single
-    at_end = pc.end_height + Mux(adj > 0, nb.ifix, Mux(adj < 0, -nb.ifix, 0))
+    down = adj < 0
+    at_end = pc.end_height + Mux(adj > 0, nb.ifix, Mux(down, _not(nb.ifix), 0)) + down
     he_first = Mux(pc.single, at_end, nb.jq + nb.khq + carry)
     xm = r.x_major
     k_area0 = pc.k_mg - Mux(pc.single, pc.k_me, 0)  # kq ((2 S - mg)^2 - single me^2)
@@ -245,7 +266,8 @@ def final_pieces(m, unit) -> None:
         nb.hs0.eq(hs0),
         nb.total0.eq(Mux(xm, k_area0 >> (2 * s + 3), pc.y_area0 >> (s + 2))),
         pc.m_area0.eq(hs0 + he_first),  # `total0_steps`
-        pc.m_me.eq(Mux(xm, w.me * w.me, w.w1 * w.w1)),  # `kq_product_steps`
+        # `kq_product_steps`: me^2 (x-major) or w1^2 = (2 S - me)^2 (y-major); (2 S - mg)^2
+        pc.m_me.eq(Mux(xm, w.me * w.me, w.w1 * w.w1)),
         pc.m_mg.eq((2 * S - w.mg) * (2 * S - w.mg)),
         *(nb[name].eq(getattr(pc, name)) for name in _EARLY),
     ]

@@ -21,9 +21,10 @@ and the setup accepts the next command in that clock).
 Timing structure (for the clock rate; no path carries more than about one wide carry chain):
 the accept clock registers the command with its deltas ``x1 - x0``, ``x0 - x1`` (and for y),
 the "delta not positive" flags, the bad-command flag and the clip window; FOLD picks the major
-axis with one compare of the magnitudes (every choice that depends on it is formed for both
-axes and selected after it: the folded flags, ``du``, ``dv``, ``c0``, ``c1`` and the folded
-window bounds ``lo``, ``hi``); WINDOW cuts ``[c0, c1]`` to ``[lo, hi]`` with one compare each
+axis with one compare of the magnitudes, then that axis's operands (coordinates, sign, window
+bounds), and forms ``c0``, ``c1``, ``e`` and the folded window bounds ``lo``, ``hi`` once
+from them, each with one carry chain after the compare (a negation rides in its add as
+``(p ^ neg) + neg``); WINDOW cuts ``[c0, c1]`` to ``[lo, hi]`` with one compare each
 and forms the clipped start offset ``lo S - u0`` (one add) and ``v0`` in parallel; the column
 count is formed in the first RUN clock and tested in the second; the lanes form their three
 candidate remainders and quotients in parallel; ``kq, kr`` are registered when lane B is done,
@@ -282,12 +283,10 @@ class EdgeSetupUnit(wiring.Component):
         I = config.intensity_bits  # noqa: E741
         coord = W + s
         cmd, acc, r = self.cmd, self.accepted, self.regs
-        dx_le0, dy_le0 = acc["dx_le0"], acc["dy_le0"]
         dx, dy = Signal(signed(coord + 1)), Signal(signed(coord + 1))
         adx, ady = Signal(unsigned(coord)), Signal(unsigned(coord))
         nadx, nady = Signal(signed(coord + 1)), Signal(signed(coord + 1))  # -|dx|, -|dy|
         f_x_major = Signal()
-        dq = Signal(signed(coord + 1))
         f_diff = Signal(signed(I + 1))
         f_id = Signal(unsigned(I))
         m.d.comb += [
@@ -298,26 +297,37 @@ class EdgeSetupUnit(wiring.Component):
             nadx.eq(Mux(dx < 0, dx, acc["ndx_r"])),
             nady.eq(Mux(dy < 0, dy, acc["ndy_r"])),
             f_x_major.eq((adx + nady) >= 0),  # |dx| >= |dy|
-            dq.eq(Mux(f_x_major, dy, dx)),
             f_diff.eq(cmd.i_in - cmd.i_out),
             f_id.eq(Mux(f_diff < 0, -f_diff, f_diff)),
         ]
-
-        f_c0, f_c1, f_lo, f_hi = self._fold_columns(m, f_x_major)
-        value_base, value_neg = self._orientation(m, f_x_major, f_diff, dx, dy)
-        e, e_mag = self._start_offset(m, f_x_major)
-        # Lane B starts with X = dv: dv - du and dv - 2 du from |dx| and |dy| directly (lane A
-        # copies them from lane B in WINDOW).
-        f_dv = Mux(f_x_major, ady, adx)
-        f_dv_du = Mux(f_x_major, ady + nadx, adx + nady)
-        f_dv_2du = Mux(f_x_major, ady + (nadx << 1), adx + (nady << 1))
+        # The major axis's operands are picked first (after the compare); everything that
+        # depends on the axis is then formed once from them.
+        f = types.SimpleNamespace(
+            x_major=f_x_major,
+            le0=Mux(f_x_major, acc["dx_le0"], acc["dy_le0"]),
+            minor_neg=Mux(f_x_major, dy < 0, dx < 0),
+            p0=Mux(f_x_major, cmd.x0, cmd.y0),
+            p1=Mux(f_x_major, cmd.x1, cmd.y1),
+            low=Mux(f_x_major, self.clip_r.x_min, self.clip_r.y_min),
+            high=Mux(f_x_major, self.clip_r.x_max, self.clip_r.y_max),
+            du=Signal(unsigned(coord), name="f_du"),
+            dv=Signal(unsigned(coord), name="f_dv"),
+            neg_du=Signal(signed(coord + 1), name="f_neg_du"),
+        )
+        m.d.comb += [
+            f.du.eq(Mux(f_x_major, adx, ady)),
+            f.dv.eq(Mux(f_x_major, ady, adx)),
+            f.neg_du.eq(Mux(f_x_major, nadx, nady)),
+        ]
+        f_c0, f_c1, f_lo, f_hi, e_neg, e_mag = self._fold_columns(m, f)
+        value_base, value_neg = self._orientation(f, f_diff)
         return [
             r.x_major.eq(f_x_major),
-            r.major_neg.eq(Mux(f_x_major, dx_le0, dy_le0)),  # the model: dp > 0 steps up
-            r.minor_neg.eq(dq < 0),
-            r.du.eq(Mux(f_x_major, adx, ady)),
-            r.dv.eq(f_dv),
-            r.neg_du.eq(Mux(f_x_major, nadx, nady)),
+            r.major_neg.eq(f.le0),  # the model: dp > 0 steps up
+            r.minor_neg.eq(f.minor_neg),
+            r.du.eq(f.du),
+            r.dv.eq(f.dv),
+            r.neg_du.eq(f.neg_du),
             r.first.eq(f_c0),
             r.last.eq(f_c1),
             r.lo.eq(f_lo),
@@ -325,112 +335,65 @@ class EdgeSetupUnit(wiring.Component):
             r.i_d.eq(f_id),
             r.value_base.eq(value_base),
             r.value_neg.eq(value_neg),
-            r.e_neg.eq(e < 0),
+            r.e_neg.eq(e_neg),
             r.e_mag_r.eq(e_mag),
             r.counter.eq(0),
-            *self.lane_b.load(f_id << (F - 1), I + F - 1, f_dv, f_dv_du, f_dv_2du),
+            # Lane B starts with X = dv (lane A copies X and its differences in WINDOW).
+            *self.lane_b.load(
+                f_id << (F - 1), I + F - 1, f.dv, f.dv + f.neg_du, f.dv + (f.neg_du << 1)
+            ),
         ]
 
-    def _fold_columns(self, m, f_x_major):
-        """c0, c1 and the folded window bounds lo, hi."""
+    def _fold_columns(self, m, f):
+        """c0, c1, the folded window bounds lo, hi, and the sign and magnitude of e."""
         config = self._config
         W, s = config.coord_bits, config.subpixel_bits
         S = 1 << s
-        cmd, clip, acc = self.cmd, self.clip_r, self.accepted
-        dx_le0, dy_le0 = acc["dx_le0"], acc["dy_le0"]
+        coord = W + s
+        neg = f.le0
 
-        # The columns and the window along the major axis: every candidate (x or y major, each
-        # with its own sign) is formed in parallel with the major-axis test, which picks one.
-        # c0 = floor(u0 / S + 1/2) and c1 = ceil(u1 / S - 1/2) = floor((2 u1 + S - 1) / 2S)
-        # (arithmetic shifts floor); the window's bounds fold like u: (lo, hi) = (min, max),
-        # or (-max, -min) when the major axis steps down.
-        def first_column(p0, le0):
-            return Mux(le0, (S - (p0 << 1)) >> (s + 1), ((p0 << 1) + S) >> (s + 1))
+        # u = +-p is (p ^ neg) + neg on coord + 1 bits (~p = -p - 1); each sum below takes the
+        # "+ neg" with its constant, so it is one carry chain after the axis's operands.
+        # c0 = floor(u0 / S + 1/2) = (u0 + S/2) >> s; c1 = ceil(u1 / S - 1/2)
+        # = floor((2 u1 + S - 1) / 2S) = (u1 + S/2 - 1) >> s (2 u1 + S - 1 is odd for s > 0). The
+        # window's bounds fold like u: (lo, hi) = (min, max), or (-max, -min) when the major
+        # axis steps down.
+        def folded(p, width):
+            p = Cat(p, Const(0, width + 1 - len(p))).as_signed()
+            return Mux(neg, ~p, p)
 
-        def last_column(p1, le0):
-            return Mux(le0, ((S - 1) - (p1 << 1)) >> (s + 1), ((p1 << 1) + (S - 1)) >> (s + 1))
-
-        def bound(le0, low, high):
-            return Mux(le0, -high, low)
-
+        k1 = S // 2 - 1 if s else 0  # c1 = u1 when s = 0
+        c0_sum = Signal(signed(coord + 2), name="f_c0_sum")  # u0 + S/2
         f_c0, f_c1 = Signal(signed(W + 2)), Signal(signed(W + 2))
         f_lo, f_hi = Signal(signed(W + 2)), Signal(signed(W + 2))
         m.d.comb += [
-            f_c0.eq(Mux(f_x_major, first_column(cmd.x0, dx_le0), first_column(cmd.y0, dy_le0))),
-            f_c1.eq(Mux(f_x_major, last_column(cmd.x1, dx_le0), last_column(cmd.y1, dy_le0))),
-            f_lo.eq(
-                Mux(
-                    f_x_major,
-                    bound(dx_le0, clip.x_min, clip.x_max),
-                    bound(dy_le0, clip.y_min, clip.y_max),
-                )
-            ),
-            f_hi.eq(
-                Mux(
-                    f_x_major,
-                    bound(dx_le0, clip.x_max, clip.x_min),
-                    bound(dy_le0, clip.y_max, clip.y_min),
-                )
-            ),
+            c0_sum.eq(folded(f.p0, coord) + Mux(neg, S // 2 + 1, S // 2)),
+            f_c0.eq(c0_sum >> s),
+            f_c1.eq((folded(f.p1, coord) + Mux(neg, k1 + 1, k1)) >> s),
+            f_lo.eq(Mux(neg, ~Cat(f.high, 0).as_signed(), f.low) + neg),
+            f_hi.eq(Mux(neg, ~Cat(f.low, 0).as_signed(), f.high) + neg),
         ]
-        return f_c0, f_c1, f_lo, f_hi
-
-    def _orientation(self, m, f_x_major, f_diff, dx, dy):
-        """I_B and the sign of I_A - I_B: a swap or one mirror flips left and right (the
-        model's det). Both candidates (x or y major) are formed in parallel with the
-        major-axis test."""
-        I = self._config.intensity_bits  # noqa: E741
-        cmd, acc = self.cmd, self.accepted
-        f_value_base, f_value_neg = Signal(unsigned(I)), Signal()
-        candidates = []
-        for major_x, major_le0, minor_neg in (
-            (0, acc["dy_le0"], dx < 0),
-            (1, acc["dx_le0"], dy < 0),
-        ):
-            det_neg = (not major_x) ^ major_le0 ^ minor_neg
-            inside_is_a = (cmd.inside == 0) ^ det_neg
-            candidates.append(
-                (
-                    Mux(inside_is_a, cmd.i_out, cmd.i_in),
-                    # value_sign = +1 iff I_A >= I_B; I_A = I_in iff inside is A.
-                    Mux(inside_is_a, f_diff < 0, f_diff > 0),
-                )
-            )
-        m.d.comb += [
-            f_value_base.eq(Mux(f_x_major, candidates[1][0], candidates[0][0])),
-            f_value_neg.eq(Mux(f_x_major, candidates[1][1], candidates[0][1])),
-        ]
-        return f_value_base, f_value_neg
-
-    def _start_offset(self, m, f_x_major):
-        """e = c0 S - u0 (|e| <= S/2) and |e|: they depend on the low bits of u0 = +-p0 only,
-        so both candidates (x or y major, each with its own sign) are formed in parallel with
-        the major-axis test, which picks one."""
-        s = self._config.subpixel_bits
-        S = 1 << s
-        cmd, acc = self.cmd, self.accepted
-
-        def start_offset(u0):
-            """e = c0 S - u0 for c0 = floor(u0 / S + 1/2): in (-S/2, S/2]."""
-            return ((((u0 << 1) + S) >> (s + 1)) << s) - u0
-
-        e_cands, e_mag_cands = [], []
-        for p0, le0 in ((cmd.y0, acc["dy_le0"]), (cmd.x0, acc["dx_le0"])):
-            e_cand = Signal(signed(s + 2), name=f"e_cand{len(e_cands)}")
-            e_mag_cand = Signal(unsigned(max(s, 1)), name=f"e_mag_cand{len(e_cands)}")
-            m.d.comb += [
-                e_cand.eq(Mux(le0, start_offset(-p0), start_offset(p0))),
-                e_mag_cand.eq(Mux(e_cand < 0, -e_cand, e_cand)),
-            ]
-            e_cands.append(e_cand)
-            e_mag_cands.append(e_mag_cand)
-        e = Signal(signed(s + 2))
+        # e = c0 S - u0 = S/2 - t in (-S/2, S/2] for t = (u0 + S/2) mod S, the sum's low bits:
+        # negative when t > S/2, |e| = t - S/2 (t's low s - 1 bits) then, else S/2 - t.
+        t = c0_sum[:s]
+        e_neg = Signal()
         e_mag = Signal(unsigned(max(s, 1)))
-        m.d.comb += [
-            e.eq(Mux(f_x_major, e_cands[1], e_cands[0])),
-            e_mag.eq(Mux(f_x_major, e_mag_cands[1], e_mag_cands[0])),
-        ]
-        return e, e_mag
+        if s:
+            m.d.comb += [
+                e_neg.eq(t[-1] & (t[:-1] != 0)),
+                e_mag.eq(Mux(e_neg, t[:-1], S // 2 - t)),
+            ]
+        return f_c0, f_c1, f_lo, f_hi, e_neg, e_mag
+
+    def _orientation(self, f, f_diff):
+        """I_B and the sign of I_A - I_B: a swap or one mirror flips left and right (the
+        model's det)."""
+        cmd = self.cmd
+        det_neg = ~f.x_major ^ f.le0 ^ f.minor_neg
+        inside_is_a = (cmd.inside == 0) ^ det_neg
+        # value_sign = +1 iff I_A >= I_B; I_A = I_in iff inside is A. FOLD loads it only for a
+        # good command (I_in != I_out), so "I_A < I_B" is "I_in < I_out" or its negation.
+        return Mux(inside_is_a, cmd.i_out, cmd.i_in), ~(inside_is_a ^ (f_diff < 0))
 
     # -- WINDOW: from the registers of FOLD --------------------------------------------------
 
@@ -446,12 +409,16 @@ class EdgeSetupUnit(wiring.Component):
         # row's offset when the window moved the first column (then in (S/2, du + S/2)).
         w_p0 = Mux(r.x_major, cmd.x0, cmd.y0)
         offset = Signal(unsigned(W + s + 1), name="clip_offset")
+        # One carry chain: lo S + p0, or lo S + ~p0 + 1 (~p0 = -p0 - 1 modulo the offset's
+        # bits), the + 1 in lo S's low bit, which is zero.
+        step_up = ~r.major_neg
+        lo_s = Cat(step_up, Const(0, s - 1), r.lo) if s else r.lo + step_up
         r_q0 = Mux(r.x_major, cmd.y0, cmd.x0)
         r_v0 = Signal(signed(W + s + 1), name="v0")
         m.d.comb += [
             w_start_clip.eq(r.first < r.lo),
             w_cut_end.eq(r_cut_end(r)),
-            offset.eq(Mux(r.major_neg, (r.lo << s) + w_p0, (r.lo << s) - w_p0)),
+            offset.eq(lo_s + Mux(r.major_neg, w_p0, ~Cat(w_p0, 0))),
             r_v0.eq(Mux(r.minor_neg, -r_q0, r_q0)),
         ]
         # Lane A's pass-1 multiplier, W + s + 2 bits: 2 (lo S - u0), or 2 |e| followed by
@@ -647,12 +614,15 @@ class EdgeSetupUnit(wiring.Component):
                 m.d.sync += id_product_steps(self, self.lane_a.a[-1])
         with m.If(counter < lanes.b_bits):
             m.d.sync += lanes.b_step
-            if self.pieces is not None:  # the products by kq, one quotient digit a clock
-                m.d.sync += kq_product_steps(self, self.lane_b.twice, self.lane_b.once)
-        with m.If(counter == lanes.b_bits):  # lane B is done
+        b_done = counter == lanes.b_bits
+        with m.If(b_done):  # lane B is done
             m.d.sync += lanes.k_loads
-            if self.pieces is not None:
-                m.d.sync += kq_product_steps(self, 0, lanes.k_bit)
+        if self.pieces is not None:  # the products by kq, one quotient digit a clock, then
+            # k_bit (one adder each: the digit is picked before it)
+            with m.If(counter <= lanes.b_bits):
+                twice = Mux(b_done, 0, self.lane_b.twice)
+                once = Mux(b_done, lanes.k_bit, self.lane_b.once)
+                m.d.sync += kq_product_steps(self, twice, once)
         with m.If(lanes.done):
             m.next = "FINAL"
             if self.pieces is not None:  # kq, row0 and the column count are known
