@@ -80,8 +80,8 @@ def _select(sel, values):
 
 def lowest_set(bits: Signal, width: int):
     """Index of the lowest set bit of `bits` (0 when none) and that bit alone (one-hot, 0
-    when none): ``bits & ~(bits - 1)`` (``bits & -bits``, 30 LUT4 fewer for the rows) and an
-    OR per index bit."""
+    when none): ``bits & ~(bits - 1)`` (equal to ``bits & -bits``, and 30 LUT4 fewer for the
+    32 rows) and an OR per index bit."""
     one_hot = (bits & ~(bits - 1))[:width]
     index = Cat(
         *(Cat(*(one_hot[k] for k in range(width) if k >> j & 1)).any() for j in range(log2(width)))

@@ -36,10 +36,10 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Cat, Const, Mux, Signal, Value, signed
+from amaranth.hdl import Mux, Signal, Value, signed
 
 from ..model.config import EdgeConfig
-from .layouts import const_mul, log2, register_shape
+from .layouts import const_mul, log2, register_shape, signed_widened
 
 __all__ = ["delta_pipeline", "delta_registers"]
 
@@ -62,11 +62,6 @@ def _clamp(value, hi):
     hi = Value.cast(hi)
     clamped = Mux(value < 0, 0, Mux(value > hi, hi, value))[: len(hi)]
     return clamped.as_signed() if hi.shape().signed else clamped
-
-
-def _signed(value):
-    """A non-negative `value` made signed (a zero bit on top), so that ``~v + 1`` is -v."""
-    return Cat(value, Const(0, 1)).as_signed()
 
 
 def _stage(m, en, prefix: str, values: dict) -> types.SimpleNamespace:
@@ -102,7 +97,7 @@ def _piece_end(m, st, last):
     full = st.jq + st.khq + carry
     adj = regs["adj"]
     # end_height + sign(adj) ifix in one add (-ifix = ~ifix + 1 on ifix made signed)
-    ifix = _signed(st.ifix)
+    ifix = signed_widened(st.ifix)
     at_end = st.end_height + Mux(adj < 0, ~ifix, Mux(adj > 0, ifix, 0)) + (adj < 0)
     he = Signal(register_shape(st.config.register_widths()["height"]), name="he")
     m.d.comb += he.eq(Mux(last & st.last_partial, at_end, full))
@@ -182,7 +177,7 @@ def _depth(low, he, hs, ifix):
     """The depth of the piece's crossing part, he - ifix when it crosses into the row below,
     else -hs, in one add: he + ~ifix + 1 or ~hs + 0 + 1 (both made signed), in the width of
     the wider of the two (exact)."""
-    ifix = _signed(ifix)
+    ifix = signed_widened(ifix)
     depth = Mux(low, he, ~hs) + Mux(low, ~ifix, 0) + 1
     return depth[: _depth_width(he, hs, ifix)].as_signed()
 
@@ -209,7 +204,7 @@ def _estimate(config: EdgeConfig, p1):
         assert not any(getattr(p1, f"icpt{j}").shape().signed for j in range(n))
     # Clamped at 0 it is at most the largest line's slope term (the intercepts are unsigned):
     # no sign bit and only that term's width (exact).
-    depth_width = _depth_width(p1.he, p1.hs, _signed(p1.ifix))
+    depth_width = _depth_width(p1.he, p1.hs, signed_widened(p1.ifix))
     top = (1 << (depth_width - 1)) - 1
     width = max((top * (2 * j + 1)) >> shift for j in range(n)).bit_length()
     return Mux(t > 0, t, 0)[:width]

@@ -12,7 +12,7 @@
 
 from __future__ import annotations
 
-from amaranth.hdl import Const, signed, unsigned
+from amaranth.hdl import Cat, Const, signed, unsigned
 from amaranth.lib import data
 
 from ..model.bank import bank_fields, check_output
@@ -32,6 +32,7 @@ __all__ = [
     "pixel_layout",
     "register_shape",
     "setup_layout",
+    "signed_widened",
     "tile_cell_layout",
     "tile_op_layout",
     "tile_pixel_layout",
@@ -52,6 +53,12 @@ def register_shape(width: RegisterWidth):
 
 def log2(n: int) -> int:
     return n.bit_length() - 1
+
+
+def signed_widened(value):
+    """A non-negative `value` made signed (a zero bit on top), so that ``~v`` is ``-v - 1``
+    and ``~v + 1`` is ``-v`` (a negation or subtraction folded into an add's carry in)."""
+    return Cat(value, Const(0, 1)).as_signed()
 
 
 def const_mul(value, k: int):

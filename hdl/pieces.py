@@ -38,7 +38,7 @@ import types
 from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
 
 from ..model.config import EdgeConfig
-from .layouts import register_shape
+from .layouts import register_shape, signed_widened
 
 __all__ = [
     "final_pieces",
@@ -216,7 +216,7 @@ def run_end_loads(unit) -> list:
 
 def _not(value):
     """``-value - 1`` (exact: `value` sign-extended by one bit first when unsigned)."""
-    return ~Cat(value, Const(0, 1)).as_signed() if not value.shape().signed else ~value
+    return ~value if value.shape().signed else ~signed_widened(value)
 
 
 def total0_steps(unit) -> list:

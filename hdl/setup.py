@@ -88,6 +88,7 @@ from .layouts import (
     log2,
     register_shape,
     setup_layout,
+    signed_widened,
 )
 from .pieces import (
     final_pieces,
@@ -370,8 +371,8 @@ class EdgeSetupUnit(wiring.Component):
             c0_sum.eq(folded(f.p0, coord) + Mux(neg, S // 2 + 1, S // 2)),
             f_c0.eq(c0_sum >> s),
             f_c1.eq((folded(f.p1, coord) + Mux(neg, k1 + 1, k1)) >> s),
-            f_lo.eq(Mux(neg, ~Cat(f.high, 0).as_signed(), f.low) + neg),
-            f_hi.eq(Mux(neg, ~Cat(f.low, 0).as_signed(), f.high) + neg),
+            f_lo.eq(Mux(neg, ~signed_widened(f.high), f.low) + neg),
+            f_hi.eq(Mux(neg, ~signed_widened(f.low), f.high) + neg),
         ]
         # e = c0 S - u0 = S/2 - t in (-S/2, S/2] for t = (u0 + S/2) mod S, the sum's low bits:
         # negative when t > S/2, |e| = t - S/2 (t's low s - 1 bits) then, else S/2 - t.
