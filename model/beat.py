@@ -74,12 +74,6 @@ def beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> Beat:
     return Beat(pixel(LANES[0]), lane1, bool(get(("last",))))
 
 
-def payload_row(get: Callable[[tuple[str, ...]], int]) -> list[int]:
-    """The payload's leaves as one row of `BEAT_COLUMNS`, as sampled (lane 1 included when it
-    is not valid: its don't-care values are deterministic and the harnesses compare them)."""
-    return [int(get(path)) for path in PAYLOAD_PATHS]
-
-
 def beat_row(beat: Beat) -> list[int]:
     """A beat as one row of `BEAT_COLUMNS` (lane 1 zero when it is not valid)."""
     lane1 = (0, 0, 0) if beat.lane1 is None else beat.lane1
@@ -151,11 +145,6 @@ def delta_beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> DeltaBeat:
     """A delta beat from its payload leaves (`get(path)` of a `DELTA_PAYLOAD_PATHS` entry)."""
     cells = tuple(tuple(int(get((cell, name))) for name in CELL_FIELDS) for cell in CELLS)
     return DeltaBeat(cells, bool(get(("last",))))
-
-
-def delta_payload_row(get: Callable[[tuple[str, ...]], int]) -> list[int]:
-    """The delta payload's leaves as one row of `DELTA_BEAT_COLUMNS`."""
-    return [int(get(path)) for path in DELTA_PAYLOAD_PATHS]
 
 
 def delta_beat_row(beat: DeltaBeat) -> list[int]:
