@@ -222,7 +222,7 @@ def _check_options(args: argparse.Namespace, config) -> None:
 
 
 def _compare(args: argparse.Namespace, scene, config, crop) -> int:
-    from .compare import plot_compare
+    from ..analysis.compare import plot_compare
 
     with atomic_output(PROG, args.output) as temporary:
         rows = plot_compare(scene, config, temporary, crop)
