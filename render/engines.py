@@ -28,9 +28,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Edge, EdgeConfig
-from ..model.beat import CELLS, DELTA_RUN_COLUMNS, LANES, PIXEL_FIELDS, RUN_COLUMNS
+from ..model.beat import (
+    CELLS,
+    DELTA_RUN_COLUMNS,
+    LANES,
+    PIXEL_FIELDS,
+    RUN_COLUMNS,
+    edge_columns,
+)
 from ..model.timing import schedule, write_cycles
-from ..sim.verification.scoreboard import edge_columns
 
 ENGINES = ("model", "amaranth", "verilator")
 MODEL_CHUNK = 512  # edges per run_edges call
@@ -78,7 +84,7 @@ def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
     write order (edge index, x, y, value): lane 0 then lane 1 of each beat.
 
     `columns` holds each sent edge's visible columns
-    (`edgeaa.sim.verification.scoreboard.edge_columns`):
+    (`edgeaa.model.beat.edge_columns`):
     the core emits that many beats per edge, the last one with `last`, and none for an edge
     with 0 (no column in its clip window). Edge indices count every edge sent. Raises unless
     the beats and their `last` flags fit the counts exactly."""
