@@ -1,6 +1,6 @@
 # amaranth: UnusedElaboratable=no
 """`FormalHarness`: the core with free inputs and the check groups, covers and faults asked
-for (the package docstring describes them)."""
+for (docs/hardware.md, "The harness, its check groups and faults", describes them)."""
 
 from __future__ import annotations
 
