@@ -26,7 +26,7 @@ from ..render.builtin import builtin
 from ..render.exact import exact_image
 from ..render.render import plan_scene, render_scene
 from ..render.scene import Polygon, Scene
-from . import aa_methods, aa_scenes, evaluate
+from . import aa_methods, aa_scenes, compare, evaluate
 from .bench import values_per_pixel
 from .geometry import random_image_edges
 from .report import fmt_float, pyplot, save, table
@@ -55,8 +55,6 @@ SCENES = ("text", "starburst", "hatch")
 
 
 def scene_image(plan, name: str) -> np.ndarray:
-    from ..render import compare
-
     mode = evaluate.mode_of(name)
     if mode:
         return render_scene(plan_scene(plan.scene, plan.config.with_(mode=mode))).image

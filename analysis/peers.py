@@ -132,7 +132,8 @@ def fill_jobs(config: EdgeConfig, edges: list[Edge], batch: WriteBatch) -> list[
 # -- renderers: each returns an (h, w) uint8 mask -----------------------------------------------
 
 
-def skia_fill(job: MaskJob) -> np.ndarray:
+def _skia_mask(job: MaskJob, draw) -> np.ndarray:
+    """`draw(canvas)` on a cleared 8-bit alpha surface of the job's size; its pixels."""
     import skia
 
     w, h = job.size
@@ -140,11 +141,17 @@ def skia_fill(job: MaskJob) -> np.ndarray:
     surface = skia.Surface.MakeRaster(info)
     canvas = surface.getCanvas()
     canvas.clear(skia.ColorTRANSPARENT)
-    path = skia.Path.Polygon([skia.Point(x, y) for x, y in job.points], True)
-    canvas.drawPath(path, skia.Paint(AntiAlias=True))
+    draw(canvas)
     mask = np.empty((h, w), dtype=np.uint8)
     surface.readPixels(info, mask, w)
     return mask
+
+
+def skia_fill(job: MaskJob) -> np.ndarray:
+    import skia
+
+    path = skia.Path.Polygon([skia.Point(x, y) for x, y in job.points], True)
+    return _skia_mask(job, lambda canvas: canvas.drawPath(path, skia.Paint(AntiAlias=True)))
 
 
 def agg_fill(job: MaskJob, *, widen: bool = False) -> np.ndarray:
@@ -165,18 +172,10 @@ def agg_fill(job: MaskJob, *, widen: bool = False) -> np.ndarray:
 def skia_stroke(job: MaskJob) -> np.ndarray:
     import skia
 
-    w, h = job.size
-    info = skia.ImageInfo.MakeA8(w, h)
-    surface = skia.Surface.MakeRaster(info)
-    canvas = surface.getCanvas()
-    canvas.clear(skia.ColorTRANSPARENT)
     paint = skia.Paint(AntiAlias=True, Style=skia.Paint.kStroke_Style, StrokeWidth=1.0)
     paint.setStrokeCap(skia.Paint.kButt_Cap)
     (x0, y0), (x1, y1) = job.points
-    canvas.drawLine(x0, y0, x1, y1, paint)
-    mask = np.empty((h, w), dtype=np.uint8)
-    surface.readPixels(info, mask, w)
-    return mask
+    return _skia_mask(job, lambda canvas: canvas.drawLine(x0, y0, x1, y1, paint))
 
 
 def agg_stroke(job: MaskJob) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 For each scene the plan (`edgeaa.render.plan_scene`) is made once; then, per repeat and in
 turn, plan_scene (timed alone), `render_scene(plan)` (model engine, skipping on), the timing
-model's `engines.cycles` on the edges sent, AGG (`edgeaa.render.compare.agg_scene`) and Skia
+model's `engines.cycles` on the edges sent, AGG (`edgeaa.analysis.compare.agg_scene`) and Skia
 (`skia_scene`) on that same plan, after one untimed warm-up run each. Times are the
 process's CPU seconds, the minimum over `--repeats` (the 2 cores are shared, so CPU time is
 steadier than wall time; --json also holds the wall minima). The peers' times include
@@ -48,12 +48,12 @@ import time
 
 import numpy as np
 
+from edgeaa.analysis.compare import agg_scene, skia_scene
 from edgeaa.analysis.report import machine_info, machine_line, table
 from edgeaa.model import EdgeConfig, accumulate
 from edgeaa.model.edge import setup_batch
 from edgeaa.render import builtin, plan_scene, render_scene
 from edgeaa.render.builtin import TEXT, starburst, text_polygons
-from edgeaa.render.compare import agg_scene, skia_scene
 from edgeaa.render.engines import cycles, run_deltas
 from edgeaa.render.render import edge_arrays
 from edgeaa.render.scene import DEFAULT_TOLERANCE, Scene

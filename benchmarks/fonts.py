@@ -12,7 +12,7 @@ baseline 1.15 size + 0.37 px).
 Every method draws the same quantized polygons of one plan (`plan_scene`, 1/16 px grid):
 
 - ``paper``, ``seg4``: `render_scene` with the model engine;
-- ``AGG``, ``Skia``: `edgeaa.render.compare.agg_scene`, `skia_scene` (8-bit, their own
+- ``AGG``, ``Skia``: `edgeaa.analysis.compare.agg_scene`, `skia_scene` (8-bit, their own
   blending);
 - ``FreeType``: FreeType's own gray rasterizer (the ``smooth`` module), driven through
   matplotlib's ft2font: the plan's polygons are written as the straight-line contours of the
@@ -53,10 +53,10 @@ import warnings
 
 import numpy as np
 
+from edgeaa.analysis.compare import agg_scene, polygon_points, skia_scene
 from edgeaa.analysis.report import machine_info, machine_line, table
 from edgeaa.model import EdgeConfig
 from edgeaa.render import plan_scene, render_scene
-from edgeaa.render.compare import _polygon_points, agg_scene, skia_scene
 from edgeaa.render.corpus import FONT_TEXT as TEXT
 from edgeaa.render.corpus import (
     FONTS,
@@ -84,7 +84,7 @@ def _font_units(plan: Plan, index: int) -> list[list[tuple[int, int]]]:
     """The polygon's quantized contours in the built font's units: pixel i covers [i, i + 1)
     in FreeType, so +1/2 px as for the peers; y up."""
     out = []
-    for pts in _polygon_points(plan, index):
+    for pts in polygon_points(plan, index):
         units = np.rint((pts + 0.5) * FT_UNITS).astype(np.int64)
         if not np.allclose(units, (pts + 0.5) * FT_UNITS):
             raise ValueError("a vertex is off the 1/16 px grid")

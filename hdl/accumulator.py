@@ -1,53 +1,30 @@
 # amaranth: UnusedElaboratable=no
 """The tile's accumulation memory (`TileAccumulator`): delta beats in, one per clock; on a
 polygon's end, the touched rows' cell sums out to the resolve, each cell cleared as it is
-read. `edgeaa.model.tile` is the model and the cycle model.
+read. `edgeaa.model.tile` is the model and the cycle model (`beat_clocks`, `tile_cycles`).
 
-Memory. The tile's cells are one `amaranth.lib.memory.Memory` of ``width x height`` cells
-(the address ``Cat(x, y)``), with one synchronous read port (not transparent) and one write
-port: a simple dual-port block RAM. A cell holds its sum modulo ``2**cell_bits``.
+In: ``ops``, delta beats and tile, end and flush ops. A beat's nonzero cells are taken one a
+clock, in cell order, and the beat in the clock of its last (one clock for a beat with none:
+`edgeaa.model.tile.beat_clocks`), so ``ops.ready`` depends on the beat's deltas; any four
+cells make a beat, repeats included. A cell left of the tile moves into its row's first
+column; one right of, above or below it is dropped (it still takes its clock). A cell holds
+its sum modulo ``2**cell_bits`` in one `amaranth.lib.memory.Memory` of ``width x height``
+cells (a simple dual-port block RAM); back-to-back deltas to one cell are neither lost nor
+doubled (read-modify-write with forwarding, `_rmw`).
 
-One cell a clock. A beat's nonzero cells are taken one a clock, in cell order (``done``
-marks those taken), and the beat in the clock of its last (one clock for a beat with none:
-`edgeaa.model.tile.beat_clocks`), so ``ops.ready`` depends on the beat's deltas. A cell left
-of the tile moves into its row's first column; one right of, above or below it is dropped
-(it still takes its clock).
+Out: ``cells`` to the resolve. An end taken in clock a reads, from a + 2, the rows the
+polygon touched in ascending order, one cell per clock while the output advances (``start``
+marks a row's first cell, where the resolve's prefix sum restarts), each read clearing its
+cell; a row already scanned in this tile is read over the polygon's scan span only
+(`edgeaa.model.tile`, "Scan span", where it is shown exact). A cell read in clock s is
+offered in s + 1 (the end's first in a + 3), and a stalled cell holds. Tile and flush ops go
+out through the same output register, in order.
 
-Read-modify-write, one cell a clock, two stages: A (the cell is taken; read it), B (add the
-delta to what was read, or to the sum of the cell before if it wrote the same cell last
-clock, which the read did not see; write the sum). So back-to-back deltas to one cell (the
-cells of a beat left of the tile, the next column's first cell) are neither lost nor
-doubled. Stage B's delta is zero when it holds no cell, so a scan's clear is the same add
-with the read forced to zero.
-
-Scan. An end taken in clock a: the last beat's write lands in a (WAIT in a + 1); from a + 2 the
-touched rows (a bit per row, set by every nonzero delta kept) are read in ascending order,
-one cell per clock while the output advances, each read clearing its cell through the write
-port (the read returns the old value), so the clear costs no pass. The read port's enable is
-the output's advance: a stalled cell stays in the read port's output register, and the output
-payload's sum is the read data. Tile and flush ops go out through the same
-output register, in order. Latency: a cell read in clock s is offered in s + 1.
-
-Scan span (`edgeaa.model.tile`, "Scan span", where it is shown exact). Two registers hold the
-least and greatest column of the polygon's kept cells (``lo``, ``hi``), a bit per row the
-rows scanned since the tile started (``seen``: the resolve has written them whole). A seen
-row is read from ``lo``; at ``hi`` (below the last column) the row may stop: its sum through
-``hi`` (``rsum``, the row's cells as they leave the output register, plus the cell waiting
-there) is known once ``hi`` waits in the output register. The scan reads ``hi + 1`` as ``hi``
-is taken; when the sum is zero that cell (zero: no delta lies right of ``hi``) is not sent
-and the next row is chosen, so a row that stops at ``hi`` costs a clock more than its cells.
-A row not seen yet is read whole. The output's ``start`` marks a row's first cell, where the
-resolve's prefix sum restarts. The decision only loads registers (no read address depends on
-a sum).
-
-Reset. A reset clears the registers but not the memory, so deltas written before a reset in
-the middle of a polygon (between its first kept delta and the end of its scan) would add to a
-later polygon's. ``dirty`` is kept through reset (``reset_less``): set by a kept delta,
-cleared when its polygon's scan ends. In the first clock after a reset (``check``, whose
-reset value is 1) a dirty memory sends the accumulator through CLEAR, which writes zero to
-every cell, one a clock, ``width x height`` clocks (2,048 by default), before it takes an
-op; a clean one takes ops from that first clock, so power-up and a reset when idle cost no
-clock.
+Reset clears the registers, not the memory: a memory holding deltas of an unfinished polygon
+(``dirty``, kept through reset) is cleared, one cell a clock, ``width x height`` clocks,
+before the first op after the reset; a clean one takes ops from the first clock. The
+clock-by-clock story, the scan span's registers and the costs: docs/hardware.md, "Polygon
+pipeline", Accumulation memory.
 """
 
 from __future__ import annotations
@@ -169,8 +146,11 @@ class TileAccumulator(wiring.Component):
         return cell
 
     def _rmw(self, m, rd, wr, cell):
-        """Stages A and B (see the module docstring); `self._clear` (the scan's) takes the
-        write port when set and writes zero at `self._scan_addr`."""
+        """Read-modify-write in two stages: A (the cell is taken; read it), B (add the delta to
+        what was read, or to the sum of the cell before if it wrote the same cell last clock,
+        which the read did not see; write the sum). Stage B's delta is zero when it holds no
+        cell, so a scan's clear is the same add with the read forced to zero. `self._clear`
+        (the scan's) takes the write port when set and writes zero at `self._scan_addr`."""
         tile = self._tile
         addr_bits = len(rd.addr)
         self._scan_addr = Signal(addr_bits)

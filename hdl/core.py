@@ -47,7 +47,8 @@ Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
   saturating at ``2**errors_bits - 1``.
 * ``error`` (out): high for one clock when a bad command is dropped.
 
-Bad commands, clipping and the setup arithmetic: the module docstring of `edgeaa.hdl.setup`.
+Bad commands, clipping and the setup arithmetic: `edgeaa.hdl.setup` and docs/hardware.md, "The
+setup unit, clock by clock".
 """
 
 from __future__ import annotations

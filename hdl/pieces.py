@@ -8,9 +8,8 @@ of a whole first column, ``total0`` of a y-major edge) from FINAL on. The y-majo
 takes ``s + 2`` clocks in this setup (`edgeaa.model.timing.final_cycles`), one bit of the
 first piece's width ``w0`` (``s + 2`` bits, at most ``2 S``) a clock, MSB first
 (`total0_steps`: ``P = 2 P + bit (hs0 + he_first)``, the multiplicand constant once the
-lanes are done), so ``next_bank`` reads a register in HOLD where it had a multiplier of the
-height sum by ``w0`` (433 LUT4 measured; the setup unit alone went from 3,375 to 3,011 LUT4
-and from 907 to 944 flip-flops, Yosys, harness subtracted).
+lanes are done), so ``next_bank`` reads a register in HOLD, not a multiplier (its cost:
+docs/hardware.md, "FINAL of `s + 2` clocks").
 
 Everything is in half sub-pixel steps as in the model (``2 S`` per pixel, so a pixel's edges
 are whole numbers): ``mg`` (from the first column's start to P0) and ``me`` (from P1 to the

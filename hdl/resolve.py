@@ -25,11 +25,9 @@ stalls (every stage loads every clock) a carried value is a fixed delay: each li
 `Memory` (a block RAM on an FPGA) written every clock at a free-running address and read by
 a synchronous read port at the address written that many clocks before, so the value is the
 read port's data in the clock the last stage writes. Its depth is the power of two above the
-longest delay (16 words at I = 8; the word read is never the one written). Why: on an iCE40
-a flip-flop whose input is another register (or a port or a memory) takes a logic cell of
-its own, and the carried fields were 211 such flip-flops (the resolve alone: 559 -> 352
-flip-flops with the 4-bit address, 775 -> 781 LUT4), while block RAMs were free (two more,
-256 x 16 each). Timing and every output bit are unchanged.
+longest delay (16 words at I = 8; the word read is never the one written). Why (a flip-flop
+loaded from a register costs an iCE40 logic cell; block RAMs were free) and what it saved:
+docs/hardware.md, "Polygon pipeline", Resolve.
 
 The pipeline never stalls: nothing leaves it but the write. A polygon's first cell, a tile op
 and a flush are taken only when no cell is in flight (the pixels they read must be written

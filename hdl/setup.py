@@ -1,71 +1,20 @@
 # amaranth: UnusedElaboratable=no
-"""The per-edge setup of the core (`EdgeSetupUnit`): folds an edge command into the first
-octant, cuts its columns to the clip window and computes the bank the stepper needs (the
-model's `edgeaa.model.edge.setup`) with two lanes of a sequential multiply-divide unit
-(Horner shift-add multiplication interleaved with radix-2 restoring division, one bit per
-clock). Its latency is fixed per configuration, and ``W + 1`` clocks longer for an edge whose
-start the clip window cuts (`edgeaa.model.timing` owns the numbers).
+"""The per-edge setup of the core (`EdgeSetupUnit`): an edge command in, one bank of stepper
+constants out (the model's `edgeaa.model.edge.setup`).
 
-States (``a``: the clock a command is accepted): IDLE (``edges.ready``; accepts the command
-and samples ``clip`` with it), FOLD (``a + 1``: the fold; a bad command is dropped here, IDLE
-again in ``a + 2``), WINDOW (``a + 2``: the columns cut to the window, lane A loaded), RUN
-(``R = I + F + 1`` clocks from ``a + 3``, ``W + 1`` more when the window cuts the start; an
-edge with no column inside the window leaves RUN after its second clock, IDLE again in
-``a + 5``, no bank write), FINAL (``Phi`` clocks from ``a + R + 3``: ``next_bank`` is
-formed; ``Phi = 1``, or ``s + 2`` in the deltas core's setup, which forms the y-major
-``total0`` product there one bit a clock, `edgeaa.hdl.pieces.total0_steps`), HOLD (from
-``a + R + 3 + Phi``: ``bank.valid``; the bank is ``next_bank`` of the registers HOLD
-keeps, so the setup has no bank register; it ends in the clock the stepper takes the bank,
-and the setup accepts the next command in that clock).
+In: an ``edges`` beat (`edge_layout`) and the ``clip`` window sampled with it. Out: the
+``bank`` stream (`setup_layout`), valid from the clock the bank is complete until the stepper
+takes it; the setup accepts its next command in that clock. A bad command (zero length or
+I_in == I_out, as the model's `validate`) gives no bank: it pulses ``error`` and counts in
+``errors``, and the setup is ready again two clocks after accepting it. An edge with no column
+inside the window gives no bank and is not an error.
 
-Timing structure (for the clock rate; no path carries more than about one wide carry chain):
-the accept clock registers the command with its deltas ``x1 - x0``, ``x0 - x1`` (and for y),
-the "delta not positive" flags, the bad-command flag and the clip window; FOLD picks the major
-axis with one compare of the magnitudes, then that axis's operands (coordinates, sign, window
-bounds), and forms ``c0``, ``c1``, ``e`` and the folded window bounds ``lo``, ``hi`` once
-from them, each with one carry chain after the compare (a negation rides in its add as
-``(p ^ neg) + neg``); WINDOW cuts ``[c0, c1]`` to ``[lo, hi]`` with one compare each
-and forms the clipped start offset ``lo S - u0`` (one add) and ``v0`` in parallel; the column
-count is formed in the first RUN clock and tested in the second; the lanes form their three
-candidate remainders and quotients in parallel; ``kq, kr`` are registered when lane B is done,
-before FINAL.
-
-Bad commands: the model's `validate` rejects a zero-length edge (P0 == P1) and I_in == I_out
-(out-of-range coordinates or intensities cannot be expressed on ports of exactly the width).
-The setup accepts such a command, detects it in FOLD, drops it (nothing reaches the bank),
-pulses ``error``, counts it in ``errors`` and is ready for the next command two clocks after
-accepting the bad one.
-
-Clipping (the model's `Edge.clip`): only the major axis is clipped. In the folded frame
-(``u = step_major * p``) the window's major-axis bounds are ``lo, hi = min, max``, or
-``-max, -min`` when the major axis steps down; the edge steps the columns
-``first = max(c0, lo) .. last = min(c1, hi)``. A window that cuts the end only makes the
-count smaller; one that cuts the start (``c0 < lo``) starts the edge at column ``lo``, whose
-start offset ``e = lo S - u0`` is up to the edge's length, so lane A's first pass takes
-``W + s + 2`` clocks instead of ``s + 1``. An edge with no column inside (``last < first``,
-including a window with min > max) produces no beat and is not an error (``errors`` and
-``error`` are unchanged). The minor axis is not clipped: a write may land outside the window.
-
-Arithmetic (all exact; proofs in the comments below):
-
-* fold: ``du, dv = |major delta|, |minor delta|``; ``u0, v0, u1`` the folded coordinates;
-  ``c0 = (2 u0 + S) >> (s + 1)``, ``c1 = (2 u1 + S - 1) >> (s + 1)`` (= the model's
-  ``-((S - 2 u1) >> (s + 1))``).
-* window: ``first = max(c0, lo)``, ``last = min(c1, hi)``, ``columns = last - first + 1``
-  (none visible when ``<= 0``); ``e = first S - u0``: ``|e| <= S / 2`` when ``first = c0``,
-  else ``S / 2 < e < du + S / 2``.
-* lane A, pass 1 (``s + 1`` clocks, or ``W + s + 2`` for ``first > c0``):
-  ``q', r' = divmod(2 |e| dv, du)`` (``q' <= 2 |e| < 2**(W + s + 2)``); fix the sign of ``e``
-  to get ``q, r = divmod(2 e dv, du)``; then ``M = 2 v0 + S + q``, ``row0 = M >> (s + 1)``,
-  ``m = M mod 2S`` and the model's ``mf = m du + r``.
-* lane A, pass 2 (``I + F - s - 1`` clocks): ``jq, jr = divmod(|I_d| mf << (F - s - 1), du)``
-  computed as Horner over the bits of ``|I_d|`` with multiplicand ``r`` and the quotient digit
-  ``m`` added per set bit (``mf = m du + r``).
-* lane B (``I + F - 1`` clocks, in parallel): ``khq, khr = divmod(|I_d| dv << (F - 1), du)``.
-* when lane B is done (RUN, counter ``I + F - 1``): ``kq = 2 khq + (2 khr >= du)``,
-  ``kr = 2 khr - du (2 khr >= du)`` (exactly the model's ``divmod(|I_d| dv << F, du)``);
-  FINAL: the segment constants from ``kq`` (shift-adds) and, for the truncated accumulator,
-  ``jr = kr = khr = 0``.
+Latency: fixed per configuration, ``W + 1`` clocks longer for an edge whose start the window
+cuts (`edgeaa.model.timing` owns the numbers: `run_cycles`, `final_cycles`, `setup_interval`;
+the unit checks at construction that its lane passes add up to `run_cycles`). The arithmetic
+is two lanes of a sequential multiply-divide unit (Horner shift-add multiplication
+interleaved with radix-2 restoring division, one bit per clock); the states, clock by clock,
+and the derivation of each step: docs/hardware.md, "The setup unit, clock by clock".
 """
 
 from __future__ import annotations
@@ -167,7 +116,7 @@ class EdgeSetupUnit(wiring.Component):
     command), ``bank`` (out stream, `setup_layout`: valid in HOLD, ``next_bank`` of the held
     registers),
     ``errors`` (saturating count of bad commands) and ``error`` (a one-clock pulse per bad
-    command). See the module docstring for the states and the arithmetic.
+    command). States and arithmetic: docs/hardware.md, "The setup unit, clock by clock".
 
     Observation points for the formal harness (attributes, not ports; all created here):
 

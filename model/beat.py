@@ -12,6 +12,8 @@ and ``last`` on the edge's last column. Everything else is derived from the name
   `PAYLOAD_PATHS` entry;
 * the array encoding: int64 rows of `BEAT_COLUMNS` (`beats_to_array`, `beats_from_array`); a
   simulation run records the clock of each beat in front (`RUN_COLUMNS`).
+* `edge_columns`: how many beats each edge of a command stream gives (0 for an edge the core
+  drops as bad or whose clip window holds none of its columns).
 
 The accumulation-delta core (output ``"deltas"``) has its own beat, declared the same way
 below (`DeltaBeat`, `DELTA_PAYLOAD_PATHS`); `BEAT_FORMATS` names both for the harnesses.
@@ -23,6 +25,9 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import NamedTuple
 
 import numpy as np
+
+from .config import EdgeConfig
+from .edge import Edge, EdgeError, setup
 
 LANES = ("lane0", "lane1")
 PIXEL_FIELDS = ("x", "y", "value")  # x, y signed (register "x", "y"), value unsigned
@@ -74,10 +79,16 @@ def beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> Beat:
     return Beat(pixel(LANES[0]), lane1, bool(get(("last",))))
 
 
-def payload_row(get: Callable[[tuple[str, ...]], int]) -> list[int]:
-    """The payload's leaves as one row of `BEAT_COLUMNS`, as sampled (lane 1 included when it
-    is not valid: its don't-care values are deterministic and the harnesses compare them)."""
-    return [int(get(path)) for path in PAYLOAD_PATHS]
+def edge_columns(config: EdgeConfig, edges: Iterable[Edge]) -> np.ndarray:
+    """Beats (visible columns) of each edge: 0 for a bad command and for an edge whose clip
+    window holds none of its columns (neither ends with a `last` beat)."""
+    counts = []
+    for edge in edges:
+        try:
+            counts.append(setup(config, edge).columns)
+        except EdgeError:
+            counts.append(0)
+    return np.array(counts, dtype=np.int64)
 
 
 def beat_row(beat: Beat) -> list[int]:
@@ -151,11 +162,6 @@ def delta_beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> DeltaBeat:
     """A delta beat from its payload leaves (`get(path)` of a `DELTA_PAYLOAD_PATHS` entry)."""
     cells = tuple(tuple(int(get((cell, name))) for name in CELL_FIELDS) for cell in CELLS)
     return DeltaBeat(cells, bool(get(("last",))))
-
-
-def delta_payload_row(get: Callable[[tuple[str, ...]], int]) -> list[int]:
-    """The delta payload's leaves as one row of `DELTA_BEAT_COLUMNS`."""
-    return [int(get(path)) for path in DELTA_PAYLOAD_PATHS]
 
 
 def delta_beat_row(beat: DeltaBeat) -> list[int]:

@@ -203,10 +203,6 @@ def _check_options(args: argparse.Namespace, config) -> None:
         if getattr(args, first) and getattr(args, second):
             names = (f"--{n.replace('_', '-')}" for n in (first, second))
             raise usage_error(PROG, f"{' and '.join(names)} cannot be combined: {why}")
-    from .engines import DELTA_ENGINES, unavailable
-
-    if not args.compare and args.engine not in DELTA_ENGINES:
-        raise usage_error(PROG, unavailable(args.engine))
     if args.compare and args.engine != "model":
         raise usage_error(PROG, "--compare renders with the model: --engine does not apply")
     if args.tile is not None and args.engine == "model":
@@ -226,7 +222,7 @@ def _check_options(args: argparse.Namespace, config) -> None:
 
 
 def _compare(args: argparse.Namespace, scene, config, crop) -> int:
-    from .compare import plot_compare
+    from ..analysis.compare import plot_compare
 
     with atomic_output(PROG, args.output) as temporary:
         rows = plot_compare(scene, config, temporary, crop)

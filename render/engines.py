@@ -28,12 +28,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import Edge, EdgeConfig
-from ..model.beat import CELLS, DELTA_RUN_COLUMNS, LANES, PIXEL_FIELDS, RUN_COLUMNS
+from ..model.beat import (
+    CELLS,
+    DELTA_RUN_COLUMNS,
+    LANES,
+    PIXEL_FIELDS,
+    RUN_COLUMNS,
+    edge_columns,
+)
 from ..model.timing import schedule, write_cycles
-from ..sim.verification.scoreboard import edge_columns
 
 ENGINES = ("model", "amaranth", "verilator")
-DELTA_ENGINES = ENGINES  # the engines that emit accumulation deltas (polygons)
 MODEL_CHUNK = 512  # edges per run_edges call
 AMARANTH_CLOCKS_PER_SECOND = 1000.0  # rough rate of the Python simulator, for the warning
 AMARANTH_WARN_SECONDS = 60.0
@@ -79,7 +84,7 @@ def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
     write order (edge index, x, y, value): lane 0 then lane 1 of each beat.
 
     `columns` holds each sent edge's visible columns
-    (`edgeaa.sim.verification.scoreboard.edge_columns`):
+    (`edgeaa.model.beat.edge_columns`):
     the core emits that many beats per edge, the last one with `last`, and none for an edge
     with 0 (no column in its clip window). Edge indices count every edge sent. Raises unless
     the beats and their `last` flags fit the counts exactly."""
@@ -140,8 +145,8 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
     progress(done, total) is called as edges complete."""
     from ..model.edge import setup_batch
 
-    if engine not in DELTA_ENGINES:
-        raise EngineUnavailable(unavailable(engine))
+    if engine not in ENGINES:
+        raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
     if engine == "model":
         return _model_deltas(config, arrays, progress)
     batch = setup_batch(config, *arrays.args(), arrays.clip)
@@ -233,13 +238,6 @@ def _check_lasts(last: np.ndarray, columns: np.ndarray) -> None:
 
 class EngineUnavailable(RuntimeError):
     """An engine that cannot do what was asked (one line for the user)."""
-
-
-def unavailable(engine: str) -> str:
-    return (
-        f"the {engine} core does not emit accumulation deltas yet, so it cannot render "
-        f"polygons; use --engine model (engines that can: {', '.join(DELTA_ENGINES)})"
-    )
 
 
 def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None) -> EngineRun:

@@ -442,10 +442,6 @@ class Render:
     pipeline_tile: object | None = None  # its `edgeaa.model.tile.TileConfig`
     mismatches: int | None = None
 
-    @property
-    def engine_run(self) -> DeltaRun:
-        return self.deltas
-
 
 def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:
     """Which boundary edges go to the engine, and which are skipped by which rule."""

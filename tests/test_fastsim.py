@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, setup
+from edgeaa.model.beat import edge_columns
 from edgeaa.model.timing import (
     DEFAULT_SETUP_UNITS,
     EMPTY_EDGE_CYCLES,
@@ -18,7 +19,7 @@ from edgeaa.model.vector import run_edges
 from edgeaa.render.engines import beat_clocks, beats_to_writes, run_engine
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
 from edgeaa.sim.verification.commands import COMMAND_FIELDS
-from edgeaa.sim.verification.scoreboard import beats_to_array, edge_columns, expected_beats
+from edgeaa.sim.verification.scoreboard import beats_to_array, expected_beats
 from edgeaa.sim.verification.workloads import random_sim_edges
 
 DEFAULT = EdgeConfig()

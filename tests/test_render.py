@@ -15,13 +15,13 @@ import numpy as np
 import pytest
 from fixtures import TINY_SCENE
 
+from edgeaa.analysis.compare import agg_scene
 from edgeaa.cli import main
 from edgeaa.model import Edge, EdgeConfig, exact_coverage, setup
 from edgeaa.model.reference import error_bound
 from edgeaa.model.vector import run_edges_deltas
 from edgeaa.render import Polygon, Scene, SceneError, builtin, parse_path, parse_scene, render_scene
 from edgeaa.render import plan_scene as plan
-from edgeaa.render.compare import agg_scene
 from edgeaa.render.engines import beat_clocks
 from edgeaa.render.exact import crossed_cells, edges_per_pixel, error_rows, exact_image
 from edgeaa.render.geometry import halfplane_coverage, split_crossings

@@ -12,9 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-import numpy as np
-
-from ...model import Edge, EdgeConfig, EdgeError, run_edge, setup
+from ...model import Edge, EdgeConfig, EdgeError, run_edge
 from ...model.beat import BEAT_FORMATS, Beat, beats_from_array, beats_to_array, column_beats
 from ...model.step import EdgeResult, run_edge_deltas
 
@@ -24,7 +22,6 @@ __all__ = [
     "beats_from_array",
     "beats_to_array",
     "edge_beats",
-    "edge_columns",
     "expected_beats",
 ]
 
@@ -54,18 +51,6 @@ def expected_beats(
         except EdgeError:
             dropped += 1
     return beats, dropped
-
-
-def edge_columns(config: EdgeConfig, edges: Iterable[Edge]) -> np.ndarray:
-    """Beats (visible columns) of each edge: 0 for a bad command and for an edge whose clip
-    window holds none of its columns (neither ends with a `last` beat)."""
-    counts = []
-    for edge in edges:
-        try:
-            counts.append(setup(config, edge).columns)
-        except EdgeError:
-            counts.append(0)
-    return np.array(counts, dtype=np.int64)
 
 
 class Scoreboard:

@@ -1,6 +1,6 @@
 # amaranth: UnusedElaboratable=no
 """`FormalHarness`: the core with free inputs and the check groups, covers and faults asked
-for (the package docstring describes them)."""
+for (docs/hardware.md, "The harness, its check groups and faults", describes them)."""
 
 from __future__ import annotations
 
@@ -48,7 +48,8 @@ def _check_output_groups(output: str, groups, covers) -> None:
 
 
 class FormalHarness(Elaboratable):
-    """The core with free inputs and the properties of `checks` (see the package docstring).
+    """The core with free inputs and the properties of `checks` (docs/hardware.md, "The
+    harness, its check groups and faults").
 
     ``reset``: the reset is a free input (else the domain has no reset). ``covers``: add the
     Cover statements. ``assumes``: check groups proven elsewhere, assumed here. ``fault``: one

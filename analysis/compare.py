@@ -5,18 +5,18 @@ Methods, each drawing the whole scene polygon by polygon over the background:
 - ``no AA``: one sample at the pixel centre (the renderer's own span fill alone);
 - ``edgeaa paper``, ``edgeaa seg4``: `edgeaa.render.render_scene` with the model;
 - ``16x16 SSAA``: 256 samples per pixel on an ordered grid (the ``grid16`` pattern of
-  `edgeaa.analysis.sampling`, here evaluated on whole polygons with the same exact scanline
+  `sampling`, here evaluated on whole polygons with the same exact scanline
   test as the span fill, since that module samples single-edge half-planes);
 - ``Skia``: skia-python path fill, analytic antialiasing, on an 8-bit surface;
 - ``AGG``: aggdraw's path fill (AGG's exact-area scanline rasterizer), with the pen-width-0
-  setting of `edgeaa.analysis.peers` so that AGG does not widen the polygons by 1/4 px.
+  setting of `peers` so that AGG does not widen the polygons by 1/4 px.
   aggdraw fills non-zero only: even-odd polygons are drawn non-zero (noted in the panel).
-- the seeds' methods (`edgeaa.analysis.aa_scenes`): MSAA 2x, 4x and 8x with the standard
+- the seeds' methods (`aa_scenes`): MSAA 2x, 4x and 8x with the standard
   positions, quincunx and FLIPQUAD resolved per sample; MLAA, MLAA with slope prediction,
   FXAA and FXAA with geometry edges on the point-sampled image; TAA of the still scene.
 
 Skia's and AGG's pixel i covers [i, i + 1); edgeaa's is centred on i: the peers get every
-vertex shifted by +1/2 px (the convention of `edgeaa.analysis.peers`). The peers composite
+vertex shifted by +1/2 px (the convention of `peers`). The peers composite
 with their own 8-bit blending; the others with the renderer's integer arithmetic (no AA,
 edgeaa) or in floating point rounded at the end (SSAA).
 """
@@ -26,15 +26,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..model import EdgeConfig
-from .exact import exact_image
-from .geometry import sample_mask
-from .render import Plan, plan_scene, render_scene
-from .scene import Scene
+from ..render.exact import exact_image
+from ..render.geometry import sample_mask
+from ..render.render import Plan, plan_scene, render_scene
+from ..render.scene import Scene
+from .aa_scenes import method_image
 
 SSAA = 16  # samples per axis
 
 
-def _polygon_points(plan: Plan, index: int) -> list[np.ndarray]:
+def polygon_points(plan: Plan, index: int) -> list[np.ndarray]:
     """The polygon's contours (quantized) in image pixels."""
     poly = plan.polygons[index]
     S = plan.config.subpixel_scale
@@ -99,7 +100,7 @@ def skia_scene(plan: Plan) -> np.ndarray:
     canvas.clear(skia.ColorSetRGB(b, b, b))
     for i, poly in enumerate(plan.polygons):
         path = skia.Path()
-        for pts in _polygon_points(plan, i):
+        for pts in polygon_points(plan, i):
             path.moveTo(*(pts[0] + 0.5))
             for p in pts[1:]:
                 path.lineTo(*(p + 0.5))
@@ -122,7 +123,7 @@ def agg_scene(plan: Plan) -> np.ndarray:
     draw = aggdraw.Draw(image)
     for i, poly in enumerate(plan.polygons):
         path = aggdraw.Path()
-        for pts in _polygon_points(plan, i):
+        for pts in polygon_points(plan, i):
             path.moveto(*(pts[0] + 0.5))
             for p in pts[1:]:
                 path.lineto(*(p + 0.5))
@@ -147,8 +148,6 @@ def compare_images(scene: Scene, config: EdgeConfig) -> tuple[dict[str, np.ndarr
     images["Skia"] = skia_scene(plan)
     label = "AGG" if all(p.fill_rule == "nonzero" for p in scene.polygons) else "AGG (non-zero)"
     images[label] = agg_scene(plan)
-    from ..analysis.aa_scenes import method_image
-
     for name, title in SEED_METHODS.items():
         images[title] = method_image(plan, name)
     return images, exact_image(plan)
