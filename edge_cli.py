@@ -14,7 +14,6 @@ from pathlib import Path
 from .command import (
     INTEGER,
     Command,
-    ProgressBar,
     add_config_options,
     atomic_output,
     check_output,
@@ -27,6 +26,7 @@ from .command import (
 from .model import MODES, Clip, Edge, EdgeConfig, run_edge
 from .model.reference import error_bound, exact_coverage_array, fixed_point_term
 from .model.timing import DEFAULT_SETUP_UNITS, MAX_SETUP_UNITS
+from .progress import ProgressBar
 
 
 class EdgeCommand(Command):

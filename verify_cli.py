@@ -17,13 +17,13 @@ import sys
 
 from .command import (
     Command,
-    ProgressBar,
     add_config_options,
     config_from_args,
     integer_type,
     shown,
     usage_error,
 )
+from .progress import ProgressBar
 
 EXIT_MISMATCH = 1
 EXIT_INTERRUPTED = 130  # the shell's status for Ctrl-C

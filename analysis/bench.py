@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.vector import run_edges
+from ..progress import ProgressBar
 from . import aa_methods, msaa, peers, sampling
 from .aa_methods import run_method
 from .evaluate import EDGEAA_METHODS, SAMPLE_METHODS, MethodRun, mode_of, pixel_set, timed

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
+from ..progress import ProgressBar
 from . import aa_methods, peers
 from .aa_methods import run_method
 from .evaluate import BOUND_PER_K, EDGEAA_METHODS, SAMPLE_METHODS, mode_of, pixel_set

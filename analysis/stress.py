@@ -41,10 +41,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.step import WidthError
 from ..model.vector import chunked, run_edges
+from ..progress import ProgressBar
 from .evaluate import BOUND_PER_K
 from .geometry import column_index, exact_coverage_pixels, pixel_keys
 from .report import fmt_float, pyplot, save, table

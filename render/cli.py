@@ -17,7 +17,6 @@ import numpy as np
 from ..command import PROG as COMMAND_PROG
 from ..command import (
     Command,
-    ProgressBar,
     add_config_options,
     atomic_output,
     check_output,
@@ -26,6 +25,7 @@ from ..command import (
     tile_from_args,
     usage_error,
 )
+from ..progress import ProgressBar
 from .builtin import BUILTINS
 
 PROG = f"{COMMAND_PROG} render"  # RenderCommand.prog, for the helpers below
