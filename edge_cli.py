@@ -221,17 +221,19 @@ def _plot_demo(per_mode, path: str) -> None:
 # -- edgeaa verilog and synth --------------------------------------------------------------
 
 
-def _synthesize(make, target: str, seed: int):
+def _synthesize(make, target: str, seed: int, stage):
     """Synthesise, place and route; when place and route fails (a design that does not fit
-    the device), the synthesis figures alone and the failure's first error line."""
+    the device), the synthesis figures alone and the failure's first error line. `stage(name)`
+    names each tool run as it starts."""
     from .sim.synthesis import ToolError, synthesize
 
     try:
-        return synthesize(make(), target, wrap=True, seed=seed), None
+        return synthesize(make(), target, wrap=True, seed=seed, stage=stage), None
     except ToolError as error:
         lines = [line for line in str(error).splitlines() if "ERROR" in line.upper()]
         cause = (lines or str(error).splitlines()[:1])[0].strip()
-        return synthesize(make(), target, wrap=True, place_and_route=False), cause
+        again = synthesize(make(), target, wrap=True, place_and_route=False, stage=stage)
+        return again, cause
 
 
 def _add_core_option(parser: argparse.ArgumentParser) -> None:
@@ -339,6 +341,11 @@ class VerilogCommand(Command):
 BLOCK_RAMS = {"ice40": "SB_RAM40_4K", "ecp5": "DP16KD"}
 
 
+def _stage(bar: ProgressBar, target: str, design: str):
+    """Name the synthesis step on the bar: target, design and the tool running now."""
+    return lambda tool: bar(bar.done, bar.total, f"{target} {design}: {tool}")
+
+
 class SynthCommand(Command):
     name = "synth"
     help = "synthesise the core (or the polygon pipeline) and an aliased Bresenham baseline"
@@ -420,7 +427,9 @@ class SynthCommand(Command):
         for target in targets:
             for name, make in designs.items():
                 with bar.ticking(f"{target} {name}"):
-                    result, failure = _synthesize(make, target, args.seed)
+                    result, failure = _synthesize(
+                        make, target, args.seed, _stage(bar, target, name)
+                    )
                 bar.step()
                 bar.close()  # the row goes to stdout on a line of its own
                 results[target, name] = result

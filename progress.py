@@ -31,13 +31,14 @@ def duration(seconds: float) -> str:
     return f"{seconds // 3600} h {seconds % 3600 // 60} min"
 
 
-def rate(count: float, seconds: float) -> str:
-    """Steps per second, or seconds per step when steps are slow."""
-    if count <= 0 or seconds <= 0:
-        return "?/s"
+def rate(count: float, seconds: float, unit: str = "") -> str:
+    """Steps per second (of `unit`, e.g. "edges"), or seconds per step when steps are slow."""
     per_second = count / seconds
+    unit = f" {unit}" if unit else ""
+    if per_second >= 100:
+        return f"{per_second:,.0f}{unit}/s"
     if per_second >= 1:
-        return f"{per_second:,.1f}/s"
+        return f"{per_second:.1f}{unit}/s"
     return f"{seconds / count:,.1f} s each"
 
 
@@ -47,7 +48,8 @@ class ProgressBar:
     Either called with the counts, `bar(done, total, stage)`, or stepped through a total
     given up front, `bar.step(stage)` (or `with bar.doing(stage):` around each step). A total
     of 0 means unknown: a spinner and the time so far. `already` counts work done before this
-    run (a resumed job): it is in the bar but not in the rate. `clock` is for tests.
+    run (a resumed job): it is in the bar but not in the rate. `unit` names what is counted
+    in the rate ("edges": 1,234 edges/s). `clock` is for tests.
     """
 
     def __init__(
@@ -58,13 +60,14 @@ class ProgressBar:
         stream=None,
         delay: float | None = None,
         already: int = 0,
+        unit: str = "",
         clock=time.perf_counter,
     ):
         self.label, self.total, self.enabled = label, total, enabled
         self.delay = DELAY if delay is None else delay
         self.stream = stream if stream is not None else sys.stderr
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.clock = clock
+        self.clock, self.unit = clock, unit
         self.start = clock()
         self.mark = (0.0, already)  # (time, done) where this total began: the rate's origin
         self.last = -1.0
@@ -112,7 +115,7 @@ class ProgressBar:
         since, base = self.mark
         ran, spent = self.done - base, now - since
         if ran > 0 and spent > 0:
-            counts += f", {rate(ran, spent)}"
+            counts += f", {rate(ran, spent, self.unit)}"
             if self.done < self.total:
                 counts += f", {duration((self.total - self.done) * spent / ran)} left"
         return f"{self.label}: {stage}[{bar}] {100 * fraction:5.1f}% ({counts})"

@@ -182,7 +182,7 @@ class RenderCommand(Command):
             f"engine {args.engine}; {config}"
         )
         if args.compare:
-            return _compare(args, scene, config, crop)
+            return _compare(args, scene, config, crop, bar)
         return _render(args, plan, bar)
 
 
@@ -225,11 +225,12 @@ def _check_options(args: argparse.Namespace, config) -> None:
         raise usage_error(PROG, "--compare needs -o FIGURE.png")
 
 
-def _compare(args: argparse.Namespace, scene, config, crop) -> int:
+def _compare(args: argparse.Namespace, scene, config, crop, bar: ProgressBar) -> int:
     from .compare import plot_compare
 
     with atomic_output(PROG, args.output) as temporary:
-        rows = plot_compare(scene, config, temporary, crop)
+        rows = plot_compare(scene, config, temporary, crop, bar)
+    bar.close()
     print(f"{'method':22} {'max |err| LSB':>14} {'RMS LSB':>8}")
     for label, worst, rms in rows:
         print(f"{label:22} {worst:14.3f} {rms:8.3f}")
@@ -317,6 +318,13 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
         with atomic_output(PROG, args.output) as temporary:
             kind = write_png(result.image, config.full_scale, config.intensity_bits, temporary)
         say(f"wrote {args.output} ({kind})")
+    elif not (args.quiet or args.json):
+        scene = plan.scene
+        print(
+            f"{PROG}: rendered {scene.width}x{scene.height} px ({args.engine}); give -o FILE.png "
+            "to save it",
+            file=sys.stderr,
+        )
     figures = _figures(result) if args.json else {}
     if baseline is not None:
         from .stats import rule_savings, stats_numbers, stats_report
