@@ -47,9 +47,10 @@ class ProgressBar:
 
     Either called with the counts, `bar(done, total, stage)`, or stepped through a total
     given up front, `bar.step(stage)` (or `with bar.doing(stage):` around each step). A total
-    of 0 means unknown: a spinner and the time so far. `already` counts work done before this
-    run (a resumed job): it is in the bar but not in the rate. `unit` names what is counted
-    in the rate ("edges": 1,234 edges/s). `clock` is for tests.
+    of 0 means unknown: a spinner and the time so far. The rate counts from where the total
+    was set: a job that resumes, or that waits for a build first, starts with `bar(done_before,
+    total)` at the start of its work. `unit` names what is counted in the rate ("edges":
+    1,234 edges/s). `clock` is for tests.
     """
 
     def __init__(
@@ -59,7 +60,6 @@ class ProgressBar:
         enabled: bool = True,
         stream=None,
         delay: float | None = None,
-        already: int = 0,
         unit: str = "",
         clock=time.perf_counter,
     ):
@@ -69,11 +69,11 @@ class ProgressBar:
         self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.clock, self.unit = clock, unit
         self.start = clock()
-        self.mark = (0.0, already)  # (time, done) where this total began: the rate's origin
-        self.last = -1.0
+        self.mark = (0.0, 0)  # (time, done) where this total was set: the rate's origin
+        self.last = float("-inf")  # the first line comes at `delay`, on any stream
         self.shown = False
         self.stage = ""
-        self.done = already
+        self.done = 0
         self.frame = 0
         self.lock = threading.Lock()  # `ticking` redraws from a second thread
 

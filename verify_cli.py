@@ -197,12 +197,13 @@ def _run(plan, store, workers: int, cluster: str | None, *, quiet: bool) -> dict
     from .sim.verification.regress import open_runner, run_plan
 
     resumed = sum(record["edges"] for record in store.finished.values())
-    bar = ProgressBar("edgeaa verify", plan.edges, not quiet, already=resumed, unit="edges")
+    bar = ProgressBar("edgeaa verify", enabled=not quiet, unit="edges")
     with contextlib.ExitStack() as cleanup:
         cleanup.callback(bar.close)  # an error's line starts on a line of its own
         with bar.ticking(f"build the {plan.engine} core"):
             runner = open_runner(plan.config, plan.engine, workers, cluster)
         cleanup.callback(runner.close)
+        bar(resumed, plan.edges)  # the rate counts this run's edges from here
         with bar.ticking("check"):  # a shard takes seconds: the time runs between them
             return run_plan(plan, runner, store, progress=bar)
 

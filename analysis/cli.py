@@ -37,7 +37,7 @@ def _write_plot(prog: str, path: str, draw, quiet: bool) -> None:
     """`draw(file)` into `path` whole or not at all, named on a progress bar while it runs
     (a figure of many panels takes seconds)."""
     bar = ProgressBar(prog.removeprefix("edgeaa "), enabled=not quiet)
-    with bar.ticking(f"plot {path}"), atomic_output(prog, path) as temporary:
+    with bar.ticking(f"write {path}"), atomic_output(prog, path) as temporary:
         draw(temporary)
     bar.close()
     print(f"wrote {path}")
@@ -194,12 +194,6 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
     return 0
 
 
-def _progress(args: argparse.Namespace, prog: str):
-    import sys
-
-    return None if args.quiet else (lambda what: print(f"{prog}: {what}", file=sys.stderr))
-
-
 def _plot_aa_methods(args: argparse.Namespace) -> int:
     from ..model import EdgeConfig
     from . import aa_report
@@ -208,7 +202,7 @@ def _plot_aa_methods(args: argparse.Namespace) -> int:
     prog = "edgeaa plot aa-methods"
     _check_output(prog, args.output)
     config = EdgeConfig()
-    rows = aa_report.method_table(config, args.edges, args.seed, _progress(args, prog))
+    rows = aa_report.method_table(config, args.edges, args.seed, not args.quiet)
     print(machine_line())
     print(
         f"edges: {args.edges} random (seed {args.seed}), output values, fraction of a pixel; "
@@ -227,7 +221,7 @@ def _plot_taa(args: argparse.Namespace) -> int:
 
     prog = "edgeaa plot taa"
     _check_output(prog, args.output)
-    seq = aa_report.taa_sequence(EdgeConfig(), args.frames, args.step, _progress(args, prog))
+    seq = aa_report.taa_sequence(EdgeConfig(), args.frames, args.step, not args.quiet)
     print(machine_line())
     print(aa_report.sequence_text(seq))
     _write_plot(prog, args.output, partial(aa_report.plot_sequence, seq), args.quiet)

@@ -42,12 +42,14 @@ def test_a_bar_with_a_known_total_shows_its_rate_and_time_left(eager):
     assert "job: work [" in last and "40.0% (4/10, 8.0 s, 2.0 s each, 12 s left)" in last, last
 
 
-def test_the_rate_of_a_resumed_job_counts_this_run_only(eager):
+def test_the_rate_of_a_resumed_job_counts_this_run_from_its_start_only(eager):
     clock, stream = Clock(), io.StringIO()
-    bar = ProgressBar("verify", 1000, stream=stream, already=600, clock=clock)
-    clock.now = 4.0
+    bar = ProgressBar("verify", stream=stream, unit="edges", clock=clock)
+    clock.now = 30.0  # a build first: not in the rate
+    bar(600, 1000)  # 600 done before this run: not in the rate
+    clock.now = 34.0
     bar(800, 1000)  # 200 in 4 s this run: 50/s, 200 left = 4 s
-    assert "(800/1,000, 4.0 s, 50.0/s, 4.0 s left)" in stream.getvalue()
+    assert "(800/1,000, 34 s, 50.0 edges/s, 4.0 s left)" in stream.getvalue()
 
 
 def test_a_wait_of_unknown_length_shows_the_stage_and_the_time_so_far(monkeypatch):
