@@ -318,13 +318,6 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
         with atomic_output(PROG, args.output) as temporary:
             kind = write_png(result.image, config.full_scale, config.intensity_bits, temporary)
         say(f"wrote {args.output} ({kind})")
-    elif not (args.quiet or args.json):
-        scene = plan.scene
-        print(
-            f"{PROG}: rendered {scene.width}x{scene.height} px ({args.engine}); give -o FILE.png "
-            "to save it",
-            file=sys.stderr,
-        )
     figures = _figures(result) if args.json else {}
     if baseline is not None:
         from .stats import rule_savings, stats_numbers, stats_report
@@ -342,6 +335,13 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
         figures.update(_error(result, plan, bar, say))
     if args.json:
         print(json.dumps(figures, indent=1))
+    elif args.output is None and not args.quiet:  # the last line: what happened to the image
+        scene = plan.scene
+        print(
+            f"{PROG}: rendered {scene.width}x{scene.height} px ({args.engine}); give -o FILE.png "
+            "to save it",
+            file=sys.stderr,
+        )
     return 0
 
 
