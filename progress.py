@@ -77,8 +77,9 @@ class ProgressBar:
         self.frame = 0
         self.lock = threading.Lock()  # `ticking` redraws from a second thread
 
-    def step(self, stage: str = "", n: int = 1) -> None:
-        """Count n more of `total` done; the last step ends the bar's line."""
+    def step(self, stage: str | None = None, n: int = 1) -> None:
+        """Count n more of `total` done (the stage kept unless given); the last step ends the
+        bar's line."""
         self.done += n
         self(self.done, self.total, stage)
         if self.done >= self.total:
