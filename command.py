@@ -1,4 +1,4 @@
-"""What every `edgeaa` command shares: the registry, one-line errors, configuration, progress.
+"""What every `edgeaa` command shares: the registry, one-line errors, configuration.
 
 A command is a subclass of `Command` with a `name`, `help`, `description`, `add_arguments` and
 `run`; defining it registers it in `COMMANDS` (in definition order, the order of
@@ -16,10 +16,7 @@ import argparse
 import contextlib
 import os
 import re
-import sys
 import tempfile
-import threading
-import time
 
 from .model import ACCUMULATORS, MODES, EdgeConfig
 from .model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
@@ -263,92 +260,6 @@ def config_arguments(config: EdgeConfig) -> list[str]:
     if config.frac_bits is not None:
         argv += ["--frac-bits", str(config.frac_bits)]
     return argv
-
-
-# -- progress --------------------------------------------------------------------------------
-
-DELAY = 0.5  # seconds before the bar first appears: short jobs print nothing
-EVERY = 0.2  # seconds between redraws (a line per redraw when stderr is not a terminal: 2 s)
-
-
-class ProgressBar:
-    """A progress bar on stderr for long jobs (nothing on stdout, nothing for short ones).
-
-    Either called with the counts, `bar(done, total, stage)`, or stepped through a total
-    given up front, `bar.step(stage)`.
-    """
-
-    def __init__(
-        self, label: str, total: int = 0, enabled: bool = True, stream=None, delay: float = None
-    ):
-        self.label, self.total, self.enabled = label, total, enabled
-        self.delay = DELAY if delay is None else delay
-        self.stream = stream if stream is not None else sys.stderr
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.start = time.perf_counter()
-        self.last = -1.0
-        self.shown = False
-        self.stage = ""
-        self.done = 0
-
-    def step(self, stage: str = "", n: int = 1) -> None:
-        """Count n more of `total` done; the last step ends the bar's line."""
-        self.done += n
-        self(self.done, self.total, stage)
-        if self.done >= self.total:
-            self.close()
-
-    def __call__(self, done: int, total: int, stage: str | None = None) -> None:
-        if stage is not None:
-            self.stage = stage
-        if not self.enabled:
-            return
-        now = time.perf_counter() - self.start
-        finished = total > 0 and done >= total
-        every = EVERY if self.tty else 10 * EVERY
-        if now < self.delay or (not finished and now - self.last < every):
-            return
-        self.last = now
-        self.shown = True
-        if total > 0:
-            fraction = done / total
-            width = 30
-            bar = "#" * round(width * fraction) + "-" * (width - round(width * fraction))
-            counts = f"[{bar}] {100 * fraction:5.1f}% ({done}/{total}, {now:.1f} s)"
-        else:  # a step of unknown length: the time so far
-            counts = f"({now:.1f} s)"
-        text = f"{self.label}: {self.stage:<12} {counts}"
-        if self.tty:
-            self.stream.write("\r" + text)
-        else:
-            self.stream.write(text + "\n")
-        self.stream.flush()
-
-    @contextlib.contextmanager
-    def ticking(self, stage: str):
-        """Redraw the bar (its elapsed time) while a step with no progress of its own runs,
-        such as a compiler or a synthesis tool: long work is visible from its start."""
-        self(self.done, self.total, stage)
-        stop = threading.Event()
-
-        def tick():
-            while not stop.wait(EVERY):
-                self(self.done, self.total)
-
-        thread = threading.Thread(target=tick, daemon=True)
-        thread.start()
-        try:
-            yield
-        finally:
-            stop.set()
-            thread.join()
-
-    def close(self) -> None:
-        """End the bar's line (on a terminal); a later call starts a new one."""
-        if self.shown and self.tty:
-            self.stream.write("\n")
-            self.stream.flush()
-        self.shown = False
 
 
 def tile_from_args(prog: str, text: str, config: EdgeConfig):

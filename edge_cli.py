@@ -14,7 +14,6 @@ from pathlib import Path
 from .command import (
     INTEGER,
     Command,
-    ProgressBar,
     add_config_options,
     atomic_output,
     check_output,
@@ -27,6 +26,7 @@ from .command import (
 from .model import MODES, Clip, Edge, EdgeConfig, run_edge
 from .model.reference import error_bound, exact_coverage_array, fixed_point_term
 from .model.timing import DEFAULT_SETUP_UNITS, MAX_SETUP_UNITS
+from .progress import ProgressBar
 
 
 class EdgeCommand(Command):
@@ -155,8 +155,11 @@ class DemoCommand(Command):
             f" {'err/bound':>10}"
         )
         per_mode = {}
+        bar = ProgressBar("demo", len(MODES) * len(edges))
         for mode in MODES:
-            per_mode[mode] = _demo_mode(base.with_(mode=mode), edges)
+            row, per_mode[mode] = _demo_mode(base.with_(mode=mode), edges, bar)
+            bar.close()  # the row goes to stdout on a line of its own
+            print(row)
         if args.output:
             with atomic_output(self.prog, args.output) as temporary:
                 _plot_demo(per_mode, temporary)
@@ -164,9 +167,10 @@ class DemoCommand(Command):
         return 0
 
 
-def _demo_mode(config: EdgeConfig, edges: list[Edge]) -> tuple[list[float], list[float]]:
-    """Print one mode's row of the demo table; return each edge's direction and worst error.
-    An edge's bound is c_N k plus the fixed-point term of its last column (the largest)."""
+def _demo_mode(config: EdgeConfig, edges: list[Edge], bar: ProgressBar):
+    """One mode's row of the demo table, and each edge's direction and worst error (a step of
+    `bar` per edge). An edge's bound is c_N k plus the fixed-point term of its last column
+    (the largest)."""
     angles, errors, writes = [], [], 0
     worst, worst_over_k, worst_over_bound = 0.0, 0.0, 0.0
     for edge in edges:
@@ -185,12 +189,13 @@ def _demo_mode(config: EdgeConfig, edges: list[Edge]) -> tuple[list[float], list
             worst_over_k = max(worst_over_k, err / k)
         angles.append(math.degrees(math.atan2(edge.y1 - edge.y0, edge.x1 - edge.x0)) % 360)
         errors.append(err)
+        bar.step(config.mode)
     c_n = error_bound(config.mode, 1.0)
-    print(
+    row = (
         f"{config.mode:6} {writes:7d} {worst:10.6f} {worst_over_k:10.6f} {c_n:10.6f}"
         f" {worst_over_bound:10.6f}"
     )
-    return angles, errors
+    return row, (angles, errors)
 
 
 def _plot_demo(per_mode, path: str) -> None:
@@ -221,17 +226,19 @@ def _plot_demo(per_mode, path: str) -> None:
 # -- edgeaa verilog and synth --------------------------------------------------------------
 
 
-def _synthesize(make, target: str, seed: int):
+def _synthesize(make, target: str, seed: int, stage):
     """Synthesise, place and route; when place and route fails (a design that does not fit
-    the device), the synthesis figures alone and the failure's first error line."""
+    the device), the synthesis figures alone and the failure's first error line. `stage(name)`
+    names each tool run as it starts."""
     from .sim.synthesis import ToolError, synthesize
 
     try:
-        return synthesize(make(), target, wrap=True, seed=seed), None
+        return synthesize(make(), target, wrap=True, seed=seed, stage=stage), None
     except ToolError as error:
         lines = [line for line in str(error).splitlines() if "ERROR" in line.upper()]
         cause = (lines or str(error).splitlines()[:1])[0].strip()
-        return synthesize(make(), target, wrap=True, place_and_route=False), cause
+        again = synthesize(make(), target, wrap=True, place_and_route=False, stage=stage)
+        return again, cause
 
 
 def _add_core_option(parser: argparse.ArgumentParser) -> None:
@@ -302,7 +309,10 @@ class VerilogCommand(Command):
                 raise usage_error(
                     self.prog, f"the lint waiver file {shown(waivers_path)} is a directory"
                 )
-        source = self._source(args, config)
+        bar = ProgressBar("verilog")
+        with bar.ticking(f"elaborate the {args.top}"):  # a large tile takes a minute
+            source = self._source(args, config)
+        bar.close()
         if not to_file:
             sys.stdout.write(source)
         else:
@@ -337,6 +347,11 @@ class VerilogCommand(Command):
 
 
 BLOCK_RAMS = {"ice40": "SB_RAM40_4K", "ecp5": "DP16KD"}
+
+
+def _stage(bar: ProgressBar, target: str, design: str):
+    """Name the synthesis step on the bar: target, design and the tool running now."""
+    return lambda tool: bar(bar.done, bar.total, f"{target} {design}: {tool}")
 
 
 class SynthCommand(Command):
@@ -420,7 +435,9 @@ class SynthCommand(Command):
         for target in targets:
             for name, make in designs.items():
                 with bar.ticking(f"{target} {name}"):
-                    result, failure = _synthesize(make, target, args.seed)
+                    result, failure = _synthesize(
+                        make, target, args.seed, _stage(bar, target, name)
+                    )
                 bar.step()
                 bar.close()  # the row goes to stdout on a line of its own
                 results[target, name] = result

@@ -10,6 +10,7 @@ its reproducers) or a simulator that failed, 2 for bad input, 130 when interrupt
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import re
@@ -17,13 +18,13 @@ import sys
 
 from .command import (
     Command,
-    ProgressBar,
     add_config_options,
     config_from_args,
     integer_type,
     shown,
     usage_error,
 )
+from .progress import ProgressBar
 
 EXIT_MISMATCH = 1
 EXIT_INTERRUPTED = 130  # the shell's status for Ctrl-C
@@ -195,13 +196,16 @@ def _run(plan, store, workers: int, cluster: str | None, *, quiet: bool) -> dict
     """Open the runner (the core is built here), run the plan with a progress bar, close."""
     from .sim.verification.regress import open_runner, run_plan
 
-    runner = open_runner(plan.config, plan.engine, workers, cluster)
-    bar = ProgressBar("edgeaa verify", enabled=not quiet)
-    try:
-        return run_plan(plan, runner, store, progress=bar)
-    finally:
-        bar.close()
-        runner.close()
+    resumed = sum(record["edges"] for record in store.finished.values())
+    bar = ProgressBar("edgeaa verify", enabled=not quiet, unit="edges")
+    with contextlib.ExitStack() as cleanup:
+        cleanup.callback(bar.close)  # an error's line starts on a line of its own
+        with bar.ticking(f"build the {plan.engine} core"):
+            runner = open_runner(plan.config, plan.engine, workers, cluster)
+        cleanup.callback(runner.close)
+        bar(resumed, plan.edges)  # the rate counts this run's edges from here
+        with bar.ticking("check"):  # a shard takes seconds: the time runs between them
+            return run_plan(plan, runner, store, progress=bar)
 
 
 def _interrupted(plan, store, out: str | None) -> str:

@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..model import EdgeConfig
+from ..progress import ProgressBar
 from ..render.builtin import builtin
 from ..render.exact import exact_image
 from ..render.render import plan_scene, render_scene
@@ -75,29 +76,36 @@ class TableRow:
     ns_per_pixel: float
 
 
-def method_table(config: EdgeConfig, edges: int = 1000, seed: int = 1, progress=None):
-    edge_list = random_image_edges(config, edges, seed)
-    pixels, batch = evaluate.pixel_set(config, edge_list)
-    jobs = aa_methods.evaluate.peers.fill_jobs(config, edge_list, batch)
-    plans = {name: plan_scene(builtin(name, config), config) for name in SCENES}
-    exact = {name: exact_image(plan) for name, plan in plans.items()}
+def method_table(config: EdgeConfig, edges: int = 1000, seed: int = 1, progress: bool = True):
+    bar = ProgressBar("aa-methods", enabled=progress)
+    with bar.ticking("edges, scenes and exact areas"):
+        edge_list = random_image_edges(config, edges, seed)
+        pixels, batch = evaluate.pixel_set(config, edge_list)
+        jobs = aa_methods.evaluate.peers.fill_jobs(config, edge_list, batch)
+        plans = {name: plan_scene(builtin(name, config), config) for name in SCENES}
+        exact = {name: exact_image(plan) for name, plan in plans.items()}
+    bar(0, len(TABLE_METHODS))
     rows = []
     for name in TABLE_METHODS:
-        if progress:
-            progress(name)
-        run = aa_methods.run_method(config, edge_list, pixels, name, coverage="output", jobs=jobs)
-        err = np.abs(run.coverage - pixels.exact)
-        row = TableRow(name, (float(err.max()), float(np.sqrt(np.mean(err**2)))), {}, 0.0)
-        for scene, plan in plans.items():
-            start = time.perf_counter()
-            image = scene_image(plan, name)
-            seconds = time.perf_counter() - start
-            e = np.abs(image - exact[scene])
-            row.scenes[scene] = (float(e.max()), float(np.sqrt(np.mean(e**2))))
-            if scene == "starburst":
-                row.ns_per_pixel = seconds / image.size * 1e9
-        rows.append(row)
+        with bar.doing(name):
+            rows.append(_method_row(config, name, edge_list, pixels, jobs, plans, exact))
     return rows
+
+
+def _method_row(config: EdgeConfig, name: str, edge_list, pixels, jobs, plans, exact):
+    """One method's row of `method_table`: its error on the edges and on each scene."""
+    run = aa_methods.run_method(config, edge_list, pixels, name, coverage="output", jobs=jobs)
+    err = np.abs(run.coverage - pixels.exact)
+    row = TableRow(name, (float(err.max()), float(np.sqrt(np.mean(err**2)))), {}, 0.0)
+    for scene, plan in plans.items():
+        start = time.perf_counter()
+        image = scene_image(plan, name)
+        seconds = time.perf_counter() - start
+        e = np.abs(image - exact[scene])
+        row.scenes[scene] = (float(e.max()), float(np.sqrt(np.mean(e**2))))
+        if scene == "starburst":
+            row.ns_per_pixel = seconds / image.size * 1e9
+    return row
 
 
 def table_text(rows: list[TableRow]) -> str:
@@ -181,20 +189,25 @@ def _rms(a: np.ndarray) -> float:
 SEQUENCE_METHODS = ("point", "rgss4", "taa-in-place", "taa", "edgeaa-paper")
 
 
-def taa_sequence(config: EdgeConfig, frames: int = 32, step: float = 0.2, progress=None):
+def taa_sequence(config: EdgeConfig, frames: int = 32, step: float = 0.2, progress: bool = True):
+    bar = ProgressBar("taa", enabled=progress)
     base = builtin("starburst", config)
-    plans = [plan_scene(rotated(base, f * step), config) for f in range(frames)]
+    with bar.ticking("plan the frames"):
+        plans = [plan_scene(rotated(base, f * step), config) for f in range(frames)]
     images: dict[str, list[np.ndarray]] = {name: [] for name in SEQUENCE_METHODS}
     exact = []
+    bar(0, frames)
     for f, plan in enumerate(plans):
-        if progress:
-            progress(f"frame {f}")
-        exact.append(exact_image(plan))
-        for name in ("point", "rgss4", "edgeaa-paper"):
-            images[name].append(scene_image(plan, name).astype(np.float64))
-    images["taa-in-place"] = [np.floor(i + 0.5) for i in aa_scenes.taa_frames(plans)]
-    back = _turned_back(base.width, base.height, step)
-    images["taa"] = [np.floor(i + 0.5) for i in aa_scenes.taa_frames(plans, previous=back)]
+        with bar.doing(f"frame {f}"):
+            exact.append(exact_image(plan))
+            for name in ("point", "rgss4", "edgeaa-paper"):
+                images[name].append(scene_image(plan, name).astype(np.float64))
+    bar(0, 0)  # no count of its own
+    with bar.ticking("TAA over the frames"):
+        images["taa-in-place"] = [np.floor(i + 0.5) for i in aa_scenes.taa_frames(plans)]
+        back = _turned_back(base.width, base.height, step)
+        images["taa"] = [np.floor(i + 0.5) for i in aa_scenes.taa_frames(plans, previous=back)]
+    bar.close()
     return Sequence(frames, step, images, exact)
 
 

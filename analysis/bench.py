@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.vector import run_edges
+from ..progress import ProgressBar
 from . import aa_methods, msaa, peers, sampling
 from .aa_methods import run_method
 from .evaluate import EDGEAA_METHODS, SAMPLE_METHODS, MethodRun, mode_of, pixel_set, timed
@@ -116,43 +116,46 @@ def run_bench(
     baseline = f"edgeaa-{config.mode}"
     if baseline not in methods:
         methods = (baseline, *methods)
-    edges = random_image_edges(config, count, seed)
-    pixels, batch = pixel_set(config, edges)
-    jobs = peers.fill_jobs(config, edges, batch)
-    result = BenchResult(config, seed, len(edges), len(pixels), repeats, baseline)
-    result.convention = peers.convention_check(config)
+    bar = ProgressBar("bench", enabled=progress)
+    with bar.ticking("edges and exact areas"):
+        edges = random_image_edges(config, count, seed)
+        pixels, batch = pixel_set(config, edges)
+        jobs = peers.fill_jobs(config, edges, batch)
+        result = BenchResult(config, seed, len(edges), len(pixels), repeats, baseline)
+        result.convention = peers.convention_check(config)
 
-    line_list = peers.integer_lines(config, edges) if lines else []
-    line_px = peers.line_pixels(line_list) if line_list else None
-    line_jobs = peers.line_jobs(line_list, line_px) if line_list else []
-    line_edges = [Edge(*(v * config.subpixel_scale for v in line)) for line in line_list]
+        line_list = peers.integer_lines(config, edges) if lines else []
+        line_px = peers.line_pixels(line_list) if line_list else None
+        line_jobs = peers.line_jobs(line_list, line_px) if line_list else []
+        line_edges = [Edge(*(v * config.subpixel_scale for v in line)) for line in line_list]
 
     best: dict[str, MethodRun] = {}
     line_best: dict[str, tuple[float, list]] = {}
     steps = repeats * (len(methods) + (len(peers.LINE_PEERS) + 1 if line_list else 0))
-    bar = ProgressBar("bench", steps, enabled=progress)
+    bar(0, steps)
     for round_ in range(repeats):
         for name in methods:
             if round_ and name in aa_methods.IMAGE_METHODS:
                 bar.step(name)  # seconds per run, 100 times edgeaa's: once is enough
                 continue
-            run = run_method(config, edges, pixels, name, coverage="output", jobs=jobs)
+            with bar.doing(name):
+                run = run_method(config, edges, pixels, name, coverage="output", jobs=jobs)
             if name not in best or run.seconds < best[name].seconds:
                 best[name] = run
-            bar.step(name)
         if line_list:
-            seconds, _ = timed(lambda: run_edges(config, line_edges))
+            with bar.doing("edgeaa on the line edges"):
+                seconds, _ = timed(lambda: run_edges(config, line_edges))
             key = "edgeaa-lines"
             if key not in line_best or seconds < line_best[key][0]:
                 line_best[key] = (seconds, [])
-            bar.step("edgeaa on the line edges")
             for name in peers.LINE_PEERS:
-                seconds, masks = timed(lambda name=name: peers.render(name, line_jobs))
+                with bar.doing(name):
+                    seconds, masks = timed(lambda name=name: peers.render(name, line_jobs))
                 if name not in line_best or seconds < line_best[name][0]:
                     line_best[name] = (seconds, masks)
-                bar.step(name)
 
     base_seconds = best[baseline].seconds
+    bar = ProgressBar("bench", len(methods) if hardware else 0, enabled=progress)
     for name in methods:
         run = best[name]
         err = np.abs(run.coverage - pixels.exact)
@@ -164,9 +167,10 @@ def run_bench(
                 run.seconds,
                 run.outputs,
                 run.seconds / base_seconds,
-                hardware_figures(config, name, edges, synthesis=synthesis) if hardware else None,
+                _hardware(bar, config, name, edges, synthesis) if hardware else None,
             )
         )
+    bar.close()
     if line_list:
         result.lines, result.line_pixels = len(line_list), len(line_px.edge_index)
         edge_seconds = line_best["edgeaa-lines"][0]
@@ -186,6 +190,13 @@ def run_bench(
                 )
             )
     return result
+
+
+def _hardware(bar: ProgressBar, config: EdgeConfig, name: str, edges, synthesis: bool):
+    """One method's hardware figures (a synthesis run, minutes the first time), named on the
+    bar while it runs."""
+    with bar.doing(f"hardware figures of {name}"):
+        return hardware_figures(config, name, edges, synthesis=synthesis)
 
 
 def _hw(row: Row, attr: str, digits: int) -> str:

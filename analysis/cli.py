@@ -6,6 +6,7 @@ They register themselves (`edgeaa.command.Command`) when this module is imported
 from __future__ import annotations
 
 import argparse
+from functools import partial
 
 from ..command import (
     Command,
@@ -18,6 +19,7 @@ from ..command import (
     shown,
     usage_error,
 )
+from ..progress import ProgressBar
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 # Upper bounds that keep each job to minutes, not days (every default is far below them).
@@ -29,6 +31,16 @@ SEED = integer_type(0, 2**32 - 1)  # numpy's seed range
 
 def _check_output(prog: str, path: str) -> None:
     check_output(prog, path, PLOT_SUFFIXES)
+
+
+def _write_plot(prog: str, path: str, draw, quiet: bool) -> None:
+    """`draw(file)` into `path` whole or not at all, named on a progress bar while it runs
+    (a figure of many panels takes seconds)."""
+    bar = ProgressBar(prog.removeprefix("edgeaa "), enabled=not quiet)
+    with bar.ticking(f"write {path}"), atomic_output(prog, path) as temporary:
+        draw(temporary)
+    bar.close()
+    print(f"wrote {path}")
 
 
 def _int_list(prog: str, option: str, text: str, lo: int, hi: int) -> tuple[int, ...]:
@@ -178,16 +190,8 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
         "c_N k is the estimate's own bound; the fixed-point units add U_N / (|I_d| 2^F) to it "
         "(docs/algorithm.md 9.1), so at small k the ratio can pass 1 by those units."
     )
-    with atomic_output(SLOPE_PROG, args.output) as temporary:
-        slope.plot_sweep(sweep, temporary)
-    print(f"wrote {args.output}")
+    _write_plot(SLOPE_PROG, args.output, partial(slope.plot_sweep, sweep), args.quiet)
     return 0
-
-
-def _progress(args: argparse.Namespace, prog: str):
-    import sys
-
-    return None if args.quiet else (lambda what: print(f"{prog}: {what}", file=sys.stderr))
 
 
 def _plot_aa_methods(args: argparse.Namespace) -> int:
@@ -198,7 +202,7 @@ def _plot_aa_methods(args: argparse.Namespace) -> int:
     prog = "edgeaa plot aa-methods"
     _check_output(prog, args.output)
     config = EdgeConfig()
-    rows = aa_report.method_table(config, args.edges, args.seed, _progress(args, prog))
+    rows = aa_report.method_table(config, args.edges, args.seed, not args.quiet)
     print(machine_line())
     print(
         f"edges: {args.edges} random (seed {args.seed}), output values, fraction of a pixel; "
@@ -206,9 +210,7 @@ def _plot_aa_methods(args: argparse.Namespace) -> int:
         "starburst per image pixel in this run; values/px: held per pixel before resolve"
     )
     print(aa_report.table_text(rows))
-    with atomic_output(prog, args.output) as temporary:
-        aa_report.plot_table(rows, temporary)
-    print(f"wrote {args.output}")
+    _write_plot(prog, args.output, partial(aa_report.plot_table, rows), args.quiet)
     return 0
 
 
@@ -219,12 +221,10 @@ def _plot_taa(args: argparse.Namespace) -> int:
 
     prog = "edgeaa plot taa"
     _check_output(prog, args.output)
-    seq = aa_report.taa_sequence(EdgeConfig(), args.frames, args.step, _progress(args, prog))
+    seq = aa_report.taa_sequence(EdgeConfig(), args.frames, args.step, not args.quiet)
     print(machine_line())
     print(aa_report.sequence_text(seq))
-    with atomic_output(prog, args.output) as temporary:
-        aa_report.plot_sequence(seq, temporary)
-    print(f"wrote {args.output}")
+    _write_plot(prog, args.output, partial(aa_report.plot_sequence, seq), args.quiet)
     return 0
 
 
@@ -238,8 +238,8 @@ class BenchCommand(Command):
         "On a fixed, seeded set of random edges: maximum and RMS coverage error "
         "against the exact area and run time (as a ratio to edgeaa's vectorized model in the "
         "same run) of edgeaa's modes, the sample-based baselines and the real rasterizers "
-        "Skia and AGG (and, on lines, scikit-image's line_aa). Prints the tables and writes a "
-        "Pareto plot of error against time."
+        "Skia and AGG (and, on lines, scikit-image's line_aa). Prints the tables; -o also "
+        "writes a Pareto plot of error against time."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
@@ -270,8 +270,7 @@ class BenchCommand(Command):
         parser.add_argument(
             "-o",
             "--output",
-            default="bench_pareto.png",
-            help="Pareto plot file (default bench_pareto.png)",
+            help="also write the Pareto plot to this file (.png, .svg or .pdf; default: none)",
         )
         parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
         add_config_options(parser)
@@ -281,7 +280,8 @@ class BenchCommand(Command):
         from .report import machine_line
 
         config = config_from_args(args)
-        _check_output(self.prog, args.output)
+        if args.output is not None:
+            _check_output(self.prog, args.output)
         quick = args.quick
         count = (
             args.edges
@@ -307,9 +307,8 @@ class BenchCommand(Command):
         )
         print(machine_line())
         print(bench.bench_tables(result))
-        with atomic_output(self.prog, args.output) as temporary:
-            bench.plot_pareto(result, temporary)
-        print(f"wrote {args.output}")
+        if args.output is not None:
+            _write_plot(self.prog, args.output, partial(bench.plot_pareto, result), args.quiet)
         return 0
 
 
@@ -324,7 +323,7 @@ class StressCommand(Command):
         "(L-1)/L, sub-pixel extremes, every sub-pixel phase) for each coordinate width, "
         "every mode and both accumulators; sweep the fraction bits F of the truncated "
         "accumulator and print the smallest safe F beside the derived one; plot the drift "
-        "against length and F."
+        "against length and F (with -o)."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
@@ -358,13 +357,11 @@ class StressCommand(Command):
         parser.add_argument(
             "-o",
             "--output",
-            default="stress_drift.png",
-            help="drift plot file (default stress_drift.png)",
+            help="also write the drift plot to this file (.png, .svg or .pdf; default: none)",
         )
         parser.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
 
     def run(self, args: argparse.Namespace) -> int:
-        from ..model.config import EdgeConfig
         from . import stress
         from .report import machine_line
 
@@ -382,15 +379,24 @@ class StressCommand(Command):
         )
         print("\nsmallest safe fraction bits F of the truncated accumulator, measured and derived:")
         print(stress.safe_table(safe))
-        plot_config = EdgeConfig(
-            coord_bits=args.plot_coord_bits, subpixel_bits=s, intensity_bits=plot_i, mode="paper"
-        )
-        curves = stress.drift_curves(args.plot_coord_bits, s, plot_i)
-        shallow = stress.length_curves(args.plot_coord_bits, s, plot_i)
-        with atomic_output(self.prog, args.output) as temporary:
-            stress.plot_stress(curves, shallow, safe, plot_config, temporary)
-        print(f"wrote {args.output}")
+        if args.output is not None:
+            self._plot(args, safe)
         return 0
+
+    def _plot(self, args: argparse.Namespace, safe) -> None:
+        """The drift against length and F (a few seconds: the bar names it)."""
+        from ..model.config import EdgeConfig
+        from . import stress
+
+        w, s, i = args.plot_coord_bits, args.subpixel_bits, args.plot_intensity_bits
+        plot_config = EdgeConfig(coord_bits=w, subpixel_bits=s, intensity_bits=i, mode="paper")
+
+        def draw(path: str) -> None:
+            curves = stress.drift_curves(w, s, i)
+            shallow = stress.length_curves(w, s, i)
+            stress.plot_stress(curves, shallow, safe, plot_config, path)
+
+        _write_plot(self.prog, args.output, draw, args.quiet)
 
     def _check(self, args: argparse.Namespace) -> tuple[tuple[int, ...], tuple[int, ...]]:
         """The widths and intensity bits to sweep, after checking every option."""
@@ -398,7 +404,8 @@ class StressCommand(Command):
         from . import stress
 
         prog = self.prog
-        _check_output(prog, args.output)
+        if args.output is not None:
+            _check_output(prog, args.output)
         widths = (
             _int_list(prog, "--widths", args.widths, *COORD_BITS_RANGE)
             if args.widths

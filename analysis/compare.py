@@ -23,9 +23,12 @@ edgeaa) or in floating point rounded at the end (SSAA).
 
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from ..model import EdgeConfig
+from ..progress import ProgressBar
 from ..render.exact import exact_image
 from ..render.geometry import sample_mask
 from ..render.render import Plan, plan_scene, render_scene
@@ -138,19 +141,37 @@ def _from8(pixels: np.ndarray, full: int) -> np.ndarray:
     return pixels if full == 255 else (2 * pixels * full + 255) // 510
 
 
-def compare_images(scene: Scene, config: EdgeConfig) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """Every method's image of the scene, and the exact reference (float)."""
+def compare_images(
+    scene: Scene, config: EdgeConfig, bar: ProgressBar | None = None
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Every method's image of the scene, and the exact reference (float); `bar` counts one
+    step per method and one for the exact reference, each named while it runs."""
+    bar = bar or ProgressBar("compare", enabled=False)
     plan = plan_scene(scene, config)
-    images = {"no AA (centre)": centre_sampled(plan)}
-    for mode in ("paper", "seg4"):
-        images[f"edgeaa {mode}"] = render_scene(plan_scene(scene, config.with_(mode=mode))).image
-    images[f"{SSAA}x{SSAA} SSAA"] = supersampled(plan)
-    images["Skia"] = skia_scene(plan)
-    label = "AGG" if all(p.fill_rule == "nonzero" for p in scene.polygons) else "AGG (non-zero)"
-    images[label] = agg_scene(plan)
-    for name, title in SEED_METHODS.items():
-        images[title] = method_image(plan, name)
-    return images, exact_image(plan)
+    agg = "AGG" if all(p.fill_rule == "nonzero" for p in scene.polygons) else "AGG (non-zero)"
+    methods = [
+        ("no AA (centre)", lambda: centre_sampled(plan)),
+        *((f"edgeaa {mode}", partial(_render_mode, scene, config, mode)) for mode in MODES),
+        (f"{SSAA}x{SSAA} SSAA", lambda: supersampled(plan)),
+        ("Skia", lambda: skia_scene(plan)),
+        (agg, lambda: agg_scene(plan)),
+    ]
+    methods += [(title, partial(method_image, plan, name)) for name, title in SEED_METHODS.items()]
+    bar(0, len(methods) + 1)
+    images = {}
+    for title, draw in methods:
+        with bar.doing(title):
+            images[title] = draw()
+    with bar.doing("exact area (shapely)"):
+        exact = exact_image(plan)
+    return images, exact
+
+
+MODES = ("paper", "seg4")  # edgeaa's modes in the figure
+
+
+def _render_mode(scene: Scene, config: EdgeConfig, mode: str) -> np.ndarray:
+    return render_scene(plan_scene(scene, config.with_(mode=mode))).image
 
 
 SEED_METHODS = {
@@ -169,15 +190,28 @@ COLUMNS = 6  # methods per row of the figure when the crop is not wide
 
 
 def plot_compare(
-    scene: Scene, config: EdgeConfig, path: str, crop: tuple[int, int, int, int] | None = None
+    scene: Scene,
+    config: EdgeConfig,
+    path: str,
+    crop: tuple[int, int, int, int] | None = None,
+    bar: ProgressBar | None = None,
 ) -> list[tuple[str, float, float]]:
-    """Write the figure; returns (method, max |err|, RMS err) in intensity LSB over the crop."""
+    """Write the figure; returns (method, max |err|, RMS err) in intensity LSB over the crop.
+    `bar` shows the methods as they are drawn (`compare_images`), then the figure."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    images, exact = compare_images(scene, config)
+    bar = bar or ProgressBar("compare", enabled=False)
+    images, exact = compare_images(scene, config, bar)
+    bar(0, 0)  # the figure: no count of its own
+    with bar.ticking("figure"):
+        return _figure(plt, scene, config, path, crop, images, exact)
+
+
+def _figure(plt, scene: Scene, config: EdgeConfig, path: str, crop, images, exact):
+    """Draw and save the figure of `plot_compare`; return its rows."""
     x0, y0, x1, y1 = crop or (0, 0, scene.width, scene.height)
     exact_crop = exact[y0:y1, x0:x1]
     full = config.full_scale

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
+from ..progress import ProgressBar
 from . import aa_methods, peers
 from .aa_methods import run_method
 from .evaluate import BOUND_PER_K, EDGEAA_METHODS, SAMPLE_METHODS, mode_of, pixel_set
@@ -90,8 +90,10 @@ def error_vs_slope(
     methods: tuple[str, ...] = DEFAULT_METHODS,
     progress: bool = True,
 ) -> SlopeSweep:
-    edges, index, angles = slope_edges(config, step, length, offsets)
-    pixels, batch = pixel_set(config, edges)
+    bar = ProgressBar("error-vs-slope", enabled=progress)
+    with bar.ticking("edges and exact areas"):
+        edges, index, angles = slope_edges(config, step, length, offsets)
+        pixels, batch = pixel_set(config, edges)
     angle_of_pixel = index[pixels.edge_index]
     n_angles = len(angles)
     k_per_angle = np.zeros(n_angles)
@@ -100,11 +102,14 @@ def error_vs_slope(
         for e in edges
     ]
     sweep = SlopeSweep(config, angles, k_per_angle, pixels=len(pixels), edges=len(edges))
-    jobs = peers.fill_jobs(config, edges, batch) if set(methods) & set(peers.FILL_PEERS) else None
-    bar = ProgressBar("error-vs-slope", len(methods), enabled=progress)
+    with bar.ticking("peer jobs"):
+        peer = set(methods) & set(peers.FILL_PEERS)
+        jobs = peers.fill_jobs(config, edges, batch) if peer else None
+    bar(0, len(methods))
     counts = np.bincount(angle_of_pixel, minlength=n_angles)
     for name in methods:
-        run = run_method(config, edges, pixels, name, coverage="model", jobs=jobs)
+        with bar.doing(name):
+            run = run_method(config, edges, pixels, name, coverage="model", jobs=jobs)
         err = np.abs(run.coverage - pixels.exact)
         worst = np.zeros(n_angles)
         np.maximum.at(worst, angle_of_pixel, err)
@@ -115,7 +120,6 @@ def error_vs_slope(
         sweep.rms[name] = float(np.sqrt(np.mean(err * err)))
         positive = pixels.k > 0
         sweep.worst_over_k[name] = float((err[positive] / pixels.k[positive]).max())
-        bar.step(name)
     return sweep
 
 

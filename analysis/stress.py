@@ -41,10 +41,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..command import ProgressBar
 from ..model import Edge, EdgeConfig
 from ..model.step import WidthError
 from ..model.vector import chunked, run_edges
+from ..progress import ProgressBar
 from .evaluate import BOUND_PER_K
 from .geometry import column_index, exact_coverage_pixels, pixel_keys
 from .report import fmt_float, pyplot, save, table
@@ -206,8 +206,9 @@ def bound_sweep(
         for accumulator in ("exact", "truncated"):
             checks = {}
             for mode in BOUND_PER_K:
-                checks[mode] = check_writes(base.with_(mode=mode, accumulator=accumulator), edges)
-                bar.step(f"W={w} {accumulator} {mode}")
+                with bar.doing(f"W={w} {accumulator} {mode}"):
+                    config = base.with_(mode=mode, accumulator=accumulator)
+                    checks[mode] = check_writes(config, edges)
             rows.append(BoundRow(w, accumulator, len(edges), checks))
     return rows
 
@@ -331,24 +332,29 @@ def safe_frac_bits(
             mode="paper",
             accumulator="truncated",
         )
-        row = SafeRow(w, i, base.F, base.min_frac_bits)
-        budget = 2.0 ** -(i + 1)
-        error_ok = drift_ok = True
-        for f in range(base.F + 1, base.min_frac_bits - 1, -1):
-            config = base.with_(frac_bits=f)
-            excess, drift, width_errors = error_and_drift(config, drift_edges(config))
-            row.excess[f], row.drift[f] = excess / budget, drift / budget
-            error_ok = error_ok and width_errors == 0 and excess <= allowance(config)
-            drift_ok = drift_ok and width_errors == 0 and drift <= allowance(config)
-            if error_ok:
-                row.measured_error = f
-            if drift_ok:
-                row.measured_drift = f
-            if not (error_ok or drift_ok) and (i != full_span_intensity or f <= base.F - span):
-                break
-        rows.append(row)
-        bar.step(f"W={w} I={i}")
+        with bar.doing(f"W={w} I={i}"):
+            rows.append(_safe_row(base, span if i == full_span_intensity else None))
     return rows
+
+
+def _safe_row(base: EdgeConfig, span: int | None) -> SafeRow:
+    """One (W, I) row of `safe_frac_bits`; `span`: go at least that far below derived F."""
+    row = SafeRow(base.coord_bits, base.intensity_bits, base.F, base.min_frac_bits)
+    budget = 2.0 ** -(base.intensity_bits + 1)
+    error_ok = drift_ok = True
+    for f in range(base.F + 1, base.min_frac_bits - 1, -1):
+        config = base.with_(frac_bits=f)
+        excess, drift, width_errors = error_and_drift(config, drift_edges(config))
+        row.excess[f], row.drift[f] = excess / budget, drift / budget
+        error_ok = error_ok and width_errors == 0 and excess <= allowance(config)
+        drift_ok = drift_ok and width_errors == 0 and drift <= allowance(config)
+        if error_ok:
+            row.measured_error = f
+        if drift_ok:
+            row.measured_drift = f
+        if not (error_ok or drift_ok) and (span is None or f <= base.F - span):
+            break
+    return row
 
 
 def safe_table(rows: list[SafeRow]) -> str:

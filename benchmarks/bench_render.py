@@ -24,8 +24,8 @@ import sys
 
 import numpy as np
 
-from edgeaa.command import ProgressBar
 from edgeaa.model import EdgeConfig
+from edgeaa.progress import ProgressBar
 from edgeaa.render import builtin, plan_scene, render_scene
 from edgeaa.render.engines import beat_clocks
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness

@@ -17,7 +17,6 @@ import numpy as np
 from ..command import PROG as COMMAND_PROG
 from ..command import (
     Command,
-    ProgressBar,
     add_config_options,
     atomic_output,
     check_output,
@@ -26,6 +25,7 @@ from ..command import (
     tile_from_args,
     usage_error,
 )
+from ..progress import ProgressBar
 from .builtin import BUILTINS
 
 PROG = f"{COMMAND_PROG} render"  # RenderCommand.prog, for the helpers below
@@ -182,7 +182,7 @@ class RenderCommand(Command):
             f"engine {args.engine}; {config}"
         )
         if args.compare:
-            return _compare(args, scene, config, crop)
+            return _compare(args, scene, config, crop, bar)
         return _render(args, plan, bar)
 
 
@@ -221,11 +221,12 @@ def _check_options(args: argparse.Namespace, config) -> None:
         raise usage_error(PROG, "--compare needs -o FIGURE.png")
 
 
-def _compare(args: argparse.Namespace, scene, config, crop) -> int:
+def _compare(args: argparse.Namespace, scene, config, crop, bar: ProgressBar) -> int:
     from ..analysis.compare import plot_compare
 
     with atomic_output(PROG, args.output) as temporary:
-        rows = plot_compare(scene, config, temporary, crop)
+        rows = plot_compare(scene, config, temporary, crop, bar)
+    bar.close()
     print(f"{'method':22} {'max |err| LSB':>14} {'RMS LSB':>8}")
     for label, worst, rms in rows:
         print(f"{label:22} {worst:14.3f} {rms:8.3f}")
@@ -330,6 +331,13 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
         figures.update(_error(result, plan, bar, say))
     if args.json:
         print(json.dumps(figures, indent=1))
+    elif args.output is None and not args.quiet:  # the last line: what happened to the image
+        scene = plan.scene
+        print(
+            f"{PROG}: rendered {scene.width}x{scene.height} px ({args.engine}); give -o FILE.png "
+            "to save it",
+            file=sys.stderr,
+        )
     return 0
 
 

@@ -64,6 +64,7 @@ import shutil
 import subprocess
 import tempfile
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -380,6 +381,7 @@ def synthesize(
     wrap: bool | str = "auto",
     seed: int = 1,
     workdir: str | os.PathLike | None = None,
+    stage: Callable[[str], None] | None = None,
 ) -> SynthResult:
     """Synthesise (and by default place and route) `component` for `target`.
 
@@ -395,7 +397,10 @@ def synthesize(
     workdir:         keep the files (design.v, netlist.json, netlist.stat.json, report.json,
                      the logs; wrapper.* for the harness alone) there instead of a temporary
                      directory.
+    stage:           called with the name of each step as it starts (elaborate, yosys, nextpnr),
+                     for a progress bar: each tool runs for minutes without a word.
     """
+    stage = stage or (lambda name: None)
     tgt = _target(target)
     if wrap not in (True, False, "auto"):
         raise ValueError(f"wrap must be True, False or 'auto', not {wrap!r}")
@@ -408,6 +413,7 @@ def synthesize(
     pins = port_bits(component)
     wrapped = pins > tgt.io_pins if wrap == "auto" else bool(wrap)
     design = IOHarness(component) if wrapped else component
+    stage("elaborate")
     text = verilog.convert(design, name="top", emit_src=False)
 
     with tempfile.TemporaryDirectory(prefix="edgeaa-synth-") as tmp:
@@ -419,6 +425,7 @@ def synthesize(
         if wrapped:
             # The harness alone: the same Verilog with the core turned into a black box.
             script = _synth_script(tgt, "wrapper", blackbox="top.core")
+            stage("yosys (the harness alone)")
             _run([yosys, "-q", "-p", script], cwd, "wrapper.log")
             cells = _read_stat(cwd / "wrapper.stat.json")
             cells.pop("top.core", None)
@@ -435,6 +442,7 @@ def synthesize(
                 wrapped=False,
             )
 
+        stage("yosys")
         _run([yosys, "-q", "-p", _synth_script(tgt, "netlist")], cwd, "yosys.log")
         cells = _read_stat(cwd / "netlist.stat.json")
         luts, ffs, carries = _count(cells, tgt)
@@ -442,6 +450,7 @@ def synthesize(
         if place_and_route:
             argv = [nextpnr, *tgt.nextpnr_args, "--json", "netlist.json", "--freq", f"{freq:g}"]
             argv += ["--seed", str(seed), "--timing-allow-fail", "--report", "report.json"]
+            stage("nextpnr")
             _run(argv, cwd, "nextpnr.log")
             report = json.loads((cwd / "report.json").read_text())
             fmax = [clock["achieved"] for clock in report.get("fmax", {}).values()]

@@ -641,9 +641,9 @@ def test_render_through_a_simulated_core_writes_the_models_png(engine, tmp_path,
 
 
 def test_progress_goes_to_stderr(tmp_path, capsys, monkeypatch):
-    from edgeaa import command
+    from edgeaa import progress
 
-    monkeypatch.setattr(command, "DELAY", 0.0)
+    monkeypatch.setattr(progress, "DELAY", 0.0)
     assert main(["render", "--builtin", "starburst", "-o", str(tmp_path / "s.png")]) == 0
     captured = capsys.readouterr()
     assert "render:" in captured.err and "100.0%" in captured.err

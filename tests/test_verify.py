@@ -129,18 +129,24 @@ def test_the_amaranth_engine_checks_clocks_too(capsys):
     assert summary["timed_edges_checked"] == 6 and summary["clocks_checked"] > 6 * 30
 
 
-def test_progress_shows_edges_per_second_and_time_left():
+def test_progress_shows_edges_per_second_and_time_left(monkeypatch):
+    import io
+
+    from edgeaa import progress
+
+    monkeypatch.setattr(progress, "EVERY", 0.0)
     plan = regress.Plan(DEFAULT, edges=300, shards=3, seed=2)
-    seen = []
+    stream = io.StringIO()
+    bar = progress.ProgressBar("verify", plan.edges, stream=stream, delay=0.0, unit="edges")
     runner = regress.open_runner(DEFAULT, "verilator", workers=0, cluster=None)
-    summary = regress.run_plan(
-        plan,
-        runner,
-        regress.ShardStore(None, plan.manifest()),
-        progress=lambda *args: seen.append(args),
-    )
-    assert summary["passed"] and [done for done, _, _ in seen] == [100, 200, 300]
-    assert all(total == 300 and "edges/s" in stage and "left" in stage for _, total, stage in seen)
+    summary = regress.run_plan(plan, runner, regress.ShardStore(None, plan.manifest()), bar)
+    lines = stream.getvalue().splitlines()
+    assert summary["passed"] and [line.split("(")[1].split(",")[0] for line in lines] == [
+        "100/300",
+        "200/300",
+        "300/300",
+    ]
+    assert all(" edges/s" in line for line in lines) and " left)" in lines[0], lines
 
 
 # -- faults are caught and reported with working reproducers ---------------------------------

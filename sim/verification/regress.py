@@ -334,7 +334,8 @@ def crash_result(task: ShardTask, error: BaseException) -> dict:
 
 def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = None) -> dict:
     """Run the shards `store` has not finished; return the merged summary. `progress(done,
-    total, stage)` is called with edges (finished ones included) after each shard."""
+    total, stage)` is called with edges (finished ones included) after each shard; the stage
+    is the count of mismatches once there are any (else None: the rate is the bar's)."""
     tasks = (task for task in plan.tasks() if task.index not in store.finished)
     resumed = len(store.finished)
     fresh: list[dict] = []  # this session's shards, crashed ones included
@@ -350,29 +351,18 @@ def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = 
         fresh.append(record)
         done += task.edges
         if progress is not None:
-            progress(done, plan.edges, _stage(fresh, plan.edges - done, start, store))
+            progress(done, plan.edges, _failures(fresh, store))
     seconds = time.perf_counter() - start
     crashed = [record for record in fresh if record.get("crashed")]
     records = sorted([*store.finished.values(), *crashed], key=lambda r: r["index"])
     return summarize(plan, records, fresh, resumed, seconds)
 
 
-def _stage(fresh: list[dict], left: int, start: float, store: ShardStore) -> str:
-    """The progress bar's stage: edges per second this session, time left, failures so far."""
-    elapsed = time.perf_counter() - start
-    rate = sum(record["edges"] for record in fresh) / elapsed if elapsed > 0 else 0.0
-    stage = f"{rate:,.0f} edges/s, {_duration(left / rate) if rate else '?'} left"
+def _failures(fresh: list[dict], store: ShardStore) -> str | None:
+    """The progress bar's stage: the mismatches so far, if any."""
     failed = sum(len(r["mismatches"]) for r in store.finished.values())
     failed += sum(len(r["mismatches"]) for r in fresh if r.get("crashed"))
-    return stage + (f", {failed} MISMATCHES" if failed else "")
-
-
-def _duration(seconds: float) -> str:
-    if seconds < 90:
-        return f"{seconds:.0f} s"
-    if seconds < 90 * 60:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
+    return f"{failed} MISMATCHES" if failed else None
 
 
 def summarize(plan: Plan, records: list[dict], fresh: list[dict], resumed: int, seconds: float):
