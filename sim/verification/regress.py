@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import os
 import signal
+import stat
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator
@@ -31,10 +33,12 @@ from multiprocessing import get_context
 from pathlib import Path
 
 from ...model import EdgeConfig
+from ...model.numbers import shown
 from .shards import (
     BAD_FRACTION,
     CLIP_FRACTION,
     IDLE,
+    KINDS,
     MAX_PIXELS,
     STALL,
     CompiledCore,
@@ -108,63 +112,255 @@ class Plan:
 # -- the record of finished shards -----------------------------------------------------------
 
 
+class DamagedRecord(RunMismatch):
+    """A file of the output directory is not what `ShardStore` writes (one line naming it)."""
+
+
+MAX_MANIFEST = 1 << 16  # bytes of run.json (it takes about 600)
+MAX_LINE = 1 << 16  # bytes of a line of shards.jsonl (at most six mismatches: about 5 KB)
+COUNTS = ("beats", "clocks", "dropped", "timed_edges")  # a record's whole counts, >= 0
+TIMES = ("sim_seconds", "seconds")
+MISMATCH_FIELDS = {  # a recorded mismatch's fields and their JSON types
+    "kind": (str,),
+    "edge": (int, type(None)),
+    "beat": (int, type(None)),
+    "message": (str,),
+    "stream": (str, type(None)),
+    "reproduce": (str, type(None)),
+    "reproduce_shard": (str,),
+    "shard": (int,),
+    "seed": (int,),
+}
+RECORD_FIELDS = ("index", "seed", "edges", *COUNTS, *TIMES, "mismatches")
+
+
+def _shown(value) -> str:
+    """A recorded value for a message: a plain one cut short, a structure by its type only (its
+    repr could be deep)."""
+    if isinstance(value, dict | list):
+        return f"a JSON {'object' if isinstance(value, dict) else 'array'}"
+    return shown(value)
+
+
+def _is(value, types: tuple) -> bool:
+    """`value` is of one of the JSON `types` (a bool is not an int here)."""
+    return isinstance(value, types) and (bool in types or not isinstance(value, bool))
+
+
+def record_error(record, manifest: dict) -> str | None:
+    """What is wrong with a shard's record (a parsed line of shards.jsonl) for the run of
+    `manifest`, or None: the one schema of a record, its fields' types and ranges, and the
+    shard's seed and size as the plan makes them. Looks no deeper than the schema does."""
+    if not isinstance(record, dict) or record.keys() != set(RECORD_FIELDS):
+        return f"is not a shard record (an object of the fields {', '.join(RECORD_FIELDS)})"
+    count = 1 if manifest["shard_seed"] is not None else manifest["shards"]
+    index = record["index"]
+    if not _is(index, (int,)) or not 0 <= index < count:
+        return f"index {_shown(index)} is not a shard of this run (0 to {count - 1})"
+    if manifest["shard_seed"] is not None:
+        seed, edges = manifest["shard_seed"], manifest["edges"]
+    else:
+        seed = shard_seed(manifest["seed"], index)
+        edges = shard_size(manifest["edges"], manifest["shards"], index)
+    for name, want in (("seed", seed), ("edges", edges)):
+        if not _is(record[name], (int,)) or record[name] != want:
+            return f"shard {index}'s {name} is {_shown(record[name])}, the plan's {want}"
+    for name in COUNTS:
+        if not _is(record[name], (int,)) or record[name] < 0:
+            return f"{name} {_shown(record[name])} is not a count (a whole number >= 0)"
+    for name in TIMES:
+        value = record[name]
+        if not _is(value, (int, float)) or not 0 <= value < math.inf:
+            return f"{name} {_shown(value)} is not a time (a number of seconds >= 0)"
+    mismatches = record["mismatches"]
+    if not isinstance(mismatches, list) or len(mismatches) > 2 * len(KINDS):
+        return f"mismatches is not a list of at most {2 * len(KINDS)} mismatches"
+    for mismatch in mismatches:
+        if not isinstance(mismatch, dict) or mismatch.keys() != MISMATCH_FIELDS.keys():
+            return "a mismatch is not an object of the fields " + ", ".join(MISMATCH_FIELDS)
+        for name, types in MISMATCH_FIELDS.items():
+            if not _is(mismatch[name], types):
+                return f"a mismatch's {name} {_shown(mismatch[name])} is of the wrong type"
+    return None
+
+
+def manifest_error(recorded, manifest: dict) -> str | None:
+    """What makes `recorded` (a parsed run.json) not a run record of the shape `manifest` has,
+    or None: an object of the same fields, each a plain value, an object of plain values or a
+    list of plain values where `manifest` has one. Different values are another run's."""
+    if not isinstance(recorded, dict) or recorded.keys() != manifest.keys():
+        return "is not a run record (an object of the fields " + ", ".join(manifest) + ")"
+    for name, want in manifest.items():
+        if isinstance(want, dict):
+            if not isinstance(recorded[name], dict) or recorded[name].keys() != want.keys():
+                return f"field {name} is not an object of the fields " + ", ".join(want)
+            values = list(recorded[name].values())
+        else:
+            values = [recorded[name]]
+        for value in values:
+            if isinstance(value, list):
+                value = None if all(_is(v, PLAIN) for v in value) else value
+            if not _is(value, PLAIN):
+                return f"field {name} holds {_shown(value)}, not a plain value"
+    return None
+
+
+PLAIN = (str, int, float, bool, type(None))  # JSON values without structure
+
+
 class ShardStore:
-    """Finished shards by index: in memory, and in `directory` when one is given."""
+    """Finished shards by index: in memory, and in `directory` when one is given.
+
+    A file there that is not what this class writes (another program's, or damaged) is
+    refused (`DamagedRecord`, naming the file and line), never repaired or overwritten. The
+    one exception is what an interrupted write leaves: a last line without its newline,
+    which is cut off (the note in `notes` says so) and its shard runs again."""
 
     def __init__(self, directory: str | os.PathLike | None, manifest: dict):
         self.directory = None if directory is None else Path(directory)
         self.finished: dict[int, dict] = {}
+        self.notes: list[str] = []
         if self.directory is not None:
             self._open(manifest)
+
+    def _damaged(self, path: Path, what: str, line: int | None = None) -> DamagedRecord:
+        where = f"{_path(path)}" + ("" if line is None else f" line {line}")
+        return DamagedRecord(
+            f"{where} {what}; use a fresh --out folder or delete {_path(self.directory)}"
+        )
 
     def _open(self, manifest: dict) -> None:
         self.directory.mkdir(parents=True, exist_ok=True)
         path = self.directory / MANIFEST
-        if path.exists():
-            try:
-                recorded = json.loads(path.read_text())
-            except (OSError, ValueError) as error:
-                raise RunMismatch(f"{path} is not a run record ({error})") from None
+        if path.exists() or path.is_symlink():
+            recorded = self._parse(path, _read_small(path, MAX_MANIFEST))
+            error = manifest_error(recorded, manifest)
+            if error is not None:
+                raise self._damaged(path, error)
             if recorded != manifest:
                 differences = _differences(recorded, manifest)
                 raise RunMismatch(
-                    f"{self.directory} holds another run ({differences}): rerun with its "
+                    f"{_path(self.directory)} holds another run ({differences}): rerun with its "
                     "options or give another --out"
                 )
         else:
-            path.write_text(json.dumps(manifest, indent=1) + "\n")
-        self.finished = self._load()
-
-    def _load(self) -> dict[int, dict]:
-        """The recorded shards; a line an interrupt cut short is dropped (the file rewritten
-        without it, so the next record starts on a line of its own)."""
-        path = self.directory / RECORDS
-        if not path.exists():
-            return {}
-        finished, broken = {}, False
-        for line in path.read_text().splitlines(keepends=True):
-            try:
-                record = json.loads(line)
-                finished[record["index"]] = record
-            except (ValueError, KeyError, TypeError):
-                broken = True
-            broken |= not line.endswith("\n")
-        if broken:
-            partial = path.with_suffix(".tmp")
-            partial.write_text("".join(json.dumps(r) + "\n" for r in finished.values()))
+            partial = path.with_name(f".{MANIFEST}.{os.getpid()}")
+            partial.write_text(json.dumps(manifest, indent=1) + "\n")
             os.replace(partial, path)
+        self.finished = self._load(manifest)
+
+    def _parse(self, path: Path, data: bytes | str, line: int | None = None):
+        """The JSON value of `data`; a file or line that is not one is refused."""
+        if isinstance(data, str):  # what _read_small says is wrong with the file
+            raise self._damaged(path, data)
+        try:
+            return json.loads(data.decode("utf-8"))
+        except UnicodeDecodeError:
+            raise self._damaged(path, "is not UTF-8 text", line) from None
+        except RecursionError:
+            raise self._damaged(path, "nests too deeply", line) from None
+        except ValueError as error:
+            raise self._damaged(path, f"is not JSON ({error})", line) from None
+
+    def _load(self, manifest: dict) -> dict[int, dict]:
+        """The recorded shards, each line checked (`record_error`)."""
+        path = self.directory / RECORDS
+        if not (path.exists() or path.is_symlink()):
+            return {}
+        finished: dict[int, dict] = {}
+        where: dict[int, int] = {}  # index: its line
+        problem = _not_a_file(path)
+        try:
+            file = open(path, "rb") if problem is None else None  # noqa: SIM115 (closed below)
+        except OSError as error:
+            problem = f"cannot be read ({error.strerror})"
+        if problem is not None:
+            raise self._damaged(path, problem)
+        with file:
+            end, number = 0, 0
+            while line := self._line(file, path, number + 1):
+                number += 1
+                if not line.endswith(b"\n"):
+                    self._cut(path, number, end)
+                    break
+                end += len(line)
+                record = self._parse(path, line, number)
+                error = record_error(record, manifest)
+                if error is None and record["index"] in finished:
+                    error = f"records shard {record['index']} again (line {where[record['index']]})"
+                if error is not None:
+                    raise self._damaged(path, error, number)
+                finished[record["index"]], where[record["index"]] = record, number
         return finished
+
+    def _line(self, file, path: Path, number: int) -> bytes:
+        """Line `number` of shards.jsonl, newline included; b"" at the end."""
+        try:
+            line = file.readline(MAX_LINE + 1)
+        except OSError as error:
+            raise self._damaged(path, f"cannot be read ({error.strerror})", number) from None
+        if len(line) > MAX_LINE:
+            raise self._damaged(path, f"is longer than {MAX_LINE:,} bytes", number)
+        return line
+
+    def _cut(self, path: Path, number: int, end: int) -> None:
+        """Cut off the last line, which lacks its newline: a write an interrupt stopped."""
+        os.truncate(path, end)
+        self.notes.append(
+            f"{_path(path)} line {number} was cut short (an interrupted write): dropped, "
+            "its shard runs again"
+        )
 
     def record(self, result: dict) -> None:
         self.finished[result["index"]] = result
         if self.directory is not None:
-            with open(self.directory / RECORDS, "a") as file:
-                file.write(json.dumps(result) + "\n")
+            # The line in one write (more only if the disk fills): an interrupt lands before
+            # or after it, not inside.
+            line = memoryview((json.dumps(result) + "\n").encode())
+            fd = os.open(self.directory / RECORDS, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+            try:
+                while line:
+                    line = line[os.write(fd, line) :]
+            finally:
+                os.close(fd)
+
+
+def _path(path: Path) -> str:
+    """A path for a one-line message: as it is, or quoted if it holds a newline or the like."""
+    text = str(path)
+    return text if text.isprintable() else repr(text)
+
+
+def _not_a_file(path: Path) -> str | None:
+    """What keeps `path` from being read as a record file (a directory, a pipe that would
+    block the read, a dangling link), or None."""
+    try:
+        mode = path.stat().st_mode
+    except OSError as error:
+        return f"cannot be read ({error.strerror})"
+    if stat.S_ISDIR(mode):
+        return "is a directory"
+    return None if stat.S_ISREG(mode) else "is not a regular file"
+
+
+def _read_small(path: Path, limit: int) -> bytes | str:
+    """The bytes of the file at `path`, or what is wrong with it: too large, not a file."""
+    problem = _not_a_file(path)
+    if problem is not None:
+        return problem
+    try:
+        with open(path, "rb") as file:
+            data = file.read(limit + 1)
+    except OSError as error:
+        return f"cannot be read ({error.strerror})"
+    return data if len(data) <= limit else f"is larger than {limit:,} bytes"
 
 
 def _differences(recorded: dict, wanted: dict) -> str:
     keys = [key for key in wanted if recorded.get(key) != wanted[key]]
-    return ", ".join(f"{key} {recorded.get(key)!r} there, {wanted[key]!r} here" for key in keys)
+    return ", ".join(
+        f"{key} {_shown(recorded.get(key))} there, {wanted[key]!r} here" for key in keys
+    )
 
 
 # -- where the shards run --------------------------------------------------------------------
