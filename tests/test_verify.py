@@ -131,7 +131,10 @@ def test_the_amaranth_engine_checks_clocks_too(capsys):
     assert summary["timed_edges_checked"] == 6 and summary["clocks_checked"] > 6 * 30
 
 
-def test_progress_shows_edges_per_second_and_time_left():
+def test_progress_shows_edges_per_second_and_time_left(monkeypatch):
+    """In this process, progress after each piece of a shard (pieces of 30 edges here) and
+    after each shard, with the rate and the time left."""
+    monkeypatch.setattr(shards, "CHUNK_EDGES", 30)
     plan = regress.Plan(DEFAULT, edges=300, shards=3, seed=2)
     seen = []
     runner = regress.open_runner(DEFAULT, "verilator", workers=0, cluster=None)
@@ -141,8 +144,31 @@ def test_progress_shows_edges_per_second_and_time_left():
         regress.ShardStore(None, plan.manifest()),
         progress=lambda *args: seen.append(args),
     )
-    assert summary["passed"] and [done for done, _, _ in seen] == [100, 200, 300]
+    pieces = [30, 50, 80, 100, 100]  # streams of 50 edges: pieces of 30 and 20, then the shard
+    assert summary["passed"] and [done for done, _, _ in seen] == [
+        *pieces,
+        *(100 + x for x in pieces),
+        *(200 + x for x in pieces),
+    ]
     assert all(total == 300 and "edges/s" in stage and "left" in stage for _, total, stage in seen)
+
+
+def test_a_local_pool_shows_progress_inside_a_shard():
+    """A worker of the local pool reports each piece of its shard (two pieces of CHUNK_EDGES)."""
+    edges = 2 * shards.CHUNK_EDGES
+    plan = regress.Plan(EdgeConfig(mode="seg2"), edges=edges, shards=1, seed=3)
+    seen = []
+    runner = regress.open_runner(plan.config, "verilator", workers=1, cluster=None)
+    try:
+        summary = regress.run_plan(
+            plan,
+            runner,
+            regress.ShardStore(None, plan.manifest()),
+            progress=lambda *args: seen.append(args[0]),
+        )
+    finally:
+        runner.close()
+    assert summary["passed"] and seen == [edges // 2, edges, edges]
 
 
 # -- faults are caught and reported with working reproducers ---------------------------------
@@ -268,9 +294,9 @@ def test_a_rerun_skips_recorded_shards(capsys, monkeypatch, tmp_path):
     ran = []
     original = regress.check_shard
 
-    def counted(task, core=None):
+    def counted(task, core=None, chunk=None, report=None):
         ran.append(task.index)
-        return original(task, core)
+        return original(task, core, chunk, report)
 
     monkeypatch.setattr(regress, "check_shard", counted)
     status, second, err = verify(capsys, *argv)

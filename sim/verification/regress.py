@@ -22,6 +22,7 @@ import json
 import logging
 import math
 import os
+import queue
 import signal
 import stat
 import time
@@ -36,6 +37,7 @@ from ...model import EdgeConfig
 from ...model.numbers import shown
 from .shards import (
     BAD_FRACTION,
+    CHUNK_EDGES,
     CLIP_FRACTION,
     IDLE,
     KINDS,
@@ -97,6 +99,7 @@ class Plan:
         config = {f.name: getattr(self.config, f.name) for f in fields(self.config) if f.init}
         workload = {"idle": IDLE, "stall": STALL, "bad_fraction": BAD_FRACTION}
         workload.update(clip_fraction=CLIP_FRACTION, max_pixels=list(MAX_PIXELS))
+        workload["chunk_edges"] = CHUNK_EDGES  # a longer stream runs in pieces from reset
         return {
             "format": FORMAT,
             "config": config,
@@ -391,10 +394,13 @@ class InProcess:
     def __init__(self, core: CompiledCore | None):
         self.core = core
 
-    def results(self, tasks: Iterable[ShardTask]) -> Iterator[tuple[ShardTask, Callable]]:
+    def results(
+        self, tasks: Iterable[ShardTask], piece: Callable | None = None
+    ) -> Iterator[tuple[ShardTask, Callable]]:
+        """(task, its result) as each finishes; `piece(index, edges)` after each piece."""
         for task in tasks:
             try:
-                result = check_shard(task, self.core)
+                result = check_shard(task, self.core, report=piece)
             except Exception as error:  # reported like a worker's exception
                 yield task, _raise(error)
             else:
@@ -411,34 +417,58 @@ def _raise(error: Exception) -> Callable:
     return result
 
 
-def _ignore_interrupt() -> None:
+_PIECES = None  # a pool worker's queue to the driver: (shard index, edges checked so far)
+
+
+def _start_worker(pieces) -> None:
     """Workers leave Ctrl-C to the driver, which stops handing out shards and shuts them down
-    (otherwise each prints a traceback)."""
+    (otherwise each prints a traceback); they report pieces on `pieces`."""
+    global _PIECES
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _PIECES = pieces
+
+
+def _check_in_worker(task: ShardTask, core: CompiledCore | None) -> dict:
+    return check_shard(task, core, report=lambda index, edges: _PIECES.put((index, edges)))
 
 
 class LocalPool:
     """A pool of `workers` processes on this machine (started fresh: `spawn`, so they do not
-    inherit the driver's threads or open files)."""
+    inherit the driver's threads or open files). Workers report each piece of a shard on a
+    queue, which the driver reads while it waits (`WAIT` seconds at a time)."""
+
+    WAIT = 1.0
 
     def __init__(self, workers: int, core: CompiledCore | None):
         self.workers, self.core = workers, core
+        context = get_context("spawn")
+        self.pieces = context.Queue()
         self.pool = futures.ProcessPoolExecutor(
-            workers, mp_context=get_context("spawn"), initializer=_ignore_interrupt
+            workers, mp_context=context, initializer=_start_worker, initargs=(self.pieces,)
         )
 
-    def results(self, tasks: Iterable[ShardTask]):
+    def results(self, tasks: Iterable[ShardTask], piece: Callable | None = None):
         def submit(task):
-            return self.pool.submit(check_shard, task, self.core)
+            return self.pool.submit(_check_in_worker, task, self.core)
 
         def wait_any(pending):
-            return futures.wait(pending, return_when=futures.FIRST_COMPLETED)
+            done, rest = futures.wait(pending, self.WAIT, return_when=futures.FIRST_COMPLETED)
+            # A worker puts its pieces before it returns: all of a finished shard's are here.
+            while True:
+                try:
+                    index, edges = self.pieces.get(timeout=0.05 if done else 0)
+                except queue.Empty:
+                    break
+                if piece is not None:
+                    piece(index, edges)
+            return done, rest
 
         for task, future in _results(submit, wait_any, tasks, 2 * self.workers):
             yield task, future.result
 
     def close(self) -> None:
         self.pool.shutdown(wait=True, cancel_futures=True)
+        self.pieces.close()
 
 
 class DaskCluster:
@@ -474,7 +504,8 @@ class DaskCluster:
         self.core = None if core is None else self.client.scatter(core, broadcast=True)
         self.threads = max(1, sum(self.client.nthreads().values()))
 
-    def results(self, tasks: Iterable[ShardTask]):
+    def results(self, tasks: Iterable[ShardTask], piece: Callable | None = None):
+        """(task, its result) as each finishes; pieces are not reported from a cluster."""
         from distributed import wait
 
         def submit(task):
@@ -530,37 +561,49 @@ def crash_result(task: ShardTask, error: BaseException) -> dict:
 
 def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = None) -> dict:
     """Run the shards `store` has not finished; return the merged summary. `progress(done,
-    total, stage)` is called with edges (finished ones included) after each shard."""
+    total, stage)` is called with edges (finished ones included) after each shard and, from
+    this process or a local pool, after each piece of a shard (`ShardTask.chunks`)."""
     tasks = (task for task in plan.tasks() if task.index not in store.finished)
     resumed = len(store.finished)
     fresh: list[dict] = []  # this session's shards, crashed ones included
-    done = sum(record["edges"] for record in store.finished.values())
+    done = resumed_edges = sum(record["edges"] for record in store.finished.values())
+    failed = sum(len(record["mismatches"]) for record in store.finished.values())
+    running: dict[int, int] = {}  # edges checked so far in shards still running
     start = time.perf_counter()
-    for task, result in runner.results(tasks):
+
+    def show() -> None:
+        if progress is not None:
+            edges = done + sum(running.values())
+            stage = _stage(edges - resumed_edges, plan.edges - edges, start)
+            progress(edges, plan.edges, stage + (f", {failed} MISMATCHES" if failed else ""))
+
+    def piece(index: int, edges: int) -> None:
+        running[index] = edges
+        show()
+
+    for task, result in runner.results(tasks, piece):
         try:
             record = result()
         except Exception as error:
             record = crash_result(task, error)
         else:
             store.record(record)
+        running.pop(task.index, None)
         fresh.append(record)
         done += task.edges
-        if progress is not None:
-            progress(done, plan.edges, _stage(fresh, plan.edges - done, start, store))
+        failed += len(record["mismatches"])
+        show()
     seconds = time.perf_counter() - start
     crashed = [record for record in fresh if record.get("crashed")]
     records = sorted([*store.finished.values(), *crashed], key=lambda r: r["index"])
     return summarize(plan, records, fresh, resumed, seconds)
 
 
-def _stage(fresh: list[dict], left: int, start: float, store: ShardStore) -> str:
-    """The progress bar's stage: edges per second this session, time left, failures so far."""
+def _stage(edges: int, left: int, start: float) -> str:
+    """The progress bar's stage: edges per second this session, time left."""
     elapsed = time.perf_counter() - start
-    rate = sum(record["edges"] for record in fresh) / elapsed if elapsed > 0 else 0.0
-    stage = f"{rate:,.0f} edges/s, {_duration(left / rate) if rate else '?'} left"
-    failed = sum(len(r["mismatches"]) for r in store.finished.values())
-    failed += sum(len(r["mismatches"]) for r in fresh if r.get("crashed"))
-    return stage + (f", {failed} MISMATCHES" if failed else "")
+    rate = edges / elapsed if elapsed > 0 else 0.0
+    return f"{rate:,.0f} edges/s, {_duration(left / rate) if rate else '?'} left"
 
 
 def _duration(seconds: float) -> str:

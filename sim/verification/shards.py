@@ -25,7 +25,7 @@ import os
 import shlex
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from itertools import islice
 from pathlib import Path
@@ -346,9 +346,15 @@ class StreamCheck:
         return [self.found[kind] for kind in KINDS if kind in self.found]
 
 
-def check_shard(task: ShardTask, core: CompiledCore | None = None, chunk: int | None = None):
-    """Run and check one shard, `chunk` edges at a time (`ShardTask.chunks`); the result is
-    plain data (it is stored as a JSON line)."""
+def check_shard(
+    task: ShardTask,
+    core: CompiledCore | None = None,
+    chunk: int | None = None,
+    report: Callable[[int, int], None] | None = None,
+) -> dict:
+    """Run and check one shard, `chunk` edges at a time (`ShardTask.chunks`), calling
+    `report(index, edges checked so far)` after each piece; the result is plain data (it is
+    stored as a JSON line)."""
     start = time.perf_counter()
     result = {"index": task.index, "seed": task.seed, "edges": task.edges, "beats": 0}
     result.update(clocks=0, dropped=0, timed_edges=0, sim_seconds=0.0, mismatches=[])
@@ -361,6 +367,8 @@ def check_shard(task: ShardTask, core: CompiledCore | None = None, chunk: int | 
         result["dropped"] += run.errors
         result["timed_edges"] += len(edges) if stream == "ready" else 0
         checks.setdefault(stream, StreamCheck(offset)).check(task.config, stream, edges, run)
+        if report is not None:
+            report(task.index, offset + len(edges))
     for stream, check in checks.items():
         for found in check.mismatches():
             edge = None if found["edge"] is None else check.first_edge + found["edge"]
