@@ -30,8 +30,8 @@ EXIT_INTERRUPTED = 130  # the shell's status for Ctrl-C
 DEFAULT_EDGES = 10_000
 DEFAULT_SEED = 1
 MAX_EDGES = 10**12  # a thousand times the 10^9: weeks on a large cluster
-# Edges in one shard: its time is lost when a run is interrupted, and progress moves a shard at
-# a time. One core checks an edge in about 0.4 ms (100,000 edges in one shard, default
+# Edges in one shard: its time is what an interrupted run loses (a shard is recorded whole).
+# One core checks an edge in about 0.4 ms (100,000 edges in one shard, default
 # configuration: 42.7 s, 2,343 edges/s on a shared 2-core machine), so the largest shard
 # takes about 7 minutes; its memory is bounded anyway (shards.CHUNK_EDGES).
 MAX_SHARD_EDGES = 1_000_000

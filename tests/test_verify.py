@@ -571,7 +571,7 @@ def test_a_shards_memory_is_that_of_one_chunk():
     assert result["mismatches"] == single["mismatches"] == []
     for key in ("edges", "beats", "dropped", "timed_edges"):
         assert result[key] == single[key], key
-    assert shards.CHUNK_EDGES == 10_000  # the size a shard uses (about 150 MB at its peak)
+    assert shards.CHUNK_EDGES == 10_000  # the size a shard uses
 
 
 # -- bad input -------------------------------------------------------------------------------
@@ -603,6 +603,17 @@ def test_bad_input_is_one_line_with_status_2(capsys, argv, message):
     assert status == 2 and summary is None
     # (argparse reports an unknown option from the top-level parser: "edgeaa: error: ...")
     assert err.count("\n") == 1 and err.startswith("edgeaa") and message in err
+
+
+def test_help_says_what_exists(capsys):
+    """The pipeline exists (hdl/pipeline.py): --help does not say otherwise, and says where
+    scenes through it are checked and that --scenes is not an option yet."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["verify", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert exit_.value.code == 0 and "does not exist" not in text
+    assert "hdl/pipeline.py" in text and "--engine verilator" in text
+    assert "a --scenes option is not there yet" in text
 
 
 # -- the long run ----------------------------------------------------------------------------
