@@ -272,7 +272,9 @@ def _report(summary: dict) -> str:
         if mismatch["reproduce"]:
             lines.append(f"  the edge:  {mismatch['reproduce']}")
         lines.append(f"  the shard: {mismatch['reproduce_shard']}")
-    count = len(summary["mismatches"])
+    count = summary["mismatch_count"]
     noun = "mismatch" if count == 1 else "mismatches"
-    lines.append("PASSED" if summary["passed"] else f"FAILED: {count} {noun}")
+    shown_ = len(summary["mismatches"])
+    listed = f" (the first {shown_} listed)" if count > shown_ else ""
+    lines.append("PASSED" if summary["passed"] else f"FAILED: {count} {noun}{listed}")
     return "\n".join(lines)

@@ -29,7 +29,7 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from concurrent import futures
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from multiprocessing import get_context
 from pathlib import Path
 
@@ -211,8 +211,52 @@ def manifest_error(recorded, manifest: dict) -> str | None:
 PLAIN = (str, int, float, bool, type(None))  # JSON values without structure
 
 
+class Finished:
+    """The indices of finished shards, in memory bounded by the shards out of order: all
+    below `low`, and the others in a set (a run finishes shards about in index order)."""
+
+    def __init__(self):
+        self.low, self.above, self.count = 0, set(), 0
+
+    def add(self, index: int) -> None:
+        self.above.add(index)
+        self.count += 1
+        while self.low in self.above:
+            self.above.remove(self.low)
+            self.low += 1
+
+    def __contains__(self, index: int) -> bool:
+        return index < self.low or index in self.above
+
+    def __len__(self) -> int:
+        return self.count
+
+
+MAX_LISTED = 100  # mismatches a summary lists (the count is of all of them)
+SUMMED = ("edges", "beats", "clocks", "dropped", "timed_edges", "seconds", "sim_seconds")
+
+
+@dataclass
+class Totals:
+    """Figures summed over shards' records, and the first `MAX_LISTED` of their mismatches:
+    a run of millions of shards keeps these, not its records."""
+
+    shards: int = 0
+    sums: dict = field(default_factory=lambda: dict.fromkeys(SUMMED, 0))
+    mismatches: list = field(default_factory=list)
+    mismatch_count: int = 0
+
+    def add(self, record: dict) -> None:
+        self.shards += 1
+        for key in SUMMED:
+            self.sums[key] += record[key]
+        self.mismatch_count += len(record["mismatches"])
+        self.mismatches += record["mismatches"][: MAX_LISTED - len(self.mismatches)]
+
+
 class ShardStore:
-    """Finished shards by index: in memory, and in `directory` when one is given.
+    """Finished shards by index: in memory, and in `directory` when one is given. Holds their
+    indices (`finished`) and totals (`totals`), not the records.
 
     A file there that is not what this class writes (another program's, or damaged) is
     refused (`DamagedRecord`, naming the file and line), never repaired or overwritten. The
@@ -221,7 +265,8 @@ class ShardStore:
 
     def __init__(self, directory: str | os.PathLike | None, manifest: dict):
         self.directory = None if directory is None else Path(directory)
-        self.finished: dict[int, dict] = {}
+        self.finished = Finished()
+        self.totals = Totals()
         self.notes: list[str] = []
         if self.directory is not None:
             self._open(manifest)
@@ -250,7 +295,7 @@ class ShardStore:
             partial = path.with_name(f".{MANIFEST}.{os.getpid()}")
             partial.write_text(json.dumps(manifest, indent=1) + "\n")
             os.replace(partial, path)
-        self.finished = self._load(manifest)
+        self._load(manifest)
 
     def _parse(self, path: Path, data: bytes | str, line: int | None = None):
         """The JSON value of `data`; a file or line that is not one is refused."""
@@ -265,13 +310,11 @@ class ShardStore:
         except ValueError as error:
             raise self._damaged(path, f"is not JSON ({error})", line) from None
 
-    def _load(self, manifest: dict) -> dict[int, dict]:
+    def _load(self, manifest: dict) -> None:
         """The recorded shards, each line checked (`record_error`)."""
         path = self.directory / RECORDS
         if not (path.exists() or path.is_symlink()):
-            return {}
-        finished: dict[int, dict] = {}
-        where: dict[int, int] = {}  # index: its line
+            return
         problem = _not_a_file(path)
         try:
             file = open(path, "rb") if problem is None else None  # noqa: SIM115 (closed below)
@@ -289,12 +332,15 @@ class ShardStore:
                 end += len(line)
                 record = self._parse(path, line, number)
                 error = record_error(record, manifest)
-                if error is None and record["index"] in finished:
-                    error = f"records shard {record['index']} again (line {where[record['index']]})"
+                if error is None and record["index"] in self.finished:
+                    error = f"records shard {record['index']} again"
                 if error is not None:
                     raise self._damaged(path, error, number)
-                finished[record["index"]], where[record["index"]] = record, number
-        return finished
+                self._add(record)
+
+    def _add(self, record: dict) -> None:
+        self.finished.add(record["index"])
+        self.totals.add(record)
 
     def _line(self, file, path: Path, number: int) -> bytes:
         """Line `number` of shards.jsonl, newline included; b"" at the end."""
@@ -315,7 +361,7 @@ class ShardStore:
         )
 
     def record(self, result: dict) -> None:
-        self.finished[result["index"]] = result
+        self._add(result)
         if self.directory is not None:
             # The line in one write (more only if the disk fills): an interrupt lands before
             # or after it, not inside.
@@ -565,16 +611,16 @@ def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = 
     this process or a local pool, after each piece of a shard (`ShardTask.chunks`)."""
     tasks = (task for task in plan.tasks() if task.index not in store.finished)
     resumed = len(store.finished)
-    fresh: list[dict] = []  # this session's shards, crashed ones included
-    done = resumed_edges = sum(record["edges"] for record in store.finished.values())
-    failed = sum(len(record["mismatches"]) for record in store.finished.values())
+    resumed_edges = store.totals.sums["edges"]
+    session, crashed = Totals(), Totals()  # this session's shards; those whose worker raised
     running: dict[int, int] = {}  # edges checked so far in shards still running
     start = time.perf_counter()
 
     def show() -> None:
         if progress is not None:
-            edges = done + sum(running.values())
+            edges = resumed_edges + session.sums["edges"] + sum(running.values())
             stage = _stage(edges - resumed_edges, plan.edges - edges, start)
+            failed = store.totals.mismatch_count + crashed.mismatch_count
             progress(edges, plan.edges, stage + (f", {failed} MISMATCHES" if failed else ""))
 
     def piece(index: int, edges: int) -> None:
@@ -586,17 +632,13 @@ def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = 
             record = result()
         except Exception as error:
             record = crash_result(task, error)
+            crashed.add(record)
         else:
             store.record(record)
         running.pop(task.index, None)
-        fresh.append(record)
-        done += task.edges
-        failed += len(record["mismatches"])
+        session.add(record)
         show()
-    seconds = time.perf_counter() - start
-    crashed = [record for record in fresh if record.get("crashed")]
-    records = sorted([*store.finished.values(), *crashed], key=lambda r: r["index"])
-    return summarize(plan, records, fresh, resumed, seconds)
+    return summarize(plan, store.totals, crashed, session, resumed, time.perf_counter() - start)
 
 
 def _stage(edges: int, left: int, start: float) -> str:
@@ -614,28 +656,34 @@ def _duration(seconds: float) -> str:
     return f"{seconds / 3600:.1f} h"
 
 
-def summarize(plan: Plan, records: list[dict], fresh: list[dict], resumed: int, seconds: float):
-    """The run's figures, merged over every finished shard (resumed ones included); rates and
-    times are this session's (`fresh` shards)."""
-    totals = {
-        key: sum(record[key] for record in records)
-        for key in ("edges", "beats", "clocks", "dropped", "timed_edges")
-    }
-    mismatches = [m for record in records for m in record["mismatches"]]
-    edges_run = sum(record["edges"] for record in fresh)
+def summarize(
+    plan: Plan, recorded: Totals, crashed: Totals, session: Totals, resumed: int, seconds: float
+) -> dict:
+    """The run's figures, merged over every finished shard (`recorded`, resumed ones
+    included, and the `crashed` ones of this session); rates and times are this session's.
+    Mismatches are listed by shard, at most `MAX_LISTED`, and all counted."""
+    listed = recorded.mismatches + crashed.mismatches
+    listed = sorted(listed, key=lambda mismatch: mismatch["shard"])[:MAX_LISTED]
+    count = recorded.mismatch_count + crashed.mismatch_count
+    done = recorded.shards + crashed.shards
+    edges_run = session.sums["edges"]
     return {
-        "passed": not mismatches and len(records) == plan.count,
+        "passed": not count and done == plan.count,
         **plan.manifest(),
-        "shards_done": len(records),
+        "shards_done": done,
         "shards_resumed": resumed,
-        "shards_run": len(fresh),
-        **{f"{key}_checked": value for key, value in totals.items()},
+        "shards_run": session.shards,
+        **{
+            f"{key}_checked": recorded.sums[key] + crashed.sums[key]
+            for key in ("edges", "beats", "clocks", "dropped", "timed_edges")
+        },
         "edges_run": edges_run,
         "seconds": seconds,
         "edges_per_second": edges_run / seconds if seconds > 0 else 0.0,
-        "worker_seconds": sum(record["seconds"] for record in fresh),
-        "sim_seconds": sum(record["sim_seconds"] for record in fresh),
-        "mismatches": mismatches,
+        "worker_seconds": session.sums["seconds"],
+        "sim_seconds": session.sums["sim_seconds"],
+        "mismatch_count": count,
+        "mismatches": listed,
     }
 
 
