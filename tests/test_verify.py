@@ -421,12 +421,15 @@ def test_a_run_record_it_did_not_write_is_refused(capsys, tmp_path, content, wha
 def damaged_manifest(manifest: dict, how: str) -> dict:
     if how == "config":
         return {**manifest, "config": [[[1]]]}
+    if how == "format":  # the format before the workload named its pieces
+        workload = {k: v for k, v in manifest["workload"].items() if k != "chunk_edges"}
+        return {**manifest, "format": 1, "workload": workload}
     if how == "nested":
         return {**manifest, "edges": {"deep": [[[[30]]]]}}
     return {**manifest, "workload": {**manifest["workload"], "max_pixels": [[16], 48]}}
 
 
-@pytest.mark.parametrize("how", ["config", "nested", "workload"])
+@pytest.mark.parametrize("how", ["config", "nested", "workload", "format"])
 def test_a_run_record_of_the_wrong_shape_is_refused(capsys, tmp_path, recorded_run, how):
     manifest = json.loads(recorded_run[regress.MANIFEST])
     (tmp_path / regress.MANIFEST).write_text(json.dumps(damaged_manifest(manifest, how)))

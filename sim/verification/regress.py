@@ -4,8 +4,10 @@ rerun resumes, and merge the results.
 
 The directory holds ``run.json`` (the plan: configuration, edge count, shards, seed, engine and
 workload; a rerun with other options is refused rather than mixed in) and ``shards.jsonl``, one
-JSON line per finished shard written as it finishes. A line cut short by an interrupt is
-dropped when the run is resumed, and that shard runs again. A shard whose worker raised (rather
+JSON line per finished shard written as it finishes. Both are checked against one schema when
+a run resumes (`manifest_error`, `record_error`), and a file that fails it is refused, never
+rewritten; only a last line an interrupted write left without its newline is cut off (with
+a note), and that shard runs again. A shard whose worker raised (rather
 than found a mismatch) is reported but not recorded, so a rerun tries it again.
 
 Why Dask distributed and not Ray: the work is independent shards of a few seconds each, which
@@ -53,7 +55,7 @@ from .shards import (
 
 MANIFEST = "run.json"
 RECORDS = "shards.jsonl"
-FORMAT = 1  # of run.json and shards.jsonl
+FORMAT = 2  # of run.json and shards.jsonl (2: the workload names its chunk_edges)
 ADDRESS_VARIABLE = "DASK_SCHEDULER_ADDRESS"
 
 
@@ -191,6 +193,8 @@ def manifest_error(recorded, manifest: dict) -> str | None:
     """What makes `recorded` (a parsed run.json) not a run record of the shape `manifest` has,
     or None: an object of the same fields, each a plain value, an object of plain values or a
     list of plain values where `manifest` has one. Different values are another run's."""
+    if isinstance(recorded, dict) and recorded.get("format") != manifest["format"]:
+        return f"is of format {_shown(recorded.get('format'))}, this edgeaa reads {FORMAT}"
     if not isinstance(recorded, dict) or recorded.keys() != manifest.keys():
         return "is not a run record (an object of the fields " + ", ".join(manifest) + ")"
     for name, want in manifest.items():
