@@ -27,7 +27,7 @@ from edgeaa.sim.verification.shards import CompiledCore, ShardTask, check_shard,
 PROJECTED_EDGES = 10**9
 # The steps a shard's time goes to (function names; cumulative times overlap: `setup` is
 # called inside the others).
-PROFILED = ("random_sim_edges", "random_clip", "run_edges", "write_cycles", "setup", "run")
+PROFILED = ("iter_sim_edges", "random_clip", "run_edges", "write_cycles", "setup", "run")
 
 
 def measure(config: EdgeConfig, edges: int, seed: int, workers: int) -> dict:

@@ -2,6 +2,7 @@
 and reported with reproducers that work, interrupted runs resumed without redoing shards."""
 
 import dataclasses
+import hashlib
 import json
 import os
 import shlex
@@ -9,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -130,23 +132,46 @@ def test_the_amaranth_engine_checks_clocks_too(capsys):
 
 
 def test_progress_shows_edges_per_second_and_time_left(monkeypatch):
+    """In this process, progress after each piece of a shard (pieces of 30 edges here) and
+    after each shard, with the rate and the time left."""
     import io
 
     from edgeaa import progress
 
     monkeypatch.setattr(progress, "EVERY", 0.0)
+    monkeypatch.setattr(shards, "CHUNK_EDGES", 30)
     plan = regress.Plan(DEFAULT, edges=300, shards=3, seed=2)
     stream = io.StringIO()
     bar = progress.ProgressBar("verify", plan.edges, stream=stream, delay=0.0, unit="edges")
     runner = regress.open_runner(DEFAULT, "verilator", workers=0, cluster=None)
     summary = regress.run_plan(plan, runner, regress.ShardStore(None, plan.manifest()), bar)
     lines = stream.getvalue().splitlines()
-    assert summary["passed"] and [line.split("(")[1].split(",")[0] for line in lines] == [
-        "100/300",
-        "200/300",
-        "300/300",
+    pieces = [30, 50, 80, 100, 100]  # streams of 50 edges: pieces of 30 and 20, then the shard
+    done = [int(line.split("(")[1].split("/")[0]) for line in lines]
+    assert summary["passed"] and done == [
+        *pieces,
+        *(100 + x for x in pieces),
+        *(200 + x for x in pieces),
     ]
     assert all(" edges/s" in line for line in lines) and " left)" in lines[0], lines
+
+
+def test_a_local_pool_shows_progress_inside_a_shard():
+    """A worker of the local pool reports each piece of its shard (two pieces of CHUNK_EDGES)."""
+    edges = 2 * shards.CHUNK_EDGES
+    plan = regress.Plan(EdgeConfig(mode="seg2"), edges=edges, shards=1, seed=1)  # short edges
+    seen = []
+    runner = regress.open_runner(plan.config, "verilator", workers=1, cluster=None)
+    try:
+        summary = regress.run_plan(
+            plan,
+            runner,
+            regress.ShardStore(None, plan.manifest()),
+            progress=lambda *args: seen.append(args[0]),
+        )
+    finally:
+        runner.close()
+    assert summary["passed"] and seen == [edges // 2, edges, edges]
 
 
 # -- faults are caught and reported with working reproducers ---------------------------------
@@ -178,8 +203,8 @@ FAULTS = {  # kind: the stream it is injected into
 def inject(monkeypatch, kind: str, seed: int):
     original = shards.simulate
 
-    def faulty(task, core, stream, edges):
-        run = original(task, core, stream, edges)
+    def faulty(task, core, stream, edges, part=0):
+        run = original(task, core, stream, edges, part)
         return corrupt(kind, run) if (task.seed, stream) == (seed, FAULTS[kind]) else run
 
     monkeypatch.setattr(shards, "simulate", faulty)
@@ -247,7 +272,7 @@ def test_a_fault_is_caught_and_reported_with_working_reproducers(capsys, monkeyp
 
 
 def test_a_crashing_worker_is_reported_and_not_recorded(capsys, monkeypatch, tmp_path):
-    def broken(task, core, stream, edges):
+    def broken(task, core, stream, edges, part=0):
         raise RuntimeError("harness failed (139): segmentation fault")
 
     monkeypatch.setattr(shards, "simulate", broken)
@@ -272,13 +297,14 @@ def test_a_rerun_skips_recorded_shards(capsys, monkeypatch, tmp_path):
     ran = []
     original = regress.check_shard
 
-    def counted(task, core=None):
+    def counted(task, core=None, chunk=None, report=None):
         ran.append(task.index)
-        return original(task, core)
+        return original(task, core, chunk, report)
 
     monkeypatch.setattr(regress, "check_shard", counted)
-    status, second, _ = verify(capsys, *argv)
+    status, second, err = verify(capsys, *argv)
     assert status == 0 and second["passed"]
+    assert f"{tmp_path / regress.RECORDS} line 4 was cut short" in err and err.count("\n") == 1
     assert sorted(ran) == [3, 4, 5] and (second["shards_resumed"], second["shards_run"]) == (3, 3)
     lines = records(tmp_path)
     assert lines[:3] == kept[:3] and len(lines) == 6  # the cut line dropped, nothing redone
@@ -347,6 +373,243 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
     assert records(tmp_path)[: len(kept)] == kept
 
 
+# -- records it did not write ---------------------------------------------------------------
+
+RECORDED = ["--edges", "30", "--shards", "3", "--seed", "6", "--workers", "0"]
+
+
+@pytest.fixture(scope="module")
+def recorded_run(tmp_path_factory):
+    """The record of a finished run of `RECORDED`: run.json and three lines of shards.jsonl."""
+    directory = tmp_path_factory.mktemp("recorded")
+    assert main(["verify", *RECORDED, "--out", str(directory), "--quiet", "--json"]) == 0
+    return {name: (directory / name).read_bytes() for name in (regress.MANIFEST, regress.RECORDS)}
+
+
+def refused(capsys, directory, name: str, where: str):
+    """Rerun `RECORDED` on `directory`: refused in one line naming `where` in file `name`,
+    with the hint, and nothing there changed."""
+    before = {p.name: p.read_bytes() for p in directory.iterdir() if p.is_file()}
+    status, summary, err = verify(capsys, *RECORDED, "--out", str(directory))
+    assert status == 2 and summary is None and err.count("\n") == 1, err
+    assert err.startswith(f"edgeaa verify: error: {directory / name}{where} "), err
+    assert err.endswith(f"; use a fresh --out folder or delete {directory}\n"), err
+    assert {p.name: p.read_bytes() for p in directory.iterdir() if p.is_file()} == before
+    return err
+
+
+@pytest.mark.parametrize(
+    ("content", "what"),
+    [
+        (b"[]", "is not a run record"),
+        (b'"a string"', "is not a run record"),
+        (b"null", "is not a run record"),
+        (b"[" * 30_000 + b"]" * 30_000, "nests too deeply"),
+        (b'{"format": 1, "config": ', "is not JSON"),
+        (b"\xff\xfe{}", "is not UTF-8 text"),
+        (b" " * (regress.MAX_MANIFEST + 1), "is larger than 65,536 bytes"),
+        (None, "is a directory"),
+    ],
+    ids=["list", "string", "null", "deep", "truncated", "not-utf8", "huge", "directory"],
+)
+def test_a_run_record_it_did_not_write_is_refused(capsys, tmp_path, content, what):
+    if content is None:
+        (tmp_path / regress.MANIFEST).mkdir()
+    else:
+        (tmp_path / regress.MANIFEST).write_bytes(content)
+    assert what in refused(capsys, tmp_path, regress.MANIFEST, "")
+    assert not (tmp_path / regress.RECORDS).exists()
+
+
+def damaged_manifest(manifest: dict, how: str) -> dict:
+    if how == "config":
+        return {**manifest, "config": [[[1]]]}
+    if how == "format":  # the format before the workload named its pieces
+        workload = {k: v for k, v in manifest["workload"].items() if k != "chunk_edges"}
+        return {**manifest, "format": 1, "workload": workload}
+    if how == "nested":
+        return {**manifest, "edges": {"deep": [[[[30]]]]}}
+    return {**manifest, "workload": {**manifest["workload"], "max_pixels": [[16], 48]}}
+
+
+@pytest.mark.parametrize("how", ["config", "nested", "workload", "format"])
+def test_a_run_record_of_the_wrong_shape_is_refused(capsys, tmp_path, recorded_run, how):
+    manifest = json.loads(recorded_run[regress.MANIFEST])
+    (tmp_path / regress.MANIFEST).write_text(json.dumps(damaged_manifest(manifest, how)))
+    refused(capsys, tmp_path, regress.MANIFEST, "")
+
+
+def damage(record: dict, how: str):
+    """A shard's record (a line of shards.jsonl) damaged as `how` says, or its bytes."""
+    changes = {
+        "beats-text": {"beats": "many"},
+        "clocks-negative": {"clocks": -1},
+        "clocks-bool": {"clocks": True},
+        "seconds-nan": {"seconds": float("nan")},
+        "index-outside": {"index": 3},
+        "index-nested": {"index": [[[0]]]},
+        "seed-other": {"seed": record["seed"] + 1},
+        "edges-other": {"edges": record["edges"] + 1},
+        "mismatches-text": {"mismatches": "none"},
+        "mismatch-empty": {"mismatches": [{}]},
+    }
+    if how in changes:
+        return {**record, **changes[how]}
+    if how == "missing-field":
+        return {key: value for key, value in record.items() if key != "clocks"}
+    return {"object": {}, "list": [], "number": 5}[how]
+
+
+LINE_DAMAGE = [
+    "beats-text",
+    "clocks-negative",
+    "clocks-bool",
+    "seconds-nan",
+    "index-outside",
+    "index-nested",
+    "seed-other",
+    "edges-other",
+    "mismatches-text",
+    "mismatch-empty",
+    "missing-field",
+    "object",
+    "list",
+    "number",
+]
+
+
+@pytest.mark.parametrize("how", LINE_DAMAGE)
+def test_a_damaged_shard_record_is_named_and_refused(capsys, tmp_path, recorded_run, how):
+    (tmp_path / regress.MANIFEST).write_bytes(recorded_run[regress.MANIFEST])
+    lines = recorded_run[regress.RECORDS].splitlines(keepends=True)
+    lines[1] = json.dumps(damage(json.loads(lines[1]), how)).encode() + b"\n"
+    (tmp_path / regress.RECORDS).write_bytes(b"".join(lines))
+    refused(capsys, tmp_path, regress.RECORDS, " line 2")
+
+
+@pytest.mark.parametrize(
+    ("line", "what"),
+    [
+        (lambda line: line[:40] + b"\n", "is not JSON"),  # cut short, then a newline
+        (lambda line: b"\xff" + line, "is not UTF-8 text"),
+        (lambda line: b"[" * 30_000 + b"\n", "nests too deeply"),
+        (lambda line: b" " * regress.MAX_LINE + line, "is longer than 65,536 bytes"),
+        (lambda line: b"\n", "is not JSON"),
+    ],
+    ids=["truncated", "not-utf8", "deep", "huge", "empty"],
+)
+def test_a_damaged_line_is_named_and_refused(capsys, tmp_path, recorded_run, line, what):
+    (tmp_path / regress.MANIFEST).write_bytes(recorded_run[regress.MANIFEST])
+    lines = recorded_run[regress.RECORDS].splitlines(keepends=True)
+    lines[1] = line(lines[1])
+    (tmp_path / regress.RECORDS).write_bytes(b"".join(lines))
+    assert what in refused(capsys, tmp_path, regress.RECORDS, " line 2")
+
+
+def test_a_shard_recorded_twice_and_a_records_directory_are_refused(capsys, tmp_path, recorded_run):
+    (tmp_path / regress.MANIFEST).write_bytes(recorded_run[regress.MANIFEST])
+    lines = recorded_run[regress.RECORDS].splitlines(keepends=True)
+    (tmp_path / regress.RECORDS).write_bytes(b"".join([*lines, lines[0]]))
+    err = refused(capsys, tmp_path, regress.RECORDS, " line 4")
+    assert "records shard 0 again" in err
+    (tmp_path / regress.RECORDS).unlink()
+    (tmp_path / regress.RECORDS).mkdir()
+    assert "is a directory" in refused(capsys, tmp_path, regress.RECORDS, "")
+
+
+def test_its_own_record_passes_the_schema(recorded_run):
+    """Every field `check_shard` writes, a mismatch's included, is one the schema knows."""
+    manifest = json.loads(recorded_run[regress.MANIFEST])
+    record = json.loads(recorded_run[regress.RECORDS].splitlines()[0])
+    task = next(regress.Plan(DEFAULT, edges=30, shards=3, seed=6).tasks())
+    crash = regress.crash_result(task, RuntimeError("x"))
+    mismatch = crash["mismatches"][0]
+    assert regress.record_error(record, manifest) is None
+    assert regress.record_error({**record, "mismatches": [mismatch] * 6}, manifest) is None
+    assert regress.record_error({**record, "mismatches": [mismatch] * 7}, manifest)
+
+
+def test_a_long_record_is_read_in_bounded_memory(tmp_path):
+    """Resuming keeps the finished shards' indices and totals, not their records: 20,000
+    lines read in well under a megabyte (the records held would take about 25 MB), and the
+    summary lists at most MAX_LISTED mismatches and counts them all."""
+    count = 20_000
+    plan = regress.Plan(DEFAULT, edges=2 * count, shards=count, seed=4)
+    (tmp_path / regress.MANIFEST).write_text(json.dumps(plan.manifest()))
+    mismatch = regress.crash_result(next(plan.tasks()), RuntimeError("x"))["mismatches"][0]
+    with open(tmp_path / regress.RECORDS, "w") as file:
+        for task in plan.tasks():
+            found = [{**mismatch, "shard": task.index}] if task.index % 100 == 7 else []
+            record = {"index": task.index, "seed": task.seed, "edges": task.edges, "beats": 9}
+            record.update(clocks=12, dropped=0, timed_edges=1, sim_seconds=0.1, seconds=0.2)
+            file.write(json.dumps({**record, "mismatches": found}) + "\n")
+    tracemalloc.start()
+    try:
+        store = regress.ShardStore(tmp_path, plan.manifest())
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 1_000_000, peak
+    assert len(store.finished) == count and count - 1 in store.finished
+    assert count not in store.finished and store.finished.above == set()
+    summary = regress.summarize(plan, store.totals, regress.Totals(), regress.Totals(), count, 1)
+    assert (summary["edges_checked"], summary["beats_checked"]) == (2 * count, 9 * count)
+    assert summary["mismatch_count"] == count // 100 and not summary["passed"]
+    assert [m["shard"] for m in summary["mismatches"]] == list(range(7, count, 100))[:100]
+    assert regress.MAX_LISTED == 100
+
+
+# -- a shard in bounded pieces ---------------------------------------------------------------
+
+
+def test_random_edges_are_those_of_before_and_chunks_are_one_draw():
+    """`random_sim_edges` draws what it drew before it was a generator's first edges (the
+    hashes are of the old code's draws), and a shard's pieces are its single draw."""
+    tiny = EdgeConfig(mode="seg2", coord_bits=4, subpixel_bits=0, intensity_bits=4)
+    for config, options, digest in [
+        (DEFAULT, {"max_pixels": 48, "bad_fraction": 0.02, "clip_fraction": 0.5}, "d5e1d6ce"),
+        (tiny, {"max_pixels": 200, "bad_fraction": 0.1}, "5cc42762"),
+    ]:
+        edges = random_sim_edges(config, 1000, 12345, **options)
+        assert hashlib.sha256(repr(edges).encode()).hexdigest()[:8] == digest
+    for engine, count, size in [("verilator", 23, 4), ("verilator", 1, 3), ("amaranth", 10, 3)]:
+        task = shards.ShardTask(0, 77, count, DEFAULT, engine)
+        pieces = list(task.chunks(size))
+        assert [edge for *_, edges in pieces for edge in edges] == task.draw_edges()
+        assert all(0 < len(edges) <= size for *_, edges in pieces)
+        for name, lo, edges in task.streams():
+            mine = [piece for piece in pieces if piece[0] == name]
+            assert [part for _, part, _, _ in mine] == list(range(len(mine)))
+            assert mine[0][2] == lo and sum(len(p[3]) for p in mine) == len(edges)
+
+
+def peak_bytes(task, core, chunk) -> tuple[int, dict]:
+    tracemalloc.start()
+    try:
+        result = shards.check_shard(task, core, chunk)
+        return tracemalloc.get_traced_memory()[1], result
+    finally:
+        tracemalloc.stop()
+
+
+def test_a_shards_memory_is_that_of_one_chunk():
+    """A shard of eight pieces (four a stream) peaks at about one piece's memory (Python and
+    numpy allocations, traced), not four; its edges, beats and bad commands are those of one
+    piece a stream."""
+    core = shards.CompiledCore.build(DEFAULT)
+    size = 250
+    task = shards.ShardTask(0, 2027, 8 * size, DEFAULT)
+    assert task.max_pixels == 200  # long edges: the most beats an edge
+    one_chunk, _ = peak_bytes(dataclasses.replace(task, edges=2 * size), core, size)
+    chunked, result = peak_bytes(task, core, size)
+    whole, single = peak_bytes(task, core, 4 * size)
+    assert chunked < 1.2 * one_chunk and whole > 2 * one_chunk, (one_chunk, chunked, whole)
+    assert result["mismatches"] == single["mismatches"] == []
+    for key in ("edges", "beats", "dropped", "timed_edges"):
+        assert result[key] == single[key], key
+    assert shards.CHUNK_EDGES == 10_000  # the size a shard uses
+
+
 # -- bad input -------------------------------------------------------------------------------
 
 
@@ -366,6 +629,9 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
         (["--engine", "icarus"], "invalid choice: 'icarus'"),
         (["--scenes"], "unrecognized arguments: --scenes"),
         (["--out", "/dev/null/run"], "--out /dev/null/run: Not a directory"),
+        (["--edges", "100000000", "--shards", "1"], "a shard holds at most 1,000,000 edges"),
+        (["--edges", "3000000", "--shards", "2"], "give --shards >= 3"),
+        (["--shard-seed", "5", "--edges", "1000001"], "--edges 1,000,001 for one shard"),
     ],
 )
 def test_bad_input_is_one_line_with_status_2(capsys, argv, message):
@@ -373,6 +639,17 @@ def test_bad_input_is_one_line_with_status_2(capsys, argv, message):
     assert status == 2 and summary is None
     # (argparse reports an unknown option from the top-level parser: "edgeaa: error: ...")
     assert err.count("\n") == 1 and err.startswith("edgeaa") and message in err
+
+
+def test_help_says_what_exists(capsys):
+    """The pipeline exists (hdl/pipeline.py): --help does not say otherwise, and says where
+    scenes through it are checked and that --scenes is not an option yet."""
+    with pytest.raises(SystemExit) as exit_:
+        main(["verify", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert exit_.value.code == 0 and "does not exist" not in text
+    assert "hdl/pipeline.py" in text and "--engine verilator" in text
+    assert "a --scenes option is not there yet" in text
 
 
 # -- the long run ----------------------------------------------------------------------------

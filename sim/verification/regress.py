@@ -4,8 +4,10 @@ rerun resumes, and merge the results.
 
 The directory holds ``run.json`` (the plan: configuration, edge count, shards, seed, engine and
 workload; a rerun with other options is refused rather than mixed in) and ``shards.jsonl``, one
-JSON line per finished shard written as it finishes. A line cut short by an interrupt is
-dropped when the run is resumed, and that shard runs again. A shard whose worker raised (rather
+JSON line per finished shard written as it finishes. Both are checked against one schema when
+a run resumes (`manifest_error`, `record_error`), and a file that fails it is refused, never
+rewritten; only a last line an interrupted write left without its newline is cut off (with
+a note), and that shard runs again. A shard whose worker raised (rather
 than found a mismatch) is reported but not recorded, so a rerun tries it again.
 
 Why Dask distributed and not Ray: the work is independent shards of a few seconds each, which
@@ -20,21 +22,27 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 import os
+import queue
 import signal
+import stat
 import time
 import traceback
 from collections.abc import Callable, Iterable, Iterator
 from concurrent import futures
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from multiprocessing import get_context
 from pathlib import Path
 
 from ...model import EdgeConfig
+from ...model.numbers import shown
 from .shards import (
     BAD_FRACTION,
+    CHUNK_EDGES,
     CLIP_FRACTION,
     IDLE,
+    KINDS,
     MAX_PIXELS,
     STALL,
     CompiledCore,
@@ -47,7 +55,7 @@ from .shards import (
 
 MANIFEST = "run.json"
 RECORDS = "shards.jsonl"
-FORMAT = 1  # of run.json and shards.jsonl
+FORMAT = 2  # of run.json and shards.jsonl (2: the workload names its chunk_edges)
 ADDRESS_VARIABLE = "DASK_SCHEDULER_ADDRESS"
 
 
@@ -93,6 +101,7 @@ class Plan:
         config = {f.name: getattr(self.config, f.name) for f in fields(self.config) if f.init}
         workload = {"idle": IDLE, "stall": STALL, "bad_fraction": BAD_FRACTION}
         workload.update(clip_fraction=CLIP_FRACTION, max_pixels=list(MAX_PIXELS))
+        workload["chunk_edges"] = CHUNK_EDGES  # a longer stream runs in pieces from reset
         return {
             "format": FORMAT,
             "config": config,
@@ -108,63 +117,303 @@ class Plan:
 # -- the record of finished shards -----------------------------------------------------------
 
 
+class DamagedRecord(RunMismatch):
+    """A file of the output directory is not what `ShardStore` writes (one line naming it)."""
+
+
+MAX_MANIFEST = 1 << 16  # bytes of run.json (it takes about 600)
+MAX_LINE = 1 << 16  # bytes of a line of shards.jsonl (at most six mismatches: about 5 KB)
+COUNTS = ("beats", "clocks", "dropped", "timed_edges")  # a record's whole counts, >= 0
+TIMES = ("sim_seconds", "seconds")
+MISMATCH_FIELDS = {  # a recorded mismatch's fields and their JSON types
+    "kind": (str,),
+    "edge": (int, type(None)),
+    "beat": (int, type(None)),
+    "message": (str,),
+    "stream": (str, type(None)),
+    "reproduce": (str, type(None)),
+    "reproduce_shard": (str,),
+    "shard": (int,),
+    "seed": (int,),
+}
+RECORD_FIELDS = ("index", "seed", "edges", *COUNTS, *TIMES, "mismatches")
+
+
+def _shown(value) -> str:
+    """A recorded value for a message: a plain one cut short, a structure by its type only (its
+    repr could be deep)."""
+    if isinstance(value, dict | list):
+        return f"a JSON {'object' if isinstance(value, dict) else 'array'}"
+    return shown(value)
+
+
+def _is(value, types: tuple) -> bool:
+    """`value` is of one of the JSON `types` (a bool is not an int here)."""
+    return isinstance(value, types) and (bool in types or not isinstance(value, bool))
+
+
+def record_error(record, manifest: dict) -> str | None:
+    """What is wrong with a shard's record (a parsed line of shards.jsonl) for the run of
+    `manifest`, or None: the one schema of a record, its fields' types and ranges, and the
+    shard's seed and size as the plan makes them. Looks no deeper than the schema does."""
+    if not isinstance(record, dict) or record.keys() != set(RECORD_FIELDS):
+        return f"is not a shard record (an object of the fields {', '.join(RECORD_FIELDS)})"
+    count = 1 if manifest["shard_seed"] is not None else manifest["shards"]
+    index = record["index"]
+    if not _is(index, (int,)) or not 0 <= index < count:
+        return f"index {_shown(index)} is not a shard of this run (0 to {count - 1})"
+    if manifest["shard_seed"] is not None:
+        seed, edges = manifest["shard_seed"], manifest["edges"]
+    else:
+        seed = shard_seed(manifest["seed"], index)
+        edges = shard_size(manifest["edges"], manifest["shards"], index)
+    for name, want in (("seed", seed), ("edges", edges)):
+        if not _is(record[name], (int,)) or record[name] != want:
+            return f"shard {index}'s {name} is {_shown(record[name])}, the plan's {want}"
+    for name in COUNTS:
+        if not _is(record[name], (int,)) or record[name] < 0:
+            return f"{name} {_shown(record[name])} is not a count (a whole number >= 0)"
+    for name in TIMES:
+        value = record[name]
+        if not _is(value, (int, float)) or not 0 <= value < math.inf:
+            return f"{name} {_shown(value)} is not a time (a number of seconds >= 0)"
+    mismatches = record["mismatches"]
+    if not isinstance(mismatches, list) or len(mismatches) > 2 * len(KINDS):
+        return f"mismatches is not a list of at most {2 * len(KINDS)} mismatches"
+    for mismatch in mismatches:
+        if not isinstance(mismatch, dict) or mismatch.keys() != MISMATCH_FIELDS.keys():
+            return "a mismatch is not an object of the fields " + ", ".join(MISMATCH_FIELDS)
+        for name, types in MISMATCH_FIELDS.items():
+            if not _is(mismatch[name], types):
+                return f"a mismatch's {name} {_shown(mismatch[name])} is of the wrong type"
+    return None
+
+
+def manifest_error(recorded, manifest: dict) -> str | None:
+    """What makes `recorded` (a parsed run.json) not a run record of the shape `manifest` has,
+    or None: an object of the same fields, each a plain value, an object of plain values or a
+    list of plain values where `manifest` has one. Different values are another run's."""
+    if isinstance(recorded, dict) and recorded.get("format") != manifest["format"]:
+        return f"is of format {_shown(recorded.get('format'))}, this edgeaa reads {FORMAT}"
+    if not isinstance(recorded, dict) or recorded.keys() != manifest.keys():
+        return "is not a run record (an object of the fields " + ", ".join(manifest) + ")"
+    for name, want in manifest.items():
+        if isinstance(want, dict):
+            if not isinstance(recorded[name], dict) or recorded[name].keys() != want.keys():
+                return f"field {name} is not an object of the fields " + ", ".join(want)
+            values = list(recorded[name].values())
+        else:
+            values = [recorded[name]]
+        for value in values:
+            if isinstance(value, list):
+                value = None if all(_is(v, PLAIN) for v in value) else value
+            if not _is(value, PLAIN):
+                return f"field {name} holds {_shown(value)}, not a plain value"
+    return None
+
+
+PLAIN = (str, int, float, bool, type(None))  # JSON values without structure
+
+
+class Finished:
+    """The indices of finished shards, in memory bounded by the shards out of order: all
+    below `low`, and the others in a set (a run finishes shards about in index order)."""
+
+    def __init__(self):
+        self.low, self.above, self.count = 0, set(), 0
+
+    def add(self, index: int) -> None:
+        self.above.add(index)
+        self.count += 1
+        while self.low in self.above:
+            self.above.remove(self.low)
+            self.low += 1
+
+    def __contains__(self, index: int) -> bool:
+        return index < self.low or index in self.above
+
+    def __len__(self) -> int:
+        return self.count
+
+
+MAX_LISTED = 100  # mismatches a summary lists (the count is of all of them)
+SUMMED = ("edges", "beats", "clocks", "dropped", "timed_edges", "seconds", "sim_seconds")
+
+
+@dataclass
+class Totals:
+    """Figures summed over shards' records, and the first `MAX_LISTED` of their mismatches:
+    a run of millions of shards keeps these, not its records."""
+
+    shards: int = 0
+    sums: dict = field(default_factory=lambda: dict.fromkeys(SUMMED, 0))
+    mismatches: list = field(default_factory=list)
+    mismatch_count: int = 0
+
+    def add(self, record: dict) -> None:
+        self.shards += 1
+        for key in SUMMED:
+            self.sums[key] += record[key]
+        self.mismatch_count += len(record["mismatches"])
+        self.mismatches += record["mismatches"][: MAX_LISTED - len(self.mismatches)]
+
+
 class ShardStore:
-    """Finished shards by index: in memory, and in `directory` when one is given."""
+    """Finished shards by index: in memory, and in `directory` when one is given. Holds their
+    indices (`finished`) and totals (`totals`), not the records.
+
+    A file there that is not what this class writes (another program's, or damaged) is
+    refused (`DamagedRecord`, naming the file and line), never repaired or overwritten. The
+    one exception is what an interrupted write leaves: a last line without its newline,
+    which is cut off (the note in `notes` says so) and its shard runs again."""
 
     def __init__(self, directory: str | os.PathLike | None, manifest: dict):
         self.directory = None if directory is None else Path(directory)
-        self.finished: dict[int, dict] = {}
+        self.finished = Finished()
+        self.totals = Totals()
+        self.notes: list[str] = []
         if self.directory is not None:
             self._open(manifest)
+
+    def _damaged(self, path: Path, what: str, line: int | None = None) -> DamagedRecord:
+        where = f"{_path(path)}" + ("" if line is None else f" line {line}")
+        return DamagedRecord(
+            f"{where} {what}; use a fresh --out folder or delete {_path(self.directory)}"
+        )
 
     def _open(self, manifest: dict) -> None:
         self.directory.mkdir(parents=True, exist_ok=True)
         path = self.directory / MANIFEST
-        if path.exists():
-            try:
-                recorded = json.loads(path.read_text())
-            except (OSError, ValueError) as error:
-                raise RunMismatch(f"{path} is not a run record ({error})") from None
+        if path.exists() or path.is_symlink():
+            recorded = self._parse(path, _read_small(path, MAX_MANIFEST))
+            error = manifest_error(recorded, manifest)
+            if error is not None:
+                raise self._damaged(path, error)
             if recorded != manifest:
                 differences = _differences(recorded, manifest)
                 raise RunMismatch(
-                    f"{self.directory} holds another run ({differences}): rerun with its "
+                    f"{_path(self.directory)} holds another run ({differences}): rerun with its "
                     "options or give another --out"
                 )
         else:
-            path.write_text(json.dumps(manifest, indent=1) + "\n")
-        self.finished = self._load()
-
-    def _load(self) -> dict[int, dict]:
-        """The recorded shards; a line an interrupt cut short is dropped (the file rewritten
-        without it, so the next record starts on a line of its own)."""
-        path = self.directory / RECORDS
-        if not path.exists():
-            return {}
-        finished, broken = {}, False
-        for line in path.read_text().splitlines(keepends=True):
-            try:
-                record = json.loads(line)
-                finished[record["index"]] = record
-            except (ValueError, KeyError, TypeError):
-                broken = True
-            broken |= not line.endswith("\n")
-        if broken:
-            partial = path.with_suffix(".tmp")
-            partial.write_text("".join(json.dumps(r) + "\n" for r in finished.values()))
+            partial = path.with_name(f".{MANIFEST}.{os.getpid()}")
+            partial.write_text(json.dumps(manifest, indent=1) + "\n")
             os.replace(partial, path)
-        return finished
+        self._load(manifest)
+
+    def _parse(self, path: Path, data: bytes | str, line: int | None = None):
+        """The JSON value of `data`; a file or line that is not one is refused."""
+        if isinstance(data, str):  # what _read_small says is wrong with the file
+            raise self._damaged(path, data)
+        try:
+            return json.loads(data.decode("utf-8"))
+        except UnicodeDecodeError:
+            raise self._damaged(path, "is not UTF-8 text", line) from None
+        except RecursionError:
+            raise self._damaged(path, "nests too deeply", line) from None
+        except ValueError as error:
+            raise self._damaged(path, f"is not JSON ({error})", line) from None
+
+    def _load(self, manifest: dict) -> None:
+        """The recorded shards, each line checked (`record_error`)."""
+        path = self.directory / RECORDS
+        if not (path.exists() or path.is_symlink()):
+            return
+        problem = _not_a_file(path)
+        try:
+            file = open(path, "rb") if problem is None else None  # noqa: SIM115 (closed below)
+        except OSError as error:
+            problem = f"cannot be read ({error.strerror})"
+        if problem is not None:
+            raise self._damaged(path, problem)
+        with file:
+            end, number = 0, 0
+            while line := self._line(file, path, number + 1):
+                number += 1
+                if not line.endswith(b"\n"):
+                    self._cut(path, number, end)
+                    break
+                end += len(line)
+                record = self._parse(path, line, number)
+                error = record_error(record, manifest)
+                if error is None and record["index"] in self.finished:
+                    error = f"records shard {record['index']} again"
+                if error is not None:
+                    raise self._damaged(path, error, number)
+                self._add(record)
+
+    def _add(self, record: dict) -> None:
+        self.finished.add(record["index"])
+        self.totals.add(record)
+
+    def _line(self, file, path: Path, number: int) -> bytes:
+        """Line `number` of shards.jsonl, newline included; b"" at the end."""
+        try:
+            line = file.readline(MAX_LINE + 1)
+        except OSError as error:
+            raise self._damaged(path, f"cannot be read ({error.strerror})", number) from None
+        if len(line) > MAX_LINE:
+            raise self._damaged(path, f"is longer than {MAX_LINE:,} bytes", number)
+        return line
+
+    def _cut(self, path: Path, number: int, end: int) -> None:
+        """Cut off the last line, which lacks its newline: a write an interrupt stopped."""
+        os.truncate(path, end)
+        self.notes.append(
+            f"{_path(path)} line {number} was cut short (an interrupted write): dropped, "
+            "its shard runs again"
+        )
 
     def record(self, result: dict) -> None:
-        self.finished[result["index"]] = result
+        self._add(result)
         if self.directory is not None:
-            with open(self.directory / RECORDS, "a") as file:
-                file.write(json.dumps(result) + "\n")
+            # The line in one write (more only if the disk fills): an interrupt lands before
+            # or after it, not inside.
+            line = memoryview((json.dumps(result) + "\n").encode())
+            fd = os.open(self.directory / RECORDS, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
+            try:
+                while line:
+                    line = line[os.write(fd, line) :]
+            finally:
+                os.close(fd)
+
+
+def _path(path: Path) -> str:
+    """A path for a one-line message: as it is, or quoted if it holds a newline or the like."""
+    text = str(path)
+    return text if text.isprintable() else repr(text)
+
+
+def _not_a_file(path: Path) -> str | None:
+    """What keeps `path` from being read as a record file (a directory, a pipe that would
+    block the read, a dangling link), or None."""
+    try:
+        mode = path.stat().st_mode
+    except OSError as error:
+        return f"cannot be read ({error.strerror})"
+    if stat.S_ISDIR(mode):
+        return "is a directory"
+    return None if stat.S_ISREG(mode) else "is not a regular file"
+
+
+def _read_small(path: Path, limit: int) -> bytes | str:
+    """The bytes of the file at `path`, or what is wrong with it: too large, not a file."""
+    problem = _not_a_file(path)
+    if problem is not None:
+        return problem
+    try:
+        with open(path, "rb") as file:
+            data = file.read(limit + 1)
+    except OSError as error:
+        return f"cannot be read ({error.strerror})"
+    return data if len(data) <= limit else f"is larger than {limit:,} bytes"
 
 
 def _differences(recorded: dict, wanted: dict) -> str:
     keys = [key for key in wanted if recorded.get(key) != wanted[key]]
-    return ", ".join(f"{key} {recorded.get(key)!r} there, {wanted[key]!r} here" for key in keys)
+    return ", ".join(
+        f"{key} {_shown(recorded.get(key))} there, {wanted[key]!r} here" for key in keys
+    )
 
 
 # -- where the shards run --------------------------------------------------------------------
@@ -195,10 +444,13 @@ class InProcess:
     def __init__(self, core: CompiledCore | None):
         self.core = core
 
-    def results(self, tasks: Iterable[ShardTask]) -> Iterator[tuple[ShardTask, Callable]]:
+    def results(
+        self, tasks: Iterable[ShardTask], piece: Callable | None = None
+    ) -> Iterator[tuple[ShardTask, Callable]]:
+        """(task, its result) as each finishes; `piece(index, edges)` after each piece."""
         for task in tasks:
             try:
-                result = check_shard(task, self.core)
+                result = check_shard(task, self.core, report=piece)
             except Exception as error:  # reported like a worker's exception
                 yield task, _raise(error)
             else:
@@ -215,34 +467,58 @@ def _raise(error: Exception) -> Callable:
     return result
 
 
-def _ignore_interrupt() -> None:
+_PIECES = None  # a pool worker's queue to the driver: (shard index, edges checked so far)
+
+
+def _start_worker(pieces) -> None:
     """Workers leave Ctrl-C to the driver, which stops handing out shards and shuts them down
-    (otherwise each prints a traceback)."""
+    (otherwise each prints a traceback); they report pieces on `pieces`."""
+    global _PIECES
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _PIECES = pieces
+
+
+def _check_in_worker(task: ShardTask, core: CompiledCore | None) -> dict:
+    return check_shard(task, core, report=lambda index, edges: _PIECES.put((index, edges)))
 
 
 class LocalPool:
     """A pool of `workers` processes on this machine (started fresh: `spawn`, so they do not
-    inherit the driver's threads or open files)."""
+    inherit the driver's threads or open files). Workers report each piece of a shard on a
+    queue, which the driver reads while it waits (`WAIT` seconds at a time)."""
+
+    WAIT = 1.0
 
     def __init__(self, workers: int, core: CompiledCore | None):
         self.workers, self.core = workers, core
+        context = get_context("spawn")
+        self.pieces = context.Queue()
         self.pool = futures.ProcessPoolExecutor(
-            workers, mp_context=get_context("spawn"), initializer=_ignore_interrupt
+            workers, mp_context=context, initializer=_start_worker, initargs=(self.pieces,)
         )
 
-    def results(self, tasks: Iterable[ShardTask]):
+    def results(self, tasks: Iterable[ShardTask], piece: Callable | None = None):
         def submit(task):
-            return self.pool.submit(check_shard, task, self.core)
+            return self.pool.submit(_check_in_worker, task, self.core)
 
         def wait_any(pending):
-            return futures.wait(pending, return_when=futures.FIRST_COMPLETED)
+            done, rest = futures.wait(pending, self.WAIT, return_when=futures.FIRST_COMPLETED)
+            # A worker puts its pieces before it returns: all of a finished shard's are here.
+            while True:
+                try:
+                    index, edges = self.pieces.get(timeout=0.05 if done else 0)
+                except queue.Empty:
+                    break
+                if piece is not None:
+                    piece(index, edges)
+            return done, rest
 
         for task, future in _results(submit, wait_any, tasks, 2 * self.workers):
             yield task, future.result
 
     def close(self) -> None:
         self.pool.shutdown(wait=True, cancel_futures=True)
+        self.pieces.close()
 
 
 class DaskCluster:
@@ -278,7 +554,8 @@ class DaskCluster:
         self.core = None if core is None else self.client.scatter(core, broadcast=True)
         self.threads = max(1, sum(self.client.nthreads().values()))
 
-    def results(self, tasks: Iterable[ShardTask]):
+    def results(self, tasks: Iterable[ShardTask], piece: Callable | None = None):
+        """(task, its result) as each finishes; pieces are not reported from a cluster."""
         from distributed import wait
 
         def submit(task):
@@ -334,59 +611,68 @@ def crash_result(task: ShardTask, error: BaseException) -> dict:
 
 def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = None) -> dict:
     """Run the shards `store` has not finished; return the merged summary. `progress(done,
-    total, stage)` is called with edges (finished ones included) after each shard; the stage
+    total, stage)` is called with edges (finished ones included) after each shard and, from
+    this process or a local pool, after each piece of a shard (`ShardTask.chunks`); the stage
     is the count of mismatches once there are any (else None: the rate is the bar's)."""
     tasks = (task for task in plan.tasks() if task.index not in store.finished)
     resumed = len(store.finished)
-    fresh: list[dict] = []  # this session's shards, crashed ones included
-    done = sum(record["edges"] for record in store.finished.values())
+    resumed_edges = store.totals.sums["edges"]
+    session, crashed = Totals(), Totals()  # this session's shards; those whose worker raised
+    running: dict[int, int] = {}  # edges checked so far in shards still running
     start = time.perf_counter()
-    for task, result in runner.results(tasks):
+
+    def show() -> None:
+        if progress is not None:
+            edges = resumed_edges + session.sums["edges"] + sum(running.values())
+            failed = store.totals.mismatch_count + crashed.mismatch_count
+            progress(edges, plan.edges, f"{failed} MISMATCHES" if failed else None)
+
+    def piece(index: int, edges: int) -> None:
+        running[index] = edges
+        show()
+
+    for task, result in runner.results(tasks, piece):
         try:
             record = result()
         except Exception as error:
             record = crash_result(task, error)
+            crashed.add(record)
         else:
             store.record(record)
-        fresh.append(record)
-        done += task.edges
-        if progress is not None:
-            progress(done, plan.edges, _failures(fresh, store))
-    seconds = time.perf_counter() - start
-    crashed = [record for record in fresh if record.get("crashed")]
-    records = sorted([*store.finished.values(), *crashed], key=lambda r: r["index"])
-    return summarize(plan, records, fresh, resumed, seconds)
+        running.pop(task.index, None)
+        session.add(record)
+        show()
+    return summarize(plan, store.totals, crashed, session, resumed, time.perf_counter() - start)
 
 
-def _failures(fresh: list[dict], store: ShardStore) -> str | None:
-    """The progress bar's stage: the mismatches so far, if any."""
-    failed = sum(len(r["mismatches"]) for r in store.finished.values())
-    failed += sum(len(r["mismatches"]) for r in fresh if r.get("crashed"))
-    return f"{failed} MISMATCHES" if failed else None
-
-
-def summarize(plan: Plan, records: list[dict], fresh: list[dict], resumed: int, seconds: float):
-    """The run's figures, merged over every finished shard (resumed ones included); rates and
-    times are this session's (`fresh` shards)."""
-    totals = {
-        key: sum(record[key] for record in records)
-        for key in ("edges", "beats", "clocks", "dropped", "timed_edges")
-    }
-    mismatches = [m for record in records for m in record["mismatches"]]
-    edges_run = sum(record["edges"] for record in fresh)
+def summarize(
+    plan: Plan, recorded: Totals, crashed: Totals, session: Totals, resumed: int, seconds: float
+) -> dict:
+    """The run's figures, merged over every finished shard (`recorded`, resumed ones
+    included, and the `crashed` ones of this session); rates and times are this session's.
+    Mismatches are listed by shard, at most `MAX_LISTED`, and all counted."""
+    listed = recorded.mismatches + crashed.mismatches
+    listed = sorted(listed, key=lambda mismatch: mismatch["shard"])[:MAX_LISTED]
+    count = recorded.mismatch_count + crashed.mismatch_count
+    done = recorded.shards + crashed.shards
+    edges_run = session.sums["edges"]
     return {
-        "passed": not mismatches and len(records) == plan.count,
+        "passed": not count and done == plan.count,
         **plan.manifest(),
-        "shards_done": len(records),
+        "shards_done": done,
         "shards_resumed": resumed,
-        "shards_run": len(fresh),
-        **{f"{key}_checked": value for key, value in totals.items()},
+        "shards_run": session.shards,
+        **{
+            f"{key}_checked": recorded.sums[key] + crashed.sums[key]
+            for key in ("edges", "beats", "clocks", "dropped", "timed_edges")
+        },
         "edges_run": edges_run,
         "seconds": seconds,
         "edges_per_second": edges_run / seconds if seconds > 0 else 0.0,
-        "worker_seconds": sum(record["seconds"] for record in fresh),
-        "sim_seconds": sum(record["sim_seconds"] for record in fresh),
-        "mismatches": mismatches,
+        "worker_seconds": session.sums["seconds"],
+        "sim_seconds": session.sums["sim_seconds"],
+        "mismatch_count": count,
+        "mismatches": listed,
     }
 
 

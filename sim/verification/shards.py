@@ -25,7 +25,9 @@ import os
 import shlex
 import tempfile
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
+from itertools import islice
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +39,7 @@ from ...model.timing import write_cycles
 from ...model.vector import run_edges
 from ..simulators import verilator_harness
 from ..simulators.verilator_harness import FastRun
-from .workloads import random_sim_edges
+from .workloads import iter_sim_edges
 
 ENGINES = ("verilator", "amaranth")
 
@@ -49,6 +51,13 @@ CLIP_FRACTION = 0.5  # edges with a random clip window (empty, start, end, both,
 # busy (setup-bound), long ones the stepper; 48 is the tests' default.
 MAX_PIXELS = (16, 48, 200)
 SHARD_EDGES = 2000  # default edges per shard: a few seconds of work, so progress is smooth
+# Edges a shard draws, simulates and checks at a time: its memory is that of one chunk,
+# whatever its edge count (one shard of 100,000 edges peaked at 326 MB RSS, 1.37 GB when it
+# drew them all at once; tests/test_verify.py checks the peak allocation with tracemalloc).
+# Each part of a stream after the first runs from reset with its own stall seed, so a stream
+# of more edges than this simulates other clocks than one run would (the same edges and
+# checks).
+CHUNK_EDGES = 10_000
 
 LANE1_FIELDS = [COLUMN[f"{LANES[1]}_{name}"] for name in PIXEL_FIELDS]
 
@@ -89,24 +98,43 @@ class ShardTask:
     def max_pixels(self) -> int:
         return MAX_PIXELS[self.seed % len(MAX_PIXELS)]
 
-    def draw_edges(self) -> list[Edge]:
-        return random_sim_edges(
+    def draw(self) -> Iterator[Edge]:
+        """The shard's edges one at a time (`iter_sim_edges` from its seed)."""
+        return iter_sim_edges(
             self.config,
-            self.edges,
             self.seed,
             max_pixels=self.max_pixels,
             bad_fraction=BAD_FRACTION,
             clip_fraction=CLIP_FRACTION,
         )
 
+    def draw_edges(self) -> list[Edge]:
+        return list(islice(self.draw(), self.edges))
+
+    def stream_bounds(self) -> list[tuple[str, int, int]]:
+        """(name, first edge, end) of each command stream: the first half stalled, the rest
+        ready; one ready stream on the Amaranth engine or for a one-edge shard."""
+        if self.engine == "amaranth":
+            return [("ready", 0, self.edges)]
+        half = self.edges // 2
+        bounds = [("stalled", 0, half), ("ready", half, self.edges)]
+        return [bound for bound in bounds if bound[2] > bound[1]]
+
     def streams(self) -> list[tuple[str, int, list[Edge]]]:
         """(name, index of its first edge in the shard, edges) of each command stream."""
         edges = self.draw_edges()
-        if self.engine == "amaranth":
-            return [("ready", 0, edges)]
-        half = len(edges) // 2
-        streams = [("stalled", 0, edges[:half]), ("ready", half, edges[half:])]
-        return [stream for stream in streams if stream[2]]  # a one-edge shard: ready only
+        return [(name, lo, edges[lo:hi]) for name, lo, hi in self.stream_bounds()]
+
+    def chunks(self, size: int | None = None) -> Iterator[tuple[str, int, int, list[Edge]]]:
+        """(stream, part, index of its first edge in the shard, edges) of each piece of the
+        streams, drawn as it is asked for: at most `size` (default `CHUNK_EDGES`) edges at a
+        time, so a shard's memory does not grow with its edges. Part k of a stream is its
+        edges from k * size on; a stream of `size` edges or fewer is one part."""
+        size = CHUNK_EDGES if size is None else size
+        draw = self.draw()
+        for name, lo, hi in self.stream_bounds():
+            for part, start in enumerate(range(lo, hi, size)):
+                yield name, part, start, list(islice(draw, min(size, hi - start)))
 
 
 # -- the compiled core, built once and shipped to the workers --------------------------------
@@ -146,15 +174,20 @@ class CompiledCore:
         return local
 
 
-def simulate(task: ShardTask, core: CompiledCore | None, stream: str, edges: list[Edge]) -> FastRun:
-    """The simulated core's view of one command stream: its beats, clocks and error count."""
+def simulate(
+    task: ShardTask, core: CompiledCore | None, stream: str, edges: list[Edge], part: int = 0
+) -> FastRun:
+    """The simulated core's view of part `part` of one command stream (`ShardTask.chunks`):
+    its beats, clocks and error count. Each part runs from reset; its stalls come from the
+    shard's seed plus the part."""
     if task.engine == "amaranth":
         from ..simulators import amaranth_sim
 
         return amaranth_sim.run(task.config, edges)
     idle, stall = (IDLE, STALL) if stream == "stalled" else (0.0, 0.0)
+    seed = (task.seed + part) % (1 << 64)  # the harness reads an unsigned 64-bit seed
     return verilator_harness.run(
-        task.config, edges, seed=task.seed, idle=idle, stall=stall, exe=core.executable()
+        task.config, edges, seed=seed, idle=idle, stall=stall, exe=core.executable()
     )
 
 
@@ -249,51 +282,99 @@ def edge_of_beat(columns: np.ndarray, beat: int) -> tuple[int, int]:
     return edge, beat - int(ends[edge] - columns[edge])
 
 
-def check_stream(config: EdgeConfig, stream: str, edges: list[Edge], run: FastRun) -> list[dict]:
-    """The first disagreement of each kind in one stream: beats, the bad-command count and (for
-    a ready stream whose beats agree) beat clocks. Edge indices are within the stream."""
-    model = model_stream(config, edges)
-    got = core_rows(run)
-    found = []
-    beat = first_difference(got, model.rows)
-    if beat is not None:
-        edge, column = edge_of_beat(model.columns, beat)
-        core = describe(got[beat] if beat < len(got) else None)
-        want = describe(model.rows[beat] if beat < len(model.rows) else None)
-        text = f"beat {beat} (column {column} of edge {edge}) is {core}, the model says {want}"
-        found.append({"kind": "beat", "edge": edge, "beat": beat, "message": text})
-    if run.errors != model.dropped:
-        text = f"the core counted {run.errors} bad commands, the model {model.dropped}"
-        found.append({"kind": "errors", "edge": None, "beat": None, "message": text})
-    if stream == "ready" and beat is None:
+KINDS = ("beat", "errors", "clock")  # a stream's disagreements, in the order they are listed
+
+
+@dataclass
+class StreamCheck:
+    """A command stream checked part by part: where the next part starts (edges and model
+    beats into the stream), bad commands counted by the core and by the model, and the first
+    disagreement of each kind."""
+
+    first_edge: int  # in the shard
+    edges: int = 0
+    beats: int = 0
+    errors: int = 0
+    dropped: int = 0
+    found: dict = field(default_factory=dict)
+
+    def check(self, config: EdgeConfig, stream: str, edges: list[Edge], run: FastRun) -> None:
+        """Check the next part: its beats against the model's and, while every beat of the
+        stream so far agrees, a ready stream's beat clocks against the timing model's."""
+        model = model_stream(config, edges)
+        got = core_rows(run)
+        beat = first_difference(got, model.rows)
+        if beat is not None and "beat" not in self.found:
+            edge, column = edge_of_beat(model.columns, beat)
+            core = describe(got[beat] if beat < len(got) else None)
+            want = describe(model.rows[beat] if beat < len(model.rows) else None)
+            what = f"is {core}, the model says {want}"
+            self._add(config, edges, "beat", edge, beat, column, what)
+        if stream == "ready" and beat is None and "beat" not in self.found:
+            self._check_clocks(config, edges, run, model)
+        self.edges += len(edges)
+        self.beats += len(model.rows)
+        self.errors += run.errors
+        self.dropped += model.dropped
+
+    def _check_clocks(self, config, edges, run: FastRun, model: ModelStream) -> None:
+        if "clock" in self.found:
+            return
         predicted = np.array([c for t in write_cycles(config, edges) for c in t.beats], np.int64)
         late = first_difference(run.beats[:, :1], predicted[:, None])
         if late is not None:
             edge, column = edge_of_beat(model.columns, late)
             text = (
-                f"beat {late} (column {column} of edge {edge}) left in clock "
-                f"{int(run.beats[late, 0])}, the timing model says {int(predicted[late])}"
+                f"left in clock {int(run.beats[late, 0])}, the timing model says "
+                f"{int(predicted[late])}"
             )
-            found.append({"kind": "clock", "edge": edge, "beat": late, "message": text})
-    return found
+            self._add(config, edges, "clock", edge, late, column, text)
+
+    def _add(self, config, edges, kind, edge, beat, column, what) -> None:
+        """Record a disagreement at `edge` and `beat` of the part (numbered in the stream)."""
+        text = f"beat {self.beats + beat} (column {column} of edge {self.edges + edge}) {what}"
+        found = {"kind": kind, "edge": self.edges + edge, "beat": self.beats + beat}
+        found["message"] = text
+        found["reproduce"] = reproduce_edge(config, edges[edge])
+        self.found[kind] = found
+
+    def mismatches(self) -> list[dict]:
+        """The stream's disagreements (edge indices within the stream), the bad-command
+        counts once the whole stream is checked."""
+        if self.errors != self.dropped:
+            text = f"the core counted {self.errors} bad commands, the model {self.dropped}"
+            found = {"kind": "errors", "edge": None, "beat": None, "message": text}
+            self.found["errors"] = found | {"reproduce": None}
+        return [self.found[kind] for kind in KINDS if kind in self.found]
 
 
-def check_shard(task: ShardTask, core: CompiledCore | None = None) -> dict:
-    """Run and check one shard; the result is plain data (it is stored as a JSON line)."""
+def check_shard(
+    task: ShardTask,
+    core: CompiledCore | None = None,
+    chunk: int | None = None,
+    report: Callable[[int, int], None] | None = None,
+) -> dict:
+    """Run and check one shard, `chunk` edges at a time (`ShardTask.chunks`), calling
+    `report(index, edges checked so far)` after each piece; the result is plain data (it is
+    stored as a JSON line)."""
     start = time.perf_counter()
     result = {"index": task.index, "seed": task.seed, "edges": task.edges, "beats": 0}
     result.update(clocks=0, dropped=0, timed_edges=0, sim_seconds=0.0, mismatches=[])
-    for stream, offset, edges in task.streams():
-        run = simulate(task, core, stream, edges)
+    checks: dict[str, StreamCheck] = {}
+    for stream, part, offset, edges in task.chunks(chunk):
+        run = simulate(task, core, stream, edges, part)
         result["sim_seconds"] += run.seconds
         result["beats"] += len(run.beats)
         result["clocks"] += run.clocks
         result["dropped"] += run.errors
         result["timed_edges"] += len(edges) if stream == "ready" else 0
-        for found in check_stream(task.config, stream, edges, run):
-            edge = None if found["edge"] is None else offset + found["edge"]
-            edge_line = None if edge is None else reproduce_edge(task.config, edges[edge - offset])
-            found.update(stream=stream, edge=edge, reproduce=edge_line)
+        checks.setdefault(stream, StreamCheck(offset)).check(task.config, stream, edges, run)
+        if report is not None:
+            report(task.index, offset + len(edges))
+    for stream, check in checks.items():
+        for found in check.mismatches():
+            edge = None if found["edge"] is None else check.first_edge + found["edge"]
+            found.update(stream=stream, edge=edge, reproduce=found.pop("reproduce"))
             found.update(reproduce_shard=reproduce_shard(task), shard=task.index, seed=task.seed)
             result["mismatches"].append(found)
     result["seconds"] = time.perf_counter() - start

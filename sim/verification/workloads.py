@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import random
+from collections.abc import Iterator
 from dataclasses import replace
+from itertools import islice
 
 from ...model import Clip, Edge, EdgeConfig, EdgeError, setup
 
@@ -26,14 +28,35 @@ def random_sim_edges(
     must drop and count. About `clip_fraction` of the edges get a random clip window
     (`random_clip`: some hold none of the edge's columns, some cut its start, its end or
     both); the others keep clip None. The windows come from their own generator, so the
-    geometry is the same whatever `clip_fraction` is.
+    geometry is the same whatever `clip_fraction` is. The first `count` of `iter_sim_edges`.
     """
+    draw = iter_sim_edges(
+        config,
+        seed,
+        max_pixels=max_pixels,
+        bad_fraction=bad_fraction,
+        clip_fraction=clip_fraction,
+    )
+    return list(islice(draw, count))
+
+
+def iter_sim_edges(
+    config: EdgeConfig,
+    seed: int,
+    *,
+    max_pixels: int = 48,
+    bad_fraction: float = 0.0,
+    clip_fraction: float = 0.0,
+) -> Iterator[Edge]:
+    """The edges of `random_sim_edges`, one at a time and without end, so a caller can take
+    them in pieces of bounded size. Each edge's geometry comes from one generator and its
+    window from another, each used in edge order, so the pieces are the edges of one draw."""
     rng = random.Random(seed)
+    clip_rng = random.Random(f"clip/{seed}")
     hi = config.max_vertex
     span = min(hi, max_pixels * config.subpixel_scale)
     full = config.full_scale
-    edges = []
-    for _ in range(count):
+    while True:
         x0, y0 = rng.randint(0, hi), rng.randint(0, hi)
         x1 = min(hi, max(0, x0 + rng.randint(-span, span)))
         y1 = min(hi, max(0, y0 + rng.randint(-span, span)))
@@ -48,16 +71,10 @@ def random_sim_edges(
         elif i_in == i_out:
             i_out = full - i_in if 2 * i_in != full else 0
         inside = rng.choice(("left", "right"))
-        edges.append(Edge(x0, y0, x1, y1, inside=inside, i_in=i_in, i_out=i_out))
-    if clip_fraction:
-        clip_rng = random.Random(f"clip/{seed}")
-        edges = [
-            replace(edge, clip=random_clip(config, edge, clip_rng))
-            if clip_rng.random() < clip_fraction
-            else edge
-            for edge in edges
-        ]
-    return edges
+        edge = Edge(x0, y0, x1, y1, inside=inside, i_in=i_in, i_out=i_out)
+        if clip_fraction and clip_rng.random() < clip_fraction:
+            edge = replace(edge, clip=random_clip(config, edge, clip_rng))
+        yield edge
 
 
 def major_columns(config: EdgeConfig, edge: Edge) -> tuple[int, int, int]:
