@@ -220,7 +220,7 @@ def _run(plan, store, workers: int, cluster: str | None, *, quiet: bool) -> dict
     """Open the runner (the core is built here), run the plan with a progress bar, close."""
     from .sim.verification.regress import open_runner, run_plan
 
-    resumed = sum(record["edges"] for record in store.finished.values())
+    resumed = store.totals.sums["edges"]
     bar = ProgressBar("edgeaa verify", enabled=not quiet, unit="edges")
     with contextlib.ExitStack() as cleanup:
         cleanup.callback(bar.close)  # an error's line starts on a line of its own

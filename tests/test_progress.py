@@ -116,7 +116,7 @@ def test_error_vs_slope_names_a_method_while_it_runs(eager, capsys):
 
 
 def test_render_compare_names_each_method_while_it_runs(eager, tmp_path, capsys):
-    from edgeaa.render.compare import SEED_METHODS
+    from edgeaa.analysis.compare import SEED_METHODS
 
     scene = tmp_path / "tiny.json"
     scene.write_text(json.dumps(TINY_SCENE))
