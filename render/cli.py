@@ -152,7 +152,7 @@ class RenderCommand(Command):
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
-        from .render import plan_scene
+        from .render import edges_to_send, plan_scene
         from .scene import SceneError, check_pixels
 
         config = config_from_args(args)
@@ -168,6 +168,8 @@ class RenderCommand(Command):
             with bar.ticking("plan"):
                 plan = plan_scene(scene, config)
             bar.close()
+            if args.stats or args.no_skip:
+                edges_to_send(plan, skip=False)  # refused if not every edge fits the range
         except SceneError as error:
             raise usage_error(PROG, str(error)) from None
         if crop and (crop[2] > scene.width or crop[3] > scene.height):

@@ -22,7 +22,7 @@ from operator import itemgetter
 
 import numpy as np
 
-CHUNK = 1 << 22  # point x edge pairs per numpy pass
+CHUNK = 1 << 20  # point x edge pairs per numpy pass (about 100 MB of temporaries)
 
 
 def fills(winding: np.ndarray, rule: str) -> np.ndarray:
@@ -49,28 +49,75 @@ def winding_numbers(
     rule is Sunday's (a ray to +x; an upward crossing with P left of the edge counts +1, a
     downward one with P right of it -1), decided exactly with the perturbation. first and
     second must not both be parallel to any edge and (first_y, second_y) != (0, 0).
+
+    Only an edge whose closed y range holds P's y can count, so only those pairs are tested
+    (`_stabbing_pairs`): the work is the sum over the points of the edges met by a short
+    horizontal band around each, not P x E.
     """
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
     points = np.asarray(points, dtype=np.int64).reshape(-1, 2)
     first = np.broadcast_to(np.asarray(first, dtype=np.int64), points.shape)
     second = np.broadcast_to(np.asarray(second, dtype=np.int64), points.shape)
-    ax, ay, bx, by = (edges[:, i][None, :] for i in range(4))
-    ex, ey = bx - ax, by - ay
     out = np.zeros(len(points), dtype=np.int64)
-    step = max(1, CHUNK // max(1, len(edges)))
-    for lo in range(0, len(points), step):
-        sl = slice(lo, lo + step)
-        px, py = points[sl, 0][:, None], points[sl, 1][:, None]
-        v1x, v1y = first[sl, 0][:, None], first[sl, 1][:, None]
-        v2x, v2y = second[sl, 0][:, None], second[sl, 1][:, None]
+    lo = np.minimum(edges[:, 1], edges[:, 3])
+    hi = np.maximum(edges[:, 1], edges[:, 3])
+    for q, e in _stabbing_pairs(lo, hi, points[:, 1]):
+        ax, ay, bx, by = (edges[e, i] for i in range(4))
+        ex, ey = bx - ax, by - ay
+        px, py = points[q, 0], points[q, 1]
+        v1x, v1y, v2x, v2y = first[q, 0], first[q, 1], second[q, 0], second[q, 1]
         sy = _lex_sign(v1y, v2y)  # the point's y moves up (-) or down (+) from py
         a_le = (ay < py) | ((ay == py) & (sy > 0))  # a.y <= P.y
         b_gt = (by > py) | ((by == py) & (sy < 0))  # b.y > P.y
         left = _lex_sign(ex * (py - ay) - (px - ax) * ey, ex * v1y - v1x * ey, ex * v2y - v2x * ey)
         up = a_le & b_gt & (left > 0)
         down = ~a_le & ~b_gt & (left < 0)
-        out[sl] = up.sum(axis=1) - down.sum(axis=1)
+        out += np.bincount(q, weights=up.astype(np.int64) - down, minlength=len(out)).astype(
+            np.int64
+        )
     return out
+
+
+BAND = 32  # points per horizontal band of `_stabbing_pairs`
+
+
+def _stabbing_pairs(lo: np.ndarray, hi: np.ndarray, ys: np.ndarray):
+    """Yield (point, interval) index arrays, about CHUNK pairs at a time, for every point y
+    and interval [lo, hi] with lo <= y <= hi (and some pairs that fail it, filtered out).
+
+    The points sorted by y are cut into bands of BAND points; an interval goes to every band
+    its y range meets, and is paired with that band's points. Each point is in one band, so
+    no pair comes twice. The pairs are the intervals meeting each band times its points:
+    O(P log P + sum of the bands each interval spans + the pairs kept)."""
+    if not len(ys) or not len(lo):
+        return
+    order = np.argsort(ys, kind="stable")
+    sorted_y = ys[order]
+    starts = np.arange(0, len(ys), BAND)
+    bottom = sorted_y[starts]  # each band's lowest y
+    size = np.diff(np.append(starts, len(ys)))
+    first = np.maximum(np.searchsorted(bottom, lo, side="right") - 1, 0)
+    last = np.searchsorted(bottom, hi, side="right") - 1
+    keep = last >= first
+    spans = np.where(keep, last - first + 1, 0)
+    edge = np.repeat(np.arange(len(lo)), spans)
+    band = (
+        np.repeat(first, spans) + np.arange(len(edge)) - np.repeat(np.cumsum(spans) - spans, spans)
+    )
+    by_band = np.argsort(band, kind="stable")
+    edge, band = edge[by_band], band[by_band]
+    count = size[band]
+    cum = np.cumsum(count)
+    i0 = 0
+    while i0 < len(edge):
+        i1 = max(i0 + 1, int(np.searchsorted(cum, cum[i0] - count[i0] + CHUNK, side="right")))
+        c = count[i0:i1]
+        e = np.repeat(edge[i0:i1], c)
+        k = np.repeat(starts[band[i0:i1]], c) + np.arange(len(e)) - np.repeat(np.cumsum(c) - c, c)
+        y = sorted_y[k]
+        hit = (lo[e] <= y) & (y <= hi[e])
+        yield order[k[hit]], e[hit]
+        i0 = i1
 
 
 def side_fills(edges: np.ndarray, rule: str) -> tuple[np.ndarray, np.ndarray]:

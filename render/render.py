@@ -85,6 +85,14 @@ class Plan:
         return len(self.coords)
 
     @property
+    def in_range(self) -> bool:
+        """Whether every vertex is in the engine's range (`_offset`: if not, only the edges
+        that reach the image are, and only a render that skips the rest can be made)."""
+        return not len(self.coords) or (
+            self.coords.min() >= 0 and self.coords.max() <= self.config.max_vertex
+        )
+
+    @property
     def viewport(self) -> Clip:
         """The image in engine pixels as the core's clip window (within its range)."""
         top = 1 << self.config.coord_bits
@@ -248,16 +256,46 @@ def _quantize(scene: Scene, S: int):
 
 
 def _offset(config: EdgeConfig, scene: Scene, contours, owners) -> tuple[int, int]:
-    """Whole pixels to add so that no vertex is negative; checks that the scene then fits."""
+    """Whole pixels to add so that no vertex is negative, if the scene then fits the range.
+    Otherwise only the vertices of edges that reach the image need it: an edge wholly above,
+    below or right of the image is never sent, and one wholly left of it is sent as its
+    projection on the column left of the image (its y and that column need the range, not
+    its x). `Plan.in_range` is then false, and a render without skipping is refused. Checks
+    that the vertices that need it fit."""
     S = config.subpixel_scale
-    offset = [0, 0]
-    if contours:
-        allpts = np.concatenate(contours)
-        for axis in (0, 1):
-            lo = allpts[:, axis].min()
-            offset[axis] = max(0, math.ceil(-lo / S))
-        _check_range(config, scene, contours, owners, offset)
+    if not contours:
+        return 0, 0
+    allpts = np.concatenate(contours)
+    offset = [max(0, math.ceil(-allpts[:, axis].min() / S)) for axis in (0, 1)]
+    fits = all(allpts[:, axis].max() + offset[axis] * S <= config.max_vertex for axis in (0, 1))
+    if fits and (offset[0] - 1) * S <= config.max_vertex:  # and the projections' column
+        return offset[0], offset[1]
+    need, left = _reaching(scene, contours, S)
+    for axis in (0, 1):
+        used = [pts[n[axis], axis] for pts, n in zip(contours, need, strict=True)]
+        lowest = min((u.min() for u in used if len(u)), default=0)
+        offset[axis] = max(0, math.ceil(-lowest / S))
+    offset[0] = max(offset[0], int(left))  # the projection column, ox - 1, is in range
+    _check_range(config, scene, contours, owners, offset, need)
     return offset[0], offset[1]
+
+
+def _reaching(scene: Scene, contours, S: int) -> tuple[list[tuple], bool]:
+    """Per contour, which vertices need the range in x and in y: those of an edge that is
+    not wholly outside the image by `_write_boxes` (the test `plan_scene` applies after
+    splitting; a piece lies within its edge's box), in y also those of an edge wholly left of
+    it. And whether any edge lies wholly left of the image."""
+    need, left = [], False
+    for pts in contours:
+        edges = np.concatenate([pts, np.roll(pts, -1, axis=0)], axis=1).astype(np.int64)
+        lo_x, lo_y, hi_x, hi_y = _write_boxes(edges, (0, 0), S)
+        sent = ~((lo_x >= scene.width) | (hi_y < 0) | (lo_y >= scene.height))
+        wholly_left = sent & (hi_x <= 0)
+        left = left or bool(wholly_left.any())
+        reaches = sent & ~wholly_left
+        # vertex k starts edge k and ends edge k - 1
+        need.append((reaches | np.roll(reaches, 1), sent | np.roll(sent, 1)))
+    return need, left
 
 
 def _split_edges(scene: Scene, contours, owners, offset, S: int):
@@ -391,25 +429,30 @@ def _meets(a, b) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3] and a[0] < a[2]
 
 
-def _check_range(config, scene, contours, owners, offset) -> None:
+def _check_range(config, scene, contours, owners, offset, need=None) -> None:
+    """Refuse, naming the first vertex that does not fit, a scene whose vertices do not fit
+    the engine's range after the offset (per contour, `need` marks the vertices that must,
+    in x and in y; default all)."""
     S = config.subpixel_scale
     hi = config.max_vertex
-    allpts = np.concatenate(contours)
+    if need is None:
+        need = [(np.ones(len(p), dtype=bool),) * 2 for p in contours]
+    every = all(n[0].all() and n[1].all() for n in need)
+    which = "the scene spans" if every else "the edges that reach the image span"
     for axis, name in ((0, "x"), (1, "y")):
-        top = allpts[:, axis].max() + offset[axis] * S
-        if top <= hi:
+        used = np.concatenate([p[n[axis], axis] for p, n in zip(contours, need, strict=True)])
+        if not len(used) or used.max() + offset[axis] * S <= hi:
             continue
-        for (i, j, kept), pts in zip(owners, contours, strict=True):
-            bad = np.flatnonzero(pts[:, axis] + offset[axis] * S > hi)
+        for (i, j, kept), pts, n in zip(owners, contours, need, strict=True):
+            bad = np.flatnonzero(n[axis] & (pts[:, axis] + offset[axis] * S > hi))
             if len(bad):
                 k = int(kept[bad[0]])
                 x, y = scene.polygons[i].contours[j][k]
-                lo = allpts[:, axis].min() / S
                 raise SceneError(
                     f"polygon {i} contour {j} vertex {k} at ({x:g}, {y:g}) px does not fit "
-                    f"the configured coordinate range: the scene spans {name} from {lo:g} to "
-                    f"{allpts[:, axis].max() / S:g} px, more than the engine's [0, {hi / S}] px "
-                    f"(coord_bits = {config.coord_bits}, subpixel_bits = "
+                    f"the configured coordinate range: {which} {name} from "
+                    f"{used.min() / S:g} to {used.max() / S:g} px, more than the engine's "
+                    f"[0, {hi / S}] px (coord_bits = {config.coord_bits}, subpixel_bits = "
                     f"{config.subpixel_bits})"
                 )
 
@@ -451,6 +494,12 @@ def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:
     """Which boundary edges go to the engine, and which are skipped by which rule."""
     boundary = plan.boundary
     none = np.zeros_like(boundary)
+    if not skip and not plan.in_range:
+        raise SceneError(
+            "without skipping every edge goes to the engine, but the scene's edges wholly "
+            f"outside the image do not fit its coordinate range (coord_bits = "
+            f"{plan.config.coord_bits}); render with skipping (no --no-skip or --stats)"
+        )
     if not skip:
         return dict(sent=np.flatnonzero(boundary), equal=none, culled=none, left=none, flat=none)
     skipped_poly = np.array([p.equal and not p.overlaps for p in plan.polygons], dtype=bool)
