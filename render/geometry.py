@@ -257,14 +257,29 @@ SAFE = 1 << 30  # |coordinate| below this keeps _may_split's products inside int
 PAIRS = 1 << 16  # edge pairs per numpy pass of _candidate_pairs (fits in the caches)
 
 
-def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
+class NodingLimit(ValueError):
+    """Splitting would insert more than the limit of points (`split_crossings`' limit)."""
+
+
+def _count_pairs(pairs, limit: int | None):
+    """The pairs, raising NodingLimit past `limit` of them (each inserts at least a point)."""
+    for n, pair in enumerate(pairs):
+        if limit is not None and n >= limit:
+            raise NodingLimit(f"more than {limit:,} points")
+        yield pair
+
+
+def split_crossings(
+    contours: list[np.ndarray], limit: int | None = None
+) -> tuple[list[np.ndarray], int]:
     """Insert a vertex wherever an edge of these contours crosses or touches another edge's
     interior (and at the ends of collinear overlaps), so that every edge lies on one side of
     the rest: then the fill rule gives each edge one inside side along its whole length.
 
     Contours are (n, 2) int64 arrays of closed polygons. A crossing point is rounded half up
     to the integer grid, the same for both edges. Returns the new contours and the number of
-    vertices inserted.
+    vertices inserted. More than `limit` pairs of edges that split raise NodingLimit before
+    any point is computed past them.
 
     The pairs to test come from a sweep (`_candidate_pairs`): O(n log n + B) numpy work for
     n edges and B pairs whose bounding boxes overlap, and Python work only for the pairs that
@@ -275,7 +290,7 @@ def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
     seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
     rows = seg.tolist()
     splits: dict[int, list] = {}
-    for i, j in _candidate_pairs(seg):
+    for i, j in _count_pairs(_candidate_pairs(seg), limit):
         _intersect(i, j, rows, splits)
     if not splits:
         return contours, 0
@@ -414,3 +429,123 @@ def _intersect(i: int, j: int, rows: list, splits: dict) -> None:
         num, length = (px - ox) * ux + (py - oy) * uy, ux * ux + uy * uy
         if 0 < num < length:
             _add_split(splits, k, num, length, (px, py))
+
+
+def hot_points(contours: list[np.ndarray], limit: int | None = None) -> np.ndarray:
+    """The centres of the hot pixels of snap rounding: every vertex and every crossing point
+    of the contours' edges rounded half up to the grid (`split_crossings`' rounding), (H, 2)
+    int64, unique. NodingLimit past `limit` pairs of edges that meet."""
+    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    rows = seg.tolist()
+    splits: dict[int, list] = {}
+    for i, j in _count_pairs(_candidate_pairs(seg), limit):
+        _intersect(i, j, rows, splits)
+    found = [entry[3] for entries in splits.values() for entry in entries]
+    points = np.concatenate([seg[:, 0:2], np.array(found, dtype=np.int64).reshape(-1, 2)])
+    return np.unique(points, axis=0)
+
+
+def snap_round(
+    contours: list[np.ndarray], hot: np.ndarray, limit: int | None = None
+) -> list[np.ndarray]:
+    """Snap rounding (Hobby; Guibas and Marimont): each edge becomes the chain through the
+    centres of the hot pixels it meets, in the order it meets them. A pixel is the half-open
+    square [c - 1/2, c + 1/2) x [c' - 1/2, c' + 1/2) around its centre (c, c'), the cell that
+    rounding half up sends to it; `hot` holds the centres (every vertex among them).
+    NodingLimit if the chains would have more than `limit` vertices."""
+    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    chains: dict[int, list] = {}
+    met = 0
+    for e, h in _meeting_pairs(seg, hot):
+        met += len(e)
+        if limit is not None and met - len(seg) > limit:
+            raise NodingLimit(f"more than {limit:,} points")
+        for i, k in zip(e.tolist(), h.tolist(), strict=True):
+            chains.setdefault(i, []).append(k)
+    hot_rows = hot.tolist()
+    out, base = [], 0
+    for pts in contours:
+        points = []
+        for i in range(base, base + len(pts)):
+            met = sorted(chains[i], key=lambda k, i=i: _entry(seg[i].tolist(), hot_rows[k]))
+            points.extend(tuple(hot_rows[k]) for k in met[:-1])  # the end starts the next
+        base += len(pts)
+        kept = [p for i, p in enumerate(points) if p != points[i - 1]]  # cyclic dedup
+        out.append(np.array(kept or points[:1], dtype=np.int64))
+    return out
+
+
+def _entry(edge: list, centre: list):
+    """Where the edge meets the centre's pixel: (first t, last t) as fractions; distinct
+    pixels met by one edge are met at disjoint sets of t, so this orders them."""
+    from fractions import Fraction
+
+    (ax, ay, bx, by), lows, highs = edge, [Fraction(0)], [Fraction(1)]
+    for a, b, c in ((ax, bx, centre[0]), (ay, by, centre[1])):
+        if a != b:
+            t0, t1 = Fraction(2 * (c - a) - 1, 2 * (b - a)), Fraction(2 * (c - a) + 1, 2 * (b - a))
+            lows.append(min(t0, t1))
+            highs.append(max(t0, t1))
+    return max(lows), min(highs)
+
+
+def _meeting_pairs(seg: np.ndarray, hot: np.ndarray):
+    """Yield (edge, hot point) index arrays of the edges and hot pixels that meet, exactly.
+
+    A pixel with an integer centre c meets the edge's integer box [lo, hi] iff lo <= c <= hi
+    on both axes, so the candidates are the centres in the box (a sweep along x over the
+    centres sorted by x, like `_candidate_pairs`); then the edge's parameter intervals in x
+    and y, [(2u - 1) / 2d, (2u + 1) / 2d) with u = c - a, must meet each other and [0, 1]."""
+    order = np.argsort(hot[:, 0], kind="stable")
+    hx, hy = hot[order, 0], hot[order, 1]
+    lo = np.minimum(seg[:, 0:2], seg[:, 2:4])
+    hi = np.maximum(seg[:, 0:2], seg[:, 2:4])
+    begin = np.searchsorted(hx, lo[:, 0], side="left")
+    counts = np.searchsorted(hx, hi[:, 0], side="right") - begin
+    exact = len(seg) and np.abs(seg).max() < SAFE and np.abs(hot).max() < SAFE
+    cum = np.cumsum(counts)
+    p0 = 0
+    while p0 < len(seg):
+        p1 = max(p0 + 1, int(np.searchsorted(cum, cum[p0] - counts[p0] + CHUNK, side="right")))
+        c = counts[p0:p1]
+        e = np.repeat(np.arange(p0, p1), c)
+        k = np.repeat(begin[p0:p1], c) + np.arange(len(e)) - np.repeat(np.cumsum(c) - c, c)
+        keep = (lo[e, 1] <= hy[k]) & (hy[k] <= hi[e, 1])
+        e, k = e[keep], order[k[keep]]
+        cols = seg[e].astype(np.int64 if exact else object).T
+        keep = _meets_pixel(*cols, hot[k, 0].astype(cols.dtype), hot[k, 1].astype(cols.dtype))
+        yield e[keep], k[keep]
+        p0 = p1
+
+
+def _meets_pixel(ax, ay, bx, by, cx, cy) -> np.ndarray:
+    """Whether edge a b meets the half-open pixel of centre c (arrays; int64 exact while
+    every |coordinate| < SAFE, else object arrays of Python ints).
+
+    Along the edge, t in [0, 1] closed, and per axis with d = b - a != 0 and u = c - a the
+    pixel's interval (2u - 1) / 2d <= t < (2u + 1) / 2d for d > 0, closed at the other end
+    for d < 0 (d = 0: every t if u = 0, none otherwise). Intervals on a line meet iff every
+    lower bound is below every upper bound (or equal, both closed). The ends of the edge are
+    on the grid, never on a pixel's side, so [0, 1] may be taken closed."""
+    bounds = []  # (numerator, denominator > 0, closed) of the lower and upper bounds
+    ok = np.ones(len(ax), dtype=bool)
+    for a, b, c in ((ax, bx, cx), (ay, by, cy)):
+        d, u = b - a, c - a
+        pos = d > 0
+        den = np.where(d == 0, 1, 2 * abs(d))
+        low = np.where(pos, 2 * u - 1, -2 * u - 1)
+        high = np.where(pos, 2 * u + 1, -2 * u + 1)
+        flat = d == 0
+        ok &= ~flat | (u == 0)
+        # a flat axis with u = 0 constrains nothing: [0, 1] closed
+        low, high = np.where(flat, 0, low), np.where(flat, den, high)
+        bounds.append(((low, den, pos | flat), (high, den, ~pos | flat)))
+    one = np.ones(len(ax), dtype=ax.dtype)
+    closed = np.ones(len(ax), dtype=bool)
+    lows = [(0 * one, one, closed)] + [b[0] for b in bounds]
+    highs = [(one, one, closed)] + [b[1] for b in bounds]
+    for ln, ld, lc in lows:
+        for hn, hd, hc in highs:
+            left, right = ln * hd, hn * ld
+            ok &= (left < right) | ((left == right) & lc & hc)
+    return ok

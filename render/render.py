@@ -33,8 +33,8 @@ import numpy as np
 from ..model import Clip, Edge, EdgeConfig
 from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
 from .engines import DeltaRun, cycles_of, run_deltas
-from .geometry import inside_sides, split_crossings
-from .scene import Scene, SceneError
+from .geometry import NodingLimit, hot_points, inside_sides, snap_round, split_crossings
+from .scene import MAX_NODED_EDGES, Scene, SceneError
 
 WRITE_MARGIN = 2  # px: every delta lies within the edge's bounding box grown by this much
 
@@ -314,7 +314,20 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
             for (k, _, _), pts in zip(owners, contours, strict=True)
             if k == i
         ]
-        mine, inserted = _node(mine)
+        try:
+            mine, inserted = _node(mine, MAX_NODED_EDGES - sum(map(len, mine)))
+        except NodingLimit:
+            raise SceneError(
+                f"polygon {i}: its edges cross so often that splitting them at the crossings "
+                f"gives more than the limit of {MAX_NODED_EDGES:,} edges per polygon "
+                f"({sum(map(len, mine)):,} before splitting); simplify its outline"
+            ) from None
+        if sum(map(len, mine)) > MAX_NODED_EDGES:
+            raise SceneError(
+                f"polygon {i}: splitting its edges at the crossings gives "
+                f"{sum(map(len, mine)):,} edges, more than the limit of {MAX_NODED_EDGES:,} "
+                "per polygon; simplify its outline"
+            )
         crossings += inserted
         for q in mine:
             n = len(q)
@@ -328,23 +341,36 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     return _joined(coords, 4), _joined(polygon), _joined(contour), starts, crossings
 
 
-NODING_ROUNDS = 16  # rounds of re-splitting before the plan gives up (none seen past 3)
+def _node(contours: list[np.ndarray], limit: int | None = None) -> tuple[list[np.ndarray], int]:
+    """Split the contours where they cross so that no edge crosses another (docs/noding.md).
+
+    One round of `split_crossings` rounds each crossing to the grid; if nothing crosses or
+    touches after it (a second round inserts nothing), that is the noding. Otherwise a
+    rounded point moved an edge across or onto another, and the contours are snap-rounded
+    instead (`snap_round`, with every vertex and rounded crossing as a hot pixel): no two of
+    its edges cross, and a last exact round splits where an edge passes through a vertex or
+    overlaps another (points already on the grid, so nothing moves). Should that round ever
+    add a point that is not hot, the point becomes hot and the snap is redone: the hot
+    points only grow, within the contours' box, so this ends. NodingLimit (geometry) when
+    more than `limit` points would be inserted."""
+    once, inserted = split_crossings(contours, limit)
+    if not inserted or not split_crossings(once, limit)[1]:
+        return once, inserted
+    hot = hot_points(contours, limit)
+    while True:
+        noded, _ = split_crossings(snap_round(contours, hot, limit), limit)
+        points = np.concatenate(noded)
+        new = points[~_rows_in(points, hot)]
+        if not len(new):
+            added = sum(map(len, noded)) - sum(map(len, contours))
+            return noded, max(0, added)
+        hot = np.unique(np.concatenate([hot, new]), axis=0)
 
 
-def _node(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
-    """Split the contours where they cross, again until nothing crosses: a crossing point
-    rounded to the grid can move an edge across another or onto it, and an edge left crossing
-    would get the wrong inside side for part of its length (a streak along its row)."""
-    total = 0
-    for _ in range(NODING_ROUNDS):
-        contours, inserted = split_crossings(contours)
-        total += inserted
-        if not inserted:
-            return contours, total
-    raise SceneError(
-        f"a polygon's edges still cross after {NODING_ROUNDS} rounds of splitting at the "
-        "rounded crossing points; refine or simplify its outline"
-    )
+def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Whether each (x, y) row of `rows` is a row of `table`."""
+    known = {tuple(r) for r in table.tolist()}
+    return np.array([tuple(r) in known for r in rows.tolist()], dtype=bool)
 
 
 def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:
