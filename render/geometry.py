@@ -96,7 +96,8 @@ def _stabbing_pairs(lo: np.ndarray, hi: np.ndarray, ys: np.ndarray):
     starts = np.arange(0, len(ys), BAND)
     bottom = sorted_y[starts]  # each band's lowest y
     size = np.diff(np.append(starts, len(ys)))
-    first = np.maximum(np.searchsorted(bottom, lo, side="right") - 1, 0)
+    # from the last band starting below lo (its top may reach lo; equal ys span bands)
+    first = np.maximum(np.searchsorted(bottom, lo, side="left") - 1, 0)
     last = np.searchsorted(bottom, hi, side="right") - 1
     keep = last >= first
     spans = np.where(keep, last - first + 1, 0)

@@ -308,12 +308,10 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     coords, polygon, contour = [], [], []
     starts = [0] * (len(scene.polygons) + 1)
     count = crossings = 0
-    for i in range(len(scene.polygons)):
-        mine = [
-            pts.astype(np.int64) + shift
-            for (k, _, _), pts in zip(owners, contours, strict=True)
-            if k == i
-        ]
+    by_polygon: list[list[np.ndarray]] = [[] for _ in scene.polygons]
+    for (k, _, _), pts in zip(owners, contours, strict=True):
+        by_polygon[k].append(pts.astype(np.int64) + shift)
+    for i, mine in enumerate(by_polygon):
         try:
             mine, inserted = _node(mine, MAX_NODED_EDGES - sum(map(len, mine)))
         except NodingLimit:
@@ -425,34 +423,64 @@ def _polygon_plans(scene: Scene, intensities, starts, boxes, full: int) -> list[
     """Each polygon's window and I_out: the background unless it overlaps an earlier polygon
     or equals the background, then the intensity farthest from I_in."""
     lo_x, lo_y, hi_x, hi_y = boxes
+    starts = np.asarray(starts, dtype=np.int64)
+    has = starts[1:] > starts[:-1]
+    windows = np.zeros((len(scene.polygons), 4), dtype=np.int64)
+    if has.any():
+        first = starts[:-1][has]
+        windows[has] = np.stack(
+            [
+                np.maximum(0, np.minimum.reduceat(lo_x, first)),
+                np.maximum(0, np.minimum.reduceat(lo_y, first)),
+                np.minimum(scene.width, np.maximum.reduceat(hi_x, first) + 1),
+                np.minimum(scene.height, np.maximum.reduceat(hi_y, first) + 1),
+            ],
+            axis=1,
+        )
+    overlaps = _meets_earlier(windows, scene.width, scene.height)
     polys = []
-    windows = []
     for i, poly in enumerate(scene.polygons):
-        a, b = starts[i], starts[i + 1]
-        if b > a:
-            window = (
-                max(0, int(lo_x[a:b].min())),
-                max(0, int(lo_y[a:b].min())),
-                min(scene.width, int(hi_x[a:b].max()) + 1),
-                min(scene.height, int(hi_y[a:b].max()) + 1),
-            )
-        else:
-            window = (0, 0, 0, 0)
-        overlaps = any(_meets(window, w) for w in windows)
-        windows.append(window)
         value = intensities[i]
         equal = value == scene.background
         i_out = (
             scene.background
-            if not (overlaps or equal)
+            if not (overlaps[i] or equal)
             else _alternative_out(value, scene.background, full)
         )
-        polys.append(PolygonPlan(i, value, i_out, poly.fill_rule, a, b, window, equal, overlaps))
+        window = tuple(int(v) for v in windows[i])
+        a, b = int(starts[i]), int(starts[i + 1])
+        polys.append(
+            PolygonPlan(i, value, i_out, poly.fill_rule, a, b, window, equal, bool(overlaps[i]))
+        )
     return polys
 
 
-def _meets(a, b) -> bool:
-    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3] and a[0] < a[2]
+def _meets_earlier(windows: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Whether each window (x0, y0, x1, y1: the pixels [x0, x1) x [y0, y1) of the image)
+    shares a pixel with an earlier one. In blocks of B windows: against the earlier blocks
+    by a summed-area table of the pixels they cover, within the block pair by pair, so
+    (P / B) image passes plus P B pairs, with B about the square root of the image's
+    pixels (not P**2 pairs: 66,666 windows would be 2.2e9)."""
+    x0, y0, x1, y1 = windows.T
+    live = (x0 < x1) & (y0 < y1)
+    out = np.zeros(len(windows), dtype=bool)
+    cover = np.zeros((height + 1, width + 1), dtype=np.int32)  # 2-D difference array
+    block = int(np.clip(math.isqrt(width * height), 64, 4096))
+    for s in range(0, len(windows), block):
+        k = np.arange(s, min(s + block, len(windows)))
+        k = k[live[k]]
+        if s and len(k):
+            filled = np.cumsum(np.cumsum(cover, axis=0), axis=1)[:height, :width] > 0
+            table = np.zeros((height + 1, width + 1), dtype=np.int32)
+            table[1:, 1:] = np.cumsum(np.cumsum(filled, axis=0, dtype=np.int32), axis=1)
+            hits = table[y1[k], x1[k]] - table[y0[k], x1[k]] - table[y1[k], x0[k]]
+            out[k] = hits + table[y0[k], x0[k]] > 0
+        a, b = k[:, None], k[None, :]
+        pairs = (x0[a] < x1[b]) & (x0[b] < x1[a]) & (y0[a] < y1[b]) & (y0[b] < y1[a])
+        out[k] |= np.tril(pairs, -1).any(axis=1)
+        for ys, xs, sign in ((y0, x0, 1), (y0, x1, -1), (y1, x0, -1), (y1, x1, 1)):
+            np.add.at(cover, (ys[k], xs[k]), sign)
+    return out
 
 
 def _check_range(config, scene, contours, owners, offset, need=None) -> None:
