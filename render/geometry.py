@@ -121,26 +121,45 @@ def _stabbing_pairs(lo: np.ndarray, hi: np.ndarray, ys: np.ndarray):
         i0 = i1
 
 
-def side_fills(edges: np.ndarray, rule: str) -> tuple[np.ndarray, np.ndarray]:
+def side_fills(
+    edges: np.ndarray, rule: str | np.ndarray, group: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Whether the fill covers the side just left and just right of each edge's midpoint.
 
     Left is the left of travel on the image (y down): the side of the normal (dy, -dx). The
     winding numbers count every contour of the polygon, so holes, overlapping contours and
     self-intersections are judged by the fill rule.
+
+    Several polygons at once: `group` numbers each edge's polygon (0, 1, ...) and `rule` is
+    then one per edge (an array of 'nonzero' and 'evenodd'). Polygon g is moved down by g
+    times the edges' height plus one, so the polygons' y ranges are disjoint and the winding
+    numbers (only ever differences of coordinates within a polygon) count its own edges.
     """
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
+    if group is not None and len(edges):
+        ys = edges[:, 1::2]
+        edges = edges.copy()
+        edges[:, 1::2] += (np.asarray(group, dtype=np.int64) * int(ys.max() - ys.min() + 1))[
+            :, None
+        ]
     doubled = 2 * edges
     mid = edges[:, 0:2] + edges[:, 2:4]  # the midpoint, doubled
     d = edges[:, 2:4] - edges[:, 0:2]
     normal = np.stack([d[:, 1], -d[:, 0]], axis=1)
-    left = fills(winding_numbers(doubled, mid, normal, d), rule)
-    right = fills(winding_numbers(doubled, mid, -normal, d), rule)
-    return left, right
+    left = winding_numbers(doubled, mid, normal, d)
+    right = winding_numbers(doubled, mid, -normal, d)
+    if isinstance(rule, str):
+        return fills(left, rule), fills(right, rule)
+    odd = np.asarray(rule) == "evenodd"
+    return np.where(odd, left & 1, left) != 0, np.where(odd, right & 1, right) != 0
 
 
-def inside_sides(edges: np.ndarray, rule: str) -> np.ndarray:
-    """'left', 'right', or '' (not a boundary: filled on both sides or neither) per edge."""
-    left, right = side_fills(edges, rule)
+def inside_sides(
+    edges: np.ndarray, rule: str | np.ndarray, group: np.ndarray | None = None
+) -> np.ndarray:
+    """'left', 'right', or '' (not a boundary: filled on both sides or neither) per edge
+    (several polygons at once as `side_fills` takes them)."""
+    left, right = side_fills(edges, rule, group)
     return np.where(left & ~right, "left", np.where(right & ~left, "right", ""))
 
 

@@ -21,11 +21,17 @@ import numpy as np
 from ..model import Clip
 from ..model.pipeline import Command
 from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
-from ..model.timing import EMPTY_EDGE_CYCLES
+from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
 from .engines import EngineUnavailable, run_deltas
 from .render import EdgeArrays, Plan, Render, _write_boxes, edges_to_send, render_scene
+from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
+# The most clocks (`clock_estimate`) a scene may need in each simulator: about 60 s of
+# Verilator at its measured 1 to 1.5 million clocks per second, and about 10 minutes of
+# Amaranth's simulator (docs/scenes.md, "Errors and limits").
+MAX_PIPELINE_CLOCKS = {"verilator": 60_000_000, "amaranth": 600_000}
+RESET_CLEAR_CLOCKS = 2048  # the accumulation memory's clear pass after reset
 
 
 @dataclass(frozen=True)
@@ -154,6 +160,7 @@ def render_pipeline(
         raise ValueError("the tile's stepper configuration is not the plan's")
     model = render_scene(plan, skip=True)
     commands = scene_commands(plan, tile)
+    check_clocks(plan, tile, commands, engine)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
     if engine == "verilator":
         from ..sim.simulators import pipeline_harness
@@ -176,6 +183,38 @@ def render_pipeline(
     return replace(
         model, image=image, engine=engine, pipeline=run, pipeline_tile=tile, mismatches=mismatches
     )
+
+
+def clock_estimate(plan: Plan, tile: TileConfig, commands: list[Command]) -> int:
+    """An upper estimate of the pipeline's clocks on `commands`, cheap (numpy, no cycle
+    model): every stage's work added as if none overlapped. Per edge its setup
+    (`unit_cycles`, `start_clip_cycles`) and one clock per column or row of its major axis;
+    per polygon end a scan of the whole tile; per flush the tile's pixels; and the clear
+    pass after reset. `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes
+    about 20 us a clock (6.7 s for the text's 287,121)."""
+    config = plan.config
+    rows = np.array(commands, dtype=np.int64).reshape(-1, len(Command._fields))
+    op = rows[:, 0]
+    edges = rows[op == Command.edge(0, 0, 0, 0).op]
+    span = np.maximum(abs(edges[:, 3] - edges[:, 1]), abs(edges[:, 4] - edges[:, 2]))
+    per_edge = unit_cycles(config, output="deltas") + start_clip_cycles(config) + 2
+    pixels = tile.width * tile.height
+    ends = int(np.count_nonzero(op == Command.end().op))
+    flushes = int(np.count_nonzero(op == Command.flush().op))
+    columns = int((span // config.subpixel_scale).sum())
+    return RESET_CLEAR_CLOCKS + len(edges) * per_edge + columns + (ends + flushes) * (pixels + 8)
+
+
+def check_clocks(plan: Plan, tile: TileConfig, commands: list[Command], engine: str) -> None:
+    """Refuse (SceneError, one line) a scene whose `clock_estimate` passes the engine's
+    limit, before the simulator starts: it would run for minutes or hours."""
+    clocks, limit = clock_estimate(plan, tile, commands), MAX_PIPELINE_CLOCKS[engine]
+    if clocks > limit:
+        raise SceneError(
+            f"the scene needs about {clocks:,} pipeline clocks ({len(commands):,} commands "
+            f"in {tile.width} x {tile.height} tiles), more than the {engine} engine's limit "
+            f"of {limit:,}; use --engine model, or fewer or smaller polygons"
+        )
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,7 @@ import numpy as np
 from ..model import Clip, Edge, EdgeConfig
 from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
 from .engines import DeltaRun, cycles_of, run_deltas
-from .geometry import NodingLimit, hot_points, inside_sides, snap_round, split_crossings
+from .geometry import SAFE, NodingLimit, hot_points, inside_sides, snap_round, split_crossings
 from .scene import MAX_NODED_EDGES, Scene, SceneError
 
 WRITE_MARGIN = 2  # px: every delta lies within the edge's bounding box grown by this much
@@ -311,21 +311,12 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     by_polygon: list[list[np.ndarray]] = [[] for _ in scene.polygons]
     for (k, _, _), pts in zip(owners, contours, strict=True):
         by_polygon[k].append(pts.astype(np.int64) + shift)
+    crossing = _crossing(by_polygon)
     for i, mine in enumerate(by_polygon):
-        try:
-            mine, inserted = _node(mine, MAX_NODED_EDGES - sum(map(len, mine)))
-        except NodingLimit:
-            raise SceneError(
-                f"polygon {i}: its edges cross so often that splitting them at the crossings "
-                f"gives more than the limit of {MAX_NODED_EDGES:,} edges per polygon "
-                f"({sum(map(len, mine)):,} before splitting); simplify its outline"
-            ) from None
-        if sum(map(len, mine)) > MAX_NODED_EDGES:
-            raise SceneError(
-                f"polygon {i}: splitting its edges at the crossings gives "
-                f"{sum(map(len, mine)):,} edges, more than the limit of {MAX_NODED_EDGES:,} "
-                "per polygon; simplify its outline"
-            )
+        if not crossing[i]:  # nothing to split: no need to look again, polygon by polygon
+            inserted = 0
+        else:
+            mine, inserted = _node_polygon(i, mine)
         crossings += inserted
         for q in mine:
             n = len(q)
@@ -337,6 +328,65 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
             count += n
         starts[i + 1] = count
     return _joined(coords, 4), _joined(polygon), _joined(contour), starts, crossings
+
+
+def _crossing(by_polygon: list[list[np.ndarray]]) -> np.ndarray:
+    """Whether each polygon has edges that cross or touch (`split_crossings` would insert a
+    point), for many polygons in one search: each is moved right, past the previous one,
+    so that no two polygons' boxes meet, in batches whose coordinates stay below
+    geometry.SAFE / 2 (the search's exact integer filter). A batch whose points would pass
+    the limit is left to the polygons one by one (True)."""
+    out = np.ones(len(by_polygon), dtype=bool)
+    batch: list[int] = []
+    moved: list[np.ndarray] = []
+    base = 0
+
+    def flush():
+        if batch:
+            try:
+                after, _ = split_crossings(moved, MAX_NODED_EDGES)
+                sizes = np.array([len(c) for c in after]) != np.array([len(c) for c in moved])
+                owner = np.repeat(batch, [len(by_polygon[i]) for i in batch])
+                out[batch] = False
+                out[owner[sizes]] = True
+            except NodingLimit:
+                pass
+
+    for i, mine in enumerate(by_polygon):
+        if not mine:
+            out[i] = False
+            continue
+        points = np.concatenate(mine)
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        if base + (hi[0] - lo[0]) + 1 >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+            flush()
+            batch, moved, base = [], [], 0
+        if hi[0] - lo[0] >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+            continue  # too wide for any batch: one by one
+        batch.append(i)
+        moved += [c - lo + np.array([base, 0]) for c in mine]
+        base += int(hi[0] - lo[0]) + 1
+    flush()
+    return out
+
+
+def _node_polygon(i: int, mine: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
+    """`_node` on polygon i's contours, with its limit named in a SceneError."""
+    try:
+        mine, inserted = _node(mine, MAX_NODED_EDGES - sum(map(len, mine)))
+    except NodingLimit:
+        raise SceneError(
+            f"polygon {i}: its edges cross so often that splitting them at the crossings "
+            f"gives more than the limit of {MAX_NODED_EDGES:,} edges per polygon "
+            f"({sum(map(len, mine)):,} before splitting); simplify its outline"
+        ) from None
+    if sum(map(len, mine)) > MAX_NODED_EDGES:
+        raise SceneError(
+            f"polygon {i}: splitting its edges at the crossings gives "
+            f"{sum(map(len, mine)):,} edges, more than the limit of {MAX_NODED_EDGES:,} "
+            "per polygon; simplify its outline"
+        )
+    return mine, inserted
 
 
 def _node(contours: list[np.ndarray], limit: int | None = None) -> tuple[list[np.ndarray], int]:
@@ -378,28 +428,28 @@ def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:
 
 
 def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
-    """Each edge's inside side by its polygon's fill rule ('' if not a boundary); returns the
-    sides and how many coincident boundary edges were left to the first of them."""
-    inside = np.full(len(coords), "", dtype="<U5")
-    duplicates = 0
-    for i, poly in enumerate(scene.polygons):
-        a, b = starts[i], starts[i + 1]
-        if b > a:
-            inside[a:b] = inside_sides(coords[a:b], poly.fill_rule)
-            duplicates += _drop_coincident(coords, inside, a, b)
-    return inside, duplicates
+    """Each edge's inside side by its polygon's fill rule ('' if not a boundary), every
+    polygon in one pass; returns the sides and how many coincident boundary edges were left
+    to the first of them."""
+    counts = np.diff(np.asarray(starts, dtype=np.int64))
+    group = np.repeat(np.arange(len(scene.polygons)), counts)
+    rules = np.array([p.fill_rule for p in scene.polygons] or ["nonzero"])[group]
+    inside = inside_sides(coords, rules, group).astype("<U5")
+    return inside, _drop_coincident(coords, inside, group)
 
 
-def _drop_coincident(coords: np.ndarray, inside: np.ndarray, a: int, b: int) -> int:
-    """Coincident boundary edges of edges a .. b - 1 (shared by two contours, or overlapping)
-    have the same filled side: the first one draws it, the others become interior (their
-    deltas would count the winding twice). Returns how many were dropped."""
-    edges = np.flatnonzero(inside[a:b] != "") + a
+def _drop_coincident(coords: np.ndarray, inside: np.ndarray, group: np.ndarray) -> int:
+    """Coincident boundary edges of one polygon (`group`: each edge's), shared by two
+    contours or overlapping, have the same filled side: the first one draws it, the others
+    become interior (their deltas would count the winding twice). Returns how many were
+    dropped."""
+    edges = np.flatnonzero(inside != "")
     if len(edges) < 2:
         return 0
     p0, p1 = coords[edges, 0:2], coords[edges, 2:4]
     swap = (p0[:, 0] > p1[:, 0]) | ((p0[:, 0] == p1[:, 0]) & (p0[:, 1] > p1[:, 1]))
     keys = np.where(swap[:, None], np.hstack([p1, p0]), np.hstack([p0, p1]))
+    keys = np.concatenate([group[edges][:, None], keys], axis=1)
     order = np.lexsort(keys.T[::-1])  # stable: equal keys keep their edge order
     ranked = keys[order]
     repeat = np.all(ranked[1:] == ranked[:-1], axis=1)
