@@ -264,7 +264,7 @@ def _build_engine(engine: str, tile, bar: ProgressBar) -> None:
 def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
     """The render (the model's, or the hardware pipeline's) and with --stats the model's
     render without skipping."""
-    from .pipeline import render_pipeline
+    from .pipeline import check_clocks, render_pipeline, scene_commands
     from .render import render_scene
 
     baseline = None
@@ -273,6 +273,7 @@ def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
     if args.engine == "model":
         return render_scene(plan, skip=not args.no_skip, progress=bar), baseline
     tile = tile_from_args(PROG, args.tile or "64x32", plan.config)
+    check_clocks(plan, tile, scene_commands(plan, tile), args.engine)  # before the build
     _build_engine(args.engine, tile, bar)
     return render_pipeline(plan, args.engine, tile, progress=bar), baseline
 
@@ -297,8 +298,13 @@ def _engine_line(result) -> str:
 def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
     """Render the plan (and without skipping with --stats), write the PNG and print what was
     asked for."""
+    from .scene import SceneError
+
     try:
         result, baseline = _run_engine(args, plan, bar)
+    except SceneError as error:  # beyond an engine's limit
+        bar.close()
+        raise usage_error(PROG, str(error)) from None
     except RuntimeError as error:  # a simulator failed to build or run
         bar.close()
         print(f"{PROG}: error: the {args.engine} engine failed: {_cause(error)}", file=sys.stderr)

@@ -23,14 +23,23 @@ from ..model.pipeline import Command
 from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
 from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
 from .engines import EngineUnavailable, run_deltas
-from .render import EdgeArrays, Plan, Render, _write_boxes, edges_to_send, render_scene
+from .render import (
+    WRITE_MARGIN,
+    EdgeArrays,
+    Plan,
+    Render,
+    _write_boxes,
+    edges_to_send,
+    render_scene,
+)
 from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
-# The most clocks (`clock_estimate`) a scene may need in each simulator: about 60 s of
-# Verilator at its measured 1 to 1.5 million clocks per second, and about 10 minutes of
-# Amaranth's simulator (docs/scenes.md, "Errors and limits").
-MAX_PIPELINE_CLOCKS = {"verilator": 60_000_000, "amaranth": 600_000}
+# The most clocks (`clock_estimate`, an upper estimate: 2.6 to 6.5 times the simulated
+# clocks on the built-ins) a scene may need in each simulator: 60 s of Verilator at its
+# measured 1 to 1.5 million clocks per second; for Amaranth's simulator (about 500 clocks
+# per second) the built-ins' 1.3 million (docs/scenes.md, "Errors and limits").
+MAX_PIPELINE_CLOCKS = {"verilator": 60_000_000, "amaranth": 1_500_000}
 RESET_CLEAR_CLOCKS = 2048  # the accumulation memory's clear pass after reset
 
 
@@ -158,9 +167,9 @@ def render_pipeline(
     tile = tile or TileConfig(plan.config)
     if tile.config != plan.config:
         raise ValueError("the tile's stepper configuration is not the plan's")
-    model = render_scene(plan, skip=True)
     commands = scene_commands(plan, tile)
     check_clocks(plan, tile, commands, engine)
+    model = render_scene(plan, skip=True)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
     if engine == "verilator":
         from ..sim.simulators import pipeline_harness
@@ -189,8 +198,8 @@ def clock_estimate(plan: Plan, tile: TileConfig, commands: list[Command]) -> int
     """An upper estimate of the pipeline's clocks on `commands`, cheap (numpy, no cycle
     model): every stage's work added as if none overlapped. Per edge its setup
     (`unit_cycles`, `start_clip_cycles`) and one clock per column or row of its major axis;
-    per polygon end a scan of the whole tile; per flush the tile's pixels; and the clear
-    pass after reset. `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes
+    per polygon end a scan of the tile's rows its edges reach (whole rows); per flush the
+    tile's pixels; and the clear pass after reset. `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes
     about 20 us a clock (6.7 s for the text's 287,121)."""
     config = plan.config
     rows = np.array(commands, dtype=np.int64).reshape(-1, len(Command._fields))
@@ -198,11 +207,24 @@ def clock_estimate(plan: Plan, tile: TileConfig, commands: list[Command]) -> int
     edges = rows[op == Command.edge(0, 0, 0, 0).op]
     span = np.maximum(abs(edges[:, 3] - edges[:, 1]), abs(edges[:, 4] - edges[:, 2]))
     per_edge = unit_cycles(config, output="deltas") + start_clip_cycles(config) + 2
-    pixels = tile.width * tile.height
+    S = config.subpixel_scale
+    columns = int((span // S).sum())
+    # an end scans the rows its polygon's edges reach (tile rows, all columns)
+    polygon = np.cumsum(op == Command.begin(0, 0).op)[op == Command.edge(0, 0, 0, 0).op]
+    lo = np.minimum(edges[:, 2], edges[:, 4]) // S
+    hi = np.maximum(edges[:, 2], edges[:, 4]) // S
+    rows = np.zeros(int(polygon.max()) + 1 if len(polygon) else 1, dtype=np.int64)
+    if len(polygon):
+        first = np.full(len(rows), np.iinfo(np.int64).max)
+        last = np.full(len(rows), np.iinfo(np.int64).min)
+        np.minimum.at(first, polygon, lo)
+        np.maximum.at(last, polygon, hi)
+        rows = np.clip(last - first + 1 + 2 * WRITE_MARGIN, 0, tile.height)
+        rows[last < first] = 0
     ends = int(np.count_nonzero(op == Command.end().op))
     flushes = int(np.count_nonzero(op == Command.flush().op))
-    columns = int((span // config.subpixel_scale).sum())
-    return RESET_CLEAR_CLOCKS + len(edges) * per_edge + columns + (ends + flushes) * (pixels + 8)
+    scans = int(rows.sum()) * tile.width + ends * 8 + flushes * (tile.width * tile.height + 8)
+    return RESET_CLEAR_CLOCKS + len(edges) * per_edge + columns + scans
 
 
 def check_clocks(plan: Plan, tile: TileConfig, commands: list[Command], engine: str) -> None:

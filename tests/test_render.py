@@ -879,6 +879,10 @@ def test_the_overlap_of_windows_matches_the_pairwise_test(seed, monkeypatch):
     assert _meets_earlier(windows, width, height).tolist() == want, note
     monkeypatch.setattr(math, "isqrt", lambda _: 8)  # blocks of 64: across blocks too
     assert _meets_earlier(windows, width, height).tolist() == want, note
+    monkeypatch.setattr(math, "isqrt", lambda _: 512)  # one block of 2048: rows in parts
+    many = np.concatenate([windows] * 8)[:2048]
+    want = _meets_earlier_reference(many.tolist())
+    assert _meets_earlier(many, width, height).tolist() == want, note
 
 
 def _winding_reference(edges, points, first, second):
@@ -921,3 +925,42 @@ def test_a_polygon_whose_splitting_passes_the_limit_is_refused_before_the_work()
     soup = tuple(map(tuple, rng.uniform(0, 256, (2000, 2)).round(3).tolist()))
     with pytest.raises(SceneError, match=f"limit of {MAX_NODED_EDGES:,} edges per polygon"):
         plan(Scene(257, 257, (Polygon((soup,)),)), DEFAULT)
+
+
+@pytest.mark.parametrize("engine", ["verilator", "amaranth"])
+def test_a_scene_past_an_engines_clock_limit_is_refused_before_it_runs(
+    engine, tmp_path, capsys, monkeypatch
+):
+    from edgeaa.model.tile import TileConfig
+    from edgeaa.render import pipeline
+
+    tiny = plan(parse_scene(TINY_SCENE), DEFAULT)
+    tile = TileConfig(DEFAULT)
+    needs = pipeline.clock_estimate(tiny, tile, pipeline.scene_commands(tiny, tile))
+    monkeypatch.setitem(pipeline.MAX_PIPELINE_CLOCKS, engine, needs - 1)
+    monkeypatch.setattr(pipeline, "render_scene", None)  # nothing may run
+    with pytest.raises(SceneError, match=f"engine's limit of {needs - 1:,}"):
+        pipeline.render_pipeline(tiny, engine, tile)
+    scene = tmp_path / "tiny.json"
+    scene.write_text(json.dumps(TINY_SCENE))
+    out = tmp_path / "out.png"
+    assert main(["render", str(scene), "--engine", engine, "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("edgeaa render: error: the scene needs about") and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_the_clock_estimate_is_above_the_simulated_clocks():
+    """The estimate that the engines' limits apply to is an upper one on the built-ins, as
+    the pipeline's cycle model (checked against the simulated clocks in test_pipeline.py)
+    counts them."""
+    from edgeaa.model.pipeline_timing import pipeline_cycles
+    from edgeaa.model.tile import TileConfig
+    from edgeaa.render import pipeline
+
+    for name in ("starburst", "hatch"):
+        p = plan(builtin(name), DEFAULT)
+        tile = TileConfig(DEFAULT)
+        commands = pipeline.scene_commands(p, tile)
+        exact = pipeline_cycles(tile, commands).clocks
+        assert exact <= pipeline.clock_estimate(p, tile, commands) <= 8 * exact, name
