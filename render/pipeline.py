@@ -199,8 +199,9 @@ def clock_estimate(plan: Plan, tile: TileConfig, commands: list[Command]) -> int
     model): every stage's work added as if none overlapped. Per edge its setup
     (`unit_cycles`, `start_clip_cycles`) and one clock per column or row of its major axis;
     per polygon end a scan of the tile's rows its edges reach (whole rows); per flush the
-    tile's pixels; and the clear pass after reset. `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes
-    about 20 us a clock (6.7 s for the text's 287,121)."""
+    tile's pixels; and the clear pass after reset.
+    `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
+    (6.7 s for the text's 287,121)."""
     config = plan.config
     rows = np.array(commands, dtype=np.int64).reshape(-1, len(Command._fields))
     op = rows[:, 0]
