@@ -33,8 +33,22 @@ import numpy as np
 from ..model import Clip, Edge, EdgeConfig
 from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
 from .engines import DeltaRun, cycles_of, run_deltas
-from .geometry import SAFE, NodingLimit, hot_points, inside_sides, snap_round, split_crossings
-from .scene import MAX_NODED_EDGES, Scene, SceneError
+from .geometry import (
+    SAFE,
+    NodingLimit,
+    hot_points,
+    inside_sides,
+    level_pairs,
+    snap_round,
+    split_crossings,
+)
+from .scene import (
+    MAX_INSIDE_PAIRS,
+    MAX_NODED_EDGES,
+    MAX_STEPPED_COLUMNS,
+    Scene,
+    SceneError,
+)
 
 WRITE_MARGIN = 2  # px: every delta lies within the edge's bounding box grown by this much
 
@@ -434,6 +448,14 @@ def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
     counts = np.diff(np.asarray(starts, dtype=np.int64))
     group = np.repeat(np.arange(len(scene.polygons)), counts)
     rules = np.array([p.fill_rule for p in scene.polygons] or ["nonzero"])[group]
+    pairs = level_pairs(coords, group)
+    if pairs > MAX_INSIDE_PAIRS:
+        raise SceneError(
+            f"the inside test of the scene's {len(coords):,} edges (after splitting) would "
+            f"compare {pairs:,} pairs of an edge's midpoint and an edge level with it, more "
+            f"than the limit of {MAX_INSIDE_PAIRS:,} (about 20 s): polygons with many edges "
+            "spanning the same rows (a comb of tall teeth); split them into smaller polygons"
+        )
     inside = inside_sides(coords, rules, group).astype("<U5")
     return inside, _drop_coincident(coords, inside, group)
 
@@ -638,6 +660,7 @@ def render_scene(
 
     t = time.perf_counter()
     arrays = edge_arrays(plan, sent, clip=skip)
+    _check_columns(config, arrays)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
     run, shapes = run_deltas(config, arrays, engine, progress=report)
     deltas = run.in_image(sent, plan.offset)
@@ -678,6 +701,20 @@ def render_scene(
         seconds=time.perf_counter() - start,
         timings=timings,
     )
+
+
+def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
+    """Refuse edges that step more than MAX_STEPPED_COLUMNS columns in all (the engines hold
+    every column's four cells: about 300 bytes a column at its peak)."""
+    from ..model.edge import setup_batch
+
+    columns = int(setup_batch(config, *arrays.args(), arrays.clip).columns.sum())
+    if columns > MAX_STEPPED_COLUMNS:
+        raise SceneError(
+            f"the scene's {len(arrays):,} edges step {columns:,} columns (pixels along each "
+            f"edge's major axis, within the image's rows and left of its right side), more "
+            f"than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
+        )
 
 
 def _draw_polygon(plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts):

@@ -964,3 +964,23 @@ def test_the_clock_estimate_is_above_the_simulated_clocks():
         commands = pipeline.scene_commands(p, tile)
         exact = pipeline_cycles(tile, commands).clocks
         assert exact <= pipeline.clock_estimate(p, tile, commands) <= 8 * exact, name
+
+
+def test_the_inside_test_and_the_engine_refuse_work_past_their_limits(monkeypatch):
+    """A comb of tall teeth: every midpoint is level with every edge (the inside test's
+    pairs), and every edge steps the image's height (the engine's columns)."""
+    from edgeaa.render import render as planner
+    from edgeaa.render.geometry import level_pairs
+
+    teeth = [p for k in range(40) for p in ((2 + k, 1.0), (2.5 + k, 60.0))]
+    comb = Scene(64, 64, (Polygon((tuple(teeth),)),))
+    whole = plan(comb, DEFAULT)
+    pairs = level_pairs(whole.coords, whole.polygon)
+    assert pairs > 80 * 80  # each of the 80 teeth's edges is level with the others
+    monkeypatch.setattr(planner, "MAX_INSIDE_PAIRS", pairs - 1)
+    with pytest.raises(SceneError, match=f"limit of {pairs - 1:,}"):
+        plan(comb, DEFAULT)
+    monkeypatch.setattr(planner, "MAX_INSIDE_PAIRS", pairs)
+    monkeypatch.setattr(planner, "MAX_STEPPED_COLUMNS", 80 * 59 - 1)
+    with pytest.raises(SceneError, match="columns"):
+        render_scene(comb, DEFAULT)
