@@ -412,20 +412,25 @@ def _node(contours: list[np.ndarray], limit: int | None = None) -> tuple[list[np
     instead (`snap_round`, with every vertex and rounded crossing as a hot pixel): no two of
     its edges cross, and a last exact round splits where an edge passes through a vertex or
     overlaps another (points already on the grid, so nothing moves). Should that round ever
-    add a point that is not hot, the point becomes hot and the snap is redone: the hot
-    points only grow, within the contours' box, so this ends. NodingLimit (geometry) when
+    round a crossing (snap rounding's theorem says it cannot), its point becomes hot and the
+    snap is redone: the hot points only grow, within the contours' box, so this ends; a
+    crossing rounded onto a point already hot would snap the same way again, and is raised
+    as a bug. NodingLimit (geometry) when
     more than `limit` points would be inserted."""
     once, inserted = split_crossings(contours, limit)
     if not inserted or not split_crossings(once, limit)[1]:
         return once, inserted
     hot = hot_points(contours, limit)
     while True:
-        noded, _ = split_crossings(snap_round(contours, hot, limit), limit)
+        snapped = snap_round(contours, hot, limit)
+        noded, _ = split_crossings(snapped, limit)
         points = np.concatenate(noded)
-        new = points[~_rows_in(points, hot)]
+        new = points[~_rows_in(points, np.concatenate(snapped))]  # rounded crossings
         if not len(new):
             added = sum(map(len, noded)) - sum(map(len, contours))
             return noded, max(0, added)
+        if _rows_in(new, hot).any():  # snapped again, it would not change: the theorem failed
+            raise RuntimeError("snap rounding left two edges crossing (a bug: please report)")
         hot = np.unique(np.concatenate([hot, new]), axis=0)
 
 
