@@ -264,7 +264,7 @@ def _build_engine(engine: str, tile, bar: ProgressBar) -> None:
 def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
     """The render (the model's, or the hardware pipeline's) and with --stats the model's
     render without skipping."""
-    from .pipeline import check_clocks, render_pipeline, scene_commands
+    from .pipeline import check_clocks, render_pipeline
     from .render import render_scene
 
     baseline = None
@@ -273,7 +273,7 @@ def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
     if args.engine == "model":
         return render_scene(plan, skip=not args.no_skip, progress=bar), baseline
     tile = tile_from_args(PROG, args.tile or "64x32", plan.config)
-    check_clocks(plan, tile, scene_commands(plan, tile), args.engine)  # before the build
+    check_clocks(plan, tile, args.engine)  # before the build
     _build_engine(args.engine, tile, bar)
     return render_pipeline(plan, args.engine, tile, progress=bar), baseline
 
