@@ -313,7 +313,8 @@ UNNODED = {
 @pytest.mark.parametrize("contour", list(UNNODED.values()), ids=list(UNNODED))
 def test_the_plan_nodes_until_no_edge_crosses(contour):
     """One round of split_crossings can leave edges crossing: a crossing rounded to the grid
-    moves an edge across or onto another. The plan splits again until nothing crosses."""
+    moves an edge across or onto another. The plan then snap-rounds the polygon, and
+    nothing crosses (docs/noding.md)."""
     from edgeaa.render.render import _node
 
     contour = np.array(contour, dtype=np.int64)
