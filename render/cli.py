@@ -152,7 +152,7 @@ class RenderCommand(Command):
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
-        from .render import plan_scene
+        from .render import edges_to_send, plan_scene
         from .scene import SceneError, check_pixels
 
         config = config_from_args(args)
@@ -168,6 +168,8 @@ class RenderCommand(Command):
             with bar.ticking("plan"):
                 plan = plan_scene(scene, config)
             bar.close()
+            if args.stats or args.no_skip:
+                edges_to_send(plan, skip=False)  # refused if not every edge fits the range
         except SceneError as error:
             raise usage_error(PROG, str(error)) from None
         if crop and (crop[2] > scene.width or crop[3] > scene.height):
@@ -259,7 +261,7 @@ def _build_engine(engine: str, tile, bar: ProgressBar) -> None:
 def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
     """The render (the model's, or the hardware pipeline's) and with --stats the model's
     render without skipping."""
-    from .pipeline import render_pipeline
+    from .pipeline import check_clocks, render_pipeline
     from .render import render_scene
 
     baseline = None
@@ -268,6 +270,7 @@ def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
     if args.engine == "model":
         return render_scene(plan, skip=not args.no_skip, progress=bar), baseline
     tile = tile_from_args(PROG, args.tile or "64x32", plan.config)
+    check_clocks(plan, tile, args.engine)  # before the build
     _build_engine(args.engine, tile, bar)
     return render_pipeline(plan, args.engine, tile, progress=bar), baseline
 
@@ -292,8 +295,13 @@ def _engine_line(result) -> str:
 def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
     """Render the plan (and without skipping with --stats), write the PNG and print what was
     asked for."""
+    from .scene import SceneError
+
     try:
         result, baseline = _run_engine(args, plan, bar)
+    except SceneError as error:  # beyond an engine's limit
+        bar.close()
+        raise usage_error(PROG, str(error)) from None
     except RuntimeError as error:  # a simulator failed to build or run
         bar.close()
         print(f"{PROG}: error: the {args.engine} engine failed: {_cause(error)}", file=sys.stderr)

@@ -22,7 +22,7 @@ from operator import itemgetter
 
 import numpy as np
 
-CHUNK = 1 << 22  # point x edge pairs per numpy pass
+CHUNK = 1 << 20  # point x edge pairs per numpy pass (about 100 MB of temporaries)
 
 
 def fills(winding: np.ndarray, rule: str) -> np.ndarray:
@@ -49,50 +49,132 @@ def winding_numbers(
     rule is Sunday's (a ray to +x; an upward crossing with P left of the edge counts +1, a
     downward one with P right of it -1), decided exactly with the perturbation. first and
     second must not both be parallel to any edge and (first_y, second_y) != (0, 0).
+
+    Only an edge whose closed y range holds P's y can count, so only those pairs are tested
+    (`_stabbing_pairs`): the work is the sum over the points of the edges met by a short
+    horizontal band around each, not P x E.
     """
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
     points = np.asarray(points, dtype=np.int64).reshape(-1, 2)
     first = np.broadcast_to(np.asarray(first, dtype=np.int64), points.shape)
     second = np.broadcast_to(np.asarray(second, dtype=np.int64), points.shape)
-    ax, ay, bx, by = (edges[:, i][None, :] for i in range(4))
-    ex, ey = bx - ax, by - ay
     out = np.zeros(len(points), dtype=np.int64)
-    step = max(1, CHUNK // max(1, len(edges)))
-    for lo in range(0, len(points), step):
-        sl = slice(lo, lo + step)
-        px, py = points[sl, 0][:, None], points[sl, 1][:, None]
-        v1x, v1y = first[sl, 0][:, None], first[sl, 1][:, None]
-        v2x, v2y = second[sl, 0][:, None], second[sl, 1][:, None]
+    lo = np.minimum(edges[:, 1], edges[:, 3])
+    hi = np.maximum(edges[:, 1], edges[:, 3])
+    for q, e in _stabbing_pairs(lo, hi, points[:, 1]):
+        ax, ay, bx, by = (edges[e, i] for i in range(4))
+        ex, ey = bx - ax, by - ay
+        px, py = points[q, 0], points[q, 1]
+        v1x, v1y, v2x, v2y = first[q, 0], first[q, 1], second[q, 0], second[q, 1]
         sy = _lex_sign(v1y, v2y)  # the point's y moves up (-) or down (+) from py
         a_le = (ay < py) | ((ay == py) & (sy > 0))  # a.y <= P.y
         b_gt = (by > py) | ((by == py) & (sy < 0))  # b.y > P.y
         left = _lex_sign(ex * (py - ay) - (px - ax) * ey, ex * v1y - v1x * ey, ex * v2y - v2x * ey)
         up = a_le & b_gt & (left > 0)
         down = ~a_le & ~b_gt & (left < 0)
-        out[sl] = up.sum(axis=1) - down.sum(axis=1)
+        out += np.bincount(q, weights=up.astype(np.int64) - down, minlength=len(out)).astype(
+            np.int64
+        )
     return out
 
 
-def side_fills(edges: np.ndarray, rule: str) -> tuple[np.ndarray, np.ndarray]:
+BAND = 32  # points per horizontal band of `_stabbing_pairs`
+
+
+def _stabbing_pairs(lo: np.ndarray, hi: np.ndarray, ys: np.ndarray):
+    """Yield (point, interval) index arrays, about CHUNK pairs at a time, for every point y
+    and interval [lo, hi] with lo <= y <= hi (and some pairs that fail it, filtered out).
+
+    The points sorted by y are cut into bands of BAND points; an interval goes to every band
+    its y range meets, and is paired with that band's points. Each point is in one band, so
+    no pair comes twice. The pairs are the intervals meeting each band times its points:
+    O(P log P + sum of the bands each interval spans + the pairs kept)."""
+    if not len(ys) or not len(lo):
+        return
+    order = np.argsort(ys, kind="stable")
+    sorted_y = ys[order]
+    starts = np.arange(0, len(ys), BAND)
+    bottom = sorted_y[starts]  # each band's lowest y
+    size = np.diff(np.append(starts, len(ys)))
+    # from the last band starting below lo (its top may reach lo; equal ys span bands)
+    first = np.maximum(np.searchsorted(bottom, lo, side="left") - 1, 0)
+    last = np.searchsorted(bottom, hi, side="right") - 1
+    keep = last >= first
+    spans = np.where(keep, last - first + 1, 0)
+    edge = np.repeat(np.arange(len(lo)), spans)
+    band = (
+        np.repeat(first, spans) + np.arange(len(edge)) - np.repeat(np.cumsum(spans) - spans, spans)
+    )
+    by_band = np.argsort(band, kind="stable")
+    edge, band = edge[by_band], band[by_band]
+    count = size[band]
+    cum = np.cumsum(count)
+    i0 = 0
+    while i0 < len(edge):
+        i1 = max(i0 + 1, int(np.searchsorted(cum, cum[i0] - count[i0] + CHUNK, side="right")))
+        c = count[i0:i1]
+        e = np.repeat(edge[i0:i1], c)
+        k = np.repeat(starts[band[i0:i1]], c) + np.arange(len(e)) - np.repeat(np.cumsum(c) - c, c)
+        y = sorted_y[k]
+        hit = (lo[e] <= y) & (y <= hi[e])
+        yield order[k[hit]], e[hit]
+        i0 = i1
+
+
+def side_fills(
+    edges: np.ndarray, rule: str | np.ndarray, group: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Whether the fill covers the side just left and just right of each edge's midpoint.
 
     Left is the left of travel on the image (y down): the side of the normal (dy, -dx). The
     winding numbers count every contour of the polygon, so holes, overlapping contours and
     self-intersections are judged by the fill rule.
+
+    Several polygons at once: `group` numbers each edge's polygon (0, 1, ...) and `rule` is
+    then one per edge (an array of 'nonzero' and 'evenodd'). Polygon g is moved down by g
+    times the edges' height plus one, so the polygons' y ranges are disjoint and the winding
+    numbers (only ever differences of coordinates within a polygon) count its own edges.
     """
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
+    if group is not None and len(edges):
+        ys = edges[:, 1::2]
+        edges = edges.copy()
+        edges[:, 1::2] += (np.asarray(group, dtype=np.int64) * int(ys.max() - ys.min() + 1))[
+            :, None
+        ]
     doubled = 2 * edges
     mid = edges[:, 0:2] + edges[:, 2:4]  # the midpoint, doubled
     d = edges[:, 2:4] - edges[:, 0:2]
     normal = np.stack([d[:, 1], -d[:, 0]], axis=1)
-    left = fills(winding_numbers(doubled, mid, normal, d), rule)
-    right = fills(winding_numbers(doubled, mid, -normal, d), rule)
-    return left, right
+    left = winding_numbers(doubled, mid, normal, d)
+    right = winding_numbers(doubled, mid, -normal, d)
+    if isinstance(rule, str):
+        return fills(left, rule), fills(right, rule)
+    odd = np.asarray(rule) == "evenodd"
+    return np.where(odd, left & 1, left) != 0, np.where(odd, right & 1, right) != 0
 
 
-def inside_sides(edges: np.ndarray, rule: str) -> np.ndarray:
-    """'left', 'right', or '' (not a boundary: filled on both sides or neither) per edge."""
-    left, right = side_fills(edges, rule)
+def level_pairs(edges: np.ndarray, group: np.ndarray | None = None) -> int:
+    """How many (midpoint, edge) pairs `side_fills` tests, twice: per edge midpoint, the
+    edges of its polygon whose closed y range holds it (O(E log E), nothing tested)."""
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
+    if not len(edges):
+        return 0
+    ys = edges[:, 1::2]
+    if group is not None:
+        ys = ys + (np.asarray(group, dtype=np.int64) * int(ys.max() - ys.min() + 1))[:, None]
+    lo, hi = np.sort(2 * ys.min(axis=1)), np.sort(2 * ys.max(axis=1))
+    mid = ys.sum(axis=1)  # doubled, as side_fills tests them
+    met = np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
+    return 2 * int(met.sum())
+
+
+def inside_sides(
+    edges: np.ndarray, rule: str | np.ndarray, group: np.ndarray | None = None
+) -> np.ndarray:
+    """'left', 'right', or '' (not a boundary: filled on both sides or neither) per edge
+    (several polygons at once as `side_fills` takes them)."""
+    left, right = side_fills(edges, rule, group)
     return np.where(left & ~right, "left", np.where(right & ~left, "right", ""))
 
 
@@ -210,14 +292,29 @@ SAFE = 1 << 30  # |coordinate| below this keeps _may_split's products inside int
 PAIRS = 1 << 16  # edge pairs per numpy pass of _candidate_pairs (fits in the caches)
 
 
-def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
+class NodingLimit(ValueError):
+    """Splitting would insert more than the limit of points (`split_crossings`' limit)."""
+
+
+def _count_pairs(pairs, limit: int | None):
+    """The pairs, raising NodingLimit past `limit` of them (each inserts at least a point)."""
+    for n, pair in enumerate(pairs):
+        if limit is not None and n >= limit:
+            raise NodingLimit(f"more than {limit:,} points")
+        yield pair
+
+
+def split_crossings(
+    contours: list[np.ndarray], limit: int | None = None
+) -> tuple[list[np.ndarray], int]:
     """Insert a vertex wherever an edge of these contours crosses or touches another edge's
     interior (and at the ends of collinear overlaps), so that every edge lies on one side of
     the rest: then the fill rule gives each edge one inside side along its whole length.
 
     Contours are (n, 2) int64 arrays of closed polygons. A crossing point is rounded half up
     to the integer grid, the same for both edges. Returns the new contours and the number of
-    vertices inserted.
+    vertices inserted. More than `limit` pairs of edges that split raise NodingLimit before
+    any point is computed past them.
 
     The pairs to test come from a sweep (`_candidate_pairs`): O(n log n + B) numpy work for
     n edges and B pairs whose bounding boxes overlap, and Python work only for the pairs that
@@ -228,7 +325,7 @@ def split_crossings(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
     seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
     rows = seg.tolist()
     splits: dict[int, list] = {}
-    for i, j in _candidate_pairs(seg):
+    for i, j in _count_pairs(_candidate_pairs(seg), limit):
         _intersect(i, j, rows, splits)
     if not splits:
         return contours, 0
@@ -367,3 +464,123 @@ def _intersect(i: int, j: int, rows: list, splits: dict) -> None:
         num, length = (px - ox) * ux + (py - oy) * uy, ux * ux + uy * uy
         if 0 < num < length:
             _add_split(splits, k, num, length, (px, py))
+
+
+def hot_points(contours: list[np.ndarray], limit: int | None = None) -> np.ndarray:
+    """The centres of the hot pixels of snap rounding: every vertex and every crossing point
+    of the contours' edges rounded half up to the grid (`split_crossings`' rounding), (H, 2)
+    int64, unique. NodingLimit past `limit` pairs of edges that meet."""
+    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    rows = seg.tolist()
+    splits: dict[int, list] = {}
+    for i, j in _count_pairs(_candidate_pairs(seg), limit):
+        _intersect(i, j, rows, splits)
+    found = [entry[3] for entries in splits.values() for entry in entries]
+    points = np.concatenate([seg[:, 0:2], np.array(found, dtype=np.int64).reshape(-1, 2)])
+    return np.unique(points, axis=0)
+
+
+def snap_round(
+    contours: list[np.ndarray], hot: np.ndarray, limit: int | None = None
+) -> list[np.ndarray]:
+    """Snap rounding (Hobby; Guibas and Marimont): each edge becomes the chain through the
+    centres of the hot pixels it meets, in the order it meets them. A pixel is the half-open
+    square [c - 1/2, c + 1/2) x [c' - 1/2, c' + 1/2) around its centre (c, c'), the cell that
+    rounding half up sends to it; `hot` holds the centres (every vertex among them).
+    NodingLimit if the chains would have more than `limit` vertices."""
+    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    chains: dict[int, list] = {}
+    met = 0
+    for e, h in _meeting_pairs(seg, hot):
+        met += len(e)
+        if limit is not None and met - len(seg) > limit:
+            raise NodingLimit(f"more than {limit:,} points")
+        for i, k in zip(e.tolist(), h.tolist(), strict=True):
+            chains.setdefault(i, []).append(k)
+    hot_rows = hot.tolist()
+    out, base = [], 0
+    for pts in contours:
+        points = []
+        for i in range(base, base + len(pts)):
+            met = sorted(chains[i], key=lambda k, i=i: _entry(seg[i].tolist(), hot_rows[k]))
+            points.extend(tuple(hot_rows[k]) for k in met[:-1])  # the end starts the next
+        base += len(pts)
+        kept = [p for i, p in enumerate(points) if p != points[i - 1]]  # cyclic dedup
+        out.append(np.array(kept or points[:1], dtype=np.int64))
+    return out
+
+
+def _entry(edge: list, centre: list):
+    """Where the edge meets the centre's pixel: (first t, last t) as fractions; distinct
+    pixels met by one edge are met at disjoint sets of t, so this orders them."""
+    from fractions import Fraction
+
+    (ax, ay, bx, by), lows, highs = edge, [Fraction(0)], [Fraction(1)]
+    for a, b, c in ((ax, bx, centre[0]), (ay, by, centre[1])):
+        if a != b:
+            t0, t1 = Fraction(2 * (c - a) - 1, 2 * (b - a)), Fraction(2 * (c - a) + 1, 2 * (b - a))
+            lows.append(min(t0, t1))
+            highs.append(max(t0, t1))
+    return max(lows), min(highs)
+
+
+def _meeting_pairs(seg: np.ndarray, hot: np.ndarray):
+    """Yield (edge, hot point) index arrays of the edges and hot pixels that meet, exactly.
+
+    A pixel with an integer centre c meets the edge's integer box [lo, hi] iff lo <= c <= hi
+    on both axes, so the candidates are the centres in the box (a sweep along x over the
+    centres sorted by x, like `_candidate_pairs`); then the edge's parameter intervals in x
+    and y, [(2u - 1) / 2d, (2u + 1) / 2d) with u = c - a, must meet each other and [0, 1]."""
+    order = np.argsort(hot[:, 0], kind="stable")
+    hx, hy = hot[order, 0], hot[order, 1]
+    lo = np.minimum(seg[:, 0:2], seg[:, 2:4])
+    hi = np.maximum(seg[:, 0:2], seg[:, 2:4])
+    begin = np.searchsorted(hx, lo[:, 0], side="left")
+    counts = np.searchsorted(hx, hi[:, 0], side="right") - begin
+    exact = len(seg) and np.abs(seg).max() < SAFE and np.abs(hot).max() < SAFE
+    cum = np.cumsum(counts)
+    p0 = 0
+    while p0 < len(seg):
+        p1 = max(p0 + 1, int(np.searchsorted(cum, cum[p0] - counts[p0] + CHUNK, side="right")))
+        c = counts[p0:p1]
+        e = np.repeat(np.arange(p0, p1), c)
+        k = np.repeat(begin[p0:p1], c) + np.arange(len(e)) - np.repeat(np.cumsum(c) - c, c)
+        keep = (lo[e, 1] <= hy[k]) & (hy[k] <= hi[e, 1])
+        e, k = e[keep], order[k[keep]]
+        cols = seg[e].astype(np.int64 if exact else object).T
+        keep = _meets_pixel(*cols, hot[k, 0].astype(cols.dtype), hot[k, 1].astype(cols.dtype))
+        yield e[keep], k[keep]
+        p0 = p1
+
+
+def _meets_pixel(ax, ay, bx, by, cx, cy) -> np.ndarray:
+    """Whether edge a b meets the half-open pixel of centre c (arrays; int64 exact while
+    every |coordinate| < SAFE, else object arrays of Python ints).
+
+    Along the edge, t in [0, 1] closed, and per axis with d = b - a != 0 and u = c - a the
+    pixel's interval (2u - 1) / 2d <= t < (2u + 1) / 2d for d > 0, closed at the other end
+    for d < 0 (d = 0: every t if u = 0, none otherwise). Intervals on a line meet iff every
+    lower bound is below every upper bound (or equal, both closed). The ends of the edge are
+    on the grid, never on a pixel's side, so [0, 1] may be taken closed."""
+    bounds = []  # (numerator, denominator > 0, closed) of the lower and upper bounds
+    ok = np.ones(len(ax), dtype=bool)
+    for a, b, c in ((ax, bx, cx), (ay, by, cy)):
+        d, u = b - a, c - a
+        pos = d > 0
+        den = np.where(d == 0, 1, 2 * abs(d))
+        low = np.where(pos, 2 * u - 1, -2 * u - 1)
+        high = np.where(pos, 2 * u + 1, -2 * u + 1)
+        flat = d == 0
+        ok &= ~flat | (u == 0)
+        # a flat axis with u = 0 constrains nothing: [0, 1] closed
+        low, high = np.where(flat, 0, low), np.where(flat, den, high)
+        bounds.append(((low, den, pos | flat), (high, den, ~pos | flat)))
+    one = np.ones(len(ax), dtype=ax.dtype)
+    closed = np.ones(len(ax), dtype=bool)
+    lows = [(0 * one, one, closed)] + [b[0] for b in bounds]
+    highs = [(one, one, closed)] + [b[1] for b in bounds]
+    for ln, ld, lc in lows:
+        for hn, hd, hc in highs:
+            left, right = ln * hd, hn * ld
+            ok &= (left < right) | ((left == right) & lc & hc)
+    return ok

@@ -21,11 +21,25 @@ import numpy as np
 from ..model import Clip
 from ..model.pipeline import Command
 from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
-from ..model.timing import EMPTY_EDGE_CYCLES
+from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
 from .engines import EngineUnavailable, run_deltas
-from .render import EdgeArrays, Plan, Render, _write_boxes, edges_to_send, render_scene
+from .render import (
+    EdgeArrays,
+    Plan,
+    Render,
+    _write_boxes,
+    edges_to_send,
+    render_scene,
+)
+from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
+# The most clocks (`clock_estimate`, an upper estimate: 2.1 to 5.6 times the cycle model's
+# clocks on the built-ins) a scene may need in each simulator: 60 s of Verilator at its
+# measured 1 to 1.5 million clocks per second; for Amaranth's simulator (about 500 clocks
+# per second) the built-ins' 1.3 million (docs/scenes.md, "Errors and limits").
+MAX_PIPELINE_CLOCKS = {"verilator": 60_000_000, "amaranth": 1_500_000}
+RESET_CLEAR_CLOCKS = 2048  # the accumulation memory's clear pass after reset
 
 
 @dataclass(frozen=True)
@@ -43,7 +57,9 @@ class TileJob:
 def tile_jobs(plan: Plan, tile: TileConfig) -> Iterator[TileJob]:
     """The tiles of the image, row by row, with what each needs."""
     sent = edges_to_send(plan, skip=True)["sent"]
-    lo_x, lo_y, hi_x, hi_y = (box[sent] for box in _write_boxes(plan.coords, plan.offset, S(plan)))
+    lo_x, lo_y, hi_x, hi_y = (
+        box[sent] for box in _write_boxes(plan.coords, plan.offset, S_of(plan))
+    )
     width, height = plan.scene.width, plan.scene.height
     for ty in range(0, height, tile.height):
         for tx in range(0, width, tile.width):
@@ -55,7 +71,7 @@ def tile_jobs(plan: Plan, tile: TileConfig) -> Iterator[TileJob]:
             yield TileJob(tx, ty, edges, owners, list(dict.fromkeys(owners.tolist())))
 
 
-def S(plan: Plan) -> int:
+def S_of(plan: Plan) -> int:
     return plan.config.subpixel_scale
 
 
@@ -112,12 +128,14 @@ def scene_commands(plan: Plan, tile: TileConfig) -> list[Command]:
     commands = []
     for job in tile_jobs(plan, tile):
         commands.append(Command.tile(ox + job.x, oy + job.y, plan.scene.background))
+        mine: dict[int, list] = {}
+        for edge, owner in zip(job.edges, job.polygon_of_edge.tolist(), strict=True):
+            mine.setdefault(owner, []).append(edge)
         for i in job.polygons:
             poly = plan.polygons[i]
             commands.append(Command.begin(poly.intensity, poly.i_out, poly.rule))
-            for edge, owner in zip(job.edges, job.polygon_of_edge, strict=True):
-                if owner == i:
-                    commands.append(Command.edge(edge.x0, edge.y0, edge.x1, edge.y1, edge.inside))
+            for edge in mine[i]:
+                commands.append(Command.edge(edge.x0, edge.y0, edge.x1, edge.y1, edge.inside))
             commands.append(Command.end())
         commands.append(Command.flush())
     return commands
@@ -152,8 +170,9 @@ def render_pipeline(
     tile = tile or TileConfig(plan.config)
     if tile.config != plan.config:
         raise ValueError("the tile's stepper configuration is not the plan's")
-    model = render_scene(plan, skip=True)
+    check_clocks(plan, tile, engine)
     commands = scene_commands(plan, tile)
+    model = render_scene(plan, skip=True)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
     if engine == "verilator":
         from ..sim.simulators import pipeline_harness
@@ -176,6 +195,63 @@ def render_pipeline(
     return replace(
         model, image=image, engine=engine, pipeline=run, pipeline_tile=tile, mismatches=mismatches
     )
+
+
+def clock_estimate(plan: Plan, tile: TileConfig) -> tuple[int, int]:
+    """An upper estimate of the pipeline's clocks on `scene_commands(plan, tile)`, and the
+    number of those commands, from the plan without making them (numpy, per row of tiles;
+    no cycle model): every stage's work added as if none overlapped. Per edge sent to a
+    tile (`tile_jobs`: every tile of its rows from its own rightwards) its setup
+    (`unit_cycles`, `start_clip_cycles`) and one clock per pixel of its major axis (of its
+    height when projected); per polygon in a tile a scan of the tile's rows its edges
+    reach (whole rows); per tile a flush of its pixels; and the clear pass after reset.
+    `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
+    (6.7 s for the text's 287,121) and needs the commands."""
+    config, S = plan.config, S_of(plan)
+    sent = edges_to_send(plan, skip=True)["sent"]
+    lo_x, lo_y, hi_x, hi_y = (box[sent] for box in _write_boxes(plan.coords, plan.offset, S))
+    c = plan.coords[sent]
+    span = np.where(plan.left[sent], 0, abs(c[:, 2] - c[:, 0]))
+    cost = np.maximum(span, abs(c[:, 3] - c[:, 1])) // S + unit_cycles(config, output="deltas")
+    cost += start_clip_cycles(config) + 2
+    owner = plan.polygon[sent]
+    width, height = plan.scene.width, plan.scene.height
+    rights = np.arange(0, width, tile.width) + tile.width  # each tile's first column right of it
+    clocks, commands = RESET_CLEAR_CLOCKS, 0
+    for ty in range(0, height, tile.height):
+        band = np.flatnonzero((hi_y >= ty) & (lo_y < ty + tile.height))
+        order = band[np.argsort(lo_x[band], kind="stable")]
+        edges = np.searchsorted(lo_x[order], rights, side="left")  # edges sent to each tile
+        spent = np.concatenate([[0], np.cumsum(cost[order])])[edges]
+        # a polygon is in the tiles from its leftmost edge's on, scanning its rows there
+        first = np.full(len(plan.polygons), np.iinfo(np.int64).max)
+        top = np.full(len(plan.polygons), np.iinfo(np.int64).max)
+        bottom = np.full(len(plan.polygons), np.iinfo(np.int64).min)
+        np.minimum.at(first, owner[band], lo_x[band])
+        np.minimum.at(top, owner[band], np.maximum(lo_y[band], ty))
+        np.maximum.at(bottom, owner[band], np.minimum(hi_y[band], ty + tile.height - 1))
+        present = np.flatnonzero(bottom >= top)
+        by_x = np.argsort(first[present], kind="stable")
+        rows = (bottom - top + 1)[present][by_x]
+        polygons = np.searchsorted(first[present][by_x], rights, side="left")
+        scanned = np.concatenate([[0], np.cumsum(rows)])[polygons]
+        clocks += int(spent.sum() + scanned.sum() * tile.width + 8 * polygons.sum())
+        clocks += len(rights) * (tile.width * tile.height + 8)  # the flushes
+        commands += int(edges.sum() + 2 * polygons.sum()) + 2 * len(rights)
+    return clocks, commands
+
+
+def check_clocks(plan: Plan, tile: TileConfig, engine: str) -> None:
+    """Refuse (SceneError, one line) a scene whose `clock_estimate` passes the engine's
+    limit, before any command is made or the simulator built: it would run for minutes or
+    hours."""
+    (clocks, commands), limit = clock_estimate(plan, tile), MAX_PIPELINE_CLOCKS[engine]
+    if clocks > limit:
+        raise SceneError(
+            f"the scene needs about {clocks:,} pipeline clocks ({commands:,} commands in "
+            f"{tile.width} x {tile.height} tiles), more than the {engine} engine's limit of "
+            f"{limit:,}; use --engine model, or fewer or smaller polygons"
+        )
 
 
 @dataclass(frozen=True)

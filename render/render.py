@@ -33,8 +33,22 @@ import numpy as np
 from ..model import Clip, Edge, EdgeConfig
 from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
 from .engines import DeltaRun, cycles_of, run_deltas
-from .geometry import inside_sides, split_crossings
-from .scene import Scene, SceneError
+from .geometry import (
+    SAFE,
+    NodingLimit,
+    hot_points,
+    inside_sides,
+    level_pairs,
+    snap_round,
+    split_crossings,
+)
+from .scene import (
+    MAX_INSIDE_PAIRS,
+    MAX_NODED_EDGES,
+    MAX_STEPPED_COLUMNS,
+    Scene,
+    SceneError,
+)
 
 WRITE_MARGIN = 2  # px: every delta lies within the edge's bounding box grown by this much
 
@@ -83,6 +97,14 @@ class Plan:
     @property
     def edge_count(self) -> int:
         return len(self.coords)
+
+    @property
+    def in_range(self) -> bool:
+        """Whether every vertex is in the engine's range (`_offset`: if not, only the edges
+        that reach the image are, and only a render that skips the rest can be made)."""
+        return not len(self.coords) or (
+            self.coords.min() >= 0 and self.coords.max() <= self.config.max_vertex
+        )
 
     @property
     def viewport(self) -> Clip:
@@ -248,16 +270,46 @@ def _quantize(scene: Scene, S: int):
 
 
 def _offset(config: EdgeConfig, scene: Scene, contours, owners) -> tuple[int, int]:
-    """Whole pixels to add so that no vertex is negative; checks that the scene then fits."""
+    """Whole pixels to add so that no vertex is negative, if the scene then fits the range.
+    Otherwise only the vertices of edges that reach the image need it: an edge wholly above,
+    below or right of the image is never sent, and one wholly left of it is sent as its
+    projection on the column left of the image (its y and that column need the range, not
+    its x). `Plan.in_range` is then false, and a render without skipping is refused. Checks
+    that the vertices that need it fit."""
     S = config.subpixel_scale
-    offset = [0, 0]
-    if contours:
-        allpts = np.concatenate(contours)
-        for axis in (0, 1):
-            lo = allpts[:, axis].min()
-            offset[axis] = max(0, math.ceil(-lo / S))
-        _check_range(config, scene, contours, owners, offset)
+    if not contours:
+        return 0, 0
+    allpts = np.concatenate(contours)
+    offset = [max(0, math.ceil(-allpts[:, axis].min() / S)) for axis in (0, 1)]
+    fits = all(allpts[:, axis].max() + offset[axis] * S <= config.max_vertex for axis in (0, 1))
+    if fits and (offset[0] - 1) * S <= config.max_vertex:  # and the projections' column
+        return offset[0], offset[1]
+    need, left = _reaching(scene, contours, S)
+    for axis in (0, 1):
+        used = [pts[n[axis], axis] for pts, n in zip(contours, need, strict=True)]
+        lowest = min((u.min() for u in used if len(u)), default=0)
+        offset[axis] = max(0, math.ceil(-lowest / S))
+    offset[0] = max(offset[0], int(left))  # the projection column, ox - 1, is in range
+    _check_range(config, scene, contours, owners, offset, need)
     return offset[0], offset[1]
+
+
+def _reaching(scene: Scene, contours, S: int) -> tuple[list[tuple], bool]:
+    """Per contour, which vertices need the range in x and in y: those of an edge that is
+    not wholly outside the image by `_write_boxes` (the test `plan_scene` applies after
+    splitting; a piece lies within its edge's box), in y also those of an edge wholly left of
+    it. And whether any edge lies wholly left of the image."""
+    need, left = [], False
+    for pts in contours:
+        edges = np.concatenate([pts, np.roll(pts, -1, axis=0)], axis=1).astype(np.int64)
+        lo_x, lo_y, hi_x, hi_y = _write_boxes(edges, (0, 0), S)
+        sent = ~((lo_x >= scene.width) | (hi_y < 0) | (lo_y >= scene.height))
+        wholly_left = sent & (hi_x <= 0)
+        left = left or bool(wholly_left.any())
+        reaches = sent & ~wholly_left
+        # vertex k starts edge k and ends edge k - 1
+        need.append((reaches | np.roll(reaches, 1), sent | np.roll(sent, 1)))
+    return need, left
 
 
 def _split_edges(scene: Scene, contours, owners, offset, S: int):
@@ -270,13 +322,15 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     coords, polygon, contour = [], [], []
     starts = [0] * (len(scene.polygons) + 1)
     count = crossings = 0
-    for i in range(len(scene.polygons)):
-        mine = [
-            pts.astype(np.int64) + shift
-            for (k, _, _), pts in zip(owners, contours, strict=True)
-            if k == i
-        ]
-        mine, inserted = _node(mine)
+    by_polygon: list[list[np.ndarray]] = [[] for _ in scene.polygons]
+    for (k, _, _), pts in zip(owners, contours, strict=True):
+        by_polygon[k].append(pts.astype(np.int64) + shift)
+    crossing = _crossing(by_polygon)
+    for i, mine in enumerate(by_polygon):
+        if not crossing[i]:  # nothing to split: no need to look again, polygon by polygon
+            inserted = 0
+        else:
+            mine, inserted = _node_polygon(i, mine)
         crossings += inserted
         for q in mine:
             n = len(q)
@@ -290,23 +344,100 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     return _joined(coords, 4), _joined(polygon), _joined(contour), starts, crossings
 
 
-NODING_ROUNDS = 16  # rounds of re-splitting before the plan gives up (none seen past 3)
+def _crossing(by_polygon: list[list[np.ndarray]]) -> np.ndarray:
+    """Whether each polygon has edges that cross or touch (`split_crossings` would insert a
+    point), for many polygons in one search: each is moved right, past the previous one,
+    so that no two polygons' boxes meet, in batches whose coordinates stay below
+    geometry.SAFE / 2 (the search's exact integer filter). A batch whose points would pass
+    the limit is left to the polygons one by one (True)."""
+    out = np.ones(len(by_polygon), dtype=bool)
+    batch: list[int] = []
+    moved: list[np.ndarray] = []
+    base = 0
+
+    def flush():
+        if batch:
+            try:
+                after, _ = split_crossings(moved, MAX_NODED_EDGES)
+                sizes = np.array([len(c) for c in after]) != np.array([len(c) for c in moved])
+                owner = np.repeat(batch, [len(by_polygon[i]) for i in batch])
+                out[batch] = False
+                out[owner[sizes]] = True
+            except NodingLimit:
+                pass
+
+    for i, mine in enumerate(by_polygon):
+        if not mine:
+            out[i] = False
+            continue
+        points = np.concatenate(mine)
+        lo, hi = points.min(axis=0), points.max(axis=0)
+        if base + (hi[0] - lo[0]) + 1 >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+            flush()
+            batch, moved, base = [], [], 0
+        if hi[0] - lo[0] >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+            continue  # too wide for any batch: one by one
+        batch.append(i)
+        moved += [c - lo + np.array([base, 0]) for c in mine]
+        base += int(hi[0] - lo[0]) + 1
+    flush()
+    return out
 
 
-def _node(contours: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
-    """Split the contours where they cross, again until nothing crosses: a crossing point
-    rounded to the grid can move an edge across another or onto it, and an edge left crossing
-    would get the wrong inside side for part of its length (a streak along its row)."""
-    total = 0
-    for _ in range(NODING_ROUNDS):
-        contours, inserted = split_crossings(contours)
-        total += inserted
-        if not inserted:
-            return contours, total
-    raise SceneError(
-        f"a polygon's edges still cross after {NODING_ROUNDS} rounds of splitting at the "
-        "rounded crossing points; refine or simplify its outline"
-    )
+def _node_polygon(i: int, mine: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
+    """`_node` on polygon i's contours, with its limit named in a SceneError."""
+    try:
+        mine, inserted = _node(mine, MAX_NODED_EDGES - sum(map(len, mine)))
+    except NodingLimit:
+        raise SceneError(
+            f"polygon {i}: its edges cross so often that splitting them at the crossings "
+            f"gives more than the limit of {MAX_NODED_EDGES:,} edges per polygon "
+            f"({sum(map(len, mine)):,} before splitting); simplify its outline"
+        ) from None
+    if sum(map(len, mine)) > MAX_NODED_EDGES:
+        raise SceneError(
+            f"polygon {i}: splitting its edges at the crossings gives "
+            f"{sum(map(len, mine)):,} edges, more than the limit of {MAX_NODED_EDGES:,} "
+            "per polygon; simplify its outline"
+        )
+    return mine, inserted
+
+
+def _node(contours: list[np.ndarray], limit: int | None = None) -> tuple[list[np.ndarray], int]:
+    """Split the contours where they cross so that no edge crosses another (docs/noding.md).
+
+    One round of `split_crossings` rounds each crossing to the grid; if nothing crosses or
+    touches after it (a second round inserts nothing), that is the noding. Otherwise a
+    rounded point moved an edge across or onto another, and the contours are snap-rounded
+    instead (`snap_round`, with every vertex and rounded crossing as a hot pixel): no two of
+    its edges cross, and a last exact round splits where an edge passes through a vertex or
+    overlaps another (points already on the grid, so nothing moves). Should that round ever
+    round a crossing (snap rounding's theorem says it cannot), its point becomes hot and the
+    snap is redone: the hot points only grow, within the contours' box, so this ends; a
+    crossing rounded onto a point already hot would snap the same way again, and is raised
+    as a bug. NodingLimit (geometry) when
+    more than `limit` points would be inserted."""
+    once, inserted = split_crossings(contours, limit)
+    if not inserted or not split_crossings(once, limit)[1]:
+        return once, inserted
+    hot = hot_points(contours, limit)
+    while True:
+        snapped = snap_round(contours, hot, limit)
+        noded, _ = split_crossings(snapped, limit)
+        points = np.concatenate(noded)
+        new = points[~_rows_in(points, np.concatenate(snapped))]  # rounded crossings
+        if not len(new):
+            added = sum(map(len, noded)) - sum(map(len, contours))
+            return noded, max(0, added)
+        if _rows_in(new, hot).any():  # snapped again, it would not change: the theorem failed
+            raise RuntimeError("snap rounding left two edges crossing (a bug: please report)")
+        hot = np.unique(np.concatenate([hot, new]), axis=0)
+
+
+def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Whether each (x, y) row of `rows` is a row of `table`."""
+    known = {tuple(r) for r in table.tolist()}
+    return np.array([tuple(r) in known for r in rows.tolist()], dtype=bool)
 
 
 def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:
@@ -316,28 +447,36 @@ def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:
 
 
 def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
-    """Each edge's inside side by its polygon's fill rule ('' if not a boundary); returns the
-    sides and how many coincident boundary edges were left to the first of them."""
-    inside = np.full(len(coords), "", dtype="<U5")
-    duplicates = 0
-    for i, poly in enumerate(scene.polygons):
-        a, b = starts[i], starts[i + 1]
-        if b > a:
-            inside[a:b] = inside_sides(coords[a:b], poly.fill_rule)
-            duplicates += _drop_coincident(coords, inside, a, b)
-    return inside, duplicates
+    """Each edge's inside side by its polygon's fill rule ('' if not a boundary), every
+    polygon in one pass; returns the sides and how many coincident boundary edges were left
+    to the first of them."""
+    counts = np.diff(np.asarray(starts, dtype=np.int64))
+    group = np.repeat(np.arange(len(scene.polygons)), counts)
+    rules = np.array([p.fill_rule for p in scene.polygons] or ["nonzero"])[group]
+    pairs = level_pairs(coords, group)
+    if pairs > MAX_INSIDE_PAIRS:
+        raise SceneError(
+            f"the inside test of the scene's {len(coords):,} edges (after splitting) would "
+            f"compare {pairs:,} pairs of an edge's midpoint and an edge level with it, more "
+            f"than the limit of {MAX_INSIDE_PAIRS:,} (about 20 s): polygons with many edges "
+            "spanning the same rows (a comb of tall teeth); split them into smaller polygons"
+        )
+    inside = inside_sides(coords, rules, group).astype("<U5")
+    return inside, _drop_coincident(coords, inside, group)
 
 
-def _drop_coincident(coords: np.ndarray, inside: np.ndarray, a: int, b: int) -> int:
-    """Coincident boundary edges of edges a .. b - 1 (shared by two contours, or overlapping)
-    have the same filled side: the first one draws it, the others become interior (their
-    deltas would count the winding twice). Returns how many were dropped."""
-    edges = np.flatnonzero(inside[a:b] != "") + a
+def _drop_coincident(coords: np.ndarray, inside: np.ndarray, group: np.ndarray) -> int:
+    """Coincident boundary edges of one polygon (`group`: each edge's), shared by two
+    contours or overlapping, have the same filled side: the first one draws it, the others
+    become interior (their deltas would count the winding twice). Returns how many were
+    dropped."""
+    edges = np.flatnonzero(inside != "")
     if len(edges) < 2:
         return 0
     p0, p1 = coords[edges, 0:2], coords[edges, 2:4]
     swap = (p0[:, 0] > p1[:, 0]) | ((p0[:, 0] == p1[:, 0]) & (p0[:, 1] > p1[:, 1]))
     keys = np.where(swap[:, None], np.hstack([p1, p0]), np.hstack([p0, p1]))
+    keys = np.concatenate([group[edges][:, None], keys], axis=1)
     order = np.lexsort(keys.T[::-1])  # stable: equal keys keep their edge order
     ranked = keys[order]
     repeat = np.all(ranked[1:] == ranked[:-1], axis=1)
@@ -361,55 +500,91 @@ def _polygon_plans(scene: Scene, intensities, starts, boxes, full: int) -> list[
     """Each polygon's window and I_out: the background unless it overlaps an earlier polygon
     or equals the background, then the intensity farthest from I_in."""
     lo_x, lo_y, hi_x, hi_y = boxes
+    starts = np.asarray(starts, dtype=np.int64)
+    has = starts[1:] > starts[:-1]
+    windows = np.zeros((len(scene.polygons), 4), dtype=np.int64)
+    if has.any():
+        first = starts[:-1][has]
+        windows[has] = np.stack(
+            [
+                np.maximum(0, np.minimum.reduceat(lo_x, first)),
+                np.maximum(0, np.minimum.reduceat(lo_y, first)),
+                np.minimum(scene.width, np.maximum.reduceat(hi_x, first) + 1),
+                np.minimum(scene.height, np.maximum.reduceat(hi_y, first) + 1),
+            ],
+            axis=1,
+        )
+    overlaps = _meets_earlier(windows, scene.width, scene.height)
     polys = []
-    windows = []
     for i, poly in enumerate(scene.polygons):
-        a, b = starts[i], starts[i + 1]
-        if b > a:
-            window = (
-                max(0, int(lo_x[a:b].min())),
-                max(0, int(lo_y[a:b].min())),
-                min(scene.width, int(hi_x[a:b].max()) + 1),
-                min(scene.height, int(hi_y[a:b].max()) + 1),
-            )
-        else:
-            window = (0, 0, 0, 0)
-        overlaps = any(_meets(window, w) for w in windows)
-        windows.append(window)
         value = intensities[i]
         equal = value == scene.background
         i_out = (
             scene.background
-            if not (overlaps or equal)
+            if not (overlaps[i] or equal)
             else _alternative_out(value, scene.background, full)
         )
-        polys.append(PolygonPlan(i, value, i_out, poly.fill_rule, a, b, window, equal, overlaps))
+        window = tuple(int(v) for v in windows[i])
+        a, b = int(starts[i]), int(starts[i + 1])
+        polys.append(
+            PolygonPlan(i, value, i_out, poly.fill_rule, a, b, window, equal, bool(overlaps[i]))
+        )
     return polys
 
 
-def _meets(a, b) -> bool:
-    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3] and a[0] < a[2]
+def _meets_earlier(windows: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Whether each window (x0, y0, x1, y1: the pixels [x0, x1) x [y0, y1) of the image)
+    shares a pixel with an earlier one. In blocks of B windows: against the earlier blocks
+    by a summed-area table of the pixels they cover, within the block pair by pair, so
+    (P / B) image passes plus P B pairs, with B four times the square root of the image's
+    pixels (not P**2 pairs: 66,666 windows would be 2.2e9)."""
+    x0, y0, x1, y1 = windows.T
+    live = (x0 < x1) & (y0 < y1)
+    out = np.zeros(len(windows), dtype=bool)
+    cover = np.zeros((height + 1, width + 1), dtype=np.int32)  # 2-D difference array
+    block = int(np.clip(4 * math.isqrt(width * height), 64, 8192))  # image passes cost most
+    for s in range(0, len(windows), block):
+        k = np.arange(s, min(s + block, len(windows)))
+        k = k[live[k]]
+        if s and len(k):
+            filled = np.cumsum(np.cumsum(cover, axis=0), axis=1)[:height, :width] > 0
+            table = np.zeros((height + 1, width + 1), dtype=np.int32)
+            table[1:, 1:] = np.cumsum(np.cumsum(filled, axis=0, dtype=np.int32), axis=1)
+            hits = table[y1[k], x1[k]] - table[y0[k], x1[k]] - table[y1[k], x0[k]]
+            out[k] = hits + table[y0[k], x0[k]] > 0
+        for r in range(0, len(k), 1024):  # rows of the block's pairs, 1024 at a time
+            a, b = k[r : r + 1024, None], k[None, :]
+            pairs = (x0[a] < x1[b]) & (x0[b] < x1[a]) & (y0[a] < y1[b]) & (y0[b] < y1[a])
+            out[a[:, 0]] |= np.tril(pairs, r - 1).any(axis=1)
+        for ys, xs, sign in ((y0, x0, 1), (y0, x1, -1), (y1, x0, -1), (y1, x1, 1)):
+            np.add.at(cover, (ys[k], xs[k]), sign)
+    return out
 
 
-def _check_range(config, scene, contours, owners, offset) -> None:
+def _check_range(config, scene, contours, owners, offset, need=None) -> None:
+    """Refuse, naming the first vertex that does not fit, a scene whose vertices do not fit
+    the engine's range after the offset (per contour, `need` marks the vertices that must,
+    in x and in y; default all)."""
     S = config.subpixel_scale
     hi = config.max_vertex
-    allpts = np.concatenate(contours)
+    if need is None:
+        need = [(np.ones(len(p), dtype=bool),) * 2 for p in contours]
+    every = all(n[0].all() and n[1].all() for n in need)
+    which = "the scene spans" if every else "the edges that reach the image span"
     for axis, name in ((0, "x"), (1, "y")):
-        top = allpts[:, axis].max() + offset[axis] * S
-        if top <= hi:
+        used = np.concatenate([p[n[axis], axis] for p, n in zip(contours, need, strict=True)])
+        if not len(used) or used.max() + offset[axis] * S <= hi:
             continue
-        for (i, j, kept), pts in zip(owners, contours, strict=True):
-            bad = np.flatnonzero(pts[:, axis] + offset[axis] * S > hi)
+        for (i, j, kept), pts, n in zip(owners, contours, need, strict=True):
+            bad = np.flatnonzero(n[axis] & (pts[:, axis] + offset[axis] * S > hi))
             if len(bad):
                 k = int(kept[bad[0]])
                 x, y = scene.polygons[i].contours[j][k]
-                lo = allpts[:, axis].min() / S
                 raise SceneError(
                     f"polygon {i} contour {j} vertex {k} at ({x:g}, {y:g}) px does not fit "
-                    f"the configured coordinate range: the scene spans {name} from {lo:g} to "
-                    f"{allpts[:, axis].max() / S:g} px, more than the engine's [0, {hi / S}] px "
-                    f"(coord_bits = {config.coord_bits}, subpixel_bits = "
+                    f"the configured coordinate range: {which} {name} from "
+                    f"{used.min() / S:g} to {used.max() / S:g} px, more than the engine's "
+                    f"[0, {hi / S}] px (coord_bits = {config.coord_bits}, subpixel_bits = "
                     f"{config.subpixel_bits})"
                 )
 
@@ -447,6 +622,12 @@ def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:
     """Which boundary edges go to the engine, and which are skipped by which rule."""
     boundary = plan.boundary
     none = np.zeros_like(boundary)
+    if not skip and not plan.in_range:
+        raise SceneError(
+            "without skipping every edge goes to the engine, but the scene's edges wholly "
+            f"outside the image do not fit its coordinate range (coord_bits = "
+            f"{plan.config.coord_bits}); render with skipping (no --no-skip or --stats)"
+        )
     if not skip:
         return dict(sent=np.flatnonzero(boundary), equal=none, culled=none, left=none, flat=none)
     skipped_poly = np.array([p.equal and not p.overlaps for p in plan.polygons], dtype=bool)
@@ -480,6 +661,7 @@ def render_scene(
 
     t = time.perf_counter()
     arrays = edge_arrays(plan, sent, clip=skip)
+    _check_columns(config, arrays)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
     run, shapes = run_deltas(config, arrays, engine, progress=report)
     deltas = run.in_image(sent, plan.offset)
@@ -520,6 +702,20 @@ def render_scene(
         seconds=time.perf_counter() - start,
         timings=timings,
     )
+
+
+def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
+    """Refuse edges that step more than MAX_STEPPED_COLUMNS columns in all (the engines hold
+    every column's four cells: about 300 bytes a column at its peak)."""
+    from ..model.edge import setup_batch
+
+    columns = int(setup_batch(config, *arrays.args(), arrays.clip).columns.sum())
+    if columns > MAX_STEPPED_COLUMNS:
+        raise SceneError(
+            f"the scene's {len(arrays):,} edges step {columns:,} columns (pixels along each "
+            f"edge's major axis, within the image's rows and left of its right side), more "
+            f"than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
+        )
 
 
 def _draw_polygon(plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts):

@@ -313,7 +313,8 @@ UNNODED = {
 @pytest.mark.parametrize("contour", list(UNNODED.values()), ids=list(UNNODED))
 def test_the_plan_nodes_until_no_edge_crosses(contour):
     """One round of split_crossings can leave edges crossing: a crossing rounded to the grid
-    moves an edge across or onto another. The plan splits again until nothing crosses."""
+    moves an edge across or onto another. The plan then snap-rounds the polygon, and
+    nothing crosses (docs/noding.md)."""
     from edgeaa.render.render import _node
 
     contour = np.array(contour, dtype=np.int64)
@@ -832,3 +833,156 @@ def test_a_failed_build_is_one_line_with_its_cause():
     assert _cause(RuntimeError("harness failed (139): \nSegmentation fault")) == (
         "harness failed (139): Segmentation fault"
     )
+
+
+# --- bounded planning: far-off polygons, the overlap test, the winding numbers, the limits ---
+
+
+def test_a_polygon_far_left_of_the_image_is_drawn_and_carries_no_cover(tmp_path, capsys):
+    """Its span fits the range, the image's does too, but not both with every vertex made
+    non-negative: only its projection's column and its y need the range."""
+    near = Polygon((((4, 4), (40, 8), (20, 28)),), 100)
+    far = Polygon((((-3000, 2), (-2990, 2), (-2995, 30)),), 0)
+    alone = render_scene(Scene(64, 32, (near,), 255), DEFAULT).image
+    both = render_scene(Scene(64, 32, (far, near), 255), DEFAULT)
+    assert both.plan.offset[0] < 2048 and not both.plan.in_range
+    assert len(both.projected)
+    assert np.array_equal(both.image, alone)
+    path = tmp_path / "far.json"
+    scene = {"width": 64, "height": 32, "polygons": [{"points": far.contours[0]}]}
+    path.write_text(json.dumps(scene))
+    assert main(["render", str(path), "-o", str(tmp_path / "far.png"), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["render", str(path), "--stats", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("edgeaa render: error: without skipping") and err.count("\n") == 1
+
+
+def _meets_earlier_reference(windows) -> list[bool]:
+    def meets(a, b):
+        return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3] and a[0] < a[2]
+
+    return [any(meets(w, v) for v in windows[:i]) for i, w in enumerate(windows)]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_overlap_of_windows_matches_the_pairwise_test(seed, monkeypatch):
+    from edgeaa.render.render import _meets_earlier
+
+    rng = np.random.default_rng(seed)
+    width, height = int(rng.integers(1, 40)), int(rng.integers(1, 40))
+    n = int(rng.integers(1, 300))
+    lo = rng.integers(-5, 45, (n, 2))
+    hi = lo + rng.integers(0, 20, (n, 2))  # a box's pixels, clamped as `_polygon_plans` does
+    windows = np.concatenate([np.maximum(lo, 0), np.minimum(hi + 1, [width, height])], axis=1)
+    want = _meets_earlier_reference(windows.tolist())
+    note = f"seed {seed}"
+    assert _meets_earlier(windows, width, height).tolist() == want, note
+    monkeypatch.setattr(math, "isqrt", lambda _: 8)  # blocks of 64: across blocks too
+    assert _meets_earlier(windows, width, height).tolist() == want, note
+    monkeypatch.setattr(math, "isqrt", lambda _: 512)  # one block of 2048: rows in parts
+    many = np.concatenate([windows] * 8)[:2048]
+    want = _meets_earlier_reference(many.tolist())
+    assert _meets_earlier(many, width, height).tolist() == want, note
+
+
+def _winding_reference(edges, points, first, second):
+    """winding_numbers as it was: every point against every edge."""
+    from edgeaa.render.geometry import _lex_sign
+
+    ax, ay, bx, by = (edges[:, i][None, :] for i in range(4))
+    ex, ey = bx - ax, by - ay
+    px, py = points[:, 0][:, None], points[:, 1][:, None]
+    v1x, v1y = first[:, 0][:, None], first[:, 1][:, None]
+    v2x, v2y = second[:, 0][:, None], second[:, 1][:, None]
+    sy = _lex_sign(v1y, v2y)
+    a_le = (ay < py) | ((ay == py) & (sy > 0))
+    b_gt = (by > py) | ((by == py) & (sy < 0))
+    left = _lex_sign(ex * (py - ay) - (px - ax) * ey, ex * v1y - v1x * ey, ex * v2y - v2x * ey)
+    return (a_le & b_gt & (left > 0)).sum(axis=1) - (~a_le & ~b_gt & (left < 0)).sum(axis=1)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_winding_numbers_match_every_point_against_every_edge(seed, monkeypatch):
+    from edgeaa.render import geometry
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 200))
+    pts = rng.integers(0, 12, (n, 2))  # small: many ties on the edges' ends and rows
+    edges = np.concatenate([pts, np.roll(pts, -1, axis=0)], axis=1)
+    points = rng.integers(-1, 13, (500, 2))
+    first = rng.choice([-1, 1], (500, 2))
+    second = np.stack([first[:, 1], -first[:, 0]], axis=1)
+    want = _winding_reference(edges, points, first, second)
+    assert np.array_equal(geometry.winding_numbers(edges, points, first, second), want), seed
+    monkeypatch.setattr(geometry, "CHUNK", 7)  # many passes, bands cut anywhere
+    assert np.array_equal(geometry.winding_numbers(edges, points, first, second), want), seed
+
+
+def test_a_polygon_whose_splitting_passes_the_limit_is_refused_before_the_work():
+    from edgeaa.render.scene import MAX_NODED_EDGES
+
+    rng = np.random.default_rng(0)
+    soup = tuple(map(tuple, rng.uniform(0, 256, (2000, 2)).round(3).tolist()))
+    with pytest.raises(SceneError, match=f"limit of {MAX_NODED_EDGES:,} edges per polygon"):
+        plan(Scene(257, 257, (Polygon((soup,)),)), DEFAULT)
+
+
+@pytest.mark.parametrize("engine", ["verilator", "amaranth"])
+def test_a_scene_past_an_engines_clock_limit_is_refused_before_it_runs(
+    engine, tmp_path, capsys, monkeypatch
+):
+    from edgeaa.model.tile import TileConfig
+    from edgeaa.render import pipeline
+
+    tiny = plan(parse_scene(TINY_SCENE), DEFAULT)
+    tile = TileConfig(DEFAULT)
+    needs, _ = pipeline.clock_estimate(tiny, tile)
+    monkeypatch.setitem(pipeline.MAX_PIPELINE_CLOCKS, engine, needs - 1)
+    monkeypatch.setattr(pipeline, "render_scene", None)  # nothing may run
+    with pytest.raises(SceneError, match=f"engine's limit of {needs - 1:,}"):
+        pipeline.render_pipeline(tiny, engine, tile)
+    scene = tmp_path / "tiny.json"
+    scene.write_text(json.dumps(TINY_SCENE))
+    out = tmp_path / "out.png"
+    assert main(["render", str(scene), "--engine", engine, "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("edgeaa render: error: the scene needs about") and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_the_clock_estimate_is_above_the_simulated_clocks():
+    """The estimate that the engines' limits apply to is an upper one on the built-ins, as
+    the pipeline's cycle model (checked against the simulated clocks in test_pipeline.py)
+    counts them."""
+    from edgeaa.model.pipeline_timing import pipeline_cycles
+    from edgeaa.model.tile import TileConfig
+    from edgeaa.render import pipeline
+
+    for name in ("starburst", "hatch"):
+        p = plan(builtin(name), DEFAULT)
+        tile = TileConfig(DEFAULT)
+        commands = pipeline.scene_commands(p, tile)
+        exact = pipeline_cycles(tile, commands).clocks
+        estimate, count = pipeline.clock_estimate(p, tile)
+        assert exact <= estimate <= 8 * exact and count == len(commands), name
+
+
+def test_the_inside_test_and_the_engine_refuse_work_past_their_limits(monkeypatch):
+    """A comb of tall teeth: every midpoint is level with every edge (the inside test's
+    pairs), and every edge steps the image's height (the engine's columns)."""
+    from edgeaa.render import render as planner
+    from edgeaa.render.geometry import level_pairs
+
+    teeth = [p for k in range(40) for p in ((2 + k, 1.0), (2.5 + k, 60.0))]
+    comb = Scene(64, 64, (Polygon((tuple(teeth),)),))
+    whole = plan(comb, DEFAULT)
+    pairs = level_pairs(whole.coords, whole.polygon)
+    assert pairs > 80 * 80  # each of the 80 teeth's edges is level with the others
+    monkeypatch.setattr(planner, "MAX_INSIDE_PAIRS", pairs - 1)
+    with pytest.raises(SceneError, match=f"limit of {pairs - 1:,}"):
+        plan(comb, DEFAULT)
+    monkeypatch.setattr(planner, "MAX_INSIDE_PAIRS", pairs)
+    monkeypatch.setattr(planner, "MAX_STEPPED_COLUMNS", 80 * 59 - 1)
+    with pytest.raises(SceneError, match="columns"):
+        render_scene(comb, DEFAULT)
