@@ -1,19 +1,27 @@
 """Content the project did not write (`edgeaa.render.corpus`) through the hardware pipeline:
 serif, italic and mono fonts at 9 and 24 px, matplotlib's SVG toolbar icons at 16 and 48 px,
 and the adversarial scenes, rendered by the Verilated `EdgePipeline`, every pixel equal to
-the model's; a sample again under seeded idle clocks and back-pressure."""
+the model's; a sample again under seeded idle clocks and back-pressure (`render_pipeline`).
+
+One harness run per font family, for the icons and for the adversarial scenes: the scenes'
+command streams one after another (each tile starts with its own tile command), the frames
+cut back into scenes, each scene's image compared with the model's and named if it differs.
+"""
 
 from __future__ import annotations
 
 import random
 
+import numpy as np
 import pytest
 
 from edgeaa.model import EdgeConfig
+from edgeaa.model.pipeline import CODE
 from edgeaa.model.tile import TileConfig
-from edgeaa.render import plan_scene
+from edgeaa.render import plan_scene, render_scene
 from edgeaa.render.corpus import ICONS, adversarial_scenes, font_scene, icon_scene
-from edgeaa.render.pipeline import render_pipeline
+from edgeaa.render.pipeline import image_from_frames, render_pipeline, scene_commands
+from edgeaa.sim.simulators import pipeline_harness
 
 CONFIG = EdgeConfig()
 TILE = TileConfig(CONFIG)
@@ -27,22 +35,41 @@ def _same_image(scene, **run) -> None:
     assert result.mismatches == 0, f"{scene.name}: {result.mismatches} pixels differ ({run})"
 
 
-@pytest.mark.parametrize("name, size", FONT_CASES)
-def test_fonts_through_the_pipeline_give_the_models_image(name, size):
-    scene, missing = font_scene(name, size)
-    assert not missing, f"{name} lacks {missing}"
-    _same_image(scene)
+def _same_images(scenes: dict) -> None:
+    """`scenes` (by label) in one harness run, each scene's image equal to the model's."""
+    plans = {label: plan_scene(scene, CONFIG) for label, scene in scenes.items()}
+    commands = {label: scene_commands(plan, TILE) for label, plan in plans.items()}
+    run = pipeline_harness.run(TILE, [c for stream in commands.values() for c in stream])
+    assert run.errors == run.edge_errors == 0, f"{run.errors} commands, {run.edge_errors} edges"
+    frames, differ = run.frames(TILE), {}
+    for label, plan in plans.items():
+        tiles = sum(c.op == CODE["flush"] for c in commands[label])
+        image = image_from_frames(plan, TILE, frames[:tiles])
+        frames = frames[tiles:]
+        mismatches = int(np.count_nonzero(image != render_scene(plan, skip=True).image))
+        if mismatches:
+            differ[label] = mismatches
+    assert not frames, f"{len(frames)} frames more than the scenes' flushes"
+    assert not differ, f"pixels that differ from the model's, by scene: {differ}"
 
 
-@pytest.mark.parametrize("size", [16, 48])
-@pytest.mark.parametrize("name", ICONS)
-def test_svg_icons_through_the_pipeline_give_the_models_image(name, size):
-    _same_image(icon_scene(name, size))
+@pytest.mark.parametrize("name", sorted({name for name, _ in FONT_CASES}))
+def test_fonts_through_the_pipeline_give_the_models_image(name):
+    scenes = {}
+    for size in (size for font, size in FONT_CASES if font == name):
+        scenes[f"{name} {size} px"], missing = font_scene(name, size)
+        assert not missing, f"{name} lacks {missing}"
+    _same_images(scenes)
 
 
-@pytest.mark.parametrize("name", sorted(ADVERSARIAL))
-def test_adversarial_scenes_through_the_pipeline_give_the_models_image(name):
-    _same_image(ADVERSARIAL[name])
+def test_svg_icons_through_the_pipeline_give_the_models_image():
+    _same_images(
+        {f"{name} {size} px": icon_scene(name, size) for name in ICONS for size in (16, 48)}
+    )
+
+
+def test_adversarial_scenes_through_the_pipeline_give_the_models_image():
+    _same_images(ADVERSARIAL)
 
 
 def test_back_pressure_on_content_we_did_not_write():

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import fcntl
 import hashlib
 import json
 import os
@@ -63,6 +64,16 @@ def verilator_env() -> dict[str, str]:
 def cache_dir() -> Path:
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return Path(base) / "edgeaa" / "verilator"
+
+
+@contextlib.contextmanager
+def build_lock(final: Path):
+    """Held while `final` is built: a second process (a parallel test worker) that wants the
+    same build waits, then finds it built, rather than compiling it again."""
+    final.parent.mkdir(parents=True, exist_ok=True)
+    with open(final.parent / f"{final.name}.lock", "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        yield  # closing the file releases the lock
 
 
 def private_build_dir(final: Path) -> Path:
@@ -127,18 +138,21 @@ def cocotb_build(source: str, top: str, optimize: str = "-O2") -> Path:
         return final
     from cocotb_tools.runner import get_runner
 
-    build_dir = private_build_dir(final)
-    (build_dir / f"{top}.v").write_text(source)
-    with environment(verilator_env()):
-        get_runner("verilator").build(
-            sources=[build_dir / f"{top}.v"],
-            hdl_toplevel=top,
-            build_dir=build_dir,
-            build_args=build_args,
-            always=True,
-            log_file=build_dir / "build.log",
-        )
-    return publish(build_dir, final)
+    with build_lock(final):
+        if (final / top).exists():  # built by another process while this one waited
+            return final
+        build_dir = private_build_dir(final)
+        (build_dir / f"{top}.v").write_text(source)
+        with environment(verilator_env()):
+            get_runner("verilator").build(
+                sources=[build_dir / f"{top}.v"],
+                hdl_toplevel=top,
+                build_dir=build_dir,
+                build_args=build_args,
+                always=True,
+                log_file=build_dir / "build.log",
+            )
+        return publish(build_dir, final)
 
 
 @contextlib.contextmanager

@@ -29,7 +29,7 @@ from ...model import Edge, EdgeConfig
 from ...model.beat import BEAT_FORMATS, RUN_COLUMNS, port_name
 from ...model.timing import setup_latency, start_clip_cycles
 from ..verification.commands import CLIP_FIELDS, COMMAND_FIELDS, EDGE_FIELDS, edge_command
-from .verilator import cache_dir, private_build_dir, publish, verilator_env
+from .verilator import build_lock, cache_dir, private_build_dir, publish, verilator_env
 
 TOP = "edgeaa_core"
 BEAT_FIELDS = len(RUN_COLUMNS)
@@ -215,23 +215,28 @@ def compile_harness(top: str, source: str, harness: str, optimize: str = "-O2") 
     final = cache_dir() / f"fast-{key}"
     if (final / "harness").exists():
         return final / "harness"
-    build_dir = private_build_dir(final)
-    exe = build_dir / "harness"
-    (build_dir / f"{top}.v").write_text(source)
-    (build_dir / f"{top}.vlt").write_text(lint_waivers(source, f"{top}.v"))
-    (build_dir / "harness.cpp").write_text(harness)
-    command = [
-        "verilator", "--cc", "--exe", "--build", "-j", "2", "-Wno-fatal", "--output-split", "0",
-        "--top-module", top, "-Mdir", str(build_dir / "obj"), "-CFLAGS", optimize,
-        "-o", str(exe), f"{top}.vlt", f"{top}.v", "harness.cpp",
-    ]  # fmt: skip
-    proc = subprocess.run(
-        command, cwd=build_dir, env=verilator_env(), capture_output=True, text=True, check=False
-    )
-    (build_dir / "build.log").write_text(proc.stdout + proc.stderr)
-    if proc.returncode != 0 or not exe.exists():
-        raise RuntimeError(f"Verilator build failed:\n{proc.stdout[-2000:]}{proc.stderr[-3000:]}")
-    return publish(build_dir, final) / "harness"
+    with build_lock(final):
+        if (final / "harness").exists():  # built by another process while this one waited
+            return final / "harness"
+        build_dir = private_build_dir(final)
+        exe = build_dir / "harness"
+        (build_dir / f"{top}.v").write_text(source)
+        (build_dir / f"{top}.vlt").write_text(lint_waivers(source, f"{top}.v"))
+        (build_dir / "harness.cpp").write_text(harness)
+        command = [
+            "verilator", "--cc", "--exe", "--build", "-j", "2", "-Wno-fatal", "--output-split", "0",
+            "--top-module", top, "-Mdir", str(build_dir / "obj"), "-CFLAGS", optimize,
+            "-o", str(exe), f"{top}.vlt", f"{top}.v", "harness.cpp",
+        ]  # fmt: skip
+        proc = subprocess.run(
+            command, cwd=build_dir, env=verilator_env(), capture_output=True, text=True, check=False
+        )
+        (build_dir / "build.log").write_text(proc.stdout + proc.stderr)
+        if proc.returncode != 0 or not exe.exists():
+            raise RuntimeError(
+                f"Verilator build failed:\n{proc.stdout[-2000:]}{proc.stderr[-3000:]}"
+            )
+        return publish(build_dir, final) / "harness"
 
 
 def edge_commands(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:
