@@ -17,7 +17,8 @@ full width; `implies`), `harness` (`FormalHarness`), one module per property fam
 ``pipe``, ``beat`` and ``minor``, `deltas` for the deltas core, `covers`), `run` (`Proof`,
 `PROOFS`, `DELTA_PROOFS`, `run_proof`, `main`) and the tile stages: `tile` (`TileHarness`,
 `TILE_PROOFS`, `run_tile_proof`), `accumulator` and `resolve` (their check groups and
-invariants), `tile_common` (what those share). `python -m edgeaa.sim.verification.formal [proof ...]` runs proofs.
+invariants), `tile_common` (what those share). `python -m edgeaa.sim.verification.formal
+[proof ...]` runs proofs.
 
 What each check group and cover states, the white-box helpers the inductions need, the
 faults, and the proofs' run times: docs/hardware.md, "Formal proofs" and "The harness, its
