@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .column import ArrayArith
+
 FILL_RULES = ("nonzero", "evenodd")
 # Cells of one pass's buffer: 512 KiB at int64 stays in cache (a 32 MiB pass ran the 2048 px
 # starburst 2.9 times slower, benchmarks/bench_accumulation.py).
@@ -38,15 +40,32 @@ class Window:
         return max(self.x1 - self.x0, 0)
 
 
+def nonzero_coverage(arith, sums, ifix):
+    """Non-zero: |sum| clamped at a full pixel."""
+    magnitude = arith.select(sums < 0, -sums, sums)
+    return arith.select(magnitude > ifix, ifix, magnitude)
+
+
+def evenodd_coverage(arith, sums, ifix):
+    """Even-odd: the sum folded with period 2 ifix (winding 2 is empty again)."""
+    folded = sums % (2 * ifix)
+    return arith.select(folded > ifix, 2 * ifix - folded, folded)
+
+
+def fill_coverage(arith, sums, evenodd, ifix):
+    """The fill rule on an arithmetic (`edgeaa.model.column`'s: `IntArith` on ints,
+    `ArrayArith` on arrays, the formal spec's `HdlArith` on Amaranth values, where `evenodd` is
+    a signal): coverage in [0, ifix] from winding-weighted sums."""
+    odd = evenodd_coverage(arith, sums, ifix)
+    return arith.select(evenodd, odd, nonzero_coverage(arith, sums, ifix))
+
+
 def fill(sums, rule: str, ifix: int):
-    """Coverage in [0, ifix] from winding-weighted sums: non-zero takes |sum| clamped at a
-    full pixel; even-odd folds the sum with period 2 ifix (winding 2 is empty again)."""
-    if rule == "nonzero":
-        return np.minimum(np.abs(sums), ifix)
-    if rule == "evenodd":
-        folded = np.mod(sums, 2 * ifix)
-        return np.where(folded > ifix, 2 * ifix - folded, folded)
-    raise ValueError(f"fill rule must be one of {', '.join(FILL_RULES)}, not {rule!r}")
+    """`fill_coverage` on numpy arrays for one rule of `FILL_RULES` (only that rule computed)."""
+    rules = {"nonzero": nonzero_coverage, "evenodd": evenodd_coverage}
+    if rule not in rules:
+        raise ValueError(f"fill rule must be one of {', '.join(FILL_RULES)}, not {rule!r}")
+    return rules[rule](ArrayArith, np.asarray(sums), ifix)
 
 
 def intensity_offset(coverage, frac_bits: int):

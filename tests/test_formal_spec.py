@@ -15,15 +15,19 @@ from __future__ import annotations
 import random
 import types
 
+import numpy as np
 import pytest
 from amaranth.hdl import Module, Signal, Value, signed, unsigned
 from amaranth.sim import Simulator
 
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
+from edgeaa.model.accumulate import FILL_RULES, fill, fill_coverage, intensity_offset
 from edgeaa.model.bank import bank_fields
 from edgeaa.model.column import IntArith, advance, column_areas, output_value, piece_end
 from edgeaa.model.step import run_edge_deltas
+from edgeaa.model.tile import TileConfig
 from edgeaa.sim.verification.formal import spec
+from edgeaa.sim.verification.formal.tile_common import SMALL_TILE
 
 CONFIGS = {
     "paper": EdgeConfig(),
@@ -263,4 +267,57 @@ def test_spec_deltas_column_is_the_model(name):
     sim.add_testbench(bench)
     sim.run()
     assert compared[0] > 100
+    assert not mismatches, f"seed {seed}: {len(mismatches)} mismatches, first {mismatches[:3]}"
+
+
+@pytest.mark.parametrize("name", ["small-tile", "default-tile"])
+def test_fill_on_amaranth_values_is_the_model(name):
+    """The resolve proof's pixel, `intensity_offset` of the model's `fill_coverage` on
+    Amaranth values (`spec.HdlArith`) in the width `formal.resolve` gives the exact prefix
+    sum, equals `fill` on arrays and `fill_coverage` on ints (`IntArith`) for both rules,
+    every |I_d| and sums at and around each multiple of ifix across the documented range and
+    twice it (fault ``wide_range``), plus a seeded sample."""
+    tile = SMALL_TILE if name == "small-tile" else TileConfig()
+    config, n = tile.config, tile.cell_bits
+    seed = 20261128 + len(name)
+    rng = random.Random(seed)
+    exact, evenodd = Signal(signed(n + 4), name="exact"), Signal(name="evenodd")
+    d = Signal(config.intensity_bits, name="d")
+    ifix = d << config.F
+    coverage = fill_coverage(spec.HdlArith(config), exact, evenodd, ifix)
+    m = Module()
+    wires = {"coverage": Signal(Value.cast(coverage).shape())}
+    wires["q"] = Signal(Value.cast(intensity_offset(coverage, config.F)).shape())
+    m.d.comb += [
+        wires["coverage"].eq(coverage),
+        wires["q"].eq(intensity_offset(coverage, config.F)),
+    ]
+    top = (1 << (n + 3)) - 1
+    mismatches, compared = [], [0]
+
+    def samples(step):
+        limit = 2 * tile.winding_limit * step
+        for k in range(-limit // step - 1, limit // step + 2):
+            yield from (k * step + j for j in (-1, 0, 1, step // 2))
+        yield from (rng.randrange(-top - 1, top + 1) for _ in range(64))
+
+    async def bench(ctx):
+        for magnitude in range(1, config.full_scale + 1):
+            step = magnitude << config.F
+            ctx.set(d, magnitude)
+            for rule in FILL_RULES:
+                ctx.set(evenodd, rule == "evenodd")
+                for value in (v for v in samples(step) if -top - 1 <= v <= top):
+                    ctx.set(exact, value)
+                    want = int(fill(np.array([value]), rule, step)[0])
+                    ints = fill_coverage(IntArith(), value, rule == "evenodd", step)
+                    got = ctx.get(wires["coverage"]), ctx.get(wires["q"])
+                    compared[0] += 1
+                    if got != (want, intensity_offset(want, config.F)) or ints != want:
+                        mismatches.append((magnitude, rule, value, got, want, ints))
+
+    sim = Simulator(m)
+    sim.add_testbench(bench)
+    sim.run()
+    assert compared[0] > 1000
     assert not mismatches, f"seed {seed}: {len(mismatches)} mismatches, first {mismatches[:3]}"

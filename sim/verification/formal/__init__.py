@@ -12,10 +12,13 @@ rename there is an AttributeError when the harness is built, never a vacuous pro
 deltas core), whose ``failed`` lists the failing properties and induction helpers.
 
 Files: `spec` (the model-side specification: fold, window, bank invariants, one column in
-full width), `harness` (`FormalHarness`), one module per property family (`stream`, `count`,
-`bounds`, `pipeline` for ``pipe``, ``beat`` and ``minor``, `deltas` for the deltas core,
-`covers`), `run` (`Proof`, `PROOFS`, `DELTA_PROOFS`, `run_proof`, `main`) and `tile` (the
-tile stages). `python -m edgeaa.sim.verification.formal [proof ...]` runs proofs.
+full width; `implies`), `harness` (`FormalHarness`), one module per property family
+(`stream`, also the one hold rule of every proof, `count`, `bounds`, `pipeline` for
+``pipe``, ``beat`` and ``minor``, `deltas` for the deltas core, `covers`), `run` (`Proof`,
+`PROOFS`, `DELTA_PROOFS`, `run_proof`, `main`) and the tile stages: `tile` (`TileHarness`,
+`TILE_PROOFS`, `run_tile_proof`), `accumulator` and `resolve` (their check groups and
+invariants), `tile_common` (what those share). `python -m edgeaa.sim.verification.formal
+[proof ...]` runs proofs.
 
 What each check group and cover states, the white-box helpers the inductions need, the
 faults, and the proofs' run times: docs/hardware.md, "Formal proofs" and "The harness, its

@@ -21,6 +21,7 @@ from .deltas import DELTA_CHECKS
 from .deltas import check as check_deltas
 from .pipeline import check as check_pipeline
 from .stream import check as check_stream
+from .stream import held as hold_flag
 
 __all__ = ["CHECKS", "COVERS", "DELTA_CHECKS", "FAULTS", "LINE_CHECKS", "FormalHarness", "capacity"]
 
@@ -151,8 +152,7 @@ class FormalHarness(Elaboratable):
         )
         ctx.payload = Value.cast(out.payload)
         ctx.error = core.error
-        held = Signal()  # a beat was valid and not taken in the previous clock
-        m.d.sync += held.eq(out.valid & ~out.ready)
+        held = hold_flag(m, out)  # a beat was valid and not taken in the previous clock
         if self.fault == "stall_payload":
             ctx.payload = ctx.payload ^ held
         if self.fault == "silent_drop":

@@ -1,0 +1,404 @@
+# amaranth: UnusedElaboratable=no
+"""The accumulator's ``deltas`` and ``sums`` groups and their invariants (`check_cells`), for
+`tile.TileHarness`.
+
+``accumulator`` ``deltas``
+    One symbolic cell (X, Y) of the tile (``AnyConst``). Beats are any four cells (repeats
+    included). Asserted: (X, Y) is sent after an end, before the accumulator takes another
+    op, when a nonzero delta was kept there since the previous end (the model's
+    `tile_cells`: the origin of the last tile op subtracted, a cell left of the tile moved
+    into column 0), and at most once per end (nothing lost, nothing doubled); the cells come
+    in rows, each row's cells in consecutive columns from its first (``start``), the rows
+    ascending; a row's first pass since the last tile or flush op starts at column 0 and goes
+    on to the last column (what the resolve's written rows need); a row stops before its
+    last column only when the sums it sent add to zero (modulo ``2**cell_bits``), so right
+    of it the prefix sum is zero; ``first`` on the polygon's first cell only, a row's first,
+    with the end's intensity, I_out and fill rule; each tile and flush op comes out once, in
+    order, with its background; no other op code is sent.
+``accumulator`` ``sums``
+    The shadow of cell (X, Y): the exact sum of every delta of an accepted beat placed there
+    (back-to-back cells to one address through the read-modify-write forwarding) since
+    (X, Y) was last sent, modulo ``2**cell_bits`` (a cell's width). Asserted: each (X, Y)
+    sent carries the shadow, all ``cell_bits`` bits, and the shadow restarts from 0 (the
+    clear).
+
+Invariants. ``sums`` (`_memory_state`): the memory's row of (X, Y) plus stage B's delta for
+its address plus the output's sum while (X, Y) waits in the output register equals the
+shadow; stage C's sum is in the memory (written the clock before), stage B's read is the
+memory's row unless stage C wrote that row the clock before (then B takes C's sum: the
+forwarding), stage B only in ACC, stage C never in SCAN, a cell in the output register is
+cleared in the memory and stage B is then empty, stage B's delta is zero when it is empty (a
+clear adds it), and a nonzero (X, Y) is hit (ACC) or owed (after an end) or waits in the
+output register (so the read past a row's ``hi``, not sent, clears a zero). The scan's
+(`_scan_state`, in both groups): a beat taken in part (``done``) is held by the source in
+ACC, and its cells taken are the ghost's; in ACC a hit (X, Y) lies in a touched row and in
+the span ``lo .. hi``, and any row is touched exactly when the ghost kept a delta; in WAIT
+and SCAN the ghost saw no beat and no beat is taken in part; (X, Y) owed waits in the output
+register (ACC), lies in the span of a touched row (WAIT), or waits, or lies in the span of a
+row still to scan or ahead of the scan in the current row (SCAN), and a cell still to read
+has not been sent since the end; the rows left to scan are above the scan row; SCAN's first
+read has not happened exactly while the ``first`` register is set (nothing in the output
+register, a row's start due), else a cell waits there or, after a row stopped at ``hi``, the
+next row's start is due above the last cell sent; a row's start is at ``lo`` if the row was
+seen (the ghost's rows begun since the tile or flush op), else at column 0; the scan
+position follows the waiting cell; ``decide`` only with that cell at ``hi`` below the last
+column; the accumulator's ``seen`` is the ghost's rows plus the row whose start is still to
+send; the waiting cell's ``first`` is the ghost's, a row's start, and follows the last cell
+sent; a row's first pass goes on (the waiting cell is the next column, and the scan stays in
+that row and reads it whole); ``rsum`` is the ghost's sum of the row's cells sent, and the
+last row sent is closed (at its last column, or that sum zero) whenever no cell of it is
+still to come; the end's fields are the ghost's; a tile or flush op waits exactly when the
+ghost's does, with its code and background. Both: the origin is the ghost's. Each follows
+from all of them in the clock before (`TILE_PROOFS` runs k = 2).
+"""
+
+from __future__ import annotations
+
+import types
+
+from amaranth.asserts import AnyConst
+from amaranth.hdl import Assert, Cat, Mux, Signal
+
+from ....model.beat import CELLS
+from ....model.tile import RESOLVE_OPS
+from .spec import all_, implies
+from .tile_common import CELL_OP, OP, When, any_, bit, follows, state_checks, track_rows
+
+__all__ = ["check_cells"]
+
+
+def check_cells(m, tile, dut, payload, held_in, read, checks, *, invariants, covers):
+    """The ``deltas`` and ``sums`` groups of `checks` on `dut` (a `TileAccumulator`) given the
+    source's `payload` and its held flag `held_in`; with `invariants`, also the invariants
+    that make them inductive (`read`: the harness's reader of the memory, for ``sums``)."""
+    s = _accumulator_deltas(m, tile, dut, payload, dut.cells, checks)
+    s.held_in = held_in
+    if invariants:
+        _accumulator_invariants(m, tile, dut, read, s, checks, covers)
+
+
+def _placed(tile, beat, origin):
+    """Per cell of `beat`: (kept, tile x, tile y, delta), the model's `tile_cells`."""
+    out = []
+    for name in CELLS:
+        cell = beat[name]
+        tx, ty = cell.x - origin[0], cell.y - origin[1]
+        keep = (ty >= 0) & (ty < tile.height) & (tx < tile.width) & (cell.delta != 0)
+        out.append((keep, Mux(tx < 0, 0, tx), ty, cell.delta))
+    return out
+
+
+def _ghost_cells(m, tile, dut, src, s, checks):
+    """The ghost takes a beat's nonzero cells (of the source's payload `src`) one a clock, in
+    cell order, in the clocks the accumulator takes a cell (``busy`` outside a scan with a
+    beat offered; the port's meaning), and asserts that the beat is taken with its last: so
+    it counts every cell of every beat taken, once. Returns, per cell, whether the ghost
+    counts it this clock and where it lands (kept, x, y, delta: `_placed`)."""
+    ops = dut.ops
+    done = Signal(4, name="ghost_done")
+    pending = Signal(4, name="ghost_pending")
+    m.d.comb += pending.eq(Cat(*(src.beat[c].delta != 0 for c in CELLS)) & ~done)
+    sel = (pending & -pending)[:4]
+    last = (pending & ~sel) == 0
+    taking = dut.busy & ~dut.scanning & ops.valid & (src.op == OP["beat"])
+    with m.If(taking):
+        m.d.sync += done.eq(Mux(last, 0, done | sel))
+    take_beat = ops.valid & ops.ready & (src.op == OP["beat"])
+    if "deltas" in checks or "sums" in checks:
+        m.d.comb += Assert(take_beat == (taking & last), "cells: a beat taken with its last cell")
+    s.ghost_done = done
+    placed = _placed(tile, src.beat, s.origin)
+    return [(taking & sel[j] & keep, x, y, d) for j, (keep, x, y, d) in enumerate(placed)]
+
+
+def _accumulator_deltas(m, tile, dut, src, cells, checks):
+    """The ``deltas`` group (module docstring); `src` is the source's payload."""
+    ops = dut.ops
+    s = types.SimpleNamespace(
+        X=Signal(tile.x_bits, name="track_x"),
+        Y=Signal(tile.y_bits, name="track_y"),
+        origin=[Signal.like(src.x0, name="origin_x"), Signal.like(src.y0, name="origin_y")],
+        shadow=Signal(tile.cell_bits, name="shadow"),  # modulo 2**cell_bits, as a cell
+        hit=Signal(name="cell_hit"),  # a kept delta placed at (X, Y) since the last end
+        any=Signal(name="any_touched"),
+        owed=Signal(name="owed"),
+        may=Signal(name="may_send"),  # (X, Y) not sent since the last end, no op taken since
+        first=Signal(name="first_due"),
+        seen=Signal(tile.height, name="rows_seen"),  # rows begun since the tile or flush op
+        open=Signal(name="row_open"),  # a row's first pass, not yet at its last column
+        row_sum=Signal(tile.cell_bits, name="row_sum"),  # the row's sums sent, from its start
+        params={n: Signal.like(src[n], name=f"end_{n}") for n in ("intensity", "i_out", "evenodd")},
+        passing=Signal(name="pass_pending"),
+        code=Signal.like(cells.payload.op, name="pass_code"),
+        background=Signal.like(src.background, name="pass_background"),
+        last=[Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")],
+    )
+    m.d.comb += [s.X.eq(AnyConst(tile.x_bits)), s.Y.eq(AnyConst(tile.y_bits))]
+    s.cells = cells
+    take = ops.valid & ops.ready
+    is_op = {name: take & (src.op == code) for name, code in OP.items()}
+    counted = _ghost_cells(m, tile, dut, src, s, checks)
+    hits = sum(Mux(k & (x == s.X) & (y == s.Y), d, 0) for k, x, y, d in counted)
+    out, sent = cells.payload, cells.valid & cells.ready
+    tracked = sent & (out.op == CELL_OP["cell"]) & (out.x == s.X) & (out.y == s.Y)
+    base = Mux(tracked, 0, s.shadow)
+    m.d.sync += [
+        s.shadow.eq((base + hits)[: tile.cell_bits]),
+        s.hit.eq(s.hit | any_(k & (x == s.X) & (y == s.Y) for k, x, y, _ in counted)),
+        s.any.eq(s.any | any_(k for k, _, _, _ in counted)),
+    ]
+    with m.If(is_op["end"]):
+        m.d.sync += [s.owed.eq(s.hit), s.first.eq(s.any), s.hit.eq(0), s.any.eq(0)]
+        m.d.sync += [reg.eq(src[name]) for name, reg in s.params.items()]
+    with m.If(is_op["tile"]):
+        m.d.sync += [s.origin[0].eq(src.x0), s.origin[1].eq(src.y0)]
+    condition = implies(take, ~s.owed | tracked)
+    if "deltas" in checks:
+        m.d.comb += Assert(condition, "deltas: op taken before a cell")
+    if "sums" in checks:
+        same = out.sum[: tile.cell_bits] == s.shadow
+        m.d.comb += Assert(implies(tracked, same), "sums: cell sum")
+    _accumulator_outputs(m, tile, s, out, sent, tracked, "deltas" in checks)
+    with m.If(tracked):
+        m.d.sync += s.owed.eq(0)
+    # a cell sent with an end taken is the scan's before
+    m.d.sync += s.may.eq(is_op["end"] | (s.may & ~tracked & ~take))
+    passing = is_op["tile"] | is_op["flush"]
+    if "deltas" in checks:
+        overtaken = implies(passing, ~s.passing | (sent & (out.op != CELL_OP["cell"])))
+        m.d.comb += Assert(overtaken, "deltas: tile or flush overtaken")
+    with m.If(passing):
+        code = Mux(src.op == OP["tile"], CELL_OP["tile"], CELL_OP["flush"])
+        m.d.sync += [s.passing.eq(1), s.code.eq(code), s.background.eq(src.background)]
+        m.d.sync += s.seen.eq(0)
+    return s
+
+
+def _accumulator_invariants(m, tile, dut, read, s, checks, covers):
+    """The invariants of the groups in `checks` (`_memory_state`, `_scan_state`)."""
+    origin = zip(dut.observe.origin, s.origin, strict=True)
+    m.d.comb += Assert(all_(a == b for a, b in origin), "state: origin")
+    if "sums" in checks:
+        _memory_state(m, tile, dut, read, s, covers)
+    _scan_state(m, tile, dut, s, covers)  # the sums group needs it too (a scan's extra read)
+
+
+def _memory_state(m, tile, dut, read, s, covers):
+    """Invariants of the accumulator's state (what makes the groups inductive): the read-
+    modify-write stages agree with the memory, the output register's cell was cleared, and
+    the tracked cell's shadow is the memory's row plus stage B's delta for it plus the
+    output's sum while the cell waits there. Each is implied by the ones before in the clock
+    before."""
+    obs, out, st = dut.observe, s.cells.payload, dut.observe.stage
+    o = obs.o
+    pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
+    o_addr, t_addr = Cat(o["x"], o["y"]), Cat(s.X, s.Y)
+    forwarded = st.c_valid & (st.c_addr == st.b_addr)
+    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    # after a reset with deltas in the memory (``check`` and ``dirty``, then CLEAR) the
+    # memory holds what the reset left until the clear pass has zeroed it
+    clearing = obs.in_clear | (obs.check & obs.dirty)
+    cleared_to = Cat(obs.scan_x, obs.scan_y)  # CLEAR has zeroed the cells below
+    checks = [
+        (When(pending, read(o_addr) == 0), "state: output cell cleared"),
+        (When(clearing, ~st.b_valid & ~st.c_valid), "state: no write pending in a clear"),
+        (
+            When(obs.in_clear & (t_addr < cleared_to), read(t_addr) == 0),
+            "state: the clear pass zeroed the cells below it",
+        ),
+        (
+            When(~obs.dirty & ~obs.in_clear, ~st.b_valid & ~st.c_valid & (read(t_addr) == 0)),
+            "state: a clean memory",
+        ),
+        (When(obs.check | obs.in_clear, s.shadow == 0), "state: no delta since a reset"),
+        (When(s.shadow != 0, obs.dirty | waiting), "state: a delta kept is dirty"),
+        (When(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
+        (When(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty"),
+        (When(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
+        (When(st.c_valid, read(st.c_addr) == st.c_sum), "state: stage C written"),
+        (
+            When(st.b_valid & ~forwarded, obs.read.data == read(st.b_addr)),
+            "state: stage B read",
+        ),
+        # a cell is taken only as the output advances
+        (When(pending, ~st.b_valid), "state: stage B empty while a cell waits"),
+    ]
+    stage_b = Mux(st.b_valid & (st.b_addr == t_addr), st.b_delta, 0)
+    total = read(t_addr) + stage_b + Mux(waiting, out.sum, 0)
+    checks.append((When(~clearing, s.shadow == total[: len(s.shadow)]), "state: shadow"))
+    # so a cell outside the scan span is zero (the read after a row's hi clears one)
+    owed = Mux(obs.in_acc, s.hit, s.owed) | waiting
+    checks.append((When(s.shadow != 0, owed), "state: a nonzero cell is owed"))
+    state_checks(m, checks, covers, prefix="")
+
+
+def _closed(tile, s):
+    """The last row sent ended at its last column or its cells sent sum to zero (modulo
+    ``2**cell_bits``): right of it the prefix sum is zero, so the row may stop there."""
+    return (s.last[0] == tile.width - 1) | (s.row_sum == 0)
+
+
+def _scan_state(m, tile, dut, s, covers):
+    """Invariants of the accumulator's control against the ``deltas`` ghost: while the
+    accumulator takes ops, a cell hit lies in a touched row and in the span ``lo .. hi``;
+    after an end, an owed cell waits in the output register or lies in the span of a row still
+    to scan or ahead of the scan in the current row, and a cell still to read has not been
+    sent; the scan moves up through the rows in order, a row from column 0 (not seen since the
+    tile started) or from ``lo`` (seen), the output register holding the cell before the scan
+    position; a row's first pass goes on to the last column; ``seen`` is the ghost's rows
+    plus a row whose first cell is still to send; a tile or flush op waiting there is the
+    ghost's. Each follows from all of them in the clock before."""
+    obs, o = dut.observe, dut.observe.o
+    scan, last = dut.scanning, tile.width - 1
+    touched, scan_x, scan_y, lo, hi = obs.touched, obs.scan_x, obs.scan_y, obs.lo, obs.hi
+    row_start, partial, decide = obs.row_start, obs.partial, obs.decide
+    pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
+    passing = obs.o_valid & (o["op"] != CELL_OP["cell"])
+    row_left = touched.bit_select(s.Y, 1)
+    in_span = (lo <= s.X) & (hi >= s.X)
+    ahead = (scan_y == s.Y) & (scan_x <= s.X)
+    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    above = all_(~touched[r] | (scan_y < r) for r in range(tile.height))
+    due = Mux(scan & row_start, bit(tile, scan_y), 0) | Mux(
+        pending & o["start"], bit(tile, o["y"]), 0
+    )
+    current = scan & ~row_start & (scan_y == o["y"]) & ~decide  # the waiting cell's row goes on
+    done, src = obs.cell.done, dut.ops
+    # the ghost and the accumulator as a reset leaves them: nothing kept, owed or waiting
+    quiet = all_(
+        [~s.hit, ~s.any, ~s.owed, ~s.first, ~s.passing, ~s.open, done == 0, ~obs.o_valid]
+        + [touched == 0, obs.seen == 0, s.seen == 0, _closed(tile, s)]
+    )
+    checks = [
+        (When(obs.check, quiet & obs.in_acc & (scan_x == 0) & (scan_y == 0)), "after a reset"),
+        (When(obs.in_clear, quiet & obs.dirty), "in the clear pass"),
+        (When((touched != 0) | scan | s.hit, obs.dirty), "dirty"),
+        (
+            When(done != 0, s.held_in & obs.in_acc & src.valid & (src.payload.op == OP["beat"])),
+            "a beat taken in part is held",
+        ),
+        (done == s.ghost_done, "the beat's cells taken"),
+        (
+            When(obs.in_acc, implies(s.hit, row_left & in_span) & (s.any == (touched != 0))),
+            "acc rows",
+        ),
+        (When(~obs.in_acc, ~s.hit & ~s.any & (done == 0)), "no beat after an end"),
+        (When(obs.in_acc, implies(s.owed, waiting)), "owed in ACC"),
+        (When(obs.in_acc & ~pending, ~s.first), "first in ACC"),
+        (When(obs.in_acc & pending, touched == 0), "no beat while the last cell waits"),
+        (When(obs.in_wait, ~obs.o_valid & obs.first & s.may), "WAIT output"),
+        (When(obs.in_wait, implies(s.owed, row_left & in_span)), "owed in WAIT"),
+        (When(obs.in_wait, s.first == (touched != 0)), "WAIT"),
+        (When(scan, implies(s.owed, waiting | ((row_left | ahead) & in_span))), "owed in SCAN"),
+        (When(scan & (row_left | ahead), s.may), "not sent yet in SCAN"),
+        (When(waiting, s.may), "waiting, not sent"),
+        (When(scan, above), "rows above the scan"),
+        (When(decide, scan & pending & partial & (o["x"] == hi) & (hi != last)), "decide"),
+        (When(scan & obs.first, ~obs.o_valid & s.first & row_start), "SCAN start"),
+        (When(scan & ~obs.first, pending | (~obs.o_valid & row_start)), "SCAN output"),
+        (When(scan & ~obs.o_valid & ~obs.first, scan_y > s.last[1]), "scan after a stop"),
+        (
+            When(
+                scan & row_start,
+                (scan_x == Mux(partial, lo, 0)) & (partial == s.seen.bit_select(scan_y, 1)),
+            ),
+            "row start",
+        ),
+        (
+            When(
+                scan & pending,
+                Mux(
+                    row_start,
+                    (o["x"] == last) & (scan_y > o["y"]),
+                    (scan_x == o["x"] + 1) & (scan_y == o["y"]),
+                ),
+            ),
+            "scan after the output",
+        ),
+        (obs.seen == (s.seen | due), "rows seen"),
+        (obs.rsum.as_unsigned() == s.row_sum, "row sum"),
+        (When(obs.in_acc & pending, o["x"] == last), "the scan's last cell at the last column"),
+        (
+            When(
+                (obs.in_acc & ~pending) | obs.in_wait | (scan & ~obs.o_valid) | passing,
+                _closed(tile, s),
+            ),
+            "rows closed",
+        ),
+        (When(pending & o["start"], _closed(tile, s)), "rows closed before a start"),
+        (When(pending, o["first"] == s.first), "output first"),
+        (When(pending & o["first"], o["start"]), "output first starts a row"),
+        (
+            When(
+                pending & o["start"] & ~s.seen.bit_select(o["y"], 1),
+                (o["x"] == 0) & current & ~partial,
+            ),
+            "first pass from column 0",
+        ),
+        (
+            When(pending & ~o["first"], follows(o["x"], o["y"], o["start"], *s.last)),
+            "output after the last sent",
+        ),
+        (
+            When(
+                s.open,
+                pending
+                & ~o["start"]
+                & (o["y"] == s.last[1])
+                & (o["x"] == s.last[0] + 1)
+                & implies(o["x"] != last, current & ~partial),
+            ),
+            "first pass goes on",
+        ),
+        (all_(obs.params[n] == r for n, r in s.params.items()), "polygon fields"),
+        (When(obs.o_valid, o["op"] < len(RESOLVE_OPS)), "output op"),
+        (s.passing == passing, "tile or flush waiting"),
+        (When(passing, o["op"] == s.code), "tile or flush code"),
+        (
+            When(passing & (o["op"] == CELL_OP["tile"]), obs.background == s.background),
+            "tile background",
+        ),
+        (obs.in_acc | obs.in_wait | scan | obs.in_clear, "a known state"),
+    ]
+    state_checks(m, checks, covers)
+
+
+def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
+    """What each output transfer must be (the ``deltas`` group's output side, asserted when
+    `check`), and the ghost's record of it."""
+    is_cell = sent & (out.op == CELL_OP["cell"])
+    after_last = follows(out.x, out.y, out.start, *s.last)
+    seen = s.seen.bit_select(out.y, 1)
+    checks = [
+        (implies(tracked, s.may), "deltas: a cell sent twice or not after an end"),
+        (implies(is_cell, out.first == s.first), "deltas: first flag"),
+        (implies(is_cell & out.first, out.start), "deltas: first cell not a row's first"),
+        (implies(is_cell & ~out.first, after_last), "deltas: cells out of order"),
+        (
+            implies(is_cell & out.start, ~s.open & (seen | (out.x == 0))),
+            "deltas: a row's first pass not whole",
+        ),
+        (implies(is_cell, all_(out[k] == r for k, r in s.params.items())), "deltas: fields"),
+        (
+            implies(sent & ~is_cell, s.passing & ~s.owed & ~s.open),
+            "deltas: tile or flush not taken",
+        ),
+        (
+            implies((is_cell & out.start) | (sent & ~is_cell), _closed(tile, s)),
+            "deltas: a row stopped before its last column on a nonzero sum",
+        ),
+        (implies(sent & ~is_cell, out.op == s.code), "deltas: tile or flush code"),
+        (
+            implies(sent & (out.op == CELL_OP["tile"]), out.background == s.background),
+            "deltas: tile background",
+        ),
+        (implies(sent, out.op < len(RESOLVE_OPS)), "deltas: unknown op code sent"),
+    ]
+    for condition, message in checks if check else ():
+        m.d.comb += Assert(condition, message)
+    track_rows(m, tile, out, is_cell, s.last, s.seen, s.open)
+    with m.If(is_cell):
+        m.d.sync += s.first.eq(0)
+        m.d.sync += s.row_sum.eq(Mux(out.start, 0, s.row_sum) + out.sum)
+    with m.If(sent & ~is_cell):
+        m.d.sync += s.passing.eq(0)

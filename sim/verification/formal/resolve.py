@@ -1,0 +1,234 @@
+# amaranth: UnusedElaboratable=no
+"""The resolve's ``pixels`` group and its invariants (`check_pixels`), for `tile.TileHarness`.
+
+``resolve`` ``pixels``
+    The resolve's input is assumed to be what the accumulator is proved to send (rows of
+    consecutive cells from a ``start``, ascending, a row's first pass since the tile or flush
+    op whole, ``first`` on a polygon's first, the polygon's fields constant). Each cell's
+    sum is the residue modulo ``2**cell_bits`` of a difference of two exact prefix sums
+    chosen by the harness (``AnySeq``): the exact prefix sum of the row up to the cell (from
+    the row's ``start``), assumed within the documented range ``[-L, L)``, ``L = 2**(h + 1) ifix``
+    (`TileConfig.winding_limit`; polygons with ``I_in == I_out`` are not limited, as in the
+    model). One symbolic pixel (X, Y) and its shadow: the background of the last tile op,
+    then for each cell (X, Y) taken the model's own `composite` of `intensity_offset` of the
+    model's `fill_coverage` of the exact prefix sum, computed on Amaranth values in full
+    width. Asserted: a flush sends every pixel once, in raster order, ``last`` on the last,
+    and pixel (X, Y) equals the shadow; no pixel is sent outside a flush. So the wrapping
+    cells, the wrapping prefix sum and the ``h + 1``-step even-odd fold are exact in the
+    documented range (no overflow); outside it they are not (fault ``wide_range``).
+
+Invariants (`_resolve_invariants`): (X, Y) not in flight holds the shadow: its pixel memory
+row if its row was written since the tile started or in the row's first pass ((X, Y) taken
+while the row is open, or the row's end in flight), else the background; a row begun since
+the tile or flush op (not in a flush) is written unless its first pass is open or its end in
+flight, and the last cell's row was begun; in a flush the frame equals that until (X, Y) is
+read and the waiting pixel (X, Y) equals the frame, the shadow being the background; the
+row's prefix sum register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells
+in taken order, none after the last taken and none in a flush, with a pixel waiting or
+before a polygon's first cell (a cell's position as read from the resolve's delay memory at
+the address its stage names, the last stage's the delay line's read port data:
+`_resolve_stages`); the flush and output positions and ``last`` follow the pixel count; the
+background is the shadow's. A cell in flight has no invariant of its own: with k above the
+resolve's latency every cell the induction step sees written was taken within the k clocks
+it assumes, from a state where the invariants held (the delay lines' words it reads were
+written in them too).
+"""
+
+from __future__ import annotations
+
+import types
+
+from amaranth.asserts import AnyConst, AnySeq
+from amaranth.hdl import Assert, Assume, Cat, Const, Mux, Signal, signed
+
+from ....model.accumulate import composite, fill_coverage, intensity_offset
+from ....model.tile import RESOLVE_OPS
+from .spec import HdlArith, all_, implies
+from .tile_common import CELL_OP, When, any_, follows, memory_reader, state_checks, track_rows
+
+__all__ = ["check_pixels"]
+
+
+def check_pixels(m, tile, dut, payload, read, *, wide, invariants, covers):
+    """The ``pixels`` group on `dut` (a `TileResolve`) given the source's `payload`; with
+    `invariants`, also the invariants that make it inductive (`read`: the harness's reader of
+    the pixel memory). ``wide``: fault ``wide_range``."""
+    g = _resolve_pixels(m, tile, dut.cells, payload, dut.pixels, wide=wide)
+    if invariants:
+        _resolve_invariants(m, tile, dut, read, g, covers)
+
+
+def _resolve_source(m, tile, cells, src, wide):
+    """Assumptions on the resolve's input (what the accumulator is proved to send; `src`, the
+    source's payload) and the exact prefix sums; returns (the ghost of the input: ``exact``
+    the exact prefix of the cell taken now, ``prev`` the last one, ``last``, ``row_open``,
+    ``need_first``; d; a cell taken)."""
+    c = src
+    take = cells.valid & cells.ready
+    is_cell = c.op == CELL_OP["cell"]
+    last = [Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")]
+    params = {n: Signal.like(c[n], name=f"poly_{n}") for n in ("intensity", "i_out", "evenodd")}
+    seen = Signal(tile.height, name="rows_seen")  # rows passed since the tile or flush op
+    row_open = Signal(name="row_open")  # a row's first pass, not yet at its last column
+    need_first = Signal(init=1, name="need_first")
+    well_formed = [
+        c.op < len(RESOLVE_OPS),
+        implies(is_cell, c.first | (~need_first & follows(c.x, c.y, c.start, *last))),
+        implies(is_cell & c.first, c.start),
+        implies(is_cell & c.start, ~row_open & (seen.bit_select(c.y, 1) | (c.x == 0))),
+        implies(is_cell & ~c.first, all_(c[n] == r for n, r in params.items())),
+        implies(~is_cell, ~row_open),
+    ]
+    with m.If(cells.valid):
+        m.d.comb += Assume(all_(well_formed), "source: cells as the accumulator sends them")
+    track_rows(m, tile, c, take & is_cell, last, seen, row_open)
+    with m.If(take & is_cell):
+        m.d.sync += need_first.eq(0)
+        with m.If(c.first):
+            m.d.sync += [r.eq(c[n]) for n, r in params.items()]
+    with m.If(take & ~is_cell):
+        m.d.sync += [need_first.eq(1), seen.eq(0)]
+    n = tile.cell_bits
+    exact, prev = Signal(signed(n + 4), name="exact"), Signal(signed(n + 4), name="exact_prev")
+    m.d.comb += exact.eq(AnySeq(n + 4))
+    d = Mux(c.intensity >= c.i_out, c.intensity - c.i_out, c.i_out - c.intensity)
+    limit = (tile.winding_limit * (2 if wide else 1)) * (d << tile.config.F)
+    residue = (exact - Mux(c.start, 0, prev))[:n]
+    in_range = (d == 0) | ((exact >= -limit) & (exact < limit))
+    with m.If(cells.valid & is_cell):
+        m.d.comb += Assume(in_range & (c.sum[:n] == residue), "source: exact sums")
+    with m.If(take & is_cell):
+        m.d.sync += prev.eq(exact)
+    ghost = types.SimpleNamespace(
+        last=last, seen=seen, row_open=row_open, need_first=need_first, prev=prev, exact=exact
+    )
+    return ghost, d, take & is_cell
+
+
+def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
+    """The ``pixels`` group (module docstring); `src` is the source's payload."""
+    config, c = tile.config, src
+    g, d, took = _resolve_source(m, tile, cells, src, wide)
+    exact = g.exact
+    X, Y = Signal(tile.x_bits, name="track_x"), Signal(tile.y_bits, name="track_y")
+    m.d.comb += [X.eq(AnyConst(tile.x_bits)), Y.eq(AnyConst(tile.y_bits))]
+    bits = config.intensity_bits
+    value, frame, background = (Signal(bits, name=n) for n in ("value", "frame", "background"))
+    take = cells.valid & cells.ready
+    ifix = d << config.F
+    coverage = fill_coverage(HdlArith(config), exact, c.evenodd, ifix)
+    q = intensity_offset(coverage, config.F)
+    new = composite(value, q, c.intensity, d)
+    with m.If(took & (c.x == X) & (c.y == Y) & (d != 0)):
+        m.d.sync += value.eq(new)
+    with m.If(take & (c.op == CELL_OP["tile"])):
+        m.d.sync += [value.eq(c.background), background.eq(c.background)]
+    flushing = Signal(name="flushing_h")
+    count = Signal(range(tile.pixels), name="pixel_count")
+    p, sent = pixels.payload, pixels.valid & pixels.ready
+    mine = (p.x == X) & (p.y == Y)
+    checks = [
+        (implies(sent, flushing), "pixels: a pixel outside a flush"),
+        (implies(sent, (p.x | (p.y << tile.x_bits)) == count), "pixels: raster order"),
+        (implies(sent, p.last == (count == tile.pixels - 1)), "pixels: last flag"),
+        (implies(sent & mine, p.value == frame), "pixels: value"),
+    ]
+    for condition, message in checks:
+        m.d.comb += Assert(condition, message)
+    with m.If(sent):
+        m.d.sync += count.eq(count + 1)
+        with m.If(p.last):
+            m.d.sync += flushing.eq(0)
+    # after the pixel: a flush may be taken in the clock its predecessor's last pixel goes
+    with m.If(take & (c.op == CELL_OP["flush"])):
+        m.d.sync += [frame.eq(value), value.eq(background), flushing.eq(1), count.eq(0)]
+    g.__dict__.update(
+        X=X, Y=Y, value=value, frame=frame, background=background, flushing=flushing, count=count
+    )
+    g.pixels = pixels
+    return g
+
+
+def _resolve_stages(m, dut):
+    """The resolve's stages as the invariants see them (each with ``valid``, ``x``, ``y``, ...):
+    a stage's own registers, and the values it carries in the resolve's delay lines
+    (``observe.delays``) as read from the delay memory at the address the stage names
+    (``delayed``; a combinational read port of the harness's each). The last stage's carried
+    values are the delay lines' read ports' data, what its write uses."""
+    delays = dut.observe.delays
+    readers = {name: memory_reader(m, mem) for name, mem in delays.items()}
+    views = []
+    for st in dut.observe.stages:
+        fields = {k: v for k, v in vars(st).items() if k != "delayed"}
+        for name, address in getattr(st, "delayed", {}).items():
+            word = readers[name](address)
+            fields.update((k, word[k]) for k in delays[name].shape.members)
+        views.append(types.SimpleNamespace(**fields))
+    return views
+
+
+def _resolve_invariants(m, tile, dut, read, g, covers):
+    """Invariants of the resolve's state against the ``pixels`` ghost (what makes the group
+    inductive, with k above the pipeline's latency: a cell in flight is written within it)."""
+    obs = dut.observe
+    stages, written = _resolve_stages(m, dut), obs.written
+    busy = any_(st.valid for st in stages)
+    flush = dut.flushing
+    last_pos = Cat(*g.last)
+    tracked = Cat(g.X, g.Y)
+
+    def in_flight(position):
+        return any_(st.valid & (Cat(st.x, st.y) == position) for st in stages)
+
+    written_y = written.bit_select(g.Y, 1)
+    pixel = read(tracked)
+    shown = Mux(written_y, pixel, obs.background)  # what a read of (X, Y) gives
+    row_end = Cat(Const(tile.width - 1, tile.x_bits), g.Y)
+    # written in this pass of its row, the row not yet marked written: the row's end is in
+    # flight, or the row is still open and (X, Y) was taken
+    row_open = (g.last[1] == g.Y) & g.row_open & ~g.need_first
+    done = in_flight(row_end) | (row_open & (g.last[0] >= g.X))
+    seen_y = g.seen.bit_select(g.Y, 1)
+    n = tile.cell_bits
+    count = g.count
+    p = obs.p
+    checks = [
+        (g.background == obs.background, "background"),
+        (obs.acc[:n] == g.prev[:n], "row prefix sum"),
+        (g.flushing == (flush | obs.p_valid), "flushing"),
+        (When(flush | obs.p_valid | g.need_first, ~busy), "nothing in flight"),
+        (When(flush | obs.p_valid, g.need_first), "no cell since the flush"),
+        (When(g.row_open, ~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
+        (When(~g.need_first, g.seen.bit_select(g.last[1], 1)), "last row seen"),
+        (When(g.flushing, g.seen == 0), "no row seen in a flush"),
+        (When(seen_y & ~row_open & ~in_flight(row_end) & ~flush, written_y), "seen row written"),
+        (
+            When(obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))),
+            "output position",
+        ),
+        (When(obs.p_valid, p.last == ~flush), "the last pixel waits after the flush"),
+        (
+            When(flush, Cat(obs.fx, obs.fy) == (count + obs.p_valid)[: len(count)]),
+            "flush position",
+        ),
+        (
+            When(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == shown),
+            "frame not yet read",
+        ),
+        (
+            When(obs.p_valid & (Cat(p.x, p.y) == tracked), g.pixels.payload.value == g.frame),
+            "frame waiting",
+        ),
+        (When(flush, g.value == g.background), "value in a flush"),
+        (
+            When(~flush & ~in_flight(tracked), g.value == Mux(done, pixel, shown)),
+            "value",
+        ),
+    ]
+    for i, st in enumerate(stages):
+        position = Cat(st.x, st.y)
+        checks.append((When(st.valid, position <= last_pos), f"stage {i} taken"))
+        for older in stages[i + 1 :]:
+            both = st.valid & older.valid
+            checks.append((When(both, Cat(older.x, older.y) < position), f"stage {i} order"))
+    state_checks(m, checks, covers)
