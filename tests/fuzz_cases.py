@@ -317,7 +317,7 @@ def verilog_case(d: Draft, quick: bool) -> None:
         mutate_argv(d, ["--name", "--top", "--tile", "--core"])
     if not quick and d.chance(0.01):  # a large tile that elaborates for a minute today
         d.add("--tile", "256x256") if "--tile" not in d.case.argv else None
-    if quick or d.chance(0.7):
+    if quick or d.chance(0.85):  # a valid one elaborates for seconds
         require_invalid(d, [(["--name", "wire"], "a keyword"), (["--tile", "x32"], "no width"),
                             (["-o", "core.txt"], "unsupported format")])  # fmt: skip
 
@@ -391,7 +391,7 @@ def plot_case(d: Draft, quick: bool) -> None:
     d.add("--quiet")
     if d.chance(0.15):
         mutate_argv(d, values)
-    if quick or d.chance(0.6):
+    if quick or d.chance(0.8 if figure == "aa-methods" else 0.6):  # valid: 2 to 10 s
         require_invalid(d, [(["--frobnicate"], "unknown option")])
 
 
@@ -434,7 +434,7 @@ def bench_case(d: Draft, quick: bool) -> None:
     d.case.seconds = 60.0
     if d.chance(0.15):
         mutate_argv(d, ["--edges", "--repeats", "--seed"])
-    if quick or not quick_flag or d.chance(0.6):
+    if quick or not quick_flag or d.chance(0.75):
         require_invalid(d, [(["--edges", "0"], "--edges out of range"),
                             (["--coord-bits", "5"], "--coord-bits below 6")])  # fmt: skip
 
@@ -463,7 +463,7 @@ def stress_case(d: Draft, quick: bool) -> None:
     d.case.seconds = 90.0
     if d.chance(0.15):
         mutate_argv(d, ["--widths", "--intensities", "--subpixel-bits"])
-    if quick or d.chance(0.7):
+    if quick or d.chance(0.8):  # a valid one takes 6 s
         require_invalid(d, [(["--widths", ""], "--widths: empty list"),
                             (["--intensities", "0"], "--intensities out of range")])  # fmt: skip
 

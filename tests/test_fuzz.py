@@ -148,7 +148,8 @@ class Runner:
 
     def _start(self):
         self.connection, child = self.context.Pipe()
-        self.process = self.context.Process(target=_worker, args=(child,), daemon=True)
+        # Not a daemon: `verify --workers 1` starts a pool from it. close() ends it.
+        self.process = self.context.Process(target=_worker, args=(child,))
         self.process.start()
 
     def run(self, folder: str, argv: list[str], seconds: float, memory: int, env: dict):
@@ -316,6 +317,8 @@ def campaign(seed: int, cases: int, quick: bool, first: int = 0, report=None):
                 failures.append((index, outcome, detail, describe(case)))
                 if report:
                     report(f"seed {seed} case {index}: {outcome}: {detail}; {describe(case)}")
+            if report and (index + 1) % 500 == 0:
+                report(f"seed {seed}: cases to {index}: {dict(counts)}")
     finally:
         runner.close()
     return counts, failures, commands
