@@ -166,7 +166,14 @@ class Runner:
         self.close()
         return "hang"
 
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
     def close(self):
+        """End the worker (not a daemon: a worker left running would hold up the exit)."""
         if self.process is not None:
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(self.process.pid, signal.SIGKILL)  # the worker's own group
@@ -400,14 +407,17 @@ def test_the_fuzz_checks_can_fail(tmp_path, monkeypatch):
     assert judge(case, folder, {}, (0, "", "", None), 0)[0] == "accepted bad input"
     # The worker is forked from here: it inherits a model that crashes, hangs, eats memory.
     edge = ["edge", "0", "0", "3", "1"]
-    monkeypatch.setattr(edge_cli, "run_edge", lambda config, edge: {}["no such key"])
-    assert check_case(Case(1, edge), Runner())[0] == "traceback"
-    monkeypatch.setattr(edge_cli, "run_edge", lambda config, edge: time.sleep(60))
-    assert check_case(Case(2, edge, seconds=1.0), Runner())[0] == "hang"
-    monkeypatch.setattr(edge_cli, "run_edge", lambda config, edge: bytearray(1 << 31))
-    assert check_case(Case(3, edge), Runner())[0] == "memory"
-    monkeypatch.setattr(edge_cli, "run_edge", lambda config, edge: os.kill(os.getpid(), 9))
-    assert check_case(Case(4, edge), Runner())[0] == "memory"
+    for index, (model, outcome) in enumerate(
+        [
+            (lambda config, edge: {}["no such key"], "traceback"),
+            (lambda config, edge: time.sleep(60), "hang"),
+            (lambda config, edge: bytearray(1 << 31), "memory"),  # past the 1 GiB cap
+            (lambda config, edge: os.kill(os.getpid(), signal.SIGKILL), "memory"),
+        ]
+    ):
+        monkeypatch.setattr(edge_cli, "run_edge", model)
+        with Runner() as runner:
+            assert check_case(Case(index, edge, seconds=2.0), runner)[0] == outcome
 
 
 def test_generated_cases_are_reproducible():
@@ -428,7 +438,8 @@ def main(argv: list[str] | None = None) -> int:
         print(describe(case))
         for name, content in case.files.items():
             print(f"{ascii(name)}: {content[:2000]!r}")
-        print(check_case(case, Runner()))
+        with Runner() as runner:
+            print(check_case(case, runner))
         return 0
     start = time.perf_counter()
     counts, failures, commands = campaign(
