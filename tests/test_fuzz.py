@@ -1,335 +1,117 @@
-"""Seeded fuzzing of the command line and the scene parser (docs/scenes.md, "Errors and limits").
+"""Seeded fuzzing of every `edgeaa` command and option (docs/scenes.md, "Errors and limits").
 
-Each case is a command line (mostly `edgeaa render` on a generated scene file, also `edge` and,
-with at least one bad option, the slow commands) run in-process by `edgeaa.cli.main` in a
-worker process, in a fresh folder, with stdout and stderr captured. The worker is killed and
-replaced when a case runs past its time limit. A case fails on:
+The cases come from tests/fuzz_cases.py (edge, demo, verilog, synth, verify, plot, bench,
+stress, the top level) and tests/fuzz_scenes.py (render and its scene files). Each case runs
+in-process (`edgeaa.cli.main`) in a worker process, in a fresh folder, with a strict UTF-8
+standard output (as a terminal's), a time limit and a memory cap: the case may add
+`Case.memory` bytes to the worker's data (RLIMIT_DATA, inherited by what it starts; not
+RLIMIT_AS, which would refuse the WebAssembly tools of `verilog` their reserved address space).
+A case fails on:
 
-- a traceback (any exception out of `main`), or a hang (the time limit);
-- an error that is not one line starting with "edgeaa" and exit status 2;
-- an input file changed (the scene, or a file that `-o` named);
-- a half-written file: an output left by a failed command, a temporary file left behind, or
-  an output that is not a whole PNG (Verilog: the module's last line).
+- traceback: an exception out of `main`; memory: a MemoryError, or the worker killed;
+- hang: past the case's time limit (an invalid input past FAST_SECONDS started the work);
+- accepted bad input: the generator made the input invalid and the status is not 2;
+- bad error: status 2 without exactly one `edgeaa ...: error: ...` line on stderr (progress
+  lines aside), or status 1 with more than one; bad status: any status but 0, 1, 2;
+- overwritten input: a file that existed changed (the scene, a damaged record refused);
+- half-written file: an output of a failed command, a temporary file left, an output that does
+  not decode; unasked file: a file written that no option named; bad output: --json that is
+  not JSON.
 
-Scenes start valid and small, then get up to three mutations of their data (hostile numbers,
-wrong types, unknown keys) or of their text (NaN, 1e400, duplicate keys, deep nesting, bytes
-that are not UTF-8, truncation). `pytest tests/test_fuzz.py` runs a bounded campaign;
-`pytest -m slow` a long one; `python tests/test_fuzz.py --cases 10000 --seed 1` a campaign
-of any size with its figures. Every failure names its seed and case; `--case N` reruns one.
+`pytest tests/test_fuzz.py` runs DEFAULT_CASES quick cases; `pytest -m slow` SLOW_CASES full
+ones; `python tests/test_fuzz.py --cases 10000 --seed 1` a campaign of any size with its
+figures, `--case N` replays one. Every failure names its seed and case.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import copy
 import hashlib
 import io
 import json
 import multiprocessing
 import os
 import random
+import re
+import resource
 import shutil
+import signal
 import sys
 import tempfile
 import time
 import traceback
 from collections import Counter
-from dataclasses import dataclass, field
 
 import pytest
+from fuzz_cases import (
+    Case,
+    Draft,
+    bench_case,
+    demo_case,
+    describe,
+    edge_case,
+    finish,
+    plot_case,
+    stress_case,
+    synth_case,
+    top_level_case,
+    verify_case,
+    verilog_case,
+)
+from fuzz_scenes import render_case
 
-DEFAULT_CASES = 800  # about 20 s on the shared 2-core machine
-SLOW_CASES = 10_000  # about 4 minutes
-CASE_SECONDS = 30.0  # a case past this is a hang (the slowest valid cases take a few s)
+DEFAULT_CASES = 250  # quick cases: about 30 s on the shared 2-core machine
+SLOW_CASES = 10_000
 SEED = int(os.environ.get("EDGEAA_FUZZ_SEED", "20240615"))
-
-HOSTILE_NUMBERS = [
-    "inf", "-inf", "nan", "NaN", "Infinity", "1e309", "-1e309", "0e1000000000",
-    "1e-1000000000", "9" * 5000, "-" + "9" * 400, "1e40", "-0", "0x10", "1/3", "1_000",
-    "", " ", "1e", ".", "+", "4294967296", "-1", "65536", "1.5", "0",
+COMMANDS = [  # (weight, generator)
+    (40, render_case), (14, edge_case), (12, verify_case), (8, verilog_case), (6, demo_case),
+    (5, synth_case), (4, plot_case), (4, bench_case), (4, stress_case), (1, top_level_case),
 ]  # fmt: skip
-HOSTILE_JSON_VALUES = [
-    None, True, [], {}, [1, 2], "12", -1, 0, 1e300, -1e300, 10**30, 1.5, 2**63,
-    [[0, 0], [1, 1]], "M 0 0 L 1 1 Z", {"points": []},
-]  # fmt: skip
-OUTPUTS = ["out.png", "sub/out.png", ".", "dir.png", "scene.json", "out.jpg", "/dev/full",
-           "out.PNG", "", "-"]  # fmt: skip
+FAILURES = (
+    "traceback", "memory", "hang", "accepted bad input", "bad error", "bad status",
+    "overwritten input", "half-written file", "unasked file", "bad output",
+)  # fmt: skip
+PROGRESS = re.compile(r".*\d s\)\s*$")  # a progress bar's line ends "(..., 1.5 s)"
 
 
-# -- scenes ------------------------------------------------------------------------------------
-
-
-def _coordinate(rng: random.Random) -> float | int:
-    value = rng.choice([rng.randint(-8, 72), rng.uniform(-8, 72), rng.randint(0, 64) / 16])
-    return round(value, rng.choice([0, 2, 4, 9])) if isinstance(value, float) else value
-
-
-def _path(rng: random.Random) -> str:
-    parts = [f"M {_coordinate(rng)} {_coordinate(rng)}"]
-    arity = {"L": 2, "H": 1, "V": 1, "C": 6, "S": 4, "Q": 4, "T": 2, "Z": 0}
-    for _ in range(rng.randint(1, 8)):
-        command = rng.choice(list(arity))
-        command = command.lower() if rng.random() < 0.4 else command
-        numbers = [str(_coordinate(rng)) for _ in range(arity[command.upper()])]
-        parts.append(" ".join([command, *numbers]))
-    separator = rng.choice([" ", ",", "\f", "\t", "\n", "  "])
-    return separator.join(parts)
-
-
-def _polygon(rng: random.Random) -> dict:
-    shape = rng.choice(["points", "contours", "path"])
-    if shape == "points":
-        item = {"points": [[_coordinate(rng), _coordinate(rng)] for _ in range(rng.randint(3, 7))]}
-    elif shape == "contours":
-        item = {
-            "contours": [
-                [[_coordinate(rng), _coordinate(rng)] for _ in range(rng.randint(3, 6))]
-                for _ in range(rng.randint(1, 3))
-            ]
-        }
-    else:
-        item = {"path": _path(rng)}
-    if rng.random() < 0.7:
-        item["intensity"] = rng.randint(0, 255)
-    if rng.random() < 0.4:
-        item["fill_rule"] = rng.choice(["nonzero", "evenodd", "non-zero", "even-odd"])
-    return item
-
-
-def scene_data(rng: random.Random) -> dict:
-    data = {
-        "width": rng.randint(1, 64),
-        "height": rng.randint(1, 64),
-        "polygons": [_polygon(rng) for _ in range(rng.randint(0, 4))],
-    }
-    if rng.random() < 0.5:
-        data["background"] = rng.randint(0, 255)
-    if rng.random() < 0.3:
-        data["tolerance"] = rng.choice([1 / 16, 0.5, 0.01, 1 / 1024])
-    return data
-
-
-def _leaves(data, path=()):
-    """Every (container, key) in the JSON data, so a mutation can replace any value."""
-    items = data.items() if isinstance(data, dict) else enumerate(data)
-    for key, value in items:
-        yield data, key
-        if isinstance(value, dict | list):
-            yield from _leaves(value, (*path, key))
-
-
-def mutate_data(rng: random.Random, data: dict) -> None:
-    kind = rng.randrange(4)
-    places = list(_leaves(data))
-    if kind == 0 and places:  # a value of the wrong type or out of every range
-        container, key = rng.choice(places)
-        container[key] = copy.deepcopy(rng.choice(HOSTILE_JSON_VALUES))  # never shared
-    elif kind == 1:  # huge sizes, tiny tolerance, giant control points
-        key, value = rng.choice(
-            [("width", 65536), ("height", 1 << 20), ("tolerance", 1e-300), ("tolerance", 0.0)]
-        )
-        data[key] = value
-    elif kind == 2:
-        polygons = data.get("polygons")
-        data["polygons"] = polygons = polygons if isinstance(polygons, list) else []
-        polygons.append(
-            rng.choice(
-                [
-                    {"path": "M 0 0 C 1e300 0 0 1e300 10 10 Z"},
-                    {"path": "M 0 0 L 10 0 L 10 10 " + rng.choice(["L", "C 1 2", "Q", "m"])},
-                    {"path": "M 0 0 L 10 0 L 10 10 A 1 1 0 0 0 5 5 Z"},
-                    {"points": [[0, 0], [0, 0], [0, 0]]},
-                    {"points": [[0, 0], [4, 4], [0, 4], [4, 0]], "fill_rule": ["evenodd"]},
-                    {"contours": [[[0, 0], [8, 0], [8, 8]], [[0, 0], [8, 0], [8, 8]]]},
-                    {"points": [[0, 0], [1e6, 0], [0, 1e6]]},
-                    {"path": "M 0 0 " + "l 1 0 " * 20000 + "z"},
-                ]
-            )
-        )
-    elif places:  # an unknown key
-        container, _ = rng.choice(places)
-        if isinstance(container, dict):
-            container[rng.choice(["widht", "colour", "Points"])] = 1
-
-
-def mutate_text(rng: random.Random, text: bytes) -> bytes:
-    kind = rng.randrange(8)
-    if kind == 0:
-        return text.replace(b'"width": ', b'"width": 3, "width": ', 1)  # a duplicate key
-    if kind == 1:
-        depth = rng.choice([100, 5000, 100000])
-        return b"[" * depth + b"]" * depth
-    if kind == 2:
-        return text[: rng.randrange(max(1, len(text)))]  # cut short
-    if kind == 3:
-        at = rng.randrange(max(1, len(text)))
-        return text[:at] + rng.choice([b"\xff", b"\xc3", b"\x00", b"\xef\xbb\xbf"]) + text[at:]
-    literal = rng.choice(
-        [b"NaN", b"Infinity", b"-Infinity", b"1e400", b"0e1000000000", b"1" * 5000, b"-0.0"]
-    )
-    digits = [i for i, c in enumerate(text) if 48 <= c <= 57 and not 48 <= text[i - 1] <= 57]
-    if not digits:
-        return text
-    at = rng.choice(digits)
-    end = at
-    while end < len(text) and (48 <= text[end] <= 57 or text[end] in b".-eE+"):
-        end += 1
-    return text[:at] + literal + text[end:]
-
-
-def scene_file(rng: random.Random) -> bytes:
-    data = scene_data(rng)
-    for _ in range(rng.choice([0, 0, 0, 1, 1, 2, 3])):
-        mutate_data(rng, data)
-    text = json.dumps(data, indent=rng.choice([None, 1])).encode()
-    if rng.random() < 0.25:
-        text = mutate_text(rng, text)
-    return text
-
-
-# -- command lines -----------------------------------------------------------------------------
-
-
-def _config_options(rng: random.Random) -> list[str]:
-    options = []
-    for name, good in (
-        ("--coord-bits", ["6", "8", "11", "16"]),
-        ("--subpixel-bits", ["0", "2", "4", "8"]),
-        ("--intensity-bits", ["1", "8", "10", "16"]),
-        ("--mode", ["pw", "paper", "seg2", "seg4"]),
-        ("--accumulator", ["exact", "truncated"]),
-        ("--frac-bits", ["6", "20", "48"]),
-    ):
-        if rng.random() < 0.12:
-            bad = rng.random() < 0.4
-            options += [name, rng.choice(HOSTILE_NUMBERS if bad else good)]
-    return options
-
-
-def render_argv(rng: random.Random) -> list[str]:
-    argv = ["render"]
-    if rng.random() < 0.96:
-        argv.append("scene.json")
-    if rng.random() < 0.04:
-        argv += ["--builtin", rng.choice(["starburst", "text", "circle"])]
-    output = rng.choice(OUTPUTS) if rng.random() < 0.25 else "out.png"
-    output = None if rng.random() < 0.15 else output
-    if output is not None:
-        argv += ["-o", output]
-    for flag, chance in (
-        ("--stats", 0.1), ("--no-skip", 0.1), ("--error", 0.08), ("--compare", 0.04),
-        ("--quiet", 0.5),
-    ):  # fmt: skip
-        if rng.random() < chance:
-            argv.append(flag)
-    if rng.random() < 0.06:
-        argv += ["--crop", rng.choice(["0,0,8,8", "1,2", "5,5,1,1", "0,0," + "9" * 400])]
-    if rng.random() < 0.05:
-        argv += ["--engine", rng.choice(["model", "spice"])]
-    argv += _config_options(rng)
-    if rng.random() < 0.05:  # a repeated option
-        argv += ["--mode", "paper", "--mode", "seg4"]
-    return argv
-
-
-def edge_argv(rng: random.Random) -> list[str]:
-    def number():
-        if rng.random() < 0.1:
-            return rng.choice(HOSTILE_NUMBERS)
-        return str(rng.choice([rng.randint(0, 100), rng.randint(0, 1600) / 16, 2047.9375]))
-
-    argv = ["edge", *(number() for _ in range(rng.choice([4] * 8 + [3, 5])))]
-    if rng.random() < 0.2:
-        argv += ["--inside", rng.choice(["left", "right", "up"])]
-    if rng.random() < 0.1:
-        argv += ["--inside", "left"]
-    if rng.random() < 0.15:
-        argv += ["--clip", *(rng.choice(["0", "5", "100", "-1", "9" * 50]) for _ in range(4))]
-    for name in ("--i-in", "--i-out"):
-        if rng.random() < 0.1:
-            argv += [name, rng.choice(["0", "255", "256", "-1", "1e3", "9" * 5000])]
-    if rng.random() < 0.3:
-        argv.append("--json")
-    return argv + _config_options(rng)
-
-
-# Slow commands get at least one bad option: the case checks that it fails before any work.
-BAD_OPTIONS = {
-    "demo": [["--spokes", "0"], ["--spokes", "9" * 5000], ["-o", "demo.gif"],
-             ["-o", "sub/d.png"], ["--coord-bits", "40"]],
-    "verilog": [["-o", "core.txt"], ["-o", "/dev/full"], ["--name", "1x"], ["-o", "."],
-                ["--intensity-bits", "0"], ["--name", "a", "--name", "b"]],
-    "synth": [["--target", "xc7"], ["--seed", "-1"], ["--seed", "1e9"], ["--mode", "nan"]],
-    "plot": [["error-vs-slope", "--step", "0"], ["error-vs-slope", "--step", "nan"],
-             ["error-vs-slope", "--offsets", "0"], ["error-vs-slope", "-o", "x.gif"],
-             ["error-vs-slope", "--length", "100000"], ["nonsense"]],
-    "bench": [["--edges", "0"], ["--seed", "-5"], ["--repeats", "1e9"], ["-o", "b.bmp"],
-              ["--coord-bits", "5"]],
-    "stress": [["--widths", "1,2"], ["--widths", "9" * 5000], ["--intensities", "x"],
-               ["--plot-intensity-bits", "3"], ["--subpixel-bits", "99"], ["-o", "s.txt"]],
-}  # fmt: skip
-GOOD_OPTIONS = {
-    "demo": [["--spokes", "8"], ["--quiet"]],
-    "verilog": [["--mode", "seg4"], ["--name", "core"]],
-    "synth": [["--target", "ice40"]],
-    "plot": [],
-    "bench": [["--quick"], ["--no-synth"]],
-    "stress": [["--quick"], ["--skip-bounds"]],
-}
-
-
-def other_argv(rng: random.Random) -> list[str]:
-    command = rng.choice(list(BAD_OPTIONS))
-    argv = [command]
-    bad = rng.sample(BAD_OPTIONS[command], rng.randint(1, 2))
-    if command == "plot":
-        return argv + bad[0]
-    good = [o for o in GOOD_OPTIONS[command] if rng.random() < 0.5]
-    for options in rng.sample(bad + good, len(bad + good)):
-        argv += options
-    return argv
-
-
-@dataclass
-class Case:
-    index: int
-    argv: list[str]
-    scene: bytes | None = None
-    files: dict[str, bytes] = field(default_factory=dict)  # other files before the run
-    expect_error: bool = False  # a slow command with a bad option
-
-
-def make_case(seed: int, index: int) -> Case:
-    rng = random.Random(f"{seed}/{index}")
-    kind = rng.random()
-    if kind < 0.7:
-        case = Case(index, render_argv(rng), scene_file(rng))
-    elif kind < 0.9:
-        case = Case(index, edge_argv(rng))
-    else:
-        case = Case(index, other_argv(rng), expect_error=True)
-    if "-o" in case.argv and rng.random() < 0.3:  # an output that exists already
-        target = case.argv[case.argv.index("-o") + 1]
-        if target.endswith((".png", ".v", ".PNG")) and "/" not in target and target != "dir.png":
-            case.files[target] = b"the previous file"
-    if rng.random() < 0.02:
-        case.argv = []  # a plain `edgeaa`
-    return case
+def make_case(seed: int, index: int, quick: bool = False) -> Case:
+    rng = random.Random(f"{seed}/{index}/{quick}")
+    generator = rng.choices([g for _, g in COMMANDS], [w for w, _ in COMMANDS])[0]
+    name = generator.__name__.removesuffix("_case")
+    d = Draft(rng, index, *([] if name == "top_level" else [name]))
+    generator(d, quick)
+    if name != "top_level" and rng.random() < 0.01:
+        d.add("--help")  # the help, or an error about an option before it
+        d.case.invalid.clear()
+        d.case.outputs.clear()
+    return finish(d)
 
 
 # -- running a case ----------------------------------------------------------------------------
 
 
-def _worker(connection) -> None:
-    """Run cases sent over the pipe: (folder, argv) -> (status, out, err, traceback)."""
+def _data_size() -> int:
+    with open("/proc/self/status") as file:
+        for line in file:
+            if line.startswith("VmData:"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def _run_in_worker(argv: list[str], memory: int, env: dict[str, str]):
+    """One command line, its output captured: (status, out, err, traceback)."""
     from edgeaa.cli import main
 
-    while True:
-        folder, argv = connection.recv()
-        os.chdir(folder)
-        out, err = io.StringIO(), io.StringIO()
-        status, crash = None, None
+    soft, hard = resource.getrlimit(resource.RLIMIT_DATA)
+    saved = {key: os.environ.get(key) for key in env}
+    os.environ.update(env)
+    out_bytes, err_bytes = io.BytesIO(), io.BytesIO()
+    out = io.TextIOWrapper(out_bytes, encoding="utf-8", errors="strict", write_through=True)
+    err = io.TextIOWrapper(err_bytes, encoding="utf-8", errors="backslashreplace")
+    status, crash = None, None
+    try:
+        resource.setrlimit(resource.RLIMIT_DATA, (_data_size() + memory, hard))
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
             try:
                 status = main(argv)
@@ -337,40 +119,70 @@ def _worker(connection) -> None:
                 status = exit_.code
             except BaseException:  # every escape is the finding
                 crash = traceback.format_exc()
-        connection.send((status, out.getvalue(), err.getvalue(), crash))
+    finally:
+        resource.setrlimit(resource.RLIMIT_DATA, (soft, hard))
+        for key, value in saved.items():
+            os.environ.pop(key) if value is None else os.environ.__setitem__(key, value)
+    err.flush()
+    decode = lambda data: data.getvalue().decode("utf-8", "replace")  # noqa: E731
+    return status, decode(out_bytes), decode(err_bytes), crash
+
+
+def _worker(connection) -> None:
+    """Run command lines sent over the pipe in their folders; its own process group, so that
+    a hang is ended with everything it started."""
+    os.setpgrp()
+    while True:
+        folder, argv, memory, env = connection.recv()
+        os.chdir(folder)
+        env = {key: value.replace("{folder}", folder) for key, value in env.items()}
+        connection.send(_run_in_worker(argv, memory, env))
 
 
 class Runner:
-    """A worker process that is replaced when a case hangs."""
+    """A worker process that is replaced when a case hangs or dies."""
 
-    def __init__(self, seconds: float = CASE_SECONDS):
-        self.seconds = seconds
+    def __init__(self):
         self.context = multiprocessing.get_context("fork")
         self.process = None
 
     def _start(self):
         self.connection, child = self.context.Pipe()
-        self.process = self.context.Process(target=_worker, args=(child,), daemon=True)
+        # Not a daemon: `verify --workers 1` starts a pool from it. close() ends it.
+        self.process = self.context.Process(target=_worker, args=(child,))
         self.process.start()
 
-    def run(self, folder: str, argv: list[str]):
+    def run(self, folder: str, argv: list[str], seconds: float, memory: int, env: dict):
+        """(status, out, err, traceback), "hang" past `seconds`, or "killed" if it died."""
         if self.process is None or not self.process.is_alive():
             self._start()
-        self.connection.send((folder, argv))
-        if self.connection.poll(self.seconds):
-            return self.connection.recv()
+        self.connection.send((folder, argv, memory, env))
+        try:
+            if self.connection.poll(seconds):
+                return self.connection.recv()
+        except (EOFError, ConnectionError):
+            self.close()
+            return "killed"
         self.close()
-        return None  # a hang
+        return "hang"
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
     def close(self):
+        """End the worker (not a daemon: a worker left running would hold up the exit)."""
         if self.process is not None:
-            self.process.kill()
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.process.pid, signal.SIGKILL)  # the worker's own group
             self.process.join()
             self.process = None
 
 
 def _snapshot(folder: str) -> dict[str, str]:
-    """Every file under the folder and the hash of its bytes."""
+    """Every file under the folder and the hash of its bytes (folders end with '/')."""
     out = {}
     for root, dirs, files in os.walk(folder):
         for name in dirs + files:
@@ -385,10 +197,18 @@ def _snapshot(folder: str) -> dict[str, str]:
 
 
 def _whole(path: str) -> bool:
-    """Whether an output is complete: a PNG that decodes, or Verilog that ends its module."""
+    """Whether an output is complete: a PNG that decodes, an SVG or PDF that ends, Verilog
+    that ends its module."""
+    with open(path, "rb") as file:
+        data = file.read()
     if path.endswith((".v", ".sv")):
-        with open(path) as file:
-            return file.read().rstrip().endswith("endmodule")
+        return data.rstrip().endswith(b"endmodule")
+    if path.lower().endswith(".svg"):
+        return data.rstrip().endswith(b"</svg>")
+    if path.lower().endswith(".pdf"):
+        return data.rstrip().endswith(b"%%EOF")
+    if not path.lower().endswith(".png"):
+        return True
     from PIL import Image
 
     try:
@@ -399,124 +219,205 @@ def _whole(path: str) -> bool:
         return False
 
 
+def _prepare(case: Case, folder: str) -> None:
+    for name in case.folders:
+        os.makedirs(os.path.join(folder, name), exist_ok=True)
+    for name, content in case.files.items():
+        path = os.path.join(folder, name)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "wb") as file:
+            file.write(content)
+
+
 def check_case(case: Case, runner: Runner) -> tuple[str, str]:
-    """Run one case; return (outcome, detail): 'ok', 'error' or the name of a failure."""
+    """Run one case; return (outcome, detail): 'ok', 'error', 'skipped' or a failure."""
     folder = tempfile.mkdtemp(prefix="edgeaa-fuzz-")
     try:
-        if case.scene is not None:
-            with open(os.path.join(folder, "scene.json"), "wb") as file:
-                file.write(case.scene)
-        os.mkdir(os.path.join(folder, "dir.png"))
-        for name, content in case.files.items():
-            with open(os.path.join(folder, name), "wb") as file:
-                file.write(content)
+        _prepare(case, folder)
+        if case.before is not None:  # the run whose record the case damages
+            result = runner.run(folder, case.before, 120.0, case.memory, case.env)
+            if not isinstance(result, tuple) or result[0] != 0:
+                return "skipped", f"the first run gave {str(result)[:200]}"
+            for name, content in case.appends.items():
+                with open(os.path.join(folder, name), "ab") as file:
+                    file.write(content)
         before = _snapshot(folder)
         start = time.perf_counter()
-        result = runner.run(folder, case.argv)
-        if result is None:
-            return "hang", f"no answer in {runner.seconds:.0f} s"
-        return _judge(case, folder, before, result, time.perf_counter() - start)
+        result = runner.run(folder, case.argv, case.seconds, case.memory, case.env)
+        seconds = time.perf_counter() - start
+        if result == "hang":
+            if case.long_ok:
+                return "ok", f"still running after {case.seconds:.0f} s, within its memory"
+            if case.invalid:
+                return "accepted bad input", f"still running after {case.seconds:.0f} s"
+            return "hang", f"no answer in {case.seconds:.0f} s"
+        if result == "killed":
+            return "memory", "the worker died (killed or crashed)"
+        return judge(case, folder, before, result, seconds)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def _judge(case: Case, folder: str, before: dict, result, seconds: float) -> tuple[str, str]:
+def judge(case: Case, folder: str, before: dict, result, seconds: float) -> tuple[str, str]:
     status, out, err, crash = result
-    if crash is not None or "Traceback" in err:
-        return "traceback", (crash or err).strip().splitlines()[-1]
-    after = _snapshot(folder)
-    if "scene.json" in before and after.get("scene.json") != before["scene.json"]:
-        return "overwritten input", "scene.json changed"
-    touched = [name for name in after if after[name] != before.get(name)]
-    touched += [name for name in before if name not in after]
-    if status == 2:
-        lines = [line for line in err.splitlines() if not line.startswith("render: ")]
-        if len(lines) != 1 or not lines[0].startswith("edgeaa") or out:
-            return "bad error", repr(err[:300])
-        if touched:
-            return "half-written file", f"{touched} written by a failed command"
-        return "error", lines[0]
-    if status != 0:
-        return "bad status", f"status {status}: {err[:300]!r}"
-    if case.expect_error:
-        return "accepted bad input", "exit 0"
-    for name in touched:
-        if name != _output(case.argv):
-            return "half-written file", f"{name} left behind"
-        if not _whole(os.path.join(folder, name)):
-            return "half-written file", f"{name} is not whole"
-    return "ok", f"{seconds:.2f} s"
+    if crash is not None:
+        last = crash.strip().splitlines()[-1]
+        return ("memory" if last.startswith("MemoryError") else "traceback"), last
+    if "Traceback" in err:
+        return "traceback", err.strip().splitlines()[-1]
+    lines = [line for line in err.splitlines() if line.strip() and not PROGRESS.match(line)]
+    if status not in (0, 1, 2):
+        return "bad status", f"status {status}: {err[-300:]!r}"
+    if case.invalid and status != 2:
+        return "accepted bad input", f"status {status}: {err.strip()[-200:]!r}"
+    if status == 2 and (len(lines) != 1 or not re.match(r"edgeaa[\w -]*: error: ", lines[0])):
+        return "bad error", repr(err[-300:])
+    if status == 1 and len(lines) > 1:
+        return "bad error", f"status 1: {err[-300:]!r}"
+    failure = _judge_files(case, folder, before, _snapshot(folder), status)
+    if failure:
+        return failure
+    if status == 0 and "--json" in case.argv and "--help" not in case.argv:
+        try:
+            json.loads(out)
+        except ValueError:
+            return "bad output", f"--json printed {out[:100]!r}"
+    return ("error", lines[0]) if status == 2 else ("ok", f"status {status}, {seconds:.2f} s")
 
 
-def _output(argv: list[str]) -> str | None:
-    return argv[argv.index("-o") + 1] if "-o" in argv[:-1] else None
+def _judge_files(case: Case, folder: str, before: dict, after: dict, status: int):
+    """A changed input, a file left by a failed command or written unasked, a broken output."""
+
+    def asked(name: str) -> bool:
+        return any(name == o or (o.endswith("/") and name.startswith(o)) for o in case.outputs)
+
+    changed = {n for n in after if after[n] != before.get(n)} | set(before) - set(after)
+    for name in sorted(changed):
+        if status != 2 and asked(name):
+            if name in after and not name.endswith("/") and not _whole(f"{folder}/{name}"):
+                return "half-written file", f"{name!r} is not whole"
+        elif name in before:
+            return "overwritten input", f"{name!r} changed (status {status})"
+        elif status == 2:
+            return "half-written file", f"{name!r} written by a failed command"
+        elif os.path.basename(name.rstrip("/")).startswith("."):
+            return "half-written file", f"{name!r} left behind"
+        else:
+            return "unasked file", f"{name!r} written though no option named it"
+    return None
 
 
-FAILURES = (
-    "traceback", "hang", "bad error", "bad status", "overwritten input", "half-written file",
-    "accepted bad input",
-)  # fmt: skip
-
-
-def campaign(seed: int, cases: int, first: int = 0, report=None) -> tuple[Counter, list]:
-    """Run cases first .. first + cases - 1; returns the outcome counts and the failures."""
+def campaign(seed: int, cases: int, quick: bool, first: int = 0, report=None):
+    """Run cases first .. first + cases - 1; the outcome counts, failures and commands."""
     runner = Runner()
-    counts, failures = Counter(), []
+    counts, failures, commands = Counter(), [], Counter()
     try:
         for index in range(first, first + cases):
-            case = make_case(seed, index)
+            case = make_case(seed, index, quick)
+            start = time.perf_counter()
             outcome, detail = check_case(case, runner)
             counts[outcome] += 1
+            command = (case.argv or ["(none)"])[0]
+            commands[command, outcome] += 1
+            commands[command, "seconds"] += time.perf_counter() - start
             if outcome in FAILURES:
-                failures.append((index, outcome, detail, case.argv))
+                failures.append((index, outcome, detail, describe(case)))
                 if report:
-                    report(f"seed {seed} case {index}: {outcome}: {detail}; argv {case.argv}")
+                    report(f"seed {seed} case {index}: {outcome}: {detail}; {describe(case)}")
+            if report and (index + 1) % 500 == 0:
+                report(f"seed {seed}: cases to {index}: {dict(counts)}")
     finally:
         runner.close()
-    return counts, failures
+    return counts, failures, commands
 
 
-def _describe(seed: int, failures: list) -> str:
+def _describe(seed: int, quick: bool, failures: list) -> str:
+    flag = " --quick" if quick else ""
     lines = [f"fuzz seed {seed}: {len(failures)} failing cases (rerun one with "
-             f"python tests/test_fuzz.py --seed {seed} --case N)"]  # fmt: skip
-    lines += [f"  case {i}: {outcome}: {detail}; argv {argv[:12]}" for i, outcome, detail, argv
-              in failures[:20]]  # fmt: skip
+             f"python tests/test_fuzz.py --seed {seed}{flag} --case N)"]  # fmt: skip
+    lines += [f"  case {i}: {outcome}: {detail}; {what[:300]}" for i, outcome, detail, what
+              in failures[:30]]  # fmt: skip
     return "\n".join(lines)
 
 
 # -- the tests ---------------------------------------------------------------------------------
 
 
-def test_fuzz_the_command_line_and_the_scene_parser():
-    counts, failures = campaign(SEED, DEFAULT_CASES)
-    assert not failures, _describe(SEED, failures)
-    # The generator must reach both sides: clean errors and successful renders.
+def test_fuzz_every_command_quick():
+    counts, failures, commands = campaign(SEED, DEFAULT_CASES, quick=True)
+    assert not failures, _describe(SEED, True, failures)
+    # The generator must reach both sides: clean errors and successful runs.
     assert counts["error"] > DEFAULT_CASES // 4 and counts["ok"] > DEFAULT_CASES // 10, counts
 
 
 @pytest.mark.slow
 def test_fuzz_long_run():
-    counts, failures = campaign(SEED + 1, SLOW_CASES)
-    assert not failures, _describe(SEED + 1, failures)
+    counts, failures, commands = campaign(SEED + 1, SLOW_CASES, quick=False)
+    assert not failures, _describe(SEED + 1, False, failures)
+
+
+def _options(parser: argparse.ArgumentParser, prefix: tuple = ()) -> dict[tuple, set[str]]:
+    """Every (sub)command's option strings, by its path of command names."""
+    found = {prefix: set()}
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                found.update(_options(sub, (*prefix, name)))
+        else:
+            found[prefix] |= set(action.option_strings) or {"(positional)"}
+    return found
+
+
+def test_every_command_and_option_is_generated():
+    """A new option of any command must come to the fuzz generator too."""
+    from edgeaa.cli import build_parser
+
+    seen: dict[tuple, set[str]] = {}
+    for index in range(4000):
+        argv = make_case(5, index).argv
+        path = tuple(argv[:2]) if argv[:1] == ["plot"] else tuple(argv[:1])
+        seen.setdefault(path, set()).update(argv)
+    missing = []
+    for path, options in _options(build_parser()).items():
+        if not path or path == ("plot",):
+            continue
+        words = seen.get(path, set())
+        words |= {"-o", "--output"} if words & {"-o", "--output"} else set()
+        lacking = options - words - {"-h", "--help", "(positional)"}  # argparse's own
+        missing += [f"{' '.join(path)} {o}" for o in sorted(lacking)]
+    assert not missing, missing
 
 
 def test_the_fuzz_checks_can_fail(tmp_path, monkeypatch):
-    """Each check catches what it is for: a traceback, a hang, a stray or broken file."""
+    """Each check catches what it is for: a traceback, a hang, memory, a stray or broken file,
+    a bad input accepted."""
     from edgeaa import edge_cli
 
     folder, case = str(tmp_path), Case(0, ["edge", "0", "0", "3", "1", "-o", "t.png"])
     (tmp_path / "t.png").write_bytes(b"\x89PNG\r\n\x1a\n cut short")
     assert not _whole(str(tmp_path / "t.png"))
-    assert _judge(case, folder, {}, (0, "", "", None), 0)[0] == "half-written file"
-    assert _judge(case, folder, {}, (2, "", "edgeaa: error: x\n", None), 0)[0] == (
+    assert judge(case, folder, {}, (0, "", "", None), 0)[0] == "unasked file"
+    case.outputs = ["t.png"]
+    assert judge(case, folder, {}, (0, "", "", None), 0)[0] == "half-written file"
+    assert judge(case, folder, {}, (2, "", "edgeaa: error: x\n", None), 0)[0] == (
         "half-written file"  # t.png appeared although the command failed
     )
-    assert _judge(case, folder, {}, (2, "", "edgeaa: one\ntwo\n", None), 0)[0] == "bad error"
-    # The worker is forked from here: it inherits a model that crashes, then one that hangs.
-    monkeypatch.setattr(edge_cli, "run_edge", lambda config, edge: {}["no such key"])
-    assert check_case(Case(1, ["edge", "0", "0", "3", "1"]), Runner(5.0))[0] == "traceback"
-    monkeypatch.setattr(edge_cli, "run_edge", lambda config, edge: time.sleep(60))
-    assert check_case(Case(2, ["edge", "0", "0", "3", "1"]), Runner(1.0))[0] == "hang"
+    assert judge(case, folder, {}, (2, "", "edgeaa: error: a\nb\n", None), 0)[0] == "bad error"
+    case.invalid = ["a bad input"]
+    assert judge(case, folder, {}, (0, "", "", None), 0)[0] == "accepted bad input"
+    # The worker is forked from here: it inherits a model that crashes, hangs, eats memory.
+    edge = ["edge", "0", "0", "3", "1"]
+    for index, (model, outcome) in enumerate(
+        [
+            (lambda config, edge: {}["no such key"], "traceback"),
+            (lambda config, edge: time.sleep(60), "hang"),
+            (lambda config, edge: bytearray(1 << 31), "memory"),  # past the 1 GiB cap
+            (lambda config, edge: os.kill(os.getpid(), signal.SIGKILL), "memory"),
+        ]
+    ):
+        monkeypatch.setattr(edge_cli, "run_edge", model)
+        with Runner() as runner:
+            assert check_case(Case(index, edge, seconds=2.0), runner)[0] == outcome
 
 
 def test_generated_cases_are_reproducible():
@@ -527,21 +428,30 @@ def test_generated_cases_are_reproducible():
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="a seeded fuzz campaign over edgeaa")
     parser.add_argument("--seed", type=int, default=SEED)
-    parser.add_argument("--cases", type=int, default=10_000)
+    parser.add_argument("--cases", type=int, default=SLOW_CASES)
+    parser.add_argument("--first", type=int, default=0, help="the first case's number")
+    parser.add_argument("--quick", action="store_true", help="the default run's quick cases")
     parser.add_argument("--case", type=int, help="run this one case and print it")
     args = parser.parse_args(argv)
     if args.case is not None:
-        case = make_case(args.seed, args.case)
-        print("argv:", case.argv)
-        if case.scene is not None:
-            print("scene.json:", case.scene[:2000])
-        print(check_case(case, Runner()))
+        case = make_case(args.seed, args.case, args.quick)
+        print(describe(case))
+        for name, content in case.files.items():
+            print(f"{ascii(name)}: {content[:2000]!r}")
+        with Runner() as runner:
+            print(check_case(case, runner))
         return 0
     start = time.perf_counter()
-    counts, failures = campaign(args.seed, args.cases, report=print)
+    counts, failures, commands = campaign(
+        args.seed, args.cases, args.quick, args.first, report=print
+    )
     seconds = time.perf_counter() - start
-    print(f"seed {args.seed}, {args.cases} cases in {seconds:.0f} s: " + ", ".join(
-        f"{counts[k]} {k}" for k in ("ok", "error", *FAILURES)))  # fmt: skip
+    print(f"seed {args.seed}, cases {args.first}..{args.first + args.cases - 1} in "
+          f"{seconds:.0f} s: " + ", ".join(f"{counts[k]} {k}" for k in
+                                           ("ok", "error", "skipped", *FAILURES)))  # fmt: skip
+    for name in sorted({command for command, _ in commands}):
+        row = {k: round(n, 1) for (command, k), n in commands.items() if command == name}
+        print(f"  {name}: {row}")
     return 1 if failures else 0
 
 

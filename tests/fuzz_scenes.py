@@ -1,0 +1,269 @@
+"""Scene files for the fuzz suite: a small valid scene, then mutations of its data (hostile
+numbers, wrong types, unknown keys, huge sizes, curves past the limits) or of its text (NaN,
+1e400, duplicate keys, deep nesting, bytes that are not UTF-8, truncation).
+
+`scene_file` returns the bytes, the reasons the scene is invalid (docs/scenes.md, "Errors and
+limits": a scene with one of them must be refused) and the image size it asks for. A mutation
+whose answer depends on the rest of the scene (a -1 in place of a coordinate) adds no reason:
+either answer is right, as long as it is a clean one.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import random
+
+from fuzz_cases import Draft, mutate_argv, tile_option
+
+HOSTILE_JSON_VALUES = [
+    None, True, [], {}, [1, 2], "12", -1, 0, 1e300, -1e300, 10**30, 1.5, 2**63,
+    [[0, 0], [1, 1]], "M 0 0 L 1 1 Z", {"points": []},
+]  # fmt: skip
+# Polygons added to a scene: (polygon, why it is invalid or None).
+ADDED_POLYGONS = [
+    ({"path": "M 0 0 C 1e300 0 0 1e300 10 10 Z"}, "control point past +-1,048,576 px"),
+    ({"path": "M 0 0 L 10 0 L 10 10 L"}, "path command without its numbers"),
+    ({"path": "M 0 0 L 10 0 L 10 10 C 1 2"}, "path command without its numbers"),
+    ({"path": "M 0 0 L 10 0 L 10 10 Q"}, "path command without its numbers"),
+    ({"path": "M 0 0 L 10 0 L 10 10 m"}, None),
+    ({"path": "M 0 0 L 10 0 L 10 10 A 1 1 0 0 0 5 5 Z"}, "arcs are not supported"),
+    ({"points": [[0, 0], [0, 0], [0, 0]]}, None),
+    ({"points": [[0, 0], [4, 4], [0, 4], [4, 0]], "fill_rule": ["evenodd"]}, "fill_rule a list"),
+    ({"contours": [[[0, 0], [8, 0], [8, 8]], [[0, 0], [8, 0], [8, 8]]]}, None),
+    ({"points": [[0, 0], [1e6, 0], [0, 1e6]]}, None),
+    ({"path": "M 0 0 " + "l 1 0 " * 20000 + "z"}, "20,000 edges in one polygon"),
+]
+LITERALS = [  # a number of the text replaced by: (literal, why)
+    (b"NaN", "NaN"), (b"Infinity", "Infinity"), (b"-Infinity", "-Infinity"),
+    (b"1e400", "1e400"), (b"1" * 5000, "a number of 5000 digits"),
+    (b"0e1000000000", None), (b"-0.0", None),
+]  # fmt: skip
+FILL_RULES = [("nonzero", None), ("evenodd", None), ("non-zero", None), ("even-odd", None),
+              ("NonZero", "unknown fill_rule"), ("", "unknown fill_rule")]  # fmt: skip
+
+
+def _coordinate(rng: random.Random) -> float | int:
+    value = rng.choice([rng.randint(-8, 72), rng.uniform(-8, 72), rng.randint(0, 64) / 16])
+    return round(value, rng.choice([0, 2, 4, 9])) if isinstance(value, float) else value
+
+
+def _path(rng: random.Random) -> str:
+    parts = [f"M {_coordinate(rng)} {_coordinate(rng)}"]
+    arity = {"L": 2, "H": 1, "V": 1, "C": 6, "S": 4, "Q": 4, "T": 2, "Z": 0}
+    for _ in range(rng.randint(1, 8)):
+        command = rng.choice(list(arity))
+        command = command.lower() if rng.random() < 0.4 else command
+        numbers = [str(_coordinate(rng)) for _ in range(arity[command.upper()])]
+        parts.append(" ".join([command, *numbers]))
+    separator = rng.choice([" ", ",", "\f", "\t", "\n", "  "])
+    return separator.join(parts)
+
+
+def _points(rng: random.Random, lo: int, hi: int) -> list:
+    return [[_coordinate(rng), _coordinate(rng)] for _ in range(rng.randint(lo, hi))]
+
+
+def _polygon(rng: random.Random, whys: list) -> dict:
+    shape = rng.choice(["points", "contours", "path"])
+    if shape == "points":
+        item = {"points": _points(rng, 3, 7)}
+    elif shape == "contours":
+        item = {"contours": [_points(rng, 3, 6) for _ in range(rng.randint(1, 3))]}
+    else:
+        item = {"path": _path(rng)}
+    if rng.random() < 0.7:
+        item["intensity"] = rng.randint(0, 255)
+    if rng.random() < 0.4:
+        item["fill_rule"], why = rng.choice(FILL_RULES)
+        whys += [why] if why else []
+    return item
+
+
+def scene_data(rng: random.Random, whys: list) -> dict:
+    data = {
+        "width": rng.randint(1, 64),
+        "height": rng.randint(1, 64),
+        "polygons": [_polygon(rng, whys) for _ in range(rng.randint(0, 4))],
+    }
+    if rng.random() < 0.5:
+        data["background"] = rng.randint(0, 255)
+    if rng.random() < 0.3:
+        data["tolerance"] = rng.choice([1 / 16, 0.5, 0.01, 1 / 1024])
+    return data
+
+
+def _leaves(data):
+    """Every (container, key) in the JSON data, so a mutation can replace any value."""
+    items = data.items() if isinstance(data, dict) else enumerate(data)
+    for key, value in items:
+        yield data, key
+        if isinstance(value, dict | list):
+            yield from _leaves(value)
+
+
+def mutate_data(rng: random.Random, data: dict) -> str | None:
+    """Mutate the scene's data in place; return why it is now invalid (None: it may not be)."""
+    kind = rng.randrange(4)
+    places = list(_leaves(data))
+    if kind == 0 and places:  # a value of the wrong type or out of every range
+        container, key = rng.choice(places)
+        container[key] = copy.deepcopy(rng.choice(HOSTILE_JSON_VALUES))  # never shared
+        return None
+    if kind == 1:  # huge sizes, tiny tolerance
+        key, value, why = rng.choice(
+            [("width", 65536, None), ("height", 1 << 20, None),
+             ("tolerance", 1e-300, "tolerance below 1/1024"), ("tolerance", 0.0, "tolerance 0")]
+        )  # fmt: skip
+        data[key] = value
+        return why
+    if kind == 2:
+        polygons = data.get("polygons")
+        data["polygons"] = polygons = polygons if isinstance(polygons, list) else []
+        polygon, why = rng.choice(ADDED_POLYGONS)
+        polygons.append(copy.deepcopy(polygon))
+        return why
+    if places:  # an unknown key
+        container, _ = rng.choice(places)
+        if isinstance(container, dict):
+            container[rng.choice(["widht", "colour", "Points"])] = 1
+            return "an unknown key"
+    return None
+
+
+def mutate_text(rng: random.Random, text: bytes) -> tuple[bytes, str | None]:
+    """The text mutated; why it is now invalid (None: it may not be)."""
+    kind = rng.randrange(8)
+    if kind == 0:
+        if b'"width": ' not in text:
+            return text, None
+        return text.replace(b'"width": ', b'"width": 3, "width": ', 1), "a duplicate key"
+    if kind == 1:
+        depth = rng.choice([100, 5000, 100000])
+        return b"[" * depth + b"]" * depth, "nested lists, not a scene"
+    if kind == 2:
+        return text[: rng.randrange(max(1, len(text)))], "cut short"
+    if kind == 3:
+        at = rng.randrange(max(1, len(text)))
+        byte = rng.choice([b"\xff", b"\xc3", b"\x00", b"\xef\xbb\xbf"])
+        why = None if (at == 0 and byte == b"\xef\xbb\xbf") else f"the byte(s) {byte!r} inside"
+        return text[:at] + byte + text[at:], why
+    literal, why = rng.choice(LITERALS)
+    # Where a number starts (not its fraction: 3.111... of 5,000 digits is a fine number).
+    digits = [i for i, c in enumerate(text) if 48 <= c <= 57 and text[i - 1] not in b"0123456789."]
+    if not digits:
+        return text, None
+    at = rng.choice(digits)
+    end = at
+    while end < len(text) and (48 <= text[end] <= 57 or text[end] in b".-eE+"):
+        end += 1
+    return text[:at] + literal + text[end:], why
+
+
+def scene_file(rng: random.Random) -> tuple[bytes, list[str], tuple[int, int]]:
+    """A scene file's bytes, why it is invalid (empty: maybe valid) and its width, height."""
+    whys: list[str] = []
+    data = scene_data(rng, whys)
+    for _ in range(rng.choice([0, 0, 0, 1, 1, 2, 3])):
+        why = mutate_data(rng, data)
+        whys += [why] if why else []
+    text = json.dumps(data, indent=rng.choice([None, 1])).encode()
+    if rng.random() < 0.25:
+        text, why = mutate_text(rng, text)
+        whys += [why] if why else []
+    size = tuple(v if isinstance(v, int) else 0 for v in (data["width"], data["height"]))
+    return text, whys, size
+
+
+# -- edgeaa render ---------------------------------------------------------------------------
+
+
+def render_case(d: Draft, quick: bool) -> None:
+    name = "scene.json"
+    if d.chance(0.05):
+        name = d.rng.choice(["sc\nene.json", "sc\udcffene.json", "scène.json", "a b.json"])
+    scene, whys, size = scene_file(d.rng)
+    exists, given = d.chance(0.93), d.chance(0.97)
+    if exists:
+        d.case.files[name] = scene
+    if given:  # what is wrong with the file matters only when it is read
+        d.add(name)
+        for why in whys if exists else ["the scene file does not exist"]:
+            d.bad(why)
+    render_options(d, quick, name, size)
+
+
+CONFLICTS = [("--compare", "--error"), ("--compare", "--stats"), ("--compare", "--no-skip"),
+             ("--stats", "--no-skip"), ("--compare", "--json")]  # fmt: skip
+CROPS = [("0,0,8,8", None), ("1,2", "--crop of 2 numbers"), ("5,5,1,1", "--crop empty"),
+         ("0,0," + "9" * 400, "--crop of 400 digits"), ("", "--crop empty"),
+         ("0,0,٨,٨", "--crop: non-ASCII digits")]  # fmt: skip
+
+
+def render_options(d: Draft, quick: bool, scene: str, size: tuple[int, int]) -> None:
+    argv = d.case.argv
+    if d.chance(0.04):
+        d.add("--builtin", d.rng.choice(["starburst", "text", "hatch"]))
+        d.case.seconds = 60.0
+    if ("--builtin" in argv) == (scene in argv):
+        d.bad("a scene file and --builtin, or neither")
+    flags = [("--stats", 0.1), ("--no-skip", 0.1), ("--error", 0.08), ("--compare", 0.04),
+             ("--quiet", 0.5), ("--json", 0.1)]  # fmt: skip
+    for flag, p in flags:
+        if d.chance(p):
+            d.add(flag)
+    for first, second in CONFLICTS:
+        if first in argv and second in argv:
+            d.bad(f"{first} with {second}")
+    if d.chance(0.06) or ("--compare" in argv and d.chance(0.3)):
+        crop, why = d.rng.choice(CROPS)
+        d.add("--crop", crop)
+        d.bad(why if "--compare" in argv else "--crop without --compare")
+    if "--compare" in argv:
+        d.case.seconds = 60.0
+    config = d.config(0.08)
+    _render_engine(d, quick, config, size)
+    if d.chance(0.25) and "--compare" not in argv:  # -o naming the scene itself
+        d.add("-o", scene)
+        d.bad("-o is the input")
+    else:
+        d.output((".png",), p=0.85 if "--compare" in argv else 0.6)
+    if "--compare" in argv and "-o" not in argv:
+        d.bad("--compare without -o")
+    if d.chance(0.08):
+        mutate_argv(d, ["--engine", "--tile", "--crop", "--mode", "--coord-bits", "--builtin"])
+
+
+def _render_engine(d: Draft, quick: bool, config: bool, size: tuple[int, int]) -> None:
+    """--engine and --tile: the hardware engines only on small scenes, Verilator only in the
+    configuration whose build is cached (another configuration builds for half a minute)."""
+    argv = d.case.argv
+    small = 0 < size[0] * size[1] <= 32 * 32 and "--builtin" not in argv
+    r = d.rng.random()
+    # Each Verilator case elaborates the pipeline to look up its build: 5 s; Amaranth 1 s.
+    if r < 0.04 and small and (not quick or d.chance(0.5)):
+        engine = "amaranth"
+    elif r < 0.08 and not config and (small or d.chance(0.3)) and d.chance(0.2 if quick else 0.4):
+        engine = "verilator"
+    elif r < 0.14:
+        engine = "spice"
+    else:
+        engine = "model" if d.chance(0.1) else None
+    if engine is not None:
+        d.add("--engine", engine)
+        d.bad("--engine spice" if engine == "spice" else None)
+        d.case.seconds = max(d.case.seconds, 120.0 if engine == "verilator" else 60.0)
+    hardware = engine in ("amaranth", "verilator")
+    if d.chance(0.5 if hardware else 0.04):
+        tile_option(d)
+        if not hardware:
+            d.bad("--tile without a hardware engine")
+        elif not quick and d.chance(0.03):
+            argv[-1] = "1024x1024"  # large, accepted today: it must finish or be refused
+    if hardware and "--compare" in argv:
+        d.bad("--compare with a hardware engine")
+    if hardware and "--no-skip" in argv:
+        d.bad("--no-skip with a hardware engine")
+    if engine == "verilator" and d.chance(0.1):  # the build cache is not a folder
+        d.case.files["cachefile"] = b"not a folder"
+        d.case.env["XDG_CACHE_HOME"] = "{folder}/cachefile"
