@@ -39,11 +39,12 @@ MAX_EDGES = 10**12  # a thousand times the issue's 10^9: weeks on a large cluste
 # takes about 7 minutes; its memory is bounded anyway (shards.CHUNK_EDGES).
 MAX_SHARD_EDGES = 1_000_000
 EDGE_MS, SHARD_MINUTES = 0.4, 7
-# Scenes: one takes 15 to 50 ms (the Verilated pipeline and the model, 30 scenes measured on
-# the shared 2-core machine), so the largest shard takes about 8 minutes.
+# Scenes: one takes 93 ms of worker time on average (the Verilated pipeline and the model;
+# `--scenes 1000 --workers 2` on the shared 2-core machine), so the largest shard takes about
+# 8 minutes.
 MAX_SCENES = 10**9
-MAX_SHARD_SCENES = 10_000
-SCENE_MS = 50
+MAX_SHARD_SCENES = 5_000
+SCENE_MS = 93
 # Processes on one machine: more only add memory (a cluster scales further, --cluster).
 MAX_WORKERS = 256
 
@@ -261,7 +262,7 @@ _SHARD_LIMITS = {  # the most a shard holds, and why (a shard is the unit a reru
         MAX_SHARD_EDGES,
         f"about {SHARD_MINUTES} min of one core at the measured {EDGE_MS} ms an edge",
     ),
-    "scenes": (MAX_SHARD_SCENES, f"about 8 min of one core at up to {SCENE_MS} ms a scene"),
+    "scenes": (MAX_SHARD_SCENES, f"about 8 min of one core at the measured {SCENE_MS} ms a scene"),
 }
 
 

@@ -29,7 +29,7 @@ from ..simulators import pipeline_harness
 from .shards import CompiledCore
 from .workloads import MARGIN, SCENE_HEIGHT, SCENE_POLYGONS, SCENE_WIDTH, random_scene
 
-SHARD_SCENES = 50  # default scenes per shard: about 2 s of work (30 to 50 ms a scene)
+SHARD_SCENES = 50  # default scenes per shard: about 5 s of work (93 ms a scene measured)
 MAX_LISTED_SCENES = 6  # mismatching scenes a shard's record lists (all are counted)
 SCENE_KINDS = ("pixel", "hang")  # a scene's disagreements: a wrong pixel, or no image at all
 
