@@ -431,6 +431,9 @@ def test_a_directory_of_another_run_is_refused(capsys, tmp_path):
     status, summary, err = verify(capsys, "--edges", "30", "--workers", "0", "--out", str(tmp_path))
     assert status == 2 and summary is None and err.count("\n") == 1
     assert "holds another run (edges 20 there, 30 here)" in err
+    status, summary, err = verify(capsys, "--scenes", "1", "--workers", "0", "--out", str(tmp_path))
+    assert status == 2 and summary is None and err.count("\n") == 1
+    assert "holds a run of edges, not of scenes: give another --out" in err
 
 
 def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):

@@ -2,13 +2,17 @@
 process pool or on a Dask distributed cluster, record each finished shard in a directory so a
 rerun resumes, and merge the results.
 
-The directory holds ``run.json`` (the plan: configuration, edge count, shards, seed, engine and
-workload; a rerun with other options is refused rather than mixed in) and ``shards.jsonl``, one
-JSON line per finished shard written as it finishes. Both are checked against one schema when
-a run resumes (`manifest_error`, `record_error`), and a file that fails it is refused, never
-rewritten; only a last line an interrupted write left without its newline is cut off (with
-a note), and that shard runs again. A shard whose worker raised (rather
-than found a mismatch) is reported but not recorded, so a rerun tries it again.
+A plan is of edges (`Plan`: shards of `edgeaa.sim.verification.shards`) or of scenes
+(`ScenePlan`: shards of `edgeaa.sim.verification.scene_shards`); the store, the runners and the
+summary serve both, the records' schema chosen by the plan (`schema_of`).
+
+The directory holds ``run.json`` (the plan: configuration, edge or scene count, shards, seed,
+engine and workload; a rerun with other options is refused rather than mixed in) and
+``shards.jsonl``, one JSON line per finished shard written as it finishes. Both are checked
+against one schema when a run resumes (`manifest_error`, `record_error`), and a file that
+fails it is refused, never rewritten; only a last line an interrupted write left without its
+newline is cut off (with a note), and that shard runs again. A shard whose worker raised
+(rather than found a mismatch) is reported but not recorded, so a rerun tries it again.
 
 Why Dask distributed and not Ray: the work is independent shards of a few seconds each, which
 both run equally well; Dask is pure Python wheels (Ray is a large binary wheel with its own
@@ -411,6 +415,7 @@ class ShardStore:
         path = self.directory / MANIFEST
         if path.exists() or path.is_symlink():
             recorded = self._parse(path, _read_small(path, MAX_MANIFEST))
+            _check_unit(self.directory, recorded, manifest)
             error = manifest_error(recorded, manifest)
             if error is not None:
                 raise self._damaged(path, error)
@@ -501,6 +506,17 @@ class ShardStore:
                     line = line[os.write(fd, line) :]
             finally:
                 os.close(fd)
+
+
+def _check_unit(directory: Path, recorded, manifest: dict) -> None:
+    """Refuse a run of edges recorded where one of scenes is asked for, or the other way."""
+    if not isinstance(recorded, dict) or not {"edges", "scenes"} & recorded.keys():
+        return  # not a run record at all: `manifest_error` says so
+    there, here = schema_of(recorded).unit, schema_of(manifest).unit
+    if there != here:
+        raise RunMismatch(
+            f"{_path(directory)} holds a run of {there}, not of {here}: give another --out"
+        )
 
 
 def summed(manifest: dict) -> tuple:
