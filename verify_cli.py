@@ -100,6 +100,7 @@ class VerifyCommand(Command):
             "--scenes",
             type=integer_type(),
             default=None,
+            metavar="N",
             help="check N random scenes through the Verilated pipeline instead of edges "
             f"(default shards of {SHARD_SCENES} scenes); with --shard-seed, the shard's "
             "scenes, from that scene seed on",
@@ -123,8 +124,8 @@ class VerifyCommand(Command):
             type=shard_seed,
             default=None,
             metavar="SEED",
-            help="run the one shard with this seed (as printed with a mismatch) instead of "
-            "shards derived from --seed",
+            help="run the one shard with this seed (as printed with a mismatch; with --scenes "
+            "the seed of its first scene) instead of shards derived from --seed",
         )
         parser.add_argument(
             "--workers",
