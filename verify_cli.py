@@ -1,8 +1,10 @@
-"""`edgeaa verify`: N random edges in K seeded shards through the simulated core against the
-model, on a local process pool or a Dask cluster, resumable from a directory.
+"""`edgeaa verify`: N random edges through the simulated core, or N random scenes through the
+Verilated polygon pipeline (`--scenes`), in K seeded shards against the model, on a local
+process pool or a Dask cluster, resumable from a directory.
 
-The shards and their checks are `edgeaa.sim.verification.shards`; planning, running and
-resuming them `edgeaa.sim.verification.regress`. This module reads the options, prints the
+The shards and their checks are `edgeaa.sim.verification.shards` (edges) and
+`edgeaa.sim.verification.scene_shards` (scenes); planning, running and resuming them
+`edgeaa.sim.verification.regress`. This module reads the options, prints the
 result and sets the exit status: 0 when every shard agrees, 1 for a mismatch (each printed with
 its reproducers) or a simulator that failed, 2 for bad input, 130 when interrupted.
 """
@@ -37,6 +39,12 @@ MAX_EDGES = 10**12  # a thousand times the issue's 10^9: weeks on a large cluste
 # takes about 7 minutes; its memory is bounded anyway (shards.CHUNK_EDGES).
 MAX_SHARD_EDGES = 1_000_000
 EDGE_MS, SHARD_MINUTES = 0.4, 7
+# Scenes: one takes 93 ms of worker time on average (the Verilated pipeline and the model;
+# `--scenes 1000 --workers 2` on the shared 2-core machine), so the largest shard takes about
+# 8 minutes.
+MAX_SCENES = 10**9
+MAX_SHARD_SCENES = 5_000
+SCENE_MS = 93
 # Processes on one machine: more only add memory (a cluster scales further, --cluster).
 MAX_WORKERS = 256
 
@@ -51,7 +59,10 @@ def shard_seed(text: str) -> int:
 
 class VerifyCommand(Command):
     name = "verify"
-    help = "check N random edges on the simulated core against the model, in parallel shards"
+    help = (
+        "check N random edges on the simulated core, or N random scenes through the "
+        "simulated pipeline, against the model, in parallel shards"
+    )
     description = (
         "Draw N random edges (every octant, sub-pixel vertices, random sides and intensities, "
         "clip windows of every kind, about 2 % bad commands) in K seeded shards and run each "
@@ -63,21 +74,36 @@ class VerifyCommand(Command):
         "mismatch stops nothing: it is printed at the end with an `edgeaa edge` command for "
         "the edge and an `edgeaa verify --shard-seed` command for its shard, and the exit "
         "status is 1. With --out, finished shards are recorded and a rerun of the same "
-        "command skips them; a record it did not write is refused, never overwritten. This "
-        "checks the edge core alone: scenes through the whole polygon pipeline (hdl/pipeline.py) "
-        "are checked by `edgeaa render SCENE --engine verilator` and its tests; a --scenes "
-        "option is not there yet. docs/hardware.md, 'Regressions at scale'."
+        "command skips them; a record it did not write is refused, never overwritten. With "
+        "--scenes N instead of --edges, N seeded random scenes (simple and self-intersecting "
+        "polygons, both fill rules, a few intensities, up to 160 x 80 pixels: several tiles) "
+        "go through the polygon pipeline (hdl/pipeline.py) compiled by Verilator, as `edgeaa "
+        "render SCENE --engine verilator` renders them, and every pixel is compared with the "
+        "model's image (`edgeaa render`); a shard is a range of scene seeds, and a mismatch "
+        "names the scene seed, its first differing pixel and the command that reruns that "
+        "scene. A run checks edges or scenes, not both: give --edges or --scenes. "
+        "docs/hardware.md, 'Regressions at scale'."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        from .sim.verification.scene_shards import SHARD_SCENES
         from .sim.verification.shards import ENGINES, SHARD_EDGES
 
         parser.add_argument(
             "--edges",
             type=integer_type(),
-            default=DEFAULT_EDGES,
+            default=None,
             help=f"random edges in all (default {DEFAULT_EDGES:,}); with --shard-seed, the "
             "shard's edges",
+        )
+        parser.add_argument(
+            "--scenes",
+            type=integer_type(),
+            default=None,
+            metavar="N",
+            help="check N random scenes through the Verilated pipeline instead of edges "
+            f"(default shards of {SHARD_SCENES} scenes); with --shard-seed, the shard's "
+            "scenes, from that scene seed on",
         )
         parser.add_argument(
             "--seed",
@@ -89,16 +115,17 @@ class VerifyCommand(Command):
             "--shards",
             type=integer_type(),
             default=None,
-            help=f"shards, 1 to N (default: one per {SHARD_EDGES:,} edges; it depends on N only, "
-            "so a rerun with other --workers resumes the same shards)",
+            help=f"shards, 1 to N (default: one per {SHARD_EDGES:,} edges or {SHARD_SCENES} "
+            "scenes; it depends on N only, so a rerun with other --workers resumes the same "
+            "shards)",
         )
         parser.add_argument(
             "--shard-seed",
             type=shard_seed,
             default=None,
             metavar="SEED",
-            help="run the one shard with this seed (as printed with a mismatch) instead of "
-            "shards derived from --seed",
+            help="run the one shard with this seed (as printed with a mismatch; with --scenes "
+            "the seed of its first scene) instead of shards derived from --seed",
         )
         parser.add_argument(
             "--workers",
@@ -123,7 +150,7 @@ class VerifyCommand(Command):
             default="verilator",
             help="verilator (default): the core compiled by Verilator, built once per "
             "configuration; amaranth: Amaranth's Python simulator, about a thousand times "
-            "slower and without stalls (every edge in the always-ready stream)",
+            "slower and without stalls (every edge in the always-ready stream; edges only)",
         )
         parser.add_argument(
             "--out",
@@ -170,24 +197,14 @@ class VerifyCommand(Command):
 
     def _plan(self, args: argparse.Namespace):
         """The plan, the worker count and the cluster address; bad input as one line."""
-        from .sim.verification.regress import ADDRESS_VARIABLE, Plan
-        from .sim.verification.shards import default_shards
+        from .sim.verification.regress import ADDRESS_VARIABLE
 
-        if not 1 <= args.edges <= MAX_EDGES:
-            raise usage_error(self.prog, f"--edges must be in [1, 10**12], not {args.edges}")
+        if args.scenes is not None and args.edges is not None:
+            raise usage_error(self.prog, "--edges and --scenes are separate runs: give one of them")
         if args.shard_seed is not None and (args.seed is not None or args.shards is not None):
             raise usage_error(
                 self.prog, "--shard-seed runs one shard: give it without --seed and --shards"
             )
-        shards = default_shards(args.edges) if args.shards is None else args.shards
-        if args.shard_seed is not None:
-            shards = 1
-        if not 1 <= shards <= args.edges:
-            raise usage_error(
-                self.prog, f"--shards must be in [1, --edges = {args.edges}], not {shards}"
-            )
-        if -(-args.edges // shards) > MAX_SHARD_EDGES:
-            raise usage_error(self.prog, _too_large_shards(args.edges, shards, args.shard_seed))
         workers = (os.cpu_count() or 1) if args.workers is None else args.workers
         if not 0 <= workers <= MAX_WORKERS:
             raise usage_error(
@@ -198,36 +215,82 @@ class VerifyCommand(Command):
         if cluster is not None and workers == 0:
             raise usage_error(self.prog, "--workers 0 runs in this process: not with a cluster")
         seed = DEFAULT_SEED if args.seed is None else args.seed
+        if args.scenes is not None:
+            return self._scene_plan(args, seed), workers, cluster
+        return self._edge_plan(args, seed), workers, cluster
+
+    def _shards(self, args, unit: str, total: int, default: int) -> int:
+        """The shard count of `total` edges or scenes (`unit`), checked: 1 to `total`, none
+        holding more than `_SHARD_LIMITS` allows."""
+        shards = 1 if args.shard_seed is not None else default
+        shards = shards if args.shards is None else args.shards
+        if not 1 <= shards <= total:
+            raise usage_error(
+                self.prog, f"--shards must be in [1, --{unit} = {total}], not {shards}"
+            )
+        if -(-total // shards) > _SHARD_LIMITS[unit][0]:
+            raise usage_error(self.prog, _too_large_shards(unit, total, shards, args))
+        return shards
+
+    def _edge_plan(self, args: argparse.Namespace, seed: int):
+        from .sim.verification.regress import Plan
+        from .sim.verification.shards import default_shards
+
+        edges = DEFAULT_EDGES if args.edges is None else args.edges
+        if not 1 <= edges <= MAX_EDGES:
+            raise usage_error(self.prog, f"--edges must be in [1, 10**12], not {edges}")
+        shards = self._shards(args, "edges", edges, default_shards(edges))
         config = config_from_args(args)
-        plan = Plan(config, args.edges, shards, seed, args.engine, args.shard_seed)
-        return plan, workers, cluster
+        return Plan(config, edges, shards, seed, args.engine, args.shard_seed)
+
+    def _scene_plan(self, args: argparse.Namespace, seed: int):
+        from .sim.verification.regress import ScenePlan
+        from .sim.verification.scene_shards import default_scene_shards
+
+        if args.engine != "verilator":
+            raise usage_error(
+                self.prog, "--scenes runs the Verilated pipeline: --engine amaranth is for edges"
+            )
+        if not 1 <= args.scenes <= MAX_SCENES:
+            raise usage_error(self.prog, f"--scenes must be in [1, 10**9], not {args.scenes}")
+        default = default_scene_shards(args.scenes)
+        shards = self._shards(args, "scenes", args.scenes, default)
+        return ScenePlan(config_from_args(args), args.scenes, shards, seed, args.shard_seed)
 
 
-def _too_large_shards(edges: int, shards: int, shard_seed: int | None) -> str:
-    """Why shards of edges / shards edges are refused, and what to give instead."""
-    largest = -(-edges // shards)
-    limit = (
-        f"a shard holds at most {MAX_SHARD_EDGES:,} edges (about {SHARD_MINUTES} min of one "
-        f"core at the measured {EDGE_MS} ms an edge; a shard is the unit a rerun resumes)"
-    )
-    if shard_seed is not None:
-        return f"--edges {edges:,} for one shard: {limit}"
-    least = -(-edges // MAX_SHARD_EDGES)
-    return f"--shards {shards} makes shards of {largest:,} edges: {limit}; give --shards >= {least}"
+_SHARD_LIMITS = {  # the most a shard holds, and why (a shard is the unit a rerun resumes)
+    "edges": (
+        MAX_SHARD_EDGES,
+        f"about {SHARD_MINUTES} min of one core at the measured {EDGE_MS} ms an edge",
+    ),
+    "scenes": (MAX_SHARD_SCENES, f"about 8 min of one core at the measured {SCENE_MS} ms a scene"),
+}
+
+
+def _too_large_shards(unit: str, total: int, shards: int, args) -> str:
+    """Why shards of total / shards edges or scenes are refused, and what to give instead."""
+    most, why = _SHARD_LIMITS[unit]
+    largest = -(-total // shards)
+    text = f"a shard holds at most {most:,} {unit} ({why}; a shard is the unit a rerun resumes)"
+    if args.shard_seed is not None:
+        return f"--{unit} {total:,} for one shard: {text}"
+    least = -(-total // most)
+    return f"--shards {shards} makes shards of {largest:,} {unit}: {text}; give --shards >= {least}"
 
 
 def _run(plan, store, workers: int, cluster: str | None, *, quiet: bool) -> dict:
     """Open the runner (the core is built here), run the plan with a progress bar, close."""
     from .sim.verification.regress import open_runner, run_plan
 
-    resumed = store.totals.sums["edges"]
-    bar = ProgressBar("edgeaa verify", enabled=not quiet, unit="edges")
+    resumed = store.totals.sums[plan.unit]
+    bar = ProgressBar("edgeaa verify", enabled=not quiet, unit=plan.unit)
+    what = "pipeline" if plan.unit == "scenes" else "core"
     with contextlib.ExitStack() as cleanup:
         cleanup.callback(bar.close)  # an error's line starts on a line of its own
-        with bar.ticking(f"build the {plan.engine} core"):
-            runner = open_runner(plan.config, plan.engine, workers, cluster)
+        with bar.ticking(f"build the {plan.engine} {what}"):
+            runner = open_runner(plan.config, plan.engine, workers, cluster, build=plan.build_core)
         cleanup.callback(runner.close)
-        bar(resumed, plan.edges)  # the rate counts this run's edges from here
+        bar(resumed, plan.total)  # the rate counts this run's edges or scenes from here
         with bar.ticking("check"):  # a shard takes seconds: the time runs between them
             return run_plan(plan, runner, store, progress=bar)
 
@@ -240,11 +303,13 @@ def _interrupted(plan, store, out: str | None) -> str:
 
 
 def _heading(plan, workers: int, cluster: str | None, finished: int) -> str:
+    unit = plan.unit
     if plan.shard_seed is not None:
-        what = f"one shard of {plan.edges:,} edges, shard seed {plan.shard_seed}"
+        seed = "first scene seed" if unit == "scenes" else "shard seed"
+        what = f"one shard of {plan.total:,} {unit}, {seed} {plan.shard_seed}"
     else:
         noun = "shard" if plan.shards == 1 else "shards"
-        what = f"{plan.edges:,} edges in {plan.shards} {noun}, seed {plan.seed}"
+        what = f"{plan.total:,} {unit} in {plan.shards} {noun}, seed {plan.seed}"
     if cluster == "local":
         where = f"on a local Dask cluster of {workers} workers"
     elif cluster is not None:
@@ -257,6 +322,37 @@ def _heading(plan, workers: int, cluster: str | None, finished: int) -> str:
 
 
 def _report(summary: dict) -> str:
+    lines = _scene_lines(summary) if "scenes" in summary else _edge_lines(summary)
+    count = summary["mismatch_count"]
+    noun = "mismatch" if count == 1 else "mismatches"
+    shown_ = len(summary["mismatches"])
+    listed = f" (the first {shown_} listed)" if count > shown_ else ""
+    lines.append("PASSED" if summary["passed"] else f"FAILED: {count} {noun}{listed}")
+    return "\n".join(lines)
+
+
+def _scene_lines(summary: dict) -> list[str]:
+    lines = [
+        f"{summary['scenes_checked']:,} scenes in {summary['shards_done']} shard(s) "
+        f"({summary['shards_resumed']} resumed) through the Verilated pipeline: "
+        f"{summary['pixels_checked']:,} pixels against the model's image, "
+        f"{summary['clocks_checked']:,} clocks simulated; {summary['failed_scenes_checked']:,} "
+        f"scenes differ in {summary['wrong_pixels_checked']:,} pixels",
+        f"this session: {summary['scenes_run']:,} scenes in {summary['seconds']:.1f} s, "
+        f"{summary['scenes_per_second']:,.1f} scenes/s",
+    ]
+    for mismatch in summary["mismatches"]:
+        lines.append(
+            f"MISMATCH in shard {mismatch['shard']} (first scene seed {mismatch['seed']}): "
+            f"{mismatch['message']}"
+        )
+        if mismatch["reproduce"]:
+            lines.append(f"  the scene: {mismatch['reproduce']}")
+        lines.append(f"  the shard: {mismatch['reproduce_shard']}")
+    return lines
+
+
+def _edge_lines(summary: dict) -> list[str]:
     lines = [
         f"{summary['edges_checked']:,} edges in {summary['shards_done']} shard(s) "
         f"({summary['shards_resumed']} resumed): {summary['beats_checked']:,} beats bit for "
@@ -276,9 +372,4 @@ def _report(summary: dict) -> str:
         if mismatch["reproduce"]:
             lines.append(f"  the edge:  {mismatch['reproduce']}")
         lines.append(f"  the shard: {mismatch['reproduce_shard']}")
-    count = summary["mismatch_count"]
-    noun = "mismatch" if count == 1 else "mismatches"
-    shown_ = len(summary["mismatches"])
-    listed = f" (the first {shown_} listed)" if count > shown_ else ""
-    lines.append("PASSED" if summary["passed"] else f"FAILED: {count} {noun}{listed}")
-    return "\n".join(lines)
+    return lines

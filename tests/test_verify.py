@@ -18,9 +18,9 @@ import pytest
 from edgeaa.cli import main
 from edgeaa.model import EdgeConfig, run_edge
 from edgeaa.model.beat import COLUMN
-from edgeaa.sim.verification import regress, shards
+from edgeaa.sim.verification import regress, scene_shards, shards
 from edgeaa.sim.verification.scoreboard import beats_to_array, expected_beats
-from edgeaa.sim.verification.workloads import random_sim_edges
+from edgeaa.sim.verification.workloads import random_scene, random_sim_edges
 
 DEFAULT = EdgeConfig()
 
@@ -284,6 +284,115 @@ def test_a_crashing_worker_is_reported_and_not_recorded(capsys, monkeypatch, tmp
     assert not (tmp_path / regress.RECORDS).exists()  # a rerun tries them again
 
 
+# -- scenes through the pipeline ------------------------------------------------------------
+
+
+def scene_seeds(scenes: int, shards: int, seed: int = 1) -> list[int]:
+    """The scene seeds of a run's shards, in order, as the plan makes them."""
+    plan = regress.ScenePlan(DEFAULT, scenes, shards, seed)
+    return [s for task in plan.tasks() for s in task.seeds()]
+
+
+def test_random_scenes_are_seeded_and_span_tiles():
+    """The same seed draws the same scene; over 100 seeds, scenes wider and taller than a
+    default tile (64 x 32), both fill rules, polygons of one and of two contours."""
+    assert random_scene(DEFAULT, 5) == random_scene(DEFAULT, 5) != random_scene(DEFAULT, 6)
+    scenes = [random_scene(DEFAULT, seed) for seed in range(100)]
+    assert any(s.width > 128 for s in scenes) and any(s.height > 64 for s in scenes)
+    polygons = [p for s in scenes for p in s.polygons]
+    assert {p.fill_rule for p in polygons} == {"nonzero", "evenodd"}
+    assert {len(p.contours) for p in polygons} == {1, 2}
+    assert len({p.intensity for p in polygons}) > 5
+
+
+def test_a_scene_run_checks_every_pixel_and_resumes(capsys, monkeypatch, tmp_path):
+    """4 scenes in 2 shards: every pixel of every scene checked; a rerun after the second
+    shard's record was cut short runs that shard alone and gives the same totals."""
+    argv = ["--scenes", "4", "--shards", "2", "--workers", "0", "--out", str(tmp_path)]
+    status, first, err = verify(capsys, *argv)
+    assert status == 0 and first["passed"] and first["mismatches"] == [], err
+    scenes = [random_scene(DEFAULT, seed) for seed in scene_seeds(4, 2)]
+    assert (first["scenes_checked"], first["shards_run"]) == (4, 2)
+    assert first["pixels_checked"] == sum(s.width * s.height for s in scenes)
+    assert first["clocks_checked"] > 4 * 2048 and first["failed_scenes_checked"] == 0
+    kept = records(tmp_path)
+    (tmp_path / regress.RECORDS).write_text(kept[0] + kept[1][:30])
+    ran = []
+    original = scene_shards.check_scenes
+
+    def counted(task, core=None, report=None):
+        ran.append(task.index)
+        return original(task, core, report)
+
+    monkeypatch.setattr(scene_shards, "check_scenes", counted)
+    status, second, err = verify(capsys, *argv)
+    assert status == 0 and second["passed"] and "line 2 was cut short" in err
+    assert ran == [1] and (second["shards_resumed"], second["shards_run"]) == (1, 1)
+    for key in ("scenes_checked", "pixels_checked", "clocks_checked"):
+        assert second[key] == first[key], key
+
+
+@pytest.mark.parametrize("kind", ["pixel", "hang"])
+def test_a_scene_fault_is_caught_and_names_the_scene(capsys, monkeypatch, tmp_path, kind):
+    """A harness result with one pixel flipped (or a hang) in the third scene: the run fails
+    and names that scene's seed and the pixel; the scene's reproducer finds it again, and
+    passes once the fault is gone; the mismatch's record reads back on a rerun."""
+    from edgeaa.sim.simulators import pipeline_harness
+
+    target = scene_seeds(4, 2)[2]
+    drawn, original = [], pipeline_harness.run
+
+    def drawing(config, seed):
+        drawn.append(seed)
+        return random_scene(config, seed)
+
+    def faulty(tile, commands, **options):
+        run = original(tile, commands, **options)
+        if drawn[-1] != target:
+            return run
+        if kind == "hang":
+            raise pipeline_harness.PipelineHang("the pipeline gave 0 of 2048 pixels")
+        pixels = run.pixels.copy()
+        pixels[0, pipeline_harness.PIXEL_COLUMNS.index("value")] ^= 1  # image pixel (0, 0)
+        return dataclasses.replace(run, pixels=pixels)
+
+    monkeypatch.setattr(scene_shards, "random_scene", drawing)
+    monkeypatch.setattr(pipeline_harness, "run", faulty)
+    argv = ["--scenes", "4", "--shards", "2", "--workers", "0", "--out", str(tmp_path)]
+    status, summary, _ = verify(capsys, *argv)
+    assert status == 1 and not summary["passed"]
+    [found] = summary["mismatches"]
+    assert (found["kind"], found["scene"], found["shard"]) == (kind, target, 1)
+    assert f"scene seed {target}" in found["message"]
+    if kind == "pixel":
+        assert (found["x"], found["y"]) == (0, 0) and "1 of" in found["message"]
+        assert summary["wrong_pixels_checked"] == 1
+    assert summary["failed_scenes_checked"] == 1
+    status, resumed, _ = verify(capsys, *argv)  # the record, mismatch included, reads back
+    assert status == 1 and resumed["shards_run"] == 0
+    assert resumed["mismatches"] == summary["mismatches"]
+
+    scene_argv = shlex.split(found["reproduce"])
+    assert scene_argv[:2] == ["edgeaa", "verify"]
+    status, again, _ = verify(capsys, *scene_argv[2:], "--workers", "0")
+    assert status == 1 and again["mismatches"][0]["scene"] == target
+    assert again["mismatches"][0]["message"] == found["message"]
+    monkeypatch.undo()
+    status, clean, _ = verify(capsys, *scene_argv[2:], "--workers", "0")
+    assert status == 0 and clean["passed"] and clean["scenes_checked"] == 1
+
+
+def test_a_scene_records_schema_holds_its_own_records():
+    task = next(regress.ScenePlan(DEFAULT, 4, 2, 3).tasks())
+    manifest = regress.ScenePlan(DEFAULT, 4, 2, 3).manifest()
+    crash = regress.crash_result(task, RuntimeError("x"))
+    mismatch = crash["mismatches"][0] | {"scene": task.seed}
+    record = {key: value for key, value in crash.items() if key != "crashed"}
+    assert regress.record_error(record | {"mismatches": [mismatch] * 6}, manifest) is None
+    assert regress.record_error(record | {"mismatches": [mismatch] * 7}, manifest)
+    assert "the plan's" in regress.record_error(record | {"seed": task.seed + 1}, manifest)
+
+
 # -- resuming --------------------------------------------------------------------------------
 
 
@@ -295,13 +404,13 @@ def test_a_rerun_skips_recorded_shards(capsys, monkeypatch, tmp_path):
     # As if interrupted: three shards recorded, the fourth line cut short.
     (tmp_path / regress.RECORDS).write_text("".join(kept[:3]) + kept[3][:40])
     ran = []
-    original = regress.check_shard
+    original = shards.check_shard
 
     def counted(task, core=None, chunk=None, report=None):
         ran.append(task.index)
         return original(task, core, chunk, report)
 
-    monkeypatch.setattr(regress, "check_shard", counted)
+    monkeypatch.setattr(shards, "check_shard", counted)
     status, second, err = verify(capsys, *argv)
     assert status == 0 and second["passed"]
     assert f"{tmp_path / regress.RECORDS} line 4 was cut short" in err and err.count("\n") == 1
@@ -322,6 +431,9 @@ def test_a_directory_of_another_run_is_refused(capsys, tmp_path):
     status, summary, err = verify(capsys, "--edges", "30", "--workers", "0", "--out", str(tmp_path))
     assert status == 2 and summary is None and err.count("\n") == 1
     assert "holds another run (edges 20 there, 30 here)" in err
+    status, summary, err = verify(capsys, "--scenes", "1", "--workers", "0", "--out", str(tmp_path))
+    assert status == 2 and summary is None and err.count("\n") == 1
+    assert "holds a run of edges, not of scenes: give another --out" in err
 
 
 def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
@@ -627,7 +739,12 @@ def test_a_shards_memory_is_that_of_one_chunk():
         (["--shard-seed", "5", "--seed", "3"], "--shard-seed runs one shard"),
         (["--workers", "0", "--cluster", "local"], "--workers 0 runs in this process"),
         (["--engine", "icarus"], "invalid choice: 'icarus'"),
-        (["--scenes"], "unrecognized arguments: --scenes"),
+        (["--scenes", "3", "--edges", "5"], "--edges and --scenes are separate runs"),
+        (["--scenes", "0"], "--scenes must be in [1, 10**9], not 0"),
+        (["--scenes", "2", "--engine", "amaranth"], "--engine amaranth is for edges"),
+        (["--scenes", "3", "--shards", "4"], "--shards must be in [1, --scenes = 3], not 4"),
+        (["--scenes", "10001", "--shards", "2"], "a shard holds at most 5,000 scenes"),
+        (["--scenes", "5001", "--shard-seed", "7"], "--scenes 5,001 for one shard"),
         (["--out", "/dev/null/run"], "--out /dev/null/run: Not a directory"),
         (["--edges", "100000000", "--shards", "1"], "a shard holds at most 1,000,000 edges"),
         (["--edges", "3000000", "--shards", "2"], "give --shards >= 3"),
@@ -642,14 +759,15 @@ def test_bad_input_is_one_line_with_status_2(capsys, argv, message):
 
 
 def test_help_says_what_exists(capsys):
-    """The pipeline exists (hdl/pipeline.py): --help does not say otherwise, and says where
-    scenes through it are checked and that --scenes is not an option yet."""
+    """The pipeline exists (hdl/pipeline.py) and --scenes checks it: --help says so, and that
+    a run checks edges or scenes, not both."""
     with pytest.raises(SystemExit) as exit_:
         main(["verify", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert exit_.value.code == 0 and "does not exist" not in text
     assert "hdl/pipeline.py" in text and "--engine verilator" in text
-    assert "a --scenes option is not there yet" in text
+    assert "not there yet" not in text and "--scenes N" in text
+    assert "give --edges or --scenes" in text
 
 
 # -- the long run ----------------------------------------------------------------------------

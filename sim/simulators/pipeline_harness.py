@@ -175,6 +175,12 @@ def build(tile: TileConfig, *, optimize: str = "-O2") -> Path:
     return known
 
 
+def use_executable(tile: TileConfig, exe: Path, *, optimize: str = "-O2") -> None:
+    """Run `tile`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
+    workers are handed the driver's), instead of generating and hashing the Verilog again."""
+    _BUILT[(tile, optimize)] = Path(exe)
+
+
 class PipelineHang(RuntimeError):
     """The pipeline did not deliver every expected pixel within the clock limit."""
 

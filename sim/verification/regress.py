@@ -2,13 +2,17 @@
 process pool or on a Dask distributed cluster, record each finished shard in a directory so a
 rerun resumes, and merge the results.
 
-The directory holds ``run.json`` (the plan: configuration, edge count, shards, seed, engine and
-workload; a rerun with other options is refused rather than mixed in) and ``shards.jsonl``, one
-JSON line per finished shard written as it finishes. Both are checked against one schema when
-a run resumes (`manifest_error`, `record_error`), and a file that fails it is refused, never
-rewritten; only a last line an interrupted write left without its newline is cut off (with
-a note), and that shard runs again. A shard whose worker raised (rather
-than found a mismatch) is reported but not recorded, so a rerun tries it again.
+A plan is of edges (`Plan`: shards of `edgeaa.sim.verification.shards`) or of scenes
+(`ScenePlan`: shards of `edgeaa.sim.verification.scene_shards`); the store, the runners and the
+summary serve both, the records' schema chosen by the plan (`schema_of`).
+
+The directory holds ``run.json`` (the plan: configuration, edge or scene count, shards, seed,
+engine and workload; a rerun with other options is refused rather than mixed in) and
+``shards.jsonl``, one JSON line per finished shard written as it finishes. Both are checked
+against one schema when a run resumes (`manifest_error`, `record_error`), and a file that
+fails it is refused, never rewritten; only a last line an interrupted write left without its
+newline is cut off (with a note), and that shard runs again. A shard whose worker raised
+(rather than found a mismatch) is reported but not recorded, so a rerun tries it again.
 
 Why Dask distributed and not Ray: the work is independent shards of a few seconds each, which
 both run equally well; Dask is pure Python wheels (Ray is a large binary wheel with its own
@@ -34,9 +38,17 @@ from concurrent import futures
 from dataclasses import dataclass, field, fields
 from multiprocessing import get_context
 from pathlib import Path
+from typing import ClassVar
 
 from ...model import EdgeConfig
 from ...model.numbers import shown
+from .scene_shards import (
+    MAX_LISTED_SCENES,
+    SceneTask,
+    build_pipeline,
+    first_scene_seed,
+    scene_workload,
+)
 from .shards import (
     BAD_FRACTION,
     CHUNK_EDGES,
@@ -47,8 +59,6 @@ from .shards import (
     STALL,
     CompiledCore,
     ShardTask,
-    check_shard,
-    reproduce_shard,
     shard_seed,
     shard_size,
 )
@@ -82,10 +92,21 @@ class Plan:
     engine: str = "verilator"
     shard_seed: int | None = None
 
+    unit: ClassVar[str] = "edges"  # what a shard holds; its records and summary count them
+    checked: ClassVar[tuple] = ("edges", "beats", "clocks", "dropped", "timed_edges")
+
+    @property
+    def total(self) -> int:
+        return self.edges
+
     @property
     def count(self) -> int:
         """Shards in the plan."""
         return 1 if self.shard_seed is not None else self.shards
+
+    def build_core(self, *, ship: bool = False) -> CompiledCore | None:
+        """The compiled core the shards run on (None: the Amaranth engine builds nothing)."""
+        return CompiledCore.build(self.config, ship=ship) if self.engine == "verilator" else None
 
     def tasks(self) -> Iterator[ShardTask]:
         """The shards in order, made as they are asked for (a plan may hold millions)."""
@@ -114,6 +135,63 @@ class Plan:
         }
 
 
+def scene_range(
+    scenes: int, shards: int, seed: int, shard_seed: int | None, index: int
+) -> tuple[int, int]:
+    """(first scene seed, scenes) of shard `index` of a `ScenePlan` of these fields: the run's
+    scene seeds are consecutive, split into shards that differ by at most one scene."""
+    if shard_seed is not None:
+        return shard_seed, scenes
+    base, extra = divmod(scenes, shards)
+    return first_scene_seed(seed) + index * base + min(index, extra), base + (index < extra)
+
+
+@dataclass(frozen=True)
+class ScenePlan:
+    """`scenes` random scenes (`random_scene`) through the Verilated pipeline in `shards`
+    shards, each a range of scene seeds: from the run `seed`'s first scene seed on; or, with
+    `shard_seed`, one shard of the scenes of the seeds from `shard_seed` on."""
+
+    config: EdgeConfig
+    scenes: int
+    shards: int
+    seed: int
+    shard_seed: int | None = None
+
+    engine: ClassVar[str] = "verilator"  # the pipeline in Amaranth's simulator is too slow
+    unit: ClassVar[str] = "scenes"
+    checked: ClassVar[tuple] = ("scenes", "pixels", "clocks", "failed_scenes", "wrong_pixels")
+
+    @property
+    def total(self) -> int:
+        return self.scenes
+
+    @property
+    def count(self) -> int:
+        return 1 if self.shard_seed is not None else self.shards
+
+    def tasks(self) -> Iterator[SceneTask]:
+        for index in range(self.count):
+            seed, scenes = scene_range(self.scenes, self.shards, self.seed, self.shard_seed, index)
+            yield SceneTask(index, seed, scenes, self.config)
+
+    def manifest(self) -> dict:
+        config = {f.name: getattr(self.config, f.name) for f in fields(self.config) if f.init}
+        return {
+            "format": FORMAT,
+            "config": config,
+            "scenes": self.scenes,
+            "shards": self.shards,
+            "seed": self.seed,
+            "shard_seed": self.shard_seed,
+            "engine": self.engine,
+            "workload": scene_workload(),
+        }
+
+    def build_core(self, *, ship: bool = False) -> CompiledCore:
+        return build_pipeline(self.config, ship=ship)
+
+
 # -- the record of finished shards -----------------------------------------------------------
 
 
@@ -137,6 +215,54 @@ MISMATCH_FIELDS = {  # a recorded mismatch's fields and their JSON types
     "seed": (int,),
 }
 RECORD_FIELDS = ("index", "seed", "edges", *COUNTS, *TIMES, "mismatches")
+# A shard of scenes' record (`edgeaa.sim.verification.scene_shards.check_scenes`).
+SCENE_COUNTS = ("pixels", "clocks", "failed_scenes", "wrong_pixels")
+SCENE_MISMATCH_FIELDS = {
+    "kind": (str,),
+    "scene": (int,),
+    "x": (int, type(None)),
+    "y": (int, type(None)),
+    "message": (str,),
+    "reproduce": (str, type(None)),
+    "reproduce_shard": (str,),
+    "shard": (int,),
+    "seed": (int,),
+}
+SCENE_RECORD_FIELDS = ("index", "seed", "scenes", *SCENE_COUNTS, *TIMES, "mismatches")
+
+
+@dataclass(frozen=True)
+class Schema:
+    """What a run's shard records hold: their fields, counts, mismatches' fields and how
+    many mismatches a record lists at most."""
+
+    unit: str
+    fields: tuple
+    counts: tuple
+    mismatch: dict
+    most: int
+
+
+EDGE_SCHEMA = Schema("edges", RECORD_FIELDS, COUNTS, MISMATCH_FIELDS, 2 * len(KINDS))
+SCENE_SCHEMA = Schema(
+    "scenes", SCENE_RECORD_FIELDS, SCENE_COUNTS, SCENE_MISMATCH_FIELDS, MAX_LISTED_SCENES
+)
+
+
+def schema_of(manifest: dict) -> Schema:
+    """The records' schema of the run of `manifest` (a run of scenes counts scenes)."""
+    return SCENE_SCHEMA if "scenes" in manifest else EDGE_SCHEMA
+
+
+def expected_shard(manifest: dict, index: int) -> tuple[int, int]:
+    """(seed, size) of shard `index` of the run of `manifest`, as its plan makes them."""
+    if "scenes" in manifest:
+        keys = ("scenes", "shards", "seed", "shard_seed")
+        return scene_range(*(manifest[key] for key in keys), index)
+    if manifest["shard_seed"] is not None:
+        return manifest["shard_seed"], manifest["edges"]
+    seed = shard_seed(manifest["seed"], index)
+    return seed, shard_size(manifest["edges"], manifest["shards"], index)
 
 
 def _shown(value) -> str:
@@ -154,23 +280,21 @@ def _is(value, types: tuple) -> bool:
 
 def record_error(record, manifest: dict) -> str | None:
     """What is wrong with a shard's record (a parsed line of shards.jsonl) for the run of
-    `manifest`, or None: the one schema of a record, its fields' types and ranges, and the
-    shard's seed and size as the plan makes them. Looks no deeper than the schema does."""
-    if not isinstance(record, dict) or record.keys() != set(RECORD_FIELDS):
-        return f"is not a shard record (an object of the fields {', '.join(RECORD_FIELDS)})"
+    `manifest`, or None: the one schema of a record (`schema_of`), its fields' types and
+    ranges, and the shard's seed and size as the plan makes them. Looks no deeper than the
+    schema does."""
+    schema = schema_of(manifest)
+    if not isinstance(record, dict) or record.keys() != set(schema.fields):
+        return f"is not a shard record (an object of the fields {', '.join(schema.fields)})"
     count = 1 if manifest["shard_seed"] is not None else manifest["shards"]
     index = record["index"]
     if not _is(index, (int,)) or not 0 <= index < count:
         return f"index {_shown(index)} is not a shard of this run (0 to {count - 1})"
-    if manifest["shard_seed"] is not None:
-        seed, edges = manifest["shard_seed"], manifest["edges"]
-    else:
-        seed = shard_seed(manifest["seed"], index)
-        edges = shard_size(manifest["edges"], manifest["shards"], index)
-    for name, want in (("seed", seed), ("edges", edges)):
+    seed, size = expected_shard(manifest, index)
+    for name, want in (("seed", seed), (schema.unit, size)):
         if not _is(record[name], (int,)) or record[name] != want:
             return f"shard {index}'s {name} is {_shown(record[name])}, the plan's {want}"
-    for name in COUNTS:
+    for name in schema.counts:
         if not _is(record[name], (int,)) or record[name] < 0:
             return f"{name} {_shown(record[name])} is not a count (a whole number >= 0)"
     for name in TIMES:
@@ -178,12 +302,12 @@ def record_error(record, manifest: dict) -> str | None:
         if not _is(value, (int, float)) or not 0 <= value < math.inf:
             return f"{name} {_shown(value)} is not a time (a number of seconds >= 0)"
     mismatches = record["mismatches"]
-    if not isinstance(mismatches, list) or len(mismatches) > 2 * len(KINDS):
-        return f"mismatches is not a list of at most {2 * len(KINDS)} mismatches"
+    if not isinstance(mismatches, list) or len(mismatches) > schema.most:
+        return f"mismatches is not a list of at most {schema.most} mismatches"
     for mismatch in mismatches:
-        if not isinstance(mismatch, dict) or mismatch.keys() != MISMATCH_FIELDS.keys():
-            return "a mismatch is not an object of the fields " + ", ".join(MISMATCH_FIELDS)
-        for name, types in MISMATCH_FIELDS.items():
+        if not isinstance(mismatch, dict) or mismatch.keys() != schema.mismatch.keys():
+            return "a mismatch is not an object of the fields " + ", ".join(schema.mismatch)
+        for name, types in schema.mismatch.items():
             if not _is(mismatch[name], types):
                 return f"a mismatch's {name} {_shown(mismatch[name])} is of the wrong type"
     return None
@@ -242,17 +366,22 @@ SUMMED = ("edges", "beats", "clocks", "dropped", "timed_edges", "seconds", "sim_
 
 @dataclass
 class Totals:
-    """Figures summed over shards' records, and the first `MAX_LISTED` of their mismatches:
-    a run of millions of shards keeps these, not its records."""
+    """Figures summed over shards' records (`summed`: the keys of a plan's records), and the
+    first `MAX_LISTED` of their mismatches: a run of millions of shards keeps these, not its
+    records."""
 
+    summed: tuple = SUMMED
     shards: int = 0
-    sums: dict = field(default_factory=lambda: dict.fromkeys(SUMMED, 0))
+    sums: dict = field(default_factory=dict)
     mismatches: list = field(default_factory=list)
     mismatch_count: int = 0
 
+    def __post_init__(self):
+        self.sums = dict.fromkeys(self.summed, 0) | self.sums
+
     def add(self, record: dict) -> None:
         self.shards += 1
-        for key in SUMMED:
+        for key in self.summed:
             self.sums[key] += record[key]
         self.mismatch_count += len(record["mismatches"])
         self.mismatches += record["mismatches"][: MAX_LISTED - len(self.mismatches)]
@@ -270,7 +399,7 @@ class ShardStore:
     def __init__(self, directory: str | os.PathLike | None, manifest: dict):
         self.directory = None if directory is None else Path(directory)
         self.finished = Finished()
-        self.totals = Totals()
+        self.totals = Totals(summed(manifest))
         self.notes: list[str] = []
         if self.directory is not None:
             self._open(manifest)
@@ -286,6 +415,7 @@ class ShardStore:
         path = self.directory / MANIFEST
         if path.exists() or path.is_symlink():
             recorded = self._parse(path, _read_small(path, MAX_MANIFEST))
+            _check_unit(self.directory, recorded, manifest)
             error = manifest_error(recorded, manifest)
             if error is not None:
                 raise self._damaged(path, error)
@@ -378,6 +508,23 @@ class ShardStore:
                 os.close(fd)
 
 
+def _check_unit(directory: Path, recorded, manifest: dict) -> None:
+    """Refuse a run of edges recorded where one of scenes is asked for, or the other way."""
+    if not isinstance(recorded, dict) or not {"edges", "scenes"} & recorded.keys():
+        return  # not a run record at all: `manifest_error` says so
+    there, here = schema_of(recorded).unit, schema_of(manifest).unit
+    if there != here:
+        raise RunMismatch(
+            f"{_path(directory)} holds a run of {there}, not of {here}: give another --out"
+        )
+
+
+def summed(manifest: dict) -> tuple:
+    """The figures `Totals` sums over the records of the run of `manifest`."""
+    schema = schema_of(manifest)
+    return (schema.unit, *schema.counts, *TIMES)
+
+
 def _path(path: Path) -> str:
     """A path for a one-line message: as it is, or quoted if it holds a newline or the like."""
     text = str(path)
@@ -438,6 +585,14 @@ def _results(submit: Callable, wait_any: Callable, tasks: Iterable[ShardTask], l
             yield task, future
 
 
+Task = ShardTask | SceneTask  # a shard of edges or of scenes: `task.check(core, report)`
+
+
+def check_task(task: Task, core: CompiledCore | None, report: Callable | None = None) -> dict:
+    """Check one shard (a module function: what a pool or a cluster sends to its workers)."""
+    return task.check(core, report)
+
+
 class InProcess:
     """Shards one after the other in this process (``--workers 0``: for debugging)."""
 
@@ -445,12 +600,12 @@ class InProcess:
         self.core = core
 
     def results(
-        self, tasks: Iterable[ShardTask], piece: Callable | None = None
-    ) -> Iterator[tuple[ShardTask, Callable]]:
-        """(task, its result) as each finishes; `piece(index, edges)` after each piece."""
+        self, tasks: Iterable[Task], piece: Callable | None = None
+    ) -> Iterator[tuple[Task, Callable]]:
+        """(task, its result) as each finishes; `piece(index, done)` after each piece."""
         for task in tasks:
             try:
-                result = check_shard(task, self.core, report=piece)
+                result = check_task(task, self.core, report=piece)
             except Exception as error:  # reported like a worker's exception
                 yield task, _raise(error)
             else:
@@ -478,8 +633,8 @@ def _start_worker(pieces) -> None:
     _PIECES = pieces
 
 
-def _check_in_worker(task: ShardTask, core: CompiledCore | None) -> dict:
-    return check_shard(task, core, report=lambda index, edges: _PIECES.put((index, edges)))
+def _check_in_worker(task: Task, core: CompiledCore | None) -> dict:
+    return check_task(task, core, report=lambda index, done: _PIECES.put((index, done)))
 
 
 class LocalPool:
@@ -497,7 +652,7 @@ class LocalPool:
             workers, mp_context=context, initializer=_start_worker, initargs=(self.pieces,)
         )
 
-    def results(self, tasks: Iterable[ShardTask], piece: Callable | None = None):
+    def results(self, tasks: Iterable[Task], piece: Callable | None = None):
         def submit(task):
             return self.pool.submit(_check_in_worker, task, self.core)
 
@@ -526,7 +681,7 @@ class DaskCluster:
     `LocalCluster` of `workers` single-threaded worker processes on this machine. The compiled
     core is sent to every worker once (`Client.scatter`); workers must have edgeaa installed."""
 
-    def __init__(self, address: str, workers: int, config: EdgeConfig, engine: str):
+    def __init__(self, address: str, workers: int, build: Callable):
         try:
             from distributed import Client, LocalCluster
         except ImportError:
@@ -550,16 +705,16 @@ class DaskCluster:
                 raise ClusterUnavailable(
                     f"cannot reach the Dask scheduler at {address}: {error}"
                 ) from None
-        core = CompiledCore.build(config, ship=True) if engine == "verilator" else None
+        core = build(ship=True)
         self.core = None if core is None else self.client.scatter(core, broadcast=True)
         self.threads = max(1, sum(self.client.nthreads().values()))
 
-    def results(self, tasks: Iterable[ShardTask], piece: Callable | None = None):
+    def results(self, tasks: Iterable[Task], piece: Callable | None = None):
         """(task, its result) as each finishes; pieces are not reported from a cluster."""
         from distributed import wait
 
         def submit(task):
-            return self.client.submit(check_shard, task, self.core, pure=False)
+            return self.client.submit(check_task, task, self.core, pure=False)
 
         def wait_any(pending):
             return wait(pending, return_when="FIRST_COMPLETED")
@@ -574,61 +729,60 @@ class DaskCluster:
 
 
 def open_runner(
-    config: EdgeConfig, engine: str, workers: int, cluster: str | None
+    config: EdgeConfig,
+    engine: str,
+    workers: int,
+    cluster: str | None,
+    *,
+    build: Callable | None = None,
 ) -> InProcess | LocalPool | DaskCluster:
     """Where the shards run: a Dask cluster if `cluster` is given, else the local pool (or, for
-    ``workers == 0``, this process). The compiled core is built here, once."""
+    ``workers == 0``, this process). The compiled core is built here, once: `build(ship=...)`
+    (a plan's `build_core`; default the edge core of `config` on `engine`)."""
+    if build is None:
+        build = Plan(config, 1, 1, 0, engine).build_core  # (no seed, shard or edge in a build)
     if cluster is not None:
-        return DaskCluster(cluster, workers, config, engine)
-    core = CompiledCore.build(config) if engine == "verilator" else None
+        return DaskCluster(cluster, workers, build)
+    core = build(ship=False)
     return InProcess(core) if workers == 0 else LocalPool(workers, core)
 
 
 # -- running a plan --------------------------------------------------------------------------
 
 
-def crash_result(task: ShardTask, error: BaseException) -> dict:
+def crash_result(task: Task, error: BaseException) -> dict:
     """A shard whose worker raised: a failure of this run, not recorded (a rerun retries it)."""
     lines = traceback.format_exception_only(type(error), error)
-    message = f"the worker raised {lines[-1].strip()}"
-    mismatch = {"kind": "crash", "edge": None, "beat": None, "message": message}
-    mismatch.update(stream=None, reproduce=None, reproduce_shard=reproduce_shard(task))
+    mismatch = {"kind": "crash", "message": f"the worker raised {lines[-1].strip()}"}
+    mismatch.update(task.blank_mismatch(), reproduce_shard=task.reproduce())
     mismatch.update(shard=task.index, seed=task.seed)
-    return {
-        "index": task.index,
-        "seed": task.seed,
-        "edges": task.edges,
-        "beats": 0,
-        "clocks": 0,
-        "dropped": 0,
-        "timed_edges": 0,
-        "sim_seconds": 0.0,
-        "seconds": 0.0,
-        "mismatches": [mismatch],
-        "crashed": True,
-    }
+    return task.blank_result() | {"mismatches": [mismatch], "crashed": True}
 
 
-def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = None) -> dict:
+def run_plan(
+    plan: Plan | ScenePlan, runner, store: ShardStore, progress: Callable | None = None
+) -> dict:
     """Run the shards `store` has not finished; return the merged summary. `progress(done,
-    total, stage)` is called with edges (finished ones included) after each shard and, from
-    this process or a local pool, after each piece of a shard (`ShardTask.chunks`); the stage
-    is the count of mismatches once there are any (else None: the rate is the bar's)."""
+    total, stage)` is called with edges or scenes (`plan.unit`; finished ones included) after
+    each shard and, from this process or a local pool, after each piece of a shard
+    (`ShardTask.chunks`, a scene); the stage is the count of mismatches once there are any
+    (else None: the rate is the bar's)."""
     tasks = (task for task in plan.tasks() if task.index not in store.finished)
     resumed = len(store.finished)
-    resumed_edges = store.totals.sums["edges"]
-    session, crashed = Totals(), Totals()  # this session's shards; those whose worker raised
-    running: dict[int, int] = {}  # edges checked so far in shards still running
+    unit, resumed_units = plan.unit, store.totals.sums[plan.unit]
+    # this session's shards; those whose worker raised
+    session, crashed = Totals(store.totals.summed), Totals(store.totals.summed)
+    running: dict[int, int] = {}  # edges or scenes checked so far in shards still running
     start = time.perf_counter()
 
     def show() -> None:
         if progress is not None:
-            edges = resumed_edges + session.sums["edges"] + sum(running.values())
+            done = resumed_units + session.sums[unit] + sum(running.values())
             failed = store.totals.mismatch_count + crashed.mismatch_count
-            progress(edges, plan.edges, f"{failed} MISMATCHES" if failed else None)
+            progress(done, plan.total, f"{failed} MISMATCHES" if failed else None)
 
-    def piece(index: int, edges: int) -> None:
-        running[index] = edges
+    def piece(index: int, done: int) -> None:
+        running[index] = done
         show()
 
     for task, result in runner.results(tasks, piece):
@@ -646,7 +800,12 @@ def run_plan(plan: Plan, runner, store: ShardStore, progress: Callable | None = 
 
 
 def summarize(
-    plan: Plan, recorded: Totals, crashed: Totals, session: Totals, resumed: int, seconds: float
+    plan: Plan | ScenePlan,
+    recorded: Totals,
+    crashed: Totals,
+    session: Totals,
+    resumed: int,
+    seconds: float,
 ) -> dict:
     """The run's figures, merged over every finished shard (`recorded`, resumed ones
     included, and the `crashed` ones of this session); rates and times are this session's.
@@ -655,20 +814,17 @@ def summarize(
     listed = sorted(listed, key=lambda mismatch: mismatch["shard"])[:MAX_LISTED]
     count = recorded.mismatch_count + crashed.mismatch_count
     done = recorded.shards + crashed.shards
-    edges_run = session.sums["edges"]
+    units_run = session.sums[plan.unit]
     return {
         "passed": not count and done == plan.count,
         **plan.manifest(),
         "shards_done": done,
         "shards_resumed": resumed,
         "shards_run": session.shards,
-        **{
-            f"{key}_checked": recorded.sums[key] + crashed.sums[key]
-            for key in ("edges", "beats", "clocks", "dropped", "timed_edges")
-        },
-        "edges_run": edges_run,
+        **{f"{key}_checked": recorded.sums[key] + crashed.sums[key] for key in plan.checked},
+        f"{plan.unit}_run": units_run,
         "seconds": seconds,
-        "edges_per_second": edges_run / seconds if seconds > 0 else 0.0,
+        f"{plan.unit}_per_second": units_run / seconds if seconds > 0 else 0.0,
         "worker_seconds": session.sums["seconds"],
         "sim_seconds": session.sums["sim_seconds"],
         "mismatch_count": count,
@@ -684,6 +840,7 @@ __all__ = [
     "LocalPool",
     "Plan",
     "RunMismatch",
+    "ScenePlan",
     "ShardStore",
     "open_runner",
     "run_plan",

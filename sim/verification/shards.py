@@ -98,6 +98,21 @@ class ShardTask:
     def max_pixels(self) -> int:
         return MAX_PIXELS[self.seed % len(MAX_PIXELS)]
 
+    def check(self, core: CompiledCore | None, report: Callable | None = None) -> dict:
+        return check_shard(self, core, report=report)
+
+    def blank_result(self) -> dict:
+        """A record of nothing checked (a crashed shard's)."""
+        result = {"index": self.index, "seed": self.seed, "edges": self.edges, "beats": 0}
+        result.update(clocks=0, dropped=0, timed_edges=0, sim_seconds=0.0, seconds=0.0)
+        return result | {"mismatches": []}
+
+    def blank_mismatch(self) -> dict:
+        return {"edge": None, "beat": None, "stream": None, "reproduce": None}
+
+    def reproduce(self) -> str:
+        return reproduce_shard(self)
+
     def draw(self) -> Iterator[Edge]:
         """The shard's edges one at a time (`iter_sim_edges` from its seed)."""
         return iter_sim_edges(
@@ -155,7 +170,11 @@ class CompiledCore:
 
     @classmethod
     def build(cls, config: EdgeConfig, *, ship: bool = False) -> CompiledCore:
-        path = verilator_harness.build(config)
+        return cls.of(verilator_harness.build(config), ship=ship)
+
+    @classmethod
+    def of(cls, path: Path, *, ship: bool = False) -> CompiledCore:
+        """The executable at `path` (a cached build), with its bytes if `ship`."""
         return cls(path.parent.name, str(path), path.read_bytes() if ship else b"")
 
     def executable(self) -> Path:
