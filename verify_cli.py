@@ -12,7 +12,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import sys
 
 from .command import (
@@ -21,6 +20,8 @@ from .command import (
     add_config_options,
     config_from_args,
     integer_type,
+    require_extra,
+    require_verilator_cache,
     shown,
     usage_error,
 )
@@ -34,12 +35,8 @@ MAX_EDGES = 10**12  # a thousand times the issue's 10^9: weeks on a large cluste
 MAX_WORKERS = 256
 
 
-def shard_seed(text: str) -> int:
-    """An argparse type: a shard seed, a whole number below 2**64 (read only when short)."""
-    text = text.strip()
-    if not re.fullmatch(r"\d{1,20}", text) or int(text) >= 1 << 64:
-        raise argparse.ArgumentTypeError(f"must be a whole number below 2**64, not {shown(text)}")
-    return int(text)
+# A shard seed: a whole number below 2**64 (20 digits).
+shard_seed = integer_type(0, (1 << 64) - 1, digits=20)
 
 
 class VerifyCommand(Command):
@@ -137,7 +134,7 @@ class VerifyCommand(Command):
         except RunMismatch as error:
             raise usage_error(self.prog, str(error)) from None
         except OSError as error:  # not a directory, no permission, ...
-            raise usage_error(self.prog, f"--out {args.out}: {error.strerror}") from None
+            raise usage_error(self.prog, f"--out {shown(args.out)}: {error.strerror}") from None
         if not args.json:
             print(_heading(plan, workers, cluster, len(store.finished)))
         try:
@@ -187,6 +184,11 @@ class VerifyCommand(Command):
             raise usage_error(self.prog, "--workers 0 runs in this process: not with a cluster")
         seed = DEFAULT_SEED if args.seed is None else args.seed
         config = config_from_args(args)
+        if args.engine == "verilator":
+            require_extra(self.prog, "sim", ("verilator",))
+            require_verilator_cache(self.prog)
+        if cluster is not None:
+            require_extra(self.prog, "cluster", ("distributed",))
         plan = Plan(config, args.edges, shards, seed, args.engine, args.shard_seed)
         return plan, workers, cluster
 

@@ -13,11 +13,12 @@ from ..command import (
     atomic_output,
     check_output,
     config_from_args,
+    integer_list_type,
     integer_type,
     number_type,
-    shown,
     usage_error,
 )
+from ..model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 # Upper bounds that keep each job to minutes, not days (every default is far below them).
@@ -29,24 +30,6 @@ SEED = integer_type(0, 2**32 - 1)  # numpy's seed range
 
 def _check_output(prog: str, path: str) -> None:
     check_output(prog, path, PLOT_SUFFIXES)
-
-
-def _int_list(prog: str, option: str, text: str, lo: int, hi: int) -> tuple[int, ...]:
-    try:
-        parts = [v for v in text.split(",") if v.strip()]
-        if any(len(v.strip()) > 6 for v in parts) or len(parts) > 64:
-            raise ValueError
-        values = tuple(dict.fromkeys(int(v) for v in parts))  # once each, in order
-    except ValueError:
-        raise usage_error(
-            prog, f"{option} must be integers separated by commas, not {shown(text)}"
-        ) from None
-    if not values:
-        raise usage_error(prog, f"{option} must list at least one value")
-    for value in values:
-        if not lo <= value <= hi:
-            raise usage_error(prog, f"{option}: {value} is outside [{lo}, {hi}]")
-    return values
 
 
 # -- edgeaa plot error-vs-slope -----------------------------------------------------------------
@@ -333,11 +316,13 @@ class StressCommand(Command):
         )
         parser.add_argument(
             "--widths",
+            type=integer_list_type(*COORD_BITS_RANGE),
             help="coordinate widths W, e.g. 2,4,8 (default 2,4,6,8,10,11,12,14,16; "
             "--quick 2,4,6,8,11)",
         )
         parser.add_argument(
             "--intensities",
+            type=integer_list_type(*INTENSITY_BITS_RANGE),
             help="intensity bits I for the F table, e.g. 4,8 (default 4,8,12,16; --quick 4,8)",
         )
         parser.add_argument(
@@ -394,20 +379,14 @@ class StressCommand(Command):
 
     def _check(self, args: argparse.Namespace) -> tuple[tuple[int, ...], tuple[int, ...]]:
         """The widths and intensity bits to sweep, after checking every option."""
-        from ..model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
+        from ..model.config import COORD_BITS_RANGE, SUBPIXEL_BITS_RANGE
         from . import stress
 
         prog = self.prog
         _check_output(prog, args.output)
-        widths = (
-            _int_list(prog, "--widths", args.widths, *COORD_BITS_RANGE)
-            if args.widths
-            else (stress.QUICK_WIDTHS if args.quick else stress.FULL_WIDTHS)
-        )
-        intensities = (
-            _int_list(prog, "--intensities", args.intensities, *INTENSITY_BITS_RANGE)
-            if args.intensities
-            else (stress.QUICK_INTENSITIES if args.quick else stress.FULL_INTENSITIES)
+        widths = args.widths or (stress.QUICK_WIDTHS if args.quick else stress.FULL_WIDTHS)
+        intensities = args.intensities or (
+            stress.QUICK_INTENSITIES if args.quick else stress.FULL_INTENSITIES
         )
         lo, hi = SUBPIXEL_BITS_RANGE
         if not lo <= args.subpixel_bits <= hi:
