@@ -134,6 +134,18 @@ def test_the_largest_tiles_are_read():
     assert command.tile_size("4x64") == (4, 64)
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["verify", "--edges", "100000000", "--shards", "1"],
+        ["verify", "--edges", "250001", "--shard-seed", "7"],
+        ["verify", "--edges", "500002", "--shards", "2"],
+    ],
+)
+def test_a_shard_is_bounded_by_its_memory(capsys, argv):
+    refused(capsys, argv, "more than 250,000 a shard")
+
+
 def test_demo_spokes_are_bounded_by_their_time(capsys):
     refused(capsys, ["demo", "--spokes", "4096"], "must be an integer in [1, 512]")
 
