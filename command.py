@@ -130,9 +130,9 @@ def integer_list_type(lo: int, hi: int):
                 f"must be one or more integers in [{lo}, {hi}] separated by commas, not "
                 f"{shown(text)}"
             ) from None
-        repeated = sorted({v for v in values if values.count(v) > 1})
-        if repeated:
-            raise argparse.ArgumentTypeError(f"{repeated[0]} is given twice; give each once")
+        repeated = first_repeat(values)
+        if repeated is not None:
+            raise argparse.ArgumentTypeError(f"{repeated} is given twice; give each once")
         return values
 
     parse.__name__ = "integer list"
@@ -160,11 +160,20 @@ def number_type(lo: float, hi: float):
 INTEGER = integer_type()  # the model checks the range and names it
 
 
-def check_distinct(prog: str, option: str, values) -> None:
-    """Refuse a list option that names a value twice (`--target ice40 ice40`)."""
+def first_repeat(values):
+    """The first value of a list option that is given a second time, or None: a repeat is
+    refused, never dropped (`--target ice40 ice40`, `--widths 4,4`)."""
     for i, value in enumerate(values):
         if value in values[:i]:
-            raise usage_error(prog, f"{option}: {shown(value)} is given twice; give each once")
+            return value
+    return None
+
+
+def check_distinct(prog: str, option: str, values) -> None:
+    """Refuse a list option that names a value twice (`--target ice40 ice40`)."""
+    repeated = first_repeat(values)
+    if repeated is not None:
+        raise usage_error(prog, f"{option}: {shown(repeated)} is given twice; give each once")
 
 
 # -- optional extras -------------------------------------------------------------------------
@@ -179,8 +188,8 @@ def missing_extra(prog: str, extra: str, missing) -> MissingExtra:
     noun = "package" if len(missing) == 1 else "packages"
     return MissingExtra(
         f"{prog}: error: this needs the optional {noun} {', '.join(map(repr, missing))} of "
-        f"the extra "
-        f'{extra!r}: pip install "edgeaa[{extra}]" (in a clone: pip install -e ".[{extra}]")'
+        f"the extra {extra!r}: "
+        f'pip install "edgeaa[{extra}]" (in a clone: pip install -e ".[{extra}]")'
     )
 
 
