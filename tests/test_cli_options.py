@@ -332,13 +332,18 @@ def test_require_extra_passes_when_installed():
 # -- the Verilator cache ---------------------------------------------------------------------
 
 
-def test_an_unusable_verilator_cache_is_one_line(capsys, monkeypatch, tmp_path):
-    blocker = tmp_path / "a_file"
-    blocker.write_text("")
-    monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
-    err = refused(
-        capsys,
+@pytest.mark.parametrize(
+    "argv",
+    [
         ["render", "--builtin", "text", "--engine", "verilator"],
-        "the Verilator build cache",
-    )
-    assert "XDG_CACHE_HOME" in err
+        ["verify", "--edges", "10"],
+        ["bench", "--no-synth"],
+    ],
+)
+def test_an_unusable_verilator_cache_is_one_line(capsys, monkeypatch, tmp_path, argv):
+    monkeypatch.chdir(tmp_path)
+    blocker = tmp_path / "a_file"
+    blocker.write_text("")  # XDG_CACHE_HOME names a file, not a folder
+    monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
+    err = refused(capsys, argv, "the Verilator build cache")
+    assert "XDG_CACHE_HOME" in err and "Not a directory" in err
