@@ -57,8 +57,8 @@ class VerifyCommand(Command):
         "mismatch stops nothing: it is printed at the end with an `edgeaa edge` command for "
         "the edge and an `edgeaa verify --shard-seed` command for its shard, and the exit "
         "status is 1. With --out, finished shards are recorded and a rerun of the same "
-        "command skips them. Random polygon scenes (--scenes) will come with the polygon "
-        "pipeline in hardware, which does not exist yet. docs/hardware.md, 'Regressions at "
+        "command skips them. The polygon pipeline (EdgePipeline) is checked scene by scene "
+        "by `edgeaa render --engine verilator`, not here. docs/hardware.md, 'Regressions at "
         "scale'."
     )
 
