@@ -20,6 +20,7 @@ from .command import (
     add_config_options,
     config_from_args,
     integer_type,
+    read_integer,
     require_extra,
     require_verilator_cache,
     shown,
@@ -39,8 +40,14 @@ MAX_WORKERS = 256
 MAX_SHARD_EDGES = 250_000
 
 
-# A shard seed: a whole number below 2**64 (20 digits).
-shard_seed = integer_type(0, (1 << 64) - 1, digits=20)
+def shard_seed(text: str) -> int:
+    """An argparse type: a shard seed, a whole number below 2**64 (20 ASCII digits at most)."""
+    try:
+        return read_integer(text, 0, (1 << 64) - 1, digits=20)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be a whole number below 2**64, not {shown(text)}"
+        ) from None
 
 
 class VerifyCommand(Command):
@@ -138,7 +145,7 @@ class VerifyCommand(Command):
         except RunMismatch as error:
             raise usage_error(self.prog, str(error)) from None
         except OSError as error:  # not a directory, no permission, ...
-            raise usage_error(self.prog, f"--out {shown(args.out)}: {error.strerror}") from None
+            raise usage_error(self.prog, f"--out {args.out}: {error.strerror}") from None
         if not args.json:
             print(_heading(plan, workers, cluster, len(store.finished)))
         try:

@@ -43,7 +43,7 @@ NON_ASCII_DIGITS = ["٣", "４", "۳", "३", "𝟑"]  # Arabic-Indic, full-widt
         (["edge", "0", "0", "3", "1", "--i-in", "{}"], "--i-in: must be an integer"),
         (["edge", "0", "0", "3", "1", "--clip", "0", "0", "{}", "9"], "--clip: must be"),
         (["demo", "--spokes", "{}"], "--spokes: must be an integer"),
-        (["verify", "--shard-seed", "{}"], "--shard-seed: must be an integer"),
+        (["verify", "--shard-seed", "{}"], "--shard-seed: must be a whole number"),
         (["verify", "--edges", "1{}"], "--edges: must be an integer"),
         (["plot", "error-vs-slope", "--step", "{}"], "--step: must be a number"),
         (["stress", "--widths", "4,{}"], "--widths: must be one or more integers"),
