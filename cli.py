@@ -9,13 +9,25 @@ their own modules and register themselves.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
+import io
 import os
 import sys
 
 from . import edge_cli, verify_cli
 from .analysis import cli as analysis_cli
-from .command import COMMANDS, EXIT_BAD_INPUT, PROG, OneLineErrorParser, UsageError, usage_error
+from .command import (
+    COMMANDS,
+    EXIT_BAD_INPUT,
+    PROG,
+    MissingExtra,
+    OneLineErrorParser,
+    UsageError,
+    missing_extra,
+    one_line,
+    usage_error,
+)
 from .model import ConfigError, EdgeError
 from .render import cli as render_cli
 
@@ -66,6 +78,7 @@ FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO)  # stdout cou
 
 
 def main(argv: list[str] | None = None) -> int:
+    _escape_unencodable()
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else argv
     try:
@@ -79,18 +92,16 @@ def main(argv: list[str] | None = None) -> int:
         message = str(error)
         if not message.startswith(PROG):
             message = str(usage_error(PROG, message))
-        print(message, file=sys.stderr)
+        print(one_line(message), file=sys.stderr)
         return EXIT_BAD_INPUT
-    except ModuleNotFoundError as error:
+    except MissingExtra as error:
+        print(one_line(str(error)), file=sys.stderr)
+        return EXIT_MISSING
+    except ModuleNotFoundError as error:  # one a command did not ask for with require_extra
         top = (error.name or "").split(".")[0]
         if top not in OPTIONAL_MODULES:
             raise
-        extra = OPTIONAL_MODULES[top]
-        print(
-            f"{PROG}: error: this needs the optional package {top!r}: pip install -e "
-            f'".[{extra}]" (or ".[dev]" for every extra)',
-            file=sys.stderr,
-        )
+        print(missing_extra(PROG, OPTIONAL_MODULES[top], [top]), file=sys.stderr)
         return EXIT_MISSING
     except BrokenPipeError:  # `edgeaa ... | head`: the reader has all it wanted
         _silence_stdout()
@@ -104,6 +115,14 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+def _escape_unencodable() -> None:
+    """Write what the terminal's encoding cannot hold as escapes (a file name that is not
+    UTF-8, read with surrogateescape, under PYTHONIOENCODING=ascii:strict), never raise."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(AttributeError, ValueError, io.UnsupportedOperation):
+            stream.reconfigure(errors="backslashreplace")
 
 
 def _silence_stdout() -> None:

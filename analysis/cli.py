@@ -9,16 +9,22 @@ import argparse
 from functools import partial
 
 from ..command import (
+    LINE_PEER_MODULES,
+    PEER_MODULES,
     Command,
     add_config_options,
     atomic_output,
     check_output,
     config_from_args,
+    integer_list_type,
     integer_type,
     number_type,
-    shown,
+    require_extra,
+    require_synth,
+    require_verilator_cache,
     usage_error,
 )
+from ..model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE
 from ..progress import ProgressBar
 
 PLOT_SUFFIXES = (".png", ".svg", ".pdf")
@@ -41,24 +47,6 @@ def _write_plot(prog: str, path: str, draw, quiet: bool) -> None:
         draw(temporary)
     bar.close()
     print(f"wrote {path}")
-
-
-def _int_list(prog: str, option: str, text: str, lo: int, hi: int) -> tuple[int, ...]:
-    try:
-        parts = [v for v in text.split(",") if v.strip()]
-        if any(len(v.strip()) > 6 for v in parts) or len(parts) > 64:
-            raise ValueError
-        values = tuple(dict.fromkeys(int(v) for v in parts))  # once each, in order
-    except ValueError:
-        raise usage_error(
-            prog, f"{option} must be integers separated by commas, not {shown(text)}"
-        ) from None
-    if not values:
-        raise usage_error(prog, f"{option} must list at least one value")
-    for value in values:
-        if not lo <= value <= hi:
-            raise usage_error(prog, f"{option}: {value} is outside [{lo}, {hi}]")
-    return values
 
 
 # -- edgeaa plot error-vs-slope -----------------------------------------------------------------
@@ -160,6 +148,8 @@ def _plot_error_vs_slope(args: argparse.Namespace) -> int:
 
     config = config_from_args(args)
     _check_output(SLOPE_PROG, args.output)
+    if args.peers:
+        require_extra(SLOPE_PROG, "peers", PEER_MODULES)
     need = 2 + 1 + args.length
     if args.length < 4 or need > (1 << config.coord_bits) - 1:
         raise usage_error(
@@ -201,6 +191,7 @@ def _plot_aa_methods(args: argparse.Namespace) -> int:
 
     prog = "edgeaa plot aa-methods"
     _check_output(prog, args.output)
+    require_extra(prog, "peers", PEER_MODULES)
     config = EdgeConfig()
     rows = aa_report.method_table(config, args.edges, args.seed, not args.quiet)
     print(machine_line())
@@ -283,6 +274,13 @@ class BenchCommand(Command):
         if args.output is not None:
             _check_output(self.prog, args.output)
         quick = args.quick
+        lines = () if args.no_lines else LINE_PEER_MODULES
+        require_extra(self.prog, "peers", PEER_MODULES + lines)
+        if not quick:  # the hardware columns: the compiled core, and synthesis unless skipped
+            require_extra(self.prog, "sim", ("verilator",))
+            require_verilator_cache(self.prog)
+            if not args.no_synth:
+                require_synth(self.prog, ("ice40",))
         count = (
             args.edges
             if args.edges is not None
@@ -332,11 +330,13 @@ class StressCommand(Command):
         )
         parser.add_argument(
             "--widths",
+            type=integer_list_type(*COORD_BITS_RANGE),
             help="coordinate widths W, e.g. 2,4,8 (default 2,4,6,8,10,11,12,14,16; "
             "--quick 2,4,6,8,11)",
         )
         parser.add_argument(
             "--intensities",
+            type=integer_list_type(*INTENSITY_BITS_RANGE),
             help="intensity bits I for the F table, e.g. 4,8 (default 4,8,12,16; --quick 4,8)",
         )
         parser.add_argument(
@@ -400,21 +400,15 @@ class StressCommand(Command):
 
     def _check(self, args: argparse.Namespace) -> tuple[tuple[int, ...], tuple[int, ...]]:
         """The widths and intensity bits to sweep, after checking every option."""
-        from ..model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE, SUBPIXEL_BITS_RANGE
+        from ..model.config import COORD_BITS_RANGE, SUBPIXEL_BITS_RANGE
         from . import stress
 
         prog = self.prog
         if args.output is not None:
             _check_output(prog, args.output)
-        widths = (
-            _int_list(prog, "--widths", args.widths, *COORD_BITS_RANGE)
-            if args.widths
-            else (stress.QUICK_WIDTHS if args.quick else stress.FULL_WIDTHS)
-        )
-        intensities = (
-            _int_list(prog, "--intensities", args.intensities, *INTENSITY_BITS_RANGE)
-            if args.intensities
-            else (stress.QUICK_INTENSITIES if args.quick else stress.FULL_INTENSITIES)
+        widths = args.widths or (stress.QUICK_WIDTHS if args.quick else stress.FULL_WIDTHS)
+        intensities = args.intensities or (
+            stress.QUICK_INTENSITIES if args.quick else stress.FULL_INTENSITIES
         )
         lo, hi = SUBPIXEL_BITS_RANGE
         if not lo <= args.subpixel_bits <= hi:

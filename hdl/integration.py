@@ -8,6 +8,8 @@
   driven (with the clip window's tie-off values), the reset behaviour and the lint command.
 * `must_drive`: the inputs that have no safe meaning when left undriven, for the header and
   the command's note on standard error.
+* `name_error`: why a module name cannot be used (not a plain Verilog identifier, or one of
+  the Verilog-2005 and SystemVerilog-2017 keywords, `KEYWORDS`), for `edgeaa verilog --name`.
 * `lint_waivers`: the Verilator configuration file (``.vlt``) that makes ``verilator
   --lint-only -Wall`` clean. Every waiver is one rule on the lines of one file (``-file``,
   ``-lines``), chosen by the shape of the line Yosys wrote (`WAIVERS`), and explained. A
@@ -20,14 +22,69 @@ import re
 from dataclasses import dataclass
 
 __all__ = [
+    "KEYWORDS",
+    "MAX_NAME",
     "WAIVERS",
+    "WAIVER_FILENAME",
     "Waiver",
     "annotate",
     "header",
     "lint_waivers",
     "must_drive",
+    "name_error",
     "sign_ports",
 ]
+
+# -- module names -------------------------------------------------------------------------------
+
+# The reserved words of IEEE 1800-2017 (SystemVerilog) Annex B, which include every one of IEEE
+# 1364-2005 (Verilog) Annex B: a module named `always`, `wire` or `logic` cannot be written
+# plainly (Yosys escapes it, `\always `), and a user's tools may read either language.
+KEYWORDS = frozenset(
+    """
+    accept_on alias always always_comb always_ff always_latch and assert assign assume
+    automatic before begin bind bins binsof bit break buf bufif0 bufif1 byte case casex casez
+    cell chandle checker class clocking cmos config const constraint context continue cover
+    covergroup coverpoint cross deassign default defparam design disable dist do edge else end
+    endcase endchecker endclass endclocking endconfig endfunction endgenerate endgroup
+    endinterface endmodule endpackage endprimitive endprogram endproperty endspecify
+    endsequence endtable endtask enum event eventually expect export extends extern final
+    first_match for force foreach forever fork forkjoin function generate genvar global highz0
+    highz1 if iff ifnone ignore_bins illegal_bins implements implies import incdir include
+    initial inout input inside instance int integer interconnect interface intersect join
+    join_any join_none large let liblist library local localparam logic longint macromodule
+    matches medium modport module nand negedge nettype new nexttime nmos nor noshowcancelled
+    not notif0 notif1 null or output package packed parameter pmos posedge primitive priority
+    program property protected pull0 pull1 pulldown pullup pulsestyle_ondetect
+    pulsestyle_onevent pure rand randc randcase randsequence rcmos real realtime ref reg
+    reject_on release repeat restrict return rnmos rpmos rtran rtranif0 rtranif1 s_always
+    s_eventually s_nexttime s_until s_until_with scalared sequence shortint shortreal
+    showcancelled signed small soft solve specify specparam static string strong strong0
+    strong1 struct super supply0 supply1 sync_accept_on sync_reject_on table tagged task this
+    throughout time timeprecision timeunit tran tranif0 tranif1 tri tri0 tri1 triand trior
+    trireg type typedef union unique unique0 unsigned until until_with untyped use uwire var
+    vectored virtual void wait wait_order wand weak weak0 weak1 while wildcard wire with within
+    wor xnor xor
+    """.split()  # noqa: SIM905 (the standard's table, as it reads)
+)
+MAX_NAME = 64  # characters of a module name (the standards allow 1,024; tools often fewer)
+# A simple identifier that Yosys writes as it is: a letter or _, then letters, digits and _.
+# The standards also allow $ after the first character, but Yosys escapes such a name
+# (`\a$b `), so the module would not be found under the name asked for.
+_PLAIN_NAME = re.compile(rf"[A-Za-z_][A-Za-z0-9_]{{0,{MAX_NAME - 1}}}", re.ASCII)
+
+
+def name_error(name: str) -> str | None:
+    """Why `name` cannot name the top module, or None when it can."""
+    if name in KEYWORDS:
+        return f"{name} is a Verilog/SystemVerilog keyword; choose another name"
+    if not _PLAIN_NAME.fullmatch(name):
+        return (
+            f"must be a plain Verilog identifier (a letter or _, then letters, digits or _; "
+            f"at most {MAX_NAME} characters; no $, which Yosys would escape)"
+        )
+    return None
+
 
 # -- the shapes of the lines Yosys's write_verilog emits --------------------------------------
 
@@ -175,18 +232,23 @@ def _runs(numbers: list[int]) -> list[tuple[int, int]]:
     return runs
 
 
+# The Verilog file names a waiver file can point at (`-file "*name"`, no quoting needed).
+WAIVER_FILENAME = re.compile(r"[\w.+-]+")
+WAIVER_HEADER = "// Lint waivers for {filename}, written with it by `edgeaa verilog`"
+
+
 def lint_waivers(source: str, filename: str) -> str:
     """The Verilator configuration file that waives, in the Verilog `source` written to a
     file named `filename` (its base name), exactly the `WAIVERS` lines: one ``lint_off
     -rule R -file "*filename" -lines A-B`` per run of lines of one shape. Pass it before
     the Verilog: ``verilator --lint-only -Wall core.vlt core.v``."""
-    if not re.fullmatch(r"[\w.+-]+", filename):
+    if not WAIVER_FILENAME.fullmatch(filename):
         raise ValueError(f"filename must be a plain file name, not {filename!r}")
     lines = source.splitlines()
     scopes = _scopes(lines)
     out = [
         "`verilator_config",
-        f"// Lint waivers for {filename}, written with it by `edgeaa verilog`: valid only for",
+        WAIVER_HEADER.format(filename=filename) + ": valid only for",
         "// that exact text (line numbers). Use: verilator --lint-only -Wall <this file> "
         f"{filename}",
         "// Each waiver is one rule on lines of one shape; why that warning says nothing",
@@ -225,7 +287,8 @@ def sign_ports(source: str, top: str, names: list[str]) -> str:
     port that the top module drives by one plain assignment (``assign port = ...;``) is
     changed, where the declaration cannot change any value; anything else raises."""
     lines = source.splitlines(keepends=True)
-    start = next(i for i, line in enumerate(lines) if re.match(rf"^module {top}\(", line))
+    opening = re.compile(rf"^module {re.escape(top)}\(")
+    start = next(i for i, line in enumerate(lines) if opening.match(line))
     start = next(i for i in range(start, len(lines)) if lines[i].rstrip().endswith(");"))
     end = next(i for i in range(start, len(lines)) if lines[i].startswith("endmodule"))
     for name in names:

@@ -15,7 +15,8 @@ __all__ = ["DECIMAL", "MAX_EXPONENT", "MAX_NUMBER_TEXT", "MAX_SHOWN", "decimal",
 
 MAX_SHOWN = 40  # characters of a bad value quoted in a message
 MAX_NUMBER_TEXT = 60  # characters of a number on the command line
-DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
+# [0-9], not \d: \d and Fraction() also read Arabic-Indic and full-width digits ('٣', '４').
+DECIMAL = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?", re.ASCII)
 MAX_EXPONENT = 60  # |exponent| of a decimal: far past any coordinate, cheap to evaluate
 
 

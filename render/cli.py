@@ -14,17 +14,22 @@ import time
 
 import numpy as np
 
-from ..command import PROG as COMMAND_PROG
 from ..command import (
+    PEER_MODULES,
     Command,
     add_config_options,
     atomic_output,
     check_output,
     config_from_args,
+    read_integer,
+    require_extra,
+    require_verilator_cache,
     shown,
     tile_from_args,
+    tile_size,
     usage_error,
 )
+from ..command import PROG as COMMAND_PROG
 from ..progress import ProgressBar
 from .builtin import BUILTINS
 
@@ -35,18 +40,23 @@ MAX_COMPARE_PIXELS = 1 << 16  # 65,536 (256 x 256)
 MAX_ERROR_PIXELS = 1 << 20  # 1,048,576 (1024 x 1024)
 
 
-def _crop(text: str) -> tuple[int, int, int, int]:
+MAX_CROP = 1 << 20  # past any image (the coordinates' +-2**20 px)
+
+
+def crop_box(text: str) -> tuple[int, int, int, int]:
+    """An argparse type: `--crop X0,Y0,X1,Y1`, 0 <= X0 < X1 and 0 <= Y0 < Y1 (the image's
+    size is checked once the scene is read)."""
+    parts = text.split(",")
     try:
-        parts = text.split(",")
-        if len(parts) != 4 or any(len(v.strip()) > 9 for v in parts):
+        if len(parts) != 4:
             raise ValueError
-        x0, y0, x1, y1 = (int(v) for v in parts)
+        x0, y0, x1, y1 = (read_integer(part, 0, MAX_CROP) for part in parts)
     except ValueError:
-        raise usage_error(
-            PROG, f"--crop must be X0,Y0,X1,Y1 (integers), not {shown(text)}"
+        raise argparse.ArgumentTypeError(
+            f"must be X0,Y0,X1,Y1, integers in [0, {MAX_CROP}], not {shown(text)}"
         ) from None
-    if x1 <= x0 or y1 <= y0 or min(x0, y0) < 0:
-        raise usage_error(PROG, f"--crop {text}: need 0 <= X0 < X1 and 0 <= Y0 < Y1")
+    if x1 <= x0 or y1 <= y0:
+        raise argparse.ArgumentTypeError(f"{shown(text)}: need X0 < X1 and Y0 < Y1")
     return x0, y0, x1, y1
 
 
@@ -111,8 +121,10 @@ class RenderCommand(Command):
         )
         parser.add_argument(
             "--tile",
+            type=tile_size,
+            metavar="WxH",
             help="with --engine verilator or amaranth: the pipeline's tile WIDTHxHEIGHT, "
-            "powers of two (default 64x32)",
+            "powers of two (default 64x32; limits: docs/hardware.md)",
         )
         parser.add_argument("-o", "--output", help="PNG file to write (the figure with --compare)")
         parser.add_argument(
@@ -139,7 +151,9 @@ class RenderCommand(Command):
             help="write a figure to -o instead: no antialiasing, edgeaa paper and seg4, 16x16 "
             "supersampling, Skia and AGG side by side, with error heat maps",
         )
-        parser.add_argument("--crop", help="with --compare: the pixels X0,Y0,X1,Y1 to show")
+        parser.add_argument(
+            "--crop", type=crop_box, help="with --compare: the pixels X0,Y0,X1,Y1 to show"
+        )
         parser.add_argument(
             "--json",
             action="store_true",
@@ -157,7 +171,7 @@ class RenderCommand(Command):
 
         config = config_from_args(args)
         _check_options(args, config)
-        crop = _crop(args.crop) if args.crop else None
+        crop = args.crop
         try:
             scene = _load(args, config)
             if args.compare:
@@ -174,7 +188,9 @@ class RenderCommand(Command):
             raise usage_error(PROG, str(error)) from None
         if crop and (crop[2] > scene.width or crop[3] > scene.height):
             raise usage_error(
-                PROG, f"--crop {args.crop} is outside the {scene.width} x {scene.height} image"
+                PROG,
+                f"--crop {','.join(map(str, crop))} is outside the {scene.width} x "
+                f"{scene.height} image",
             )
         boundary = int(plan.boundary.sum())
         print_text = print if not args.json else (lambda *a, **k: None)
@@ -209,18 +225,21 @@ def _check_options(args: argparse.Namespace, config) -> None:
         raise usage_error(PROG, "--compare renders with the model: --engine does not apply")
     if args.tile is not None and args.engine == "model":
         raise usage_error(PROG, "--tile sizes the hardware pipeline: add --engine verilator")
-    if args.engine != "model":
-        tile_from_args(PROG, args.tile or "64x32", config)
+    if args.engine == "verilator":
+        require_extra(PROG, "sim", ("verilator",))
+        require_verilator_cache(PROG)
     if args.no_skip and args.engine != "model":
         raise usage_error(
             PROG, "--no-skip applies to the model: the pipeline always skips (docs/hardware.md)"
         )
-    if args.crop and not args.compare:
+    if args.crop is not None and not args.compare:
         raise usage_error(PROG, "--crop selects the pixels of the --compare figure; add --compare")
     if args.output is not None:
         check_output(PROG, args.output, (".png",), inputs=(args.scene,))
     if args.compare and args.output is None:
         raise usage_error(PROG, "--compare needs -o FIGURE.png")
+    if args.compare:
+        require_extra(PROG, "peers", PEER_MODULES)
 
 
 def _compare(args: argparse.Namespace, scene, config, crop, bar: ProgressBar) -> int:
@@ -269,7 +288,7 @@ def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
         baseline = render_scene(plan, skip=False, progress=bar)
     if args.engine == "model":
         return render_scene(plan, skip=not args.no_skip, progress=bar), baseline
-    tile = tile_from_args(PROG, args.tile or "64x32", plan.config)
+    tile = tile_from_args(args.tile, plan.config)
     check_clocks(plan, tile, args.engine)  # before the build
     _build_engine(args.engine, tile, bar)
     return render_pipeline(plan, args.engine, tile, progress=bar), baseline

@@ -224,7 +224,8 @@ def test_a_bad_tile_is_refused_before_the_scene_is_planned(capsys, monkeypatch):
     args = ["render", "--builtin", "text", "--engine", "verilator", "--tile", "6x4"]
     assert main(args) == 2
     err = capsys.readouterr().err
-    assert "--tile '6x4'" in err and "power of two" in err and len(err.splitlines()) == 1, err
+    assert "--tile: must be" in err and "'6x4'" in err and "power of two" in err, err
+    assert len(err.splitlines()) == 1, err
 
 
 # -- cocotb on Verilator -------------------------------------------------------------------------
