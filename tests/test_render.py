@@ -89,6 +89,12 @@ def test_a_json_scene_with_points_contours_and_path_parses():
     ), "Z closes; m after Z is relative to the subpath's start; the repeated start is dropped"
 
 
+@pytest.mark.parametrize("digits", ["\u0661\u0662", "\uff11\uff12"])  # Arabic-Indic, full-width
+def test_path_numbers_are_ascii_digits_only(digits):
+    with pytest.raises(SceneError, match="unexpected"):
+        parse_path(f"M 0 0 L {digits} 0 L 0 5 Z")
+
+
 def test_relative_path_commands_equal_absolute_ones():
     absolute = "M 10 10 L 30 12 H 40 V 30 C 35 40 20 40 15 30 S 5 20 10 15 Q 12 12 14 11 T 10 10 Z"
     relative = (
