@@ -90,8 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         return status
     except (UsageError, ConfigError, EdgeError) as error:
         message = str(error)
-        if not message.startswith(PROG):
-            message = str(usage_error(PROG, message))
+        if not message.startswith(PROG):  # the model's errors: named by the command they came in
+            message = str(usage_error(_prog(argv), message))
         print(one_line(message), file=sys.stderr)
         return EXIT_BAD_INPUT
     except MissingExtra as error:
@@ -115,6 +115,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+def _prog(argv: list[str]) -> str:
+    """The program name of the command `argv` runs ("edgeaa edge"), or "edgeaa"."""
+    return f"{PROG} {argv[0]}" if argv and argv[0] in COMMANDS else PROG
 
 
 def _escape_unencodable() -> None:

@@ -98,7 +98,8 @@ def test_console_script_exit_status():
         check=False,
     )
     assert proc.returncode == 2
-    assert proc.stderr.strip() == "edgeaa: error: zero-length edge: P0 and P1 are the same point"
+    expected = "edgeaa edge: error: zero-length edge: P0 and P1 are the same point"
+    assert proc.stderr.strip() == expected
 
 
 def test_demo_reports_each_mode_within_its_bound(capsys, tmp_path):
