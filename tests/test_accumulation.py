@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 
 from edgeaa.model import Edge, EdgeConfig
 from edgeaa.model.accumulate import Window, fill, intensity_offset, resolve_rows
+from edgeaa.model.column import IntArith, advance, piece_end
 from edgeaa.model.config import MODES, UNITS_PER_EDGE
 from edgeaa.model.edge import setup
 from edgeaa.model.reference import FIXED_POINT_UNITS, error_bound
@@ -669,6 +670,44 @@ def test_fill_rules_on_known_sums(ifix):
     assert evenodd[:count].tolist() == [ifix * (w % 2) for w in winding.tolist()]
     with pytest.raises(ValueError, match="fill rule must be one of nonzero, evenodd"):
         fill(sums, "winding", ifix)
+
+
+def short_edge(rng: random.Random, config: EdgeConfig) -> Edge:
+    """An edge a few sub-pixel steps long along its major axis, in any octant: small du
+    makes jr + khr = du (J + K/2 on a whole unit) common."""
+    hi = config.max_vertex
+    du, dv = rng.randint(2, 40), rng.randint(0, 40)
+    dv = min(dv, du)
+    dx, dy = (du, dv) if rng.random() < 0.5 else (dv, du)
+    dx, dy = rng.choice((-1, 1)) * dx, rng.choice((-1, 1)) * dy
+    x0, y0 = rng.randint(max(0, -dx), hi - max(0, dx)), rng.randint(max(0, -dy), hi - max(0, dy))
+    i_in = rng.randint(0, config.full_scale)
+    i_out = (i_in + rng.randint(1, config.full_scale)) % (config.full_scale + 1)
+    return Edge(x0, y0, x0 + dx, y0 + dy, rng.choice(("left", "right")), i_in, i_out)
+
+
+def test_a_whole_columns_piece_ends_at_the_floor_of_j_plus_half_k_exactly():
+    """`piece_end` of a whole column is floor(J + K/2) (J = jq + jr/du, K/2 = khq + khr/du),
+    also when the remainders carry exactly (jr + khr = du), a case the random sweeps above
+    rarely reach and the column sums allow one unit of (found by
+    benchmarks/mutation_check.py: `>=` turned into `>` there survived them)."""
+    seed = 2501
+    rng = random.Random(seed)
+    config = EdgeConfig(coord_bits=8, subpixel_bits=2, mode="seg2")
+    a = IntArith(config)
+    exact_carries = 0
+    for _ in range(300):
+        edge = short_edge(rng, config)
+        st_ = setup(config, edge)
+        x, y, jq, jr = st_.x, st_.y, st_.jq, st_.jr
+        for column in range(st_.columns):
+            he, _ = piece_end(a, st_, False, jq, jr, st_.pieces.row0)
+            want = math.floor(Fraction(jq * st_.du + jr, st_.du) + Fraction(st_.khr, st_.du))
+            assert he == want + st_.khq, (seed, edge, column, he, want + st_.khq)
+            exact_carries += jr + st_.khr == st_.du
+            step = advance(a, st_, x, y, jq, jr)
+            x, y, jq, jr = step.x, step.y, step.jq, step.jr
+    assert exact_carries >= 20, (seed, exact_carries)  # the case this test is for was reached
 
 
 def test_intensity_offsets_round_half_up():
