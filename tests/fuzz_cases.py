@@ -494,6 +494,8 @@ SHARD_LINES = [  # lines added to the shards.jsonl of a finished run
 
 
 def verify_case(d: Draft, quick: bool) -> None:
+    if d.chance(0.1):
+        return _scenes_case(d, quick)
     edges = d.rng.choice([1, 2, 4, 8])
     d.integer("--edges", 1, 10**12, [edges], hostile=0.15)
     if d.chance(0.4):
@@ -526,6 +528,25 @@ def verify_case(d: Draft, quick: bool) -> None:
         mutate_argv(d, ["--edges", "--seed", "--shards", "--workers", "--engine", "--out"])
     if not quick and not d.case.invalid and d.chance(0.01):
         _huge_verify(d)
+
+
+def _scenes_case(d: Draft, quick: bool) -> None:
+    """--scenes: random scenes through the Verilated pipeline. A valid run builds (or checks the
+    cache of) the pipeline: seconds, so the quick campaign makes only the refused forms."""
+    d.integer("--scenes", 1, 10**9, [1, 2], hostile=0.3)
+    d.add("--workers", "0")
+    kind = d.rng.randrange(4)
+    if kind == 0:
+        d.add("--edges", "2")
+        d.bad("--scenes with --edges")
+    elif kind == 1:
+        d.add("--engine", "amaranth")
+        d.bad("--scenes with --engine amaranth")
+    elif kind == 2 or quick:
+        d.add("--shards", d.rng.choice(["0", "3"]))  # more shards than scenes, or none
+        d.bad("--shards out of [1, --scenes]")
+    if d.chance(0.3):
+        d.add("--json")
 
 
 def _record(d: Draft) -> None:

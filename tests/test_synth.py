@@ -314,7 +314,7 @@ def test_synth_top_pipeline_synthesises_the_pipeline_and_counts_its_block_rams(m
 
     made = []
 
-    def fake(make, target, seed):
+    def fake(make, target, seed, stage=None):
         design = make()
         Fragment.get(design, None)  # elaborated, as the real synthesis would (no warning)
         made.append((target, design))
