@@ -248,6 +248,8 @@ def _find_spec(name: str):
 
 def check_output(prog: str, path: str, suffixes: tuple[str, ...], inputs=()) -> None:
     """Refuse, before any work, an output that cannot be written or would replace an input."""
+    if not path:
+        raise usage_error(prog, "-o '' names no file; give a file name")
     if os.path.isdir(path):
         raise usage_error(prog, f"-o {shown(path)} is a directory; give a file name")
     if not path.lower().endswith(suffixes):

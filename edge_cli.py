@@ -151,7 +151,7 @@ class DemoCommand(Command):
 
     def run(self, args: argparse.Namespace) -> int:
         base = config_from_args(args)
-        if args.output:
+        if args.output is not None:
             check_output(self.prog, args.output, PLOT_SUFFIXES)
         edges = starburst(base, spokes=args.spokes)
         print(f"edgeaa demo: {len(edges)} starburst edges, every mode against the exact area")
@@ -165,7 +165,7 @@ class DemoCommand(Command):
             row, per_mode[mode] = _demo_mode(base.with_(mode=mode), edges, bar)
             bar.close()  # the row goes to stdout on a line of its own
             print(row)
-        if args.output:
+        if args.output is not None:
             with atomic_output(self.prog, args.output) as temporary:
                 _plot_demo(per_mode, temporary)
             print(f"wrote {args.output}")

@@ -347,3 +347,8 @@ def test_an_unusable_verilator_cache_is_one_line(capsys, monkeypatch, tmp_path, 
     monkeypatch.setenv("XDG_CACHE_HOME", str(blocker))
     err = refused(capsys, argv, "the Verilator build cache")
     assert "XDG_CACHE_HOME" in err and "Not a directory" in err
+
+
+@pytest.mark.parametrize("command", [["demo"], ["bench", "--quick"], ["stress", "--quick"]])
+def test_an_empty_output_name_is_refused(capsys, command):
+    refused(capsys, [*command, "-o", ""], "-o '' names no file")
