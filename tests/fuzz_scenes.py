@@ -149,8 +149,9 @@ def mutate_text(rng: random.Random, text: bytes) -> tuple[bytes, str | None]:
         why = None if (at == 0 and byte == b"\xef\xbb\xbf") else f"the byte(s) {byte!r} inside"
         return text[:at] + byte + text[at:], why
     literal, why = rng.choice(LITERALS)
-    # Where a number starts (not its fraction: 3.111... of 5,000 digits is a fine number).
-    digits = [i for i, c in enumerate(text) if 48 <= c <= 57 and text[i - 1] not in b"0123456789."]
+    # Where a number starts: not its fraction (3.111... of 5,000 digits is a fine number) and
+    # not its exponent (1e-300 made 1e+300 would no longer be the value a data mutation chose).
+    digits = [i for i, c in enumerate(text) if 48 <= c <= 57 and _starts_number(text, i)]
     if not digits:
         return text, None
     at = rng.choice(digits)
@@ -160,6 +161,16 @@ def mutate_text(rng: random.Random, text: bytes) -> tuple[bytes, str | None]:
     return text[:at] + literal + text[end:], why
 
 
+SET_VALUES = {"tolerance below 1/1024": ("tolerance", 1e-300), "tolerance 0": ("tolerance", 0.0)}
+
+
+def _starts_number(text: bytes, i: int) -> bool:
+    """Whether the digit at `i` starts a number: not after a digit or a point (a fraction),
+    nor after an exponent's `e`, `e+` or `e-`."""
+    before = text[max(0, i - 2) : i].decode("latin-1")
+    return not (before[-1:] in "0123456789." or before[-1:] in "eE" or before in "e+e-E+E-")
+
+
 def scene_file(rng: random.Random) -> tuple[bytes, list[str], tuple[int, int]]:
     """A scene file's bytes, why it is invalid (empty: maybe valid) and its width, height."""
     whys: list[str] = []
@@ -167,6 +178,10 @@ def scene_file(rng: random.Random) -> tuple[bytes, list[str], tuple[int, int]]:
     for _ in range(rng.choice([0, 0, 0, 1, 1, 2, 3])):
         why = mutate_data(rng, data)
         whys += [why] if why else []
+    # A later mutation may have replaced a value an earlier one made invalid.
+    whys = [
+        w for w in whys if w not in SET_VALUES or data.get(SET_VALUES[w][0]) == SET_VALUES[w][1]
+    ]
     text = json.dumps(data, indent=rng.choice([None, 1])).encode()
     if rng.random() < 0.25:
         text, why = mutate_text(rng, text)
