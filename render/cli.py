@@ -311,6 +311,22 @@ def _engine_line(result) -> str:
     )
 
 
+def _stats(plan, result, baseline, figures: dict) -> list[str]:
+    """--stats: the report's texts, and its figures added to `figures`."""
+    from .stats import rule_savings, stats_numbers, stats_report
+
+    report = [stats_report(baseline, result)]
+    figures["without_skipping"] = stats_numbers(baseline)
+    figures["savings"] = [vars(saving) for saving in rule_savings(baseline, result)]
+    if result.pipeline is not None:
+        from .pipeline import pipeline_savings, savings_table
+
+        savings = pipeline_savings(plan, result.pipeline_tile)
+        report.append("\n" + savings_table(savings))
+        figures["pipeline_savings"] = [vars(saving) for saving in savings]
+    return report
+
+
 def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
     """Render the plan (and without skipping with --stats), write the PNG and print what was
     asked for."""
@@ -337,23 +353,14 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
     if not args.json:
         print(_engine_line(result))
     say = print if not args.json else (lambda *a, **k: None)
-    if args.output is not None:
+    figures = _figures(result) if args.json else {}
+    report = _stats(plan, result, baseline, figures) if baseline is not None else []
+    if args.output is not None:  # after the work that can fail: no file from a failed command
         with atomic_output(PROG, args.output) as temporary:
             kind = write_png(result.image, config.full_scale, config.intensity_bits, temporary)
         say(f"wrote {args.output} ({kind})")
-    figures = _figures(result) if args.json else {}
-    if baseline is not None:
-        from .stats import rule_savings, stats_numbers, stats_report
-
-        say(stats_report(baseline, result))
-        figures["without_skipping"] = stats_numbers(baseline)
-        figures["savings"] = [vars(saving) for saving in rule_savings(baseline, result)]
-        if result.pipeline is not None:
-            from .pipeline import pipeline_savings, savings_table
-
-            savings = pipeline_savings(plan, result.pipeline_tile)
-            say("\n" + savings_table(savings))
-            figures["pipeline_savings"] = [vars(saving) for saving in savings]
+    for text in report:
+        say(text)
     if args.error:
         figures.update(_error(result, plan, bar, say))
     if args.json:

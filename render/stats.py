@@ -65,7 +65,9 @@ def rule_savings(baseline: Render, skipping: Render) -> list[RuleSaving]:
             0,
         )
     )
-    kept = [e for e in everything if e not in projected]
+    # An edge wholly left of the image, clipped, is its projection: not an edge cut in setup
+    # (and a horizontal one would be of zero length).
+    kept = [e for e in everything if e not in projected and not plan.left[e]]
     clipped = [plan.edge(e, clip=True) for e in kept]
     whole = [plan.edge(e) for e in kept]
     cut = sum(

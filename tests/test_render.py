@@ -992,3 +992,14 @@ def test_the_inside_test_and_the_engine_refuse_work_past_their_limits(monkeypatc
     monkeypatch.setattr(planner, "MAX_STEPPED_COLUMNS", 80 * 59 - 1)
     with pytest.raises(SceneError, match="columns"):
         render_scene(comb, DEFAULT)
+
+
+def test_stats_with_a_horizontal_edge_left_of_the_image(tmp_path, capsys):
+    """A horizontal edge wholly left of the image is dropped, not projected: --stats measured
+    it as clipped (a zero-length projection) and failed after the PNG was written."""
+    scene = tmp_path / "left.json"
+    polygon = {"contours": [[[-5, 2], [-2, 2], [10, 10]]], "intensity": 200}
+    scene.write_text(json.dumps({"width": 16, "height": 16, "polygons": [polygon]}))
+    out = tmp_path / "left.png"
+    assert main(["render", str(scene), "--stats", "--quiet", "-o", str(out)]) == 0
+    assert out.exists() and "edges partly outside" in capsys.readouterr().out
