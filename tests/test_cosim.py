@@ -40,6 +40,7 @@ def test_random_edges_with_back_pressure():
     ],
     ids=["pw-wide", "seg2-truncated-tiny"],
 )
+@pytest.mark.slow  # other configurations: the compiled harness (test_fastsim) in the default run
 def test_other_configurations(config):
     run(config, 200, seed=7)
 

@@ -237,6 +237,9 @@ def tiny_scene_at_4_bits() -> dict:
     return {**TINY_SCENE, "background": TINY_SCENE["background"] // 16, "polygons": polygons}
 
 
+# cocotb on the pipeline repeats what the compiled harness checks above (every pixel under
+# back-pressure, bad commands) at the cost of its own Verilator build: in -m slow only.
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [11])
 def test_cocotb_checks_every_pixel_of_the_pipeline_under_back_pressure(seed):
     from edgeaa.sim.simulators.pipeline_cosim import cosimulate_pipeline
@@ -249,6 +252,7 @@ def test_cocotb_checks_every_pixel_of_the_pipeline_under_back_pressure(seed):
     assert result.pixels == flushes * tile.pixels
 
 
+@pytest.mark.slow
 def test_cocotb_catches_a_wrong_model(monkeypatch):
     from edgeaa.sim.simulators import pipeline_cosim
     from edgeaa.sim.simulators.verilator import CosimError
