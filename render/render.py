@@ -415,8 +415,8 @@ def _node(contours: list[np.ndarray], limit: int | None = None) -> tuple[list[np
     round a crossing (snap rounding's theorem says it cannot), its point becomes hot and the
     snap is redone: the hot points only grow, within the contours' box, so this ends; a
     crossing rounded onto a point already hot would snap the same way again, and is raised
-    as a bug. NodingLimit (geometry) when
-    more than `limit` points would be inserted."""
+    as a bug. Raises NodingLimit (`geometry`) when more than `limit` points would be inserted.
+    """
     once, inserted = split_crossings(contours, limit)
     if not inserted or not split_crossings(once, limit)[1]:
         return once, inserted
