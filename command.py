@@ -197,10 +197,12 @@ def require_extra(prog: str, extra: str, modules) -> None:
         raise missing_extra(prog, extra, missing)
 
 
-def require_verilator_cache(prog: str) -> None:
-    """Refuse, before any work, a Verilator build cache that cannot be written (say
-    $XDG_CACHE_HOME names a file or a read-only folder): the builds are cached there."""
+def require_verilator(prog: str) -> None:
+    """Refuse, before any work, a Verilator build without the `sim` extra or with a build
+    cache that cannot be written (say $XDG_CACHE_HOME names a file or a read-only folder)."""
     from .sim.simulators.verilator import cache_dir
+
+    require_extra(prog, "sim", ("verilator",))
 
     folder = cache_dir()
     try:

@@ -24,7 +24,7 @@ from .command import (
     integer_type,
     read_integer,
     require_extra,
-    require_verilator_cache,
+    require_verilator,
     shown,
     usage_error,
 )
@@ -40,7 +40,7 @@ MAX_EDGES = 10**12  # a thousand times the issue's 10^9: weeks on a large cluste
 # configuration: 42.7 s, 2,343 edges/s on a shared 2-core machine), so the largest shard
 # takes about 7 minutes; its memory is bounded anyway (shards.CHUNK_EDGES).
 MAX_SHARD_EDGES = 1_000_000
-EDGE_MS, SHARD_MINUTES = 0.4, 7
+EDGE_MS = 0.4
 # Scenes: one takes 93 ms of worker time on average (the Verilated pipeline and the model;
 # `--scenes 1000 --workers 2` on the shared 2-core machine), so the largest shard takes about
 # 8 minutes.
@@ -220,8 +220,7 @@ class VerifyCommand(Command):
             raise usage_error(self.prog, "--workers 0 runs in this process: not with a cluster")
         seed = DEFAULT_SEED if args.seed is None else args.seed
         if args.engine == "verilator":
-            require_extra(self.prog, "sim", ("verilator",))
-            require_verilator_cache(self.prog)
+            require_verilator(self.prog)
         if cluster is not None:
             require_extra(self.prog, "cluster", ("distributed",))
         if args.scenes is not None:
@@ -267,12 +266,15 @@ class VerifyCommand(Command):
         return ScenePlan(config_from_args(args), args.scenes, shards, seed, args.shard_seed)
 
 
-_SHARD_LIMITS = {  # the most a shard holds, and why (a shard is the unit a rerun resumes)
-    "edges": (
-        MAX_SHARD_EDGES,
-        f"about {SHARD_MINUTES} min of one core at the measured {EDGE_MS} ms an edge",
-    ),
-    "scenes": (MAX_SHARD_SCENES, f"about 8 min of one core at the measured {SCENE_MS} ms a scene"),
+def _shard_limit(most: int, ms: float, unit: str) -> tuple[int, str]:
+    """The most a shard holds, and why: the minutes of one core it takes at the measured rate
+    (a shard is the unit a rerun resumes)."""
+    return most, f"about {round(most * ms / 60_000)} min of one core at the measured {ms} ms {unit}"
+
+
+_SHARD_LIMITS = {
+    "edges": _shard_limit(MAX_SHARD_EDGES, EDGE_MS, "an edge"),
+    "scenes": _shard_limit(MAX_SHARD_SCENES, SCENE_MS, "a scene"),
 }
 
 

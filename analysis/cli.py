@@ -21,7 +21,7 @@ from ..command import (
     number_type,
     require_extra,
     require_synth,
-    require_verilator_cache,
+    require_verilator,
     usage_error,
 )
 from ..model.config import COORD_BITS_RANGE, INTENSITY_BITS_RANGE
@@ -277,8 +277,7 @@ class BenchCommand(Command):
         lines = () if args.no_lines else LINE_PEER_MODULES
         require_extra(self.prog, "peers", PEER_MODULES + lines)
         if not quick:  # the hardware columns: the compiled core, and synthesis unless skipped
-            require_extra(self.prog, "sim", ("verilator",))
-            require_verilator_cache(self.prog)
+            require_verilator(self.prog)
             if not args.no_synth:
                 require_synth(self.prog, ("ice40",))
         count = (

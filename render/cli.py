@@ -23,7 +23,7 @@ from ..command import (
     config_from_args,
     read_integer,
     require_extra,
-    require_verilator_cache,
+    require_verilator,
     shown,
     tile_from_args,
     tile_size,
@@ -226,8 +226,7 @@ def _check_options(args: argparse.Namespace, config) -> None:
     if args.tile is not None and args.engine == "model":
         raise usage_error(PROG, "--tile sizes the hardware pipeline: add --engine verilator")
     if args.engine == "verilator":
-        require_extra(PROG, "sim", ("verilator",))
-        require_verilator_cache(PROG)
+        require_verilator(PROG)
     if args.no_skip and args.engine != "model":
         raise usage_error(
             PROG, "--no-skip applies to the model: the pipeline always skips (docs/hardware.md)"
