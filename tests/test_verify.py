@@ -664,7 +664,14 @@ def test_a_long_record_is_read_in_bounded_memory(tmp_path):
     assert peak < 1_000_000, peak
     assert len(store.finished) == count and count - 1 in store.finished
     assert count not in store.finished and store.finished.above == set()
-    summary = regress.summarize(plan, store.totals, regress.Totals(), regress.Totals(), count, 1)
+    summary = regress.summarize(
+        plan,
+        store.totals,
+        regress.Totals(store.totals.summed),
+        regress.Totals(store.totals.summed),
+        count,
+        1,
+    )
     assert (summary["edges_checked"], summary["beats_checked"]) == (2 * count, 9 * count)
     assert summary["mismatch_count"] == count // 100 and not summary["passed"]
     assert [m["shard"] for m in summary["mismatches"]] == list(range(7, count, 100))[:100]

@@ -93,7 +93,6 @@ class Plan:
     shard_seed: int | None = None
 
     unit: ClassVar[str] = "edges"  # what a shard holds; its records and summary count them
-    checked: ClassVar[tuple] = ("edges", "beats", "clocks", "dropped", "timed_edges")
 
     @property
     def total(self) -> int:
@@ -119,7 +118,7 @@ class Plan:
 
     def manifest(self) -> dict:
         """Everything that decides the shards' edges and checks (not the workers)."""
-        config = {f.name: getattr(self.config, f.name) for f in fields(self.config) if f.init}
+        config = _config_fields(self.config)
         workload = {"idle": IDLE, "stall": STALL, "bad_fraction": BAD_FRACTION}
         workload.update(clip_fraction=CLIP_FRACTION, max_pixels=list(MAX_PIXELS))
         workload["chunk_edges"] = CHUNK_EDGES  # a longer stream runs in pieces from reset
@@ -133,6 +132,11 @@ class Plan:
             "engine": self.engine,
             "workload": workload,
         }
+
+
+def _config_fields(config: EdgeConfig) -> dict:
+    """The configuration as run.json records it: every field given to `EdgeConfig`."""
+    return {f.name: getattr(config, f.name) for f in fields(config) if f.init}
 
 
 def scene_range(
@@ -160,7 +164,6 @@ class ScenePlan:
 
     engine: ClassVar[str] = "verilator"  # the pipeline in Amaranth's simulator is too slow
     unit: ClassVar[str] = "scenes"
-    checked: ClassVar[tuple] = ("scenes", "pixels", "clocks", "failed_scenes", "wrong_pixels")
 
     @property
     def total(self) -> int:
@@ -176,7 +179,7 @@ class ScenePlan:
             yield SceneTask(index, seed, scenes, self.config)
 
     def manifest(self) -> dict:
-        config = {f.name: getattr(self.config, f.name) for f in fields(self.config) if f.init}
+        config = _config_fields(self.config)
         return {
             "format": FORMAT,
             "config": config,
@@ -361,16 +364,15 @@ class Finished:
 
 
 MAX_LISTED = 100  # mismatches a summary lists (the count is of all of them)
-SUMMED = ("edges", "beats", "clocks", "dropped", "timed_edges", "seconds", "sim_seconds")
 
 
 @dataclass
 class Totals:
-    """Figures summed over shards' records (`summed`: the keys of a plan's records), and the
-    first `MAX_LISTED` of their mismatches: a run of millions of shards keeps these, not its
-    records."""
+    """Figures summed over shards' records (`summed`: the keys of a plan's records, `summed`
+    below), and the first `MAX_LISTED` of their mismatches: a run of millions of shards keeps
+    these, not its records."""
 
-    summed: tuple = SUMMED
+    summed: tuple
     shards: int = 0
     sums: dict = field(default_factory=dict)
     mismatches: list = field(default_factory=list)
@@ -821,7 +823,11 @@ def summarize(
         "shards_done": done,
         "shards_resumed": resumed,
         "shards_run": session.shards,
-        **{f"{key}_checked": recorded.sums[key] + crashed.sums[key] for key in plan.checked},
+        **{
+            f"{key}_checked": recorded.sums[key] + crashed.sums[key]
+            for key in recorded.summed
+            if key not in TIMES
+        },
         f"{plan.unit}_run": units_run,
         "seconds": seconds,
         f"{plan.unit}_per_second": units_run / seconds if seconds > 0 else 0.0,
