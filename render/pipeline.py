@@ -39,7 +39,6 @@ PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
 # measured 1 to 1.5 million clocks per second; for Amaranth's simulator (about 500 clocks
 # per second) the built-ins' 1.3 million (docs/scenes.md, "Errors and limits").
 MAX_PIPELINE_CLOCKS = {"verilator": 60_000_000, "amaranth": 1_500_000}
-RESET_CLEAR_CLOCKS = 2048  # the accumulation memory's clear pass after reset
 
 
 @dataclass(frozen=True)
@@ -217,7 +216,7 @@ def clock_estimate(plan: Plan, tile: TileConfig) -> tuple[int, int]:
     owner = plan.polygon[sent]
     width, height = plan.scene.width, plan.scene.height
     rights = np.arange(0, width, tile.width) + tile.width  # each tile's first column right of it
-    clocks, commands = RESET_CLEAR_CLOCKS, 0
+    clocks, commands = tile.pixels, 0  # the clear pass after a reset: a cell a clock
     for ty in range(0, height, tile.height):
         band = np.flatnonzero((hi_y >= ty) & (lo_y < ty + tile.height))
         order = band[np.argsort(lo_x[band], kind="stable")]
