@@ -137,11 +137,8 @@ def side_fills(
     """
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
     if group is not None and len(edges):
-        ys = edges[:, 1::2]
         edges = edges.copy()
-        edges[:, 1::2] += (np.asarray(group, dtype=np.int64) * int(ys.max() - ys.min() + 1))[
-            :, None
-        ]
+        edges[:, 1::2] += _group_shift(edges[:, 1::2], group)
     doubled = 2 * edges
     mid = edges[:, 0:2] + edges[:, 2:4]  # the midpoint, doubled
     d = edges[:, 2:4] - edges[:, 0:2]
@@ -151,7 +148,13 @@ def side_fills(
     if isinstance(rule, str):
         return fills(left, rule), fills(right, rule)
     odd = np.asarray(rule) == "evenodd"
-    return np.where(odd, left & 1, left) != 0, np.where(odd, right & 1, right) != 0
+    return tuple(np.where(odd, fills(w, "evenodd"), fills(w, "nonzero")) for w in (left, right))
+
+
+def _group_shift(ys: np.ndarray, group) -> np.ndarray:
+    """Per edge, the y offset that stacks polygon g below the others (g times the edges'
+    height plus one), as a column to add to `ys` (an edge's two y)."""
+    return (np.asarray(group, dtype=np.int64) * int(ys.max() - ys.min() + 1))[:, None]
 
 
 def level_pairs(edges: np.ndarray, group: np.ndarray | None = None) -> int:
@@ -162,7 +165,7 @@ def level_pairs(edges: np.ndarray, group: np.ndarray | None = None) -> int:
         return 0
     ys = edges[:, 1::2]
     if group is not None:
-        ys = ys + (np.asarray(group, dtype=np.int64) * int(ys.max() - ys.min() + 1))[:, None]
+        ys = ys + _group_shift(ys, group)
     lo, hi = np.sort(2 * ys.min(axis=1)), np.sort(2 * ys.max(axis=1))
     mid = ys.sum(axis=1)  # doubled, as side_fills tests them
     met = np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
