@@ -308,11 +308,13 @@ def test_atomic_output_renames_only_on_success(tmp_path):
 def test_a_closed_pipe_ends_quietly():
     program = "import sys; from edgeaa.cli import main; sys.exit(main(sys.argv[1:]))"
     proc = subprocess.Popen(
-        [sys.executable, "-c", program, "edge", "0", "0", "2000", "1"],
+        # --json: about 130 KB, more than a pipe holds, so the writer is still writing when
+        # the reader closes (38 KB of text could all fit in the pipe and end with status 0).
+        [sys.executable, "-c", program, "edge", "0", "0", "2000", "1", "--json"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
     )
-    proc.stdout.readline()
+    proc.stdout.read(1)
     proc.stdout.close()  # as `| head -1` does
     err = proc.stderr.read().decode()
     proc.stderr.close()
