@@ -75,7 +75,7 @@ class Trace:
     accepts: list[list[int]] = field(default_factory=list)
     beats: list[list[tuple[int, object]]] = field(default_factory=list)
     final: tuple = ()  # the `final` signals' values after the last clock
-    seconds: float = 0.0  # wall time of the simulation (elaboration included)
+    seconds: float = 0.0  # wall time of the simulation (the build excluded)
 
 
 class _Feed:
@@ -158,9 +158,8 @@ def run_component(
     rng = random.Random(seed) if seed is not None else None
     feeds, drains = [_Feed(dut, s) for s in sources], [_Drain(dut, s) for s in sinks]
     signals = [feed.stream.ready for feed in feeds]
-    signals += [s for d in drains for s in (d.stream.valid, d.bits)] + [
-        s for probe in probes for s in probe.signals
-    ]
+    signals += [s for d in drains for s in (d.stream.valid, d.bits)]
+    signals += [s for probe in probes for s in probe.signals]
     total = sum(len(s.payloads) for s in sources)
     trace = Trace()
 
@@ -193,7 +192,10 @@ def run_component(
             if not busy and quiet >= drain:
                 break
             if still >= stuck:
-                raise SimulationHang(f"{tag} {_left(feeds, drains)} after {clock:,} clocks")
+                raise SimulationHang(
+                    f"{tag} nothing moved for {still:,} clocks, at clock {clock:,} "
+                    f"({_left(feeds, drains)})"
+                )
         trace.clocks, trace.final = clock, tuple(ctx.get(s) for s in final)
 
     sim = Simulator(dut)
@@ -211,7 +213,7 @@ def _left(feeds, drains) -> str:
     """What a hung run still waited for, per stream."""
     taken = [f"{f.source.port}: {f.index} of {len(f.source.payloads)} taken" for f in feeds]
     out = [f"{d.sink.port}: {len(d.beats)} of {d.sink.expected} out" for d in drains]
-    return f"no transfer for {', '.join(taken + out)}"
+    return ", ".join(taken + out)
 
 
 # -- payload decoding ------------------------------------------------------------------------
