@@ -16,65 +16,30 @@ registers to the model's per-column trace and every beat's clock to `edgeaa.mode
 The stepper's scaled areas are compared with the model's `Write.area` too, so a tie decided
 differently inside the loop shows even when the rounded value hides it.
 
-The runner (`simulate`) is one per-clock testbench that drives the source, the sink and
-samples the internal observation points together (cheaper than three testbenches here);
-`edgeaa.sim.verification.streams` serves the small directed
-tests. The core simulates at 2-4k clocks/s, so
-edges are short and many of them share one run; long sweeps are marked slow
-(``pytest -m slow``).
+The runner (`simulate`, and `drive` which the deltas core's tests share) is a configuration
+of the one Amaranth driver (`edgeaa.sim.simulators.amaranth_sim.run_core`) with probes on the
+setup bank, the error pulse and the stepper's registers;
+`edgeaa.sim.verification.streams` serves the small directed tests. The core simulates at
+2-4k clocks/s, so edges are short and many of them share one run; long sweeps are marked
+slow (``pytest -m slow``).
 """
 
 from __future__ import annotations
 
-import random
 from dataclasses import dataclass, field, replace
 
-from amaranth.hdl import Shape, Value
-from amaranth.lib import data
-from amaranth.sim import Simulator
+from amaranth.hdl import Value
 from hypothesis import HealthCheck, Phase, settings
 
-from edgeaa.hdl import (
-    EdgeAntialiaser,
-    setup_layout,
-    write_layout,
-)
+from edgeaa.hdl import EdgeAntialiaser, write_layout
 from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
 from edgeaa.model.bank import bank_values
-from edgeaa.sim.verification.commands import edge_clip, edge_payload
+from edgeaa.sim.simulators.amaranth_runner import Probe, decoder
+from edgeaa.sim.simulators.amaranth_sim import run_core
+from edgeaa.sim.simulators.verilator_harness import drain_clocks
 from edgeaa.sim.verification.scoreboard import Beat, edge_beats
-
-# -- payload decoding (raw integers are much faster to sample than data.Const) ---------------
-
-
-def _fields(layout, prefix=""):
-    """(dotted name, offset, width, signed) of each leaf field of a layout."""
-    for name, fld in layout:
-        shape = fld.shape
-        key = f"{prefix}{name}"
-        if isinstance(shape, data.Layout):
-            for sub, offset, width, is_signed in _fields(shape, f"{key}."):
-                yield sub, fld.offset + offset, width, is_signed
-        else:
-            shape = Shape.cast(shape)
-            yield key, fld.offset, shape.width, shape.signed
-
-
-def decoder(layout):
-    fields = list(_fields(layout))
-
-    def decode(raw: int) -> dict[str, int]:
-        out = {}
-        for key, offset, width, is_signed in fields:
-            value = (raw >> offset) & ((1 << width) - 1)
-            if is_signed and value >> (width - 1):
-                value -= 1 << width
-            out[key] = value
-        return out
-
-    return decode
 
 
 def is_good(config: EdgeConfig, edge: Edge) -> bool:
@@ -125,122 +90,55 @@ def simulate(
     setup_units: int = timing_model.DEFAULT_SETUP_UNITS,
 ) -> Run:
     """Offer `edges` in order (each with its window on ``clip``) and drain the writes; with
-    `seed`, random idle source clocks (probability `idle` per clock before each offer), random
-    sink stalls (`stall`) and a random window on ``clip`` whenever no edge is offered."""
+    `seed`, random idle source clocks (probability `idle` before each offer), random sink
+    stalls (`stall`) and a random window on ``clip`` whenever no edge is offered. Observes
+    the stepper's registers and areas besides the bank and the error pulses."""
     dut = EdgeAntialiaser(config, setup_units=setup_units)
     stepper = dut.stepper
-    rng = random.Random(seed) if seed is not None else None
-    tag = f"[{label} seed={seed} idle={idle} stall={stall} config={config}]"
-    tag = f"{tag[:-1]} setup_units={setup_units}]"
-    run = Run(config, list(edges), tag, dut.setup_latency, setup_units=setup_units)
-    payloads = [edge_payload(config, edge) for edge in edges]
-    clips = [edge_clip(config, edge) for edge in edges]
-    expected_beats = sum(setup(config, edge).columns for edge in edges if is_good(config, edge))
-    per_edge = dut.setup_latency + dut.start_clip_cycles + 4
-    max_clocks = 50 + (len(edges) + 2) * per_edge * 4 + expected_beats
-    if stall:
-        max_clocks += int(expected_beats * 4 / (1 - stall))
-    if idle:
-        max_clocks += int(len(edges) * 4 * per_edge / (1 - idle))
-    decode_beat = decoder(write_layout(config))
-    decode_bank = decoder(setup_layout(config))
-    beat_bits = Value.cast(dut.writes.payload)
-    bank_bits = Value.cast(stepper.setup.payload)
-    drain_clocks = dut.setup_latency + 8
+    tag = f"[{label} seed={seed} idle={idle} stall={stall} config={config}"
+    label = f"{tag} setup_units={setup_units}]"
+    run = Run(config, list(edges), label, dut.setup_latency, setup_units=setup_units)
 
-    async def bench(ctx):
-        index = 0
-        offering = False
-        held = None  # raw beat valid but not taken in the previous clock
-        quiet = 0
-        clock = 0
-        while True:
-            eager = rng is None or not rng.random() < idle
-            if index < len(payloads) and not offering and eager:
-                ctx.set(dut.edges.payload, payloads[index])
-                ctx.set(dut.clip, clips[index])
-                ctx.set(dut.edges.valid, 1)
-                offering = True
-            elif rng is not None and not offering:
-                # The window is sampled with the edge only: anything in the other clocks.
-                ctx.set(dut.clip, random_clip_port(config, rng))
-            ready = rng is None or not rng.random() < stall
-            ctx.set(dut.writes.ready, ready)
-            (
-                _,
-                _,
-                e_ready,
-                w_valid,
-                w_raw,
-                error,
-                step,
-                x,
-                y,
-                jq,
-                jr,
-                area_step,
-                area0,
-                area1,
-                b_valid,
-                b_ready,
-                b_raw,
-            ) = await ctx.tick().sample(
-                dut.edges.ready,
-                dut.writes.valid,
-                beat_bits,
-                dut.error,
-                stepper.step,
-                stepper.x,
-                stepper.y,
-                stepper.jq,
-                stepper.jr,
-                stepper.area_step,
-                stepper.area0,
-                stepper.area1,
-                stepper.setup.valid,
-                stepper.setup.ready,
-                bank_bits,
-            )
-            if offering and e_ready:
-                run.accepts.append(clock)
-                index += 1
-                offering = False
-                ctx.set(dut.edges.valid, 0)
-            if held is not None:
-                assert w_valid and w_raw == held, (
-                    f"{tag} clock {clock}: a stalled beat changed or vanished "
-                    f"(valid={w_valid}, payload {w_raw:#x}, was {held:#x})"
-                )
-            held = w_raw if w_valid and not ready else None
-            if w_valid and ready:
-                run.beats.append((clock, decode_beat(w_raw)))
-            if step:
-                run.steps.append((clock, x, y, jq, jr))
-            if area_step:
-                run.areas.append((clock, area0, area1))
-            if b_valid and b_ready:
-                run.banks.append((clock, decode_bank(b_raw)))
-            if error:
-                run.error_pulses.append(clock)
-            clock += 1
-            done = index == len(payloads) and len(run.beats) >= expected_beats
-            quiet = quiet + 1 if done else 0
-            if quiet > drain_clocks or clock > max_clocks:
-                break
-        run.clocks = clock
-        run.errors = ctx.get(dut.errors)
-        # The core is idle: nothing in the output register, the bank, the stepper or setup.
-        run.final_idle = (
-            ctx.get(dut.writes.valid),
-            ctx.get(stepper.setup.valid),
-            ctx.get(stepper.active),
-            ctx.get(dut.edges.ready),
-        )
+    def registers(clock, step, x, y, jq, jr, area_step, area0, area1):
+        if step:
+            run.steps.append((clock, x, y, jq, jr))
+        if area_step:
+            run.areas.append((clock, area0, area1))
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
+    signals = (stepper.step, stepper.x, stepper.y, stepper.jq, stepper.jr)
+    signals += (stepper.area_step, stepper.area0, stepper.area1)
+    decode = decoder(write_layout(config))
+    probe = Probe(signals, registers)
+    drain = drain_clocks(config)
+    return drive(dut, run, "writes", decode=decode, drain=drain, seed=seed, idle=idle,
+                 stall=stall, probes=(probe,))  # fmt: skip
+
+
+def drive(dut, run: Run, sink: str, *, decode, drain, seed, idle, stall, probes=()) -> Run:
+    """`run.edges` through the core `dut` (`amaranth_sim.run_core`) into `run`: the beats of
+    its stream `sink`, the clock of each accept, each bank the stepper takes, each error
+    pulse, the error count and the idle state at the end; `probes` observe more."""
+    stepper = dut.stepper
+    decode_bank = decoder(stepper.setup.payload.shape())
+
+    def bank_and_error(clock, valid, ready, raw, error):
+        if valid and ready:
+            run.banks.append((clock, decode_bank(raw)))
+        if error:
+            run.error_pulses.append(clock)
+
+    bank = (stepper.setup.valid, stepper.setup.ready, Value.cast(stepper.setup.payload))
+    out = getattr(dut, sink)
+    # The core is idle at the end: nothing in the output register, the bank, the stepper.
+    idle_signals = (out.valid, stepper.setup.valid, stepper.active, dut.edges.ready)
+    trace = run_core(
+        dut, run.config, run.edges, sink, decode=decode, drain=drain, seed=seed, idle=idle,
+        stall=stall, probes=(Probe((*bank, dut.error), bank_and_error), *probes),
+        final=(dut.errors, *idle_signals), tag=run.label,
+    )  # fmt: skip
+    (run.accepts,), (run.beats,), run.clocks = trace.accepts, trace.beats, trace.clocks
+    run.errors, *final_idle = trace.final
+    run.final_idle = tuple(final_idle)
     return run
 
 
@@ -432,12 +330,6 @@ def longest_edges(config: EdgeConfig) -> list[Edge]:
     return [edge for name, edge in corpus(config) if name.startswith("longest")] + [
         Edge(hi, hi, hi, 0, inside="right"),  # the longest vertical, at the right border
     ]
-
-
-def random_clip_port(config: EdgeConfig, rng: random.Random) -> dict[str, int]:
-    """Any value of the ``clip`` port (four bounds in [0, 2**W], possibly empty)."""
-    top = 1 << config.coord_bits
-    return {name: rng.randint(0, top) for name in Clip._fields}
 
 
 def with_window(config: EdgeConfig, edge: Edge, start: int, end: int, *, minor=None) -> Edge:

@@ -10,17 +10,14 @@ Verilator harness, with random source idles and sink stalls (a stalled beat must
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass, field
 
 import pytest
-from amaranth.hdl import Value
-from amaranth.sim import Simulator
-from core_bench import corpus, decoder, first_difference, is_good, run_of, sim_settings
+from core_bench import Run, corpus, drive, first_difference, is_good, run_of, sim_settings
 from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
-from edgeaa.hdl import EdgeAntialiaser, EdgeStepper, delta_layout, setup_layout, verilog
+from edgeaa.hdl import EdgeAntialiaser, EdgeStepper, delta_layout, verilog
 from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Edge, EdgeConfig, setup
 from edgeaa.model import timing as timing_model
@@ -28,8 +25,9 @@ from edgeaa.model.bank import bank_fields, bank_values
 from edgeaa.model.beat import CELLS, DeltaBeat, delta_column_beats
 from edgeaa.model.step import run_edge_deltas
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
+from edgeaa.sim.simulators.amaranth_runner import decoder
+from edgeaa.sim.simulators.verilator_harness import drain_clocks
 from edgeaa.sim.synthesis import muldiv_cells
-from edgeaa.sim.verification.commands import edge_clip, edge_payload
 from edgeaa.sim.verification.workloads import random_sim_edges
 
 OUTPUT = "deltas"
@@ -56,93 +54,27 @@ def expected_bank(config: EdgeConfig, edge: Edge) -> dict[str, int]:
 # -- the Amaranth runner ---------------------------------------------------------------------
 
 
-@dataclass
-class DeltaRun:
-    config: EdgeConfig
-    edges: list
-    tag: str
-    accepts: list = field(default_factory=list)  # clock of each accepted command
-    beats: list = field(default_factory=list)  # (clock, DeltaBeat)
-    banks: list = field(default_factory=list)  # (clock, decoded bank) the stepper took
-    setup_units: int = 1
-    error_pulses: list = field(default_factory=list)
-    errors: int = 0
-    final_idle: tuple = ()  # deltas.valid, bank valid, stepper active, edges.ready
-    setup_units: int = timing_model.DEFAULT_SETUP_UNITS
-
-
 def _as_beat(beat: dict) -> DeltaBeat:
     cells = tuple(tuple(beat[f"{cell}.{name}"] for name in ("x", "y", "delta")) for cell in CELLS)
     return DeltaBeat(cells, bool(beat["last"]))
 
 
-def simulate(
-    config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None
-) -> DeltaRun:
-    """Offer `edges` in order (each with its window on ``clip``) and drain the deltas; with
-    `seed`, random idle source clocks and sink stalls; `setup_units` the core's."""
+def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None) -> Run:
+    """Offer `edges` in order (each with its window on ``clip``) and drain the deltas as
+    `DeltaBeat`s (`core_bench.drive`); with `seed`, random idle source clocks, sink stalls
+    and clip windows between the edges; `setup_units` the core's."""
     units = timing_model.DEFAULT_SETUP_UNITS if setup_units is None else setup_units
     dut = EdgeAntialiaser(config, output=OUTPUT, setup_units=units)
-    stepper = dut.stepper
-    rng = random.Random(seed) if seed is not None else None
     tag = f"[{label} seed={seed} idle={idle} stall={stall} units={units} {config}]"
-    run = DeltaRun(config, list(edges), tag, setup_units=units)
-    commands = [(edge_payload(config, e), edge_clip(config, e)) for e in edges]
-    want = sum(setup(config, e).columns for e in edges if is_good(config, e))
-    max_clocks = 200 + (len(edges) + 2) * 4 * (dut.setup_latency + config.coord_bits + 8)
-    max_clocks = int((max_clocks + 4 * want) / (1 - max(idle, stall)))
-    decode_beat, decode_bank = decoder(delta_layout(config)), decoder(setup_layout(config, OUTPUT))
-    beat_bits, bank_bits = Value.cast(dut.deltas.payload), Value.cast(stepper.setup.payload)
-
-    async def bench(ctx):
-        index, offering, held, clock, quiet = 0, False, None, 0, 0
-        while quiet <= dut.setup_latency + 8 and clock <= max_clocks:
-            if index < len(commands) and not offering and (rng is None or rng.random() >= idle):
-                ctx.set(dut.edges.payload, commands[index][0])
-                ctx.set(dut.clip, commands[index][1])
-                ctx.set(dut.edges.valid, 1)
-                offering = True
-            ready = rng is None or rng.random() >= stall
-            ctx.set(dut.deltas.ready, ready)
-            *_, e_ready, valid, raw, error, b_valid, b_ready, b_raw = await ctx.tick().sample(
-                dut.edges.ready,
-                dut.deltas.valid,
-                beat_bits,
-                dut.error,
-                stepper.setup.valid,
-                stepper.setup.ready,
-                bank_bits,
-            )
-            if offering and e_ready:
-                run.accepts.append(clock)
-                index, offering = index + 1, False
-                ctx.set(dut.edges.valid, 0)
-            if held is not None:
-                assert valid and raw == held, f"{run.tag} clock {clock}: a stalled beat changed"
-            held = raw if valid and not ready else None
-            if valid and ready:
-                run.beats.append((clock, _as_beat(decode_beat(raw))))
-            if b_valid and b_ready:
-                run.banks.append((clock, decode_bank(b_raw)))
-            if error:
-                run.error_pulses.append(clock)
-            clock += 1
-            done = index == len(commands) and len(run.beats) >= want
-            quiet = quiet + 1 if done else 0
-        run.errors = ctx.get(dut.errors)
-        run.final_idle = tuple(
-            ctx.get(s) for s in (dut.deltas.valid, stepper.setup.valid, stepper.active)
-        ) + (ctx.get(dut.edges.ready),)
-
-    sim = Simulator(dut)
-    sim.add_clock(1e-6)
-    sim.add_testbench(bench)
-    sim.run()
-    return run
+    run = Run(config, list(edges), tag, dut.setup_latency, setup_units=units)
+    fields = decoder(delta_layout(config))
+    drain = drain_clocks(config, OUTPUT)
+    return drive(dut, run, OUTPUT, decode=lambda raw: _as_beat(fields(raw)), drain=drain,
+                 seed=seed, idle=idle, stall=stall)  # fmt: skip
 
 
-def check_run(run: DeltaRun, *, exact_timing: bool) -> None:
-    config, tag = run.config, run.tag
+def check_run(run: Run, *, exact_timing: bool) -> None:
+    config, tag = run.config, run.label
     good = [edge for edge in run.edges if is_good(config, edge)]
     got = [beat for _, beat in run.beats]
     position = 0

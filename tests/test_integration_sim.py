@@ -19,7 +19,7 @@ from dataclasses import replace
 import pytest
 from amaranth.hdl import ClockDomain, Module
 from amaranth.sim import Simulator
-from core_bench import decoder, observed_beat
+from core_bench import observed_beat
 from fixtures import CORE_CONFIGS
 
 from edgeaa.hdl import EdgeAntialiaser
@@ -29,6 +29,7 @@ from edgeaa.model.column import IntArith
 from edgeaa.model.edge import fold, window
 from edgeaa.model.pipeline import CODE, Command, command_ops
 from edgeaa.model.tile import TileConfig, TileModel
+from edgeaa.sim.simulators.amaranth_runner import decoder
 from edgeaa.sim.verification.commands import edge_command
 from edgeaa.sim.verification.scoreboard import edge_beats
 

@@ -1,22 +1,23 @@
 # amaranth: UnusedElaboratable=no
-"""Driving the tile stages in Amaranth's simulator: ops as payloads, and a runner that
-records every transfer's clock (for `edgeaa.model.tile.tile_cycles`) and the frames."""
+"""Driving the tile stages in Amaranth's simulator: ops as payloads, and a runner (the one
+driver, `edgeaa.sim.simulators.amaranth_runner`) that records every transfer's clock (for
+`edgeaa.model.tile.tile_cycles`) and the frames."""
 
 from __future__ import annotations
 
-import random
 from dataclasses import dataclass, field
 
 import numpy as np
 from amaranth.hdl import Module
 from amaranth.lib import wiring
-from amaranth.sim import Simulator
 
 from edgeaa.hdl.accumulator import TileAccumulator
 from edgeaa.hdl.layouts import tile_op_layout
 from edgeaa.hdl.resolve import TileResolve
 from edgeaa.model.beat import CELL_FIELDS, CELLS
 from edgeaa.model.tile import OPS, Beats, Flush, PolygonEnd, TileConfig, TileStart
+from edgeaa.sim.simulators.amaranth_runner import Probe, Sink, Source, row_decoder, run_component
+from edgeaa.sim.simulators.pipeline_harness import PIXEL_COLUMNS, pixel_drain_clocks, stuck_limit
 
 
 def op_payloads(tile: TileConfig, ops) -> list:
@@ -74,7 +75,6 @@ class StageRun:
     accepts: list = field(default_factory=list)
     cells: list = field(default_factory=list)
     pixels: list = field(default_factory=list)  # (clock, x, y, value, last)
-    stalled_changed: int = 0
 
     def frames(self, tile: TileConfig) -> list[np.ndarray]:
         values = np.array([p[3] for p in self.pixels], dtype=np.int64)
@@ -83,48 +83,25 @@ class StageRun:
 
 def run_stages(tile: TileConfig, ops, *, seed=None, idle=0.0, stall=0.0) -> StageRun:
     """Offer the ops' payloads in order and take the pixels (random idles and stalls with a
-    seed); stops once the pixels of every flush are out and nothing has moved for a while."""
+    seed, a stalled pixel must hold: `amaranth_runner.run_component`), observing the clock
+    of every cell the accumulator hands the resolve; stops once the pixels of every flush
+    are out and a drain has passed."""
     dut = Stages(tile)
-    payloads = op_payloads(tile, ops)
-    want = sum(isinstance(op, Flush) for op in ops) * tile.pixels
-    rng = random.Random(seed) if seed is not None else None
     run = StageRun()
 
-    async def bench(ctx):
-        index, clock, quiet, held = 0, 0, 0, None
-        while quiet < 64 and clock < 200_000:
-            offer = index < len(payloads) and (rng is None or rng.random() >= idle)
-            ctx.set(dut.ops.valid, offer)
-            if offer:
-                ctx.set(dut.ops.payload, payloads[index])
-            ready = rng is None or rng.random() >= stall
-            ctx.set(dut.pixels.ready, ready)
-            sample = await ctx.tick().sample(
-                dut.ops.ready,
-                dut.acc.cells.valid,
-                dut.acc.cells.ready,
-                dut.acc.cells.payload.op,
-                dut.pixels.valid,
-                dut.pixels.payload,
-            )
-            taken, c_valid, c_ready, c_op, p_valid, pixel = sample[2:]
-            if offer and taken:
-                run.accepts.append(clock)
-                index += 1
-            if c_valid and c_ready and c_op == 0:  # a cell (not a tile or flush op)
-                run.cells.append(clock)
-            value = (int(pixel.x), int(pixel.y), int(pixel.value), int(pixel.last))
-            if held is not None and (not p_valid or value != held):
-                run.stalled_changed += 1
-            held = value if p_valid and not ready else None
-            if p_valid and ready:
-                run.pixels.append((clock, *value))
-            clock += 1
-            done = index == len(payloads) and len(run.pixels) >= want
-            quiet = quiet + 1 if done else 0
+    def cell(clock, valid, ready, op):
+        if valid and ready and op == 0:  # a cell (not a tile or flush op)
+            run.cells.append(clock)
 
-    sim = Simulator(dut)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    sim.run()
+    cells = dut.acc.cells
+    want = sum(isinstance(op, Flush) for op in ops) * tile.pixels
+    pixels = row_decoder(dut.pixels.payload.shape(), PIXEL_COLUMNS[1:])
+    trace = run_component(
+        dut, [Source("ops", op_payloads(tile, ops))], [Sink("pixels", want, pixels)],
+        drain=pixel_drain_clocks(tile), stuck=stuck_limit(tile, idle, stall),
+        probes=[Probe((cells.valid, cells.ready, cells.payload.op), cell)], seed=seed,
+        idle=idle, stall=stall, tag=f"[stages seed={seed} idle={idle} stall={stall} {tile}]",
+    )  # fmt: skip
+    (run.accepts,) = trace.accepts
+    run.pixels = [(clock, *pixel) for clock, pixel in trace.beats[0]]
     return run

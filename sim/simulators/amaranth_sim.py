@@ -1,28 +1,29 @@
-"""The core (`run`) and the polygon pipeline (`run_pipeline`) under Amaranth's Python
-simulator, driven like the compiled harnesses.
+"""The core (`run`, `run_core`) and the polygon pipeline (`run_pipeline`) under Amaranth's
+Python simulator, each a configuration of the one driver (`amaranth_runner.run_component`).
 
 Slow (about 10k clocks per second) but needs no compiler: for small scenes, benchmarks
-against the compiled path, and for checking that both simulators agree. The source offers
-the commands back to back and the sink is always ready, so beat clocks follow
-`edgeaa.model.timing`. Returns the same `FastRun` record as
-`edgeaa.sim.simulators.verilator_harness.run`.
+against the compiled path, and for checking that both simulators agree. Without a seed the
+source offers the commands back to back and the sink is always ready, so beat clocks follow
+`edgeaa.model.timing`. `run` returns the same `FastRun` record as
+`edgeaa.sim.simulators.verilator_harness.run`, `run_pipeline` the `PipelineRun` of
+`edgeaa.sim.simulators.pipeline_harness.run`.
 """
 
 from __future__ import annotations
 
 import random
-import time
+from functools import partial
 
 import numpy as np
-from amaranth.sim import Simulator
 
 from ...hdl import EdgeAntialiaser
 from ...hdl.pipeline import STATS, EdgePipeline, command_layout
-from ...model import Edge, EdgeConfig
-from ...model.beat import BEAT_FORMATS
+from ...model import Clip, Edge, EdgeConfig
+from ...model.beat import BEAT_FORMATS, edge_columns
 from ...model.pipeline import Command
 from ...model.tile import TileConfig
 from ..verification.commands import edge_command
+from .amaranth_runner import Probe, SimulationHang, Sink, Source, Trace, row_decoder, run_component
 from .pipeline_harness import (
     PIXEL_COLUMNS,
     PipelineHang,
@@ -34,56 +35,63 @@ from .pipeline_harness import (
 from .verilator_harness import FastRun, drain_clocks
 
 
-def payload_leaf(payload, path: tuple[str, ...]) -> int:
-    """A leaf of the sampled output payload (a `data.Const` of `write_layout` or
-    `delta_layout`)."""
-    for name in path:
-        payload = payload[name]
-    return int(payload)
+def random_clip_port(config: EdgeConfig, rng: random.Random) -> dict[str, int]:
+    """Any value of the ``clip`` port (four bounds in [0, 2**W], possibly empty)."""
+    top = 1 << config.coord_bits
+    return {name: rng.randint(0, top) for name in Clip._fields}
+
+
+def run_core(
+    dut,
+    config: EdgeConfig,
+    edges: list[Edge],
+    sink: str,
+    *,
+    decode,
+    drain: int,
+    seed: int | None = None,
+    idle: float = 0.0,
+    stall: float = 0.0,
+    probes: tuple[Probe, ...] = (),
+    final: tuple = (),
+    progress=None,
+    tag: str = "",
+) -> Trace:
+    """The core `dut` on `edges`: each command offered on ``edges`` with its window on
+    ``clip`` (with a seed, any window in the other clocks: the core samples it with the edge
+    only), the beats of its output stream `sink` decoded by `decode`; a run stops `drain`
+    quiet clocks after the last expected beat (one per column) and is a hang after four
+    times that with nothing moving (stretched by the idles and stalls)."""
+    commands = [edge_command(config, edge) for edge in edges]
+    source = Source(
+        "edges",
+        [command.payload for command in commands],
+        side="clip",
+        sides=[command.clip for command in commands],
+        filler=partial(random_clip_port, config),
+    )
+    expected = int(edge_columns(config, edges).sum())
+    return run_component(
+        dut, [source], [Sink(sink, expected, decode)],
+        drain=drain, stuck=int(4 * drain / ((1 - idle) * (1 - stall))),
+        probes=probes, final=final, seed=seed, idle=idle, stall=stall, progress=progress, tag=tag,
+    )  # fmt: skip
 
 
 def run(config: EdgeConfig, edges: list[Edge], *, progress=None, output: str = "writes") -> FastRun:
     """Simulate the core (with `output`: ``"writes"`` or ``"deltas"``) on `edges`;
     `progress(done, total)` is called as commands go in."""
     dut = EdgeAntialiaser(config, output=output)
-    paths = BEAT_FORMATS[output].paths
-    commands = [edge_command(config, edge) for edge in edges]
-    drain = drain_clocks(config, output)  # clocks with no beat before the run may end
-    rows: list[list[int]] = []
-    clocks = errors = 0
-
-    async def bench(ctx):
-        nonlocal clocks, errors
-        ctx.set(dut.out.ready, 1)
-        index, quiet = 0, 0
-        while index < len(commands) or quiet < drain:
-            offering = index < len(commands)
-            ctx.set(dut.edges.valid, offering)
-            if offering:  # the clip window is sampled with the edge: present both
-                ctx.set(dut.edges.payload, commands[index].payload)
-                ctx.set(dut.clip, commands[index].clip)
-            _, _, taken, valid, beat = await ctx.tick().sample(  # clk, rst first
-                dut.edges.ready, dut.out.valid, dut.out.payload
-            )
-            if offering and taken:
-                index += 1
-                if progress is not None:
-                    progress(index, len(commands))
-            if valid:
-                rows.append([clocks, *(payload_leaf(beat, path) for path in paths)])
-            quiet = 0 if (valid or index < len(commands)) else quiet + 1
-            clocks += 1
-        ctx.set(dut.edges.valid, 0)
-        errors = ctx.get(dut.errors)
-
-    sim = Simulator(dut)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    start = time.perf_counter()
-    sim.run()
-    seconds = time.perf_counter() - start
-    beats = np.array(rows, dtype=np.int64).reshape(-1, len(paths) + 1)
-    return FastRun(beats, clocks, errors, seconds, output)
+    beats = BEAT_FORMATS[output]
+    stream = getattr(dut, beats.stream)
+    decode = row_decoder(stream.payload.shape(), [".".join(path) for path in beats.paths])
+    trace = run_core(
+        dut, config, edges, beats.stream, decode=decode, drain=drain_clocks(config, output),
+        final=(dut.errors,), progress=progress,
+    )  # fmt: skip
+    rows = [(clock, *row) for clock, row in trace.beats[0]]
+    array = np.array(rows, dtype=np.int64).reshape(-1, len(beats.paths) + 1)
+    return FastRun(array, trace.clocks, trace.final[0], trace.seconds, output)
 
 
 def run_pipeline(
@@ -101,49 +109,22 @@ def run_pipeline(
     pixels and a drain, or raises `PipelineHang`. `progress(done, total)` as commands go in."""
     dut = EdgePipeline(tile)
     layout = command_layout(tile)
-    payloads = [layout.const(c._asdict()) for c in commands]
-    rng = random.Random(seed) if seed is not None else None
-    expected, drain = expected_pixels(tile, commands), pixel_drain_clocks(tile)
-    limit = stuck_limit(tile, idle, stall)
-    rows: list[tuple[int, ...]] = []
-    counters: dict = {}
-    clocks = 0
-
-    async def bench(ctx):
-        nonlocal clocks
-        index = quiet = stuck = 0
-        while index < len(payloads) or len(rows) < expected or quiet < drain:
-            if stuck >= limit:
-                raise PipelineHang(f"{len(rows)} of {expected} pixels in {clocks:,} clocks")
-            offer = index < len(payloads) and (rng is None or rng.random() >= idle)
-            ctx.set(dut.commands.valid, offer)
-            if offer:
-                ctx.set(dut.commands.payload, payloads[index])
-            ready = rng is None or rng.random() >= stall
-            ctx.set(dut.pixels.ready, ready)
-            *_, taken, valid, pixel = await ctx.tick().sample(
-                dut.commands.ready, dut.pixels.valid, dut.pixels.payload
-            )
-            accepted, out = bool(offer and taken), bool(valid and ready)
-            index += accepted
-            if accepted and progress is not None:
-                progress(index, len(payloads))
-            if out:
-                rows.append((clocks, int(pixel.x), int(pixel.y), int(pixel.value), int(pixel.last)))
-            clocks += 1
-            quiet = 0 if (out or len(rows) < expected or index < len(payloads)) else quiet + 1
-            stuck = 0 if (out or accepted) else stuck + 1
-        counters["errors"], counters["edge_errors"] = ctx.get(dut.errors), ctx.get(dut.edge_errors)
-        counters["stats"] = {name: ctx.get(dut.stats[name]) for name in STATS}
-
-    sim = Simulator(dut)
-    sim.add_clock(1e-8)
-    sim.add_testbench(bench)
-    start = time.perf_counter()
-    sim.run()
-    seconds = time.perf_counter() - start
-    pixels = np.array(rows, dtype=np.int64).reshape(-1, len(PIXEL_COLUMNS))
+    source = Source("commands", [layout.const(c._asdict()) for c in commands])
+    pixels = row_decoder(dut.pixels.payload.shape(), PIXEL_COLUMNS[1:])
+    sink = Sink("pixels", expected_pixels(tile, commands), pixels)
+    counters = (dut.errors, dut.edge_errors, *(dut.stats[name] for name in STATS))
+    tag = f"[pipeline seed={seed} idle={idle} stall={stall} {tile}]"
+    try:
+        trace = run_component(
+            dut, [source], [sink], drain=pixel_drain_clocks(tile),
+            stuck=stuck_limit(tile, idle, stall), final=counters, seed=seed, idle=idle,
+            stall=stall, progress=progress, tag=tag,
+        )  # fmt: skip
+    except SimulationHang as error:
+        raise PipelineHang(str(error)) from None
+    rows = [(clock, *pixel) for clock, pixel in trace.beats[0]]
+    errors, edge_errors, *stats = trace.final
     return PipelineRun(
-        pixels, clocks, counters["errors"], counters["edge_errors"], counters["stats"], seconds,
-        engine="amaranth",
+        np.array(rows, dtype=np.int64).reshape(-1, len(PIXEL_COLUMNS)), trace.clocks, errors,
+        edge_errors, dict(zip(STATS, stats, strict=True)), trace.seconds, engine="amaranth",
     )  # fmt: skip
