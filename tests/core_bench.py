@@ -10,7 +10,7 @@ Amaranth simulator, async testbenches only. Every simulation run is checked the 
 handed to the stepper equals `setup()`, bad commands are dropped and counted, edges with no
 column in their clip window leave nothing (no bank, no error), and the sink is empty at the
 end. Each command is offered with its window on the ``clip`` port
-(`edgeaa.sim.verification.commands`).
+(`edgeaa.sim.simulators.commands`).
 Runs with an always-ready sink and a back-to-back source additionally match the stepper's
 registers to the model's per-column trace and every beat's clock to `edgeaa.model.timing`.
 The stepper's scaled areas are compared with the model's `Write.area` too, so a tie decided
@@ -43,7 +43,7 @@ from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
 from edgeaa.model.bank import bank_values
-from edgeaa.sim.verification.commands import edge_clip, edge_payload
+from edgeaa.sim.simulators.commands import edge_clip, edge_payload
 from edgeaa.sim.verification.scoreboard import Beat, edge_beats
 
 # -- payload decoding (raw integers are much faster to sample than data.Const) ---------------

@@ -28,8 +28,8 @@ from edgeaa.model.bank import bank_fields, bank_values
 from edgeaa.model.beat import CELLS, DeltaBeat, delta_column_beats
 from edgeaa.model.step import run_edge_deltas
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
+from edgeaa.sim.simulators.commands import edge_clip, edge_payload
 from edgeaa.sim.synthesis import muldiv_cells
-from edgeaa.sim.verification.commands import edge_clip, edge_payload
 from edgeaa.sim.verification.workloads import random_sim_edges
 
 OUTPUT = "deltas"

@@ -22,7 +22,7 @@ from ...model import Edge, EdgeConfig
 from ...model.beat import BEAT_FORMATS
 from ...model.pipeline import Command
 from ...model.tile import TileConfig
-from ..verification.commands import edge_command
+from .commands import edge_command
 from .pipeline_harness import (
     PIXEL_COLUMNS,
     PipelineHang,
