@@ -143,12 +143,14 @@ def test_a_command_its_port_cannot_carry_is_refused(echo):
         run(echo, rows, 6)
 
 
-def test_every_input_must_be_driven_and_every_name_a_port():
+def test_every_input_must_be_driven_every_leaf_read_and_every_name_a_port():
     undriven = harness.StreamFormat("ops", (("a",), ("b",)))
     with pytest.raises(ValueError, match="no command column drives defect"):
         harness.harness_top(Echo(), "echo", undriven, BEATS)
     with pytest.raises(ValueError, match="results__payload__sum is not an input port"):
         side = (("results", "payload", "sum"),)
         harness.harness_top(Echo(), "echo", COMMANDS._replace(side=side), BEATS)
+    with pytest.raises(ValueError, match="the beat row leaves out results__payload__diff"):
+        harness.harness_top(Echo(), "echo", COMMANDS, BEATS._replace(paths=(("sum",),)))
     with pytest.raises(ValueError, match="results__payload__product is not an output port"):
         harness.harness_top(Echo(), "echo", COMMANDS, BEATS._replace(paths=(("product",),)))

@@ -39,7 +39,7 @@ from amaranth.lib import data, wiring
 
 from .verilator import build_lock, cache_dir, private_build_dir, publish, verilator_env
 
-Path_ = tuple[str, ...]  # a signature path (member names, then payload field names)
+PortPath = tuple[str, ...]  # a signature path (member names, then payload field names)
 
 
 class StreamFormat(NamedTuple):
@@ -48,8 +48,8 @@ class StreamFormat(NamedTuple):
     `edgeaa.model.beat.BeatFormat` has the same `stream` and `paths`."""
 
     stream: str
-    paths: tuple[Path_, ...]
-    side: tuple[Path_, ...] = ()
+    paths: tuple[PortPath, ...]
+    side: tuple[PortPath, ...] = ()
 
 
 class Port(NamedTuple):
@@ -89,12 +89,12 @@ class HarnessTop:
     counters: tuple[Port, ...]  # every other output, printed at the end
 
 
-def signature_ports(component: wiring.Component) -> dict[Path_, tuple[Port, bool]]:
+def signature_ports(component: wiring.Component) -> dict[PortPath, tuple[Port, bool]]:
     """Every leaf port of `component` (as `edgeaa.hdl.core.flat_verilog` names them): path ->
     (port, True for an input)."""
     ports = {}
 
-    def add(path: Path_, shape, is_input: bool) -> None:
+    def add(path: PortPath, shape, is_input: bool) -> None:
         if isinstance(shape, data.Layout):
             for name, field in shape:
                 add((*path, str(name)), field.shape, is_input)
@@ -112,8 +112,9 @@ def harness_top(
 ) -> HarnessTop:
     """The harness's view of `component` (Verilog module `name`): `commands` the input
     stream and the ports each command row sets, `beats` the output stream and a beat row's
-    leaves. Raises ValueError unless the rows drive every input the harness does not (so no
-    port sits at 0 instead of its reset value) and name ports that exist."""
+    leaves. Raises ValueError unless the rows name ports that exist, drive every input the
+    harness does not (so no port sits at 0 instead of its reset value) and read every leaf
+    of the output payload."""
     ports = signature_ports(component)
     inputs = [(commands.stream, "payload", *p) for p in commands.paths] + list(commands.side)
     outputs = [(beats.stream, "payload", *p) for p in beats.paths]
@@ -131,6 +132,9 @@ def harness_top(
         raise ValueError(f"{name}: no command column drives {', '.join(map('__'.join, undriven))}")
     counters = [p for p, (_, is_in) in ports.items() if not is_in]
     counters = [p for p in counters if p not in {*outputs, *handshake}]
+    unread = [p for p in counters if p[:2] == (beats.stream, "payload")]
+    if unread:
+        raise ValueError(f"{name}: the beat row leaves out {', '.join(map('__'.join, unread))}")
     clash = [p for p in counters if "__".join(p) in RESULTS]
     if clash:
         raise ValueError(f"{name}: an output port is named like a harness result: {clash}")
