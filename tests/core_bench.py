@@ -10,7 +10,7 @@ Amaranth simulator, async testbenches only. Every simulation run is checked the 
 handed to the stepper equals `setup()`, bad commands are dropped and counted, edges with no
 column in their clip window leave nothing (no bank, no error), and the sink is empty at the
 end. Each command is offered with its window on the ``clip`` port
-(`edgeaa.sim.verification.commands`).
+(`edgeaa.sim.simulators.commands`).
 Runs with an always-ready sink and a back-to-back source additionally match the stepper's
 registers to the model's per-column trace and every beat's clock to `edgeaa.model.timing`.
 The stepper's scaled areas are compared with the model's `Write.area` too, so a tie decided

@@ -25,7 +25,7 @@ from edgeaa.hdl import (
     setup_layout,
 )
 from edgeaa.model import Edge, EdgeConfig
-from edgeaa.sim.verification.commands import edge_clip, edge_payload
+from edgeaa.sim.simulators.commands import edge_clip, edge_payload
 
 # -- (2) setup registers against setup() -----------------------------------------------------
 

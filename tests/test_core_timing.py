@@ -20,7 +20,7 @@ from edgeaa.hdl import (
 )
 from edgeaa.model import Edge, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.sim.verification.commands import edge_payload
+from edgeaa.sim.simulators.commands import edge_payload
 from edgeaa.sim.verification.streams import stream_put
 
 

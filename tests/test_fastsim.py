@@ -18,19 +18,21 @@ from edgeaa.model.timing import (
 from edgeaa.model.vector import run_edges
 from edgeaa.render.engines import beat_clocks, beats_to_writes, run_engine
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
-from edgeaa.sim.verification.commands import COMMAND_FIELDS
+from edgeaa.sim.simulators.commands import COMMAND_FIELDS
 from edgeaa.sim.verification.scoreboard import beats_to_array, expected_beats
 from edgeaa.sim.verification.workloads import random_sim_edges
 
 DEFAULT = EdgeConfig()
 WIDE = EdgeConfig(mode="seg4", accumulator="truncated", coord_bits=15, subpixel_bits=8)
+TINY = EdgeConfig(mode="seg2", accumulator="truncated", coord_bits=4, subpixel_bits=0)
 
 
-def assert_beats_match_under_stalls(edges, seed: int) -> None:
+def assert_beats_match_under_stalls(edges, seed: int, config=DEFAULT) -> None:
     """The compiled core under random idles and stalls gives the model's beats, in order, and
-    counts exactly the bad commands (an empty clip window is not one)."""
-    expected, dropped = expected_beats(DEFAULT, edges)
-    run = verilator_harness.run(DEFAULT, edges, seed=seed, idle=0.1, stall=0.3)
+    counts exactly the bad commands (an empty clip window is not one). The harness itself
+    checks that a stalled beat holds (`edgeaa.sim.simulators.harness.UnstableBeat`)."""
+    expected, dropped = expected_beats(config, edges)
+    run = verilator_harness.run(config, edges, seed=seed, idle=0.1, stall=0.3)
     assert run.errors == dropped > 0, f"seed {seed}"
     beats = run.as_beats()
     assert len(beats) == len(expected), f"seed {seed}: lost or duplicated beats"
@@ -108,6 +110,26 @@ def test_clipped_beats_equal_the_model_under_stalls_and_idles():
     )
     assert min(clip_mix(DEFAULT, edges).values()) > 10, f"seed {seed}: a weak mix"
     assert_beats_match_under_stalls(edges, seed)
+
+
+def test_clipped_beats_of_a_tiny_configuration_under_stalls():
+    """4 coordinate bits, no sub-pixel bits, seg2 and truncated: windows cut most edges."""
+    seed = 2027
+    edges = random_sim_edges(TINY, 400, seed, bad_fraction=0.02, clip_fraction=0.7)
+    assert min(clip_mix(TINY, edges).values()) > 3, f"seed {seed}: a weak mix"
+    assert_beats_match_under_stalls(edges, seed, TINY)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "config, count",
+    [(DEFAULT, 100_000), (EdgeConfig(mode="pw", coord_bits=15, subpixel_bits=8), 2_000)],
+    ids=["default", "pw-wide"],
+)
+def test_many_edges_under_stalls(config, count):
+    seed = 100_000
+    edges = random_sim_edges(config, count, seed, bad_fraction=0.02, clip_fraction=0.2)
+    assert_beats_match_under_stalls(edges, seed, config)
 
 
 @pytest.mark.parametrize("max_pixels", [120, 16], ids=["stepper-bound", "setup-bound"])

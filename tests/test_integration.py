@@ -17,9 +17,9 @@ from edgeaa.cli import main
 from edgeaa.hdl import verilog
 from edgeaa.hdl.integration import WAIVERS, lint_waivers, sign_ports
 from edgeaa.model import Clip, Edge
+from edgeaa.sim.simulators.commands import COMMAND_FIELDS, edge_command
+from edgeaa.sim.simulators.harness import compile_harness
 from edgeaa.sim.simulators.verilator import lint, verilator_env
-from edgeaa.sim.simulators.verilator_harness import compile_harness
-from edgeaa.sim.verification.commands import COMMAND_FIELDS, edge_command
 from edgeaa.sim.verification.scoreboard import Beat, expected_beats
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -79,7 +79,7 @@ def test_every_waiver_is_a_rule_on_lines_of_one_file_with_its_reason():
 
 
 def test_no_blanket_warning_flags_in_the_verilator_runs():
-    for path in ("sim/simulators/verilator.py", "sim/simulators/verilator_harness.py"):
+    for path in ("sim/simulators/verilator.py", "sim/simulators/harness.py"):
         flags = set(re.findall(r"-Wno-[\w-]+", (ROOT / path).read_text()))
         assert flags <= {"-Wno-fatal"}, (path, flags)
 

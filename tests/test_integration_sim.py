@@ -30,7 +30,7 @@ from edgeaa.model.edge import fold, window
 from edgeaa.model.pipeline import CODE, Command, command_ops
 from edgeaa.model.tile import TileConfig, TileModel
 from edgeaa.sim.simulators.amaranth_runner import decoder
-from edgeaa.sim.verification.commands import edge_command
+from edgeaa.sim.simulators.commands import edge_command
 from edgeaa.sim.verification.scoreboard import edge_beats
 
 CONFIG = CORE_CONFIGS["small"]  # W 4, s 0, I 4: 17 x 17 pixels

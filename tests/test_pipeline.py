@@ -7,6 +7,8 @@ lint-clean."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from fixtures import TINY_SCENE, small_scenes
@@ -228,46 +230,27 @@ def test_a_bad_tile_is_refused_before_the_scene_is_planned(capsys, monkeypatch):
     assert len(err.splitlines()) == 1, err
 
 
-# -- cocotb on Verilator -------------------------------------------------------------------------
+def test_pixels_out_of_place_are_reported():
+    """`PipelineRun.frames` checks every pixel's place and ``last``, not only the values."""
+    from edgeaa.sim.simulators import pipeline_harness
 
-
-def tiny_scene_at_4_bits() -> dict:
-    """TINY_SCENE with its intensities scaled to SMALL's 4 bits."""
-    polygons = [{**p, "intensity": p["intensity"] // 16} for p in TINY_SCENE["polygons"]]
-    return {**TINY_SCENE, "background": TINY_SCENE["background"] // 16, "polygons": polygons}
-
-
-# cocotb on the pipeline repeats what the compiled harness checks above (every pixel under
-# back-pressure, bad commands) at the cost of its own Verilator build: in -m slow only.
-@pytest.mark.slow
-@pytest.mark.parametrize("seed", [11])
-def test_cocotb_checks_every_pixel_of_the_pipeline_under_back_pressure(seed):
-    from edgeaa.sim.simulators.pipeline_cosim import cosimulate_pipeline
-
-    tile = TileConfig(SMALL, 8, 8)
-    plan = plan_scene(parse_scene(tiny_scene_at_4_bits()), SMALL)
-    commands = scene_commands(plan, tile) + bad_commands(SMALL.subpixel_scale)
-    result = cosimulate_pipeline(tile, commands, seed=seed, idle=0.2, stall=0.4)
-    flushes = sum(c.op == Command.flush().op for c in commands)
-    assert result.pixels == flushes * tile.pixels
-
-
-@pytest.mark.slow
-def test_cocotb_catches_a_wrong_model(monkeypatch):
-    from edgeaa.sim.simulators import pipeline_cosim
-    from edgeaa.sim.simulators.verilator import CosimError
-
-    class OffByOne(TileModel):
-        def run(self, ops):
-            frames = super().run(ops)
-            frames[0][3, 5] += 1
-            return frames
-
-    monkeypatch.setattr(pipeline_cosim, "TileModel", OffByOne)
-    tile = TileConfig(SMALL, 8, 8)
-    plan = plan_scene(parse_scene(tiny_scene_at_4_bits()), SMALL)
-    with pytest.raises(CosimError, match=r"pixel 29 is"):
-        pipeline_cosim.cosimulate_pipeline(tile, scene_commands(plan, tile), seed=1)
+    tile = TileConfig(SMALL, 8, 4)
+    commands = [Command.tile(0, 0, 3), Command.flush(), Command.flush()]
+    run = pipeline_harness.run(tile, commands, seed=2, idle=0.3, stall=0.3)
+    want, _ = model_frames(tile, commands)
+    assert [f.tolist() for f in run.frames(tile)] == [np.asarray(f).tolist() for f in want]
+    x, last = PIXEL_COLUMNS.index("x"), PIXEL_COLUMNS.index("last")
+    for column, row, value, match in [
+        (x, 9, 0, r"pixel 9 is at \(0, 1\) with last 0; .* has \(1, 1\) with last 0"),
+        (last, 5, 1, r"pixel 5 is at \(5, 0\) with last 1"),
+        (last, 31, 0, r"pixel 31 is at \(7, 3\) with last 0; .* with last 1"),
+    ]:
+        pixels = run.pixels.copy()
+        pixels[row, column] = value
+        with pytest.raises(RuntimeError, match=match):
+            replace(run, pixels=pixels).frames(tile)
+    with pytest.raises(RuntimeError, match="63 pixels are not whole 8 x 4 tiles"):
+        replace(run, pixels=run.pixels[:-1]).frames(tile)
 
 
 @pytest.mark.parametrize("name", ["text", "starburst"])

@@ -22,8 +22,8 @@ from ...model import Clip, Edge, EdgeConfig
 from ...model.beat import BEAT_FORMATS, edge_columns
 from ...model.pipeline import Command
 from ...model.tile import TileConfig
-from ..verification.commands import edge_command
 from .amaranth_runner import Probe, SimulationHang, Sink, Source, Trace, row_decoder, run_component
+from .commands import edge_command
 from .pipeline_harness import (
     PIXEL_COLUMNS,
     PipelineHang,

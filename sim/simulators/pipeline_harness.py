@@ -1,35 +1,35 @@
-"""The polygon pipeline (`edgeaa.hdl.pipeline.EdgePipeline`) compiled by Verilator with a C++
-harness: pipeline commands in, every pixel out, with the clock it came in.
+# amaranth: UnusedElaboratable=no
+"""The polygon pipeline (`edgeaa.hdl.pipeline.EdgePipeline`) compiled by Verilator with the
+generated harness (`edgeaa.sim.simulators.harness`): pipeline commands in, every pixel out,
+with the clock it came in.
 
-The harness reads the commands (int32 rows of `edgeaa.model.pipeline.Command`'s fields) from
-a file, offers them on ``commands`` (optionally with seeded random idle clocks), takes pixels
-with optionally seeded random back-pressure, and writes each pixel as an int64 row
-``clock, x, y, value, last`` and the clock each command was taken (int64, one per command;
-`edgeaa.model.pipeline_timing` predicts both). It stops when it has every pixel the flushes
-ask for and then `drain` quiet clocks have passed (an extra pixel in them is kept, so a
-duplicate shows), or when neither a command nor a pixel has moved for `max_quiet` clocks
-while work is left (a hang: raised as `PipelineHang`, never silent). It prints the clocks,
-the counters ``errors``, ``edge_errors`` and the stage counters `STATS`, and whether it timed
-out.
+A command row is `edgeaa.model.pipeline.Command`'s fields; a pixel row is `PIXEL_COLUMNS`; the
+clock each command was taken is kept too (`edgeaa.model.pipeline_timing` predicts both). A run
+stops when it has every pixel the flushes ask for and then `pixel_drain_clocks` quiet clocks
+have passed (an extra pixel in them is kept, so a duplicate shows), or when neither a command
+nor a pixel has moved for `stuck_limit` clocks while work is left (a hang: raised as
+`PipelineHang`, never silent). The counters ``errors``, ``edge_errors`` and the stage
+counters `STATS` are read at the end.
 """
 
 from __future__ import annotations
 
-import subprocess
-import tempfile
-import time
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ...hdl.pipeline import STATS, pipeline_verilog
+from ...hdl.pipeline import STATS, EdgePipeline, pipeline_verilog
 from ...model.pipeline import CODE, Command
 from ...model.tile import TileConfig
-from .verilator_harness import compile_harness, cpp_port, cpp_prelude, cpp_reset
+from . import harness
 
 TOP = "edgeaa_pipeline"
 PIXEL_COLUMNS = ("clock", "x", "y", "value", "last")
+COMMAND_FORMAT = harness.StreamFormat("commands", tuple((name,) for name in Command._fields))
+PIXEL_FORMAT = harness.StreamFormat("pixels", tuple((name,) for name in PIXEL_COLUMNS[1:]))
+PipelineHang = harness.HarnessHang  # the name the pipeline's callers catch
 
 
 @dataclass(frozen=True)
@@ -51,8 +51,24 @@ class PipelineRun:
         return self.clocks / self.seconds if self.seconds else 0.0
 
     def frames(self, tile: TileConfig) -> list[np.ndarray]:
-        """The flushed tiles' values, (height, width) each, in order."""
-        values = self.pixels[:, PIXEL_COLUMNS.index("value")]
+        """The flushed tiles' values, (height, width) each, in order. Raises RuntimeError
+        unless the pixels came as the pipeline sends them: whole tiles, row by row, each
+        pixel at its place and ``last`` on a tile's final pixel only."""
+        x, y, values, last = (self.pixels[:, PIXEL_COLUMNS.index(n)] for n in PIXEL_COLUMNS[1:])
+        if len(values) % tile.pixels:
+            raise RuntimeError(
+                f"{len(values)} pixels are not whole {tile.width} x {tile.height} tiles"
+            )
+        k = np.arange(len(values)) % tile.pixels
+        want_y, want_x = np.divmod(k, tile.width)
+        want_last = k == tile.pixels - 1
+        wrong = np.flatnonzero((x != want_x) | (y != want_y) | (last != want_last))
+        if len(wrong):
+            i = wrong[0]
+            raise RuntimeError(
+                f"pixel {i} is at ({x[i]}, {y[i]}) with last {last[i]}; a tile sent row by row "
+                f"has ({want_x[i]}, {want_y[i]}) with last {int(want_last[i])} there"
+            )
         return list(values.reshape(-1, tile.height, tile.width))
 
 
@@ -76,113 +92,22 @@ def stuck_limit(tile: TileConfig, idle: float = 0.0, stall: float = 0.0) -> int:
     return int(4 * longest / ((1 - idle) * (1 - stall)))
 
 
-def _harness_source() -> str:
-    fields = Command._fields
-    set_payload = "\n".join(
-        f"            {cpp_port('commands__payload__' + name)} = cmd[{i}];"
-        for i, name in enumerate(fields)
-    )
-    pixel_row = ", ".join(
-        f"(int64_t){cpp_port('pixels__payload__' + name)}" for name in PIXEL_COLUMNS[1:]
-    )
-    stats = " ".join("%llu" for _ in STATS)
-    stat_args = ", ".join(f"(unsigned long long){cpp_port('stats__' + name)}" for name in STATS)
-    return (
-        cpp_prelude(TOP, "pixel")
-        + f"""
-int main(int argc, char** argv) {{
-    if (argc != 9 && argc != 10) {{
-        fprintf(stderr, "usage: %s COMMANDS PIXELS SEED IDLE STALL EXPECTED DRAIN MAX_QUIET"
-                " [TAKEN]\\n", argv[0]);
-        return 2;
-    }}
-    FILE* in = fopen(argv[1], "rb");
-    FILE* out = fopen(argv[2], "wb");
-    FILE* taken_log = argc == 10 ? fopen(argv[9], "wb") : nullptr;
-    if (!in || !out || (argc == 10 && !taken_log)) {{
-        perror("edgeaa pipeline harness");
-        return 2;
-    }}
-    rng_seed(argv[3]);
-    const uint32_t idle = atoi(argv[4]), stall = atoi(argv[5]);
-    const uint64_t expected = strtoull(argv[6], nullptr, 10);
-    const uint64_t drain = strtoull(argv[7], nullptr, 10);
-    const uint64_t max_quiet = strtoull(argv[8], nullptr, 10);
-    const std::vector<int32_t> cmds = read_words(in);
-    const size_t n_cmds = cmds.size() / {len(fields)};
-
-{cpp_reset(TOP)}
-
-    size_t next = 0;
-    bool offering = false;
-    uint64_t clock = 0, received = 0, quiet = 0, stuck = 0;
-    bool hung = false;
-    std::vector<int64_t> rows;
-    rows.reserve(1 << 16);
-    while (!hung && (next < n_cmds || offering || received < expected || quiet < drain)) {{
-        if (!offering && next < n_cmds && (idle == 0 || rng_permille() >= idle)) {{
-            const int32_t* cmd = &cmds[next * {len(fields)}];
-{set_payload}
-            offering = true;
-        }}
-        {cpp_port("commands__valid")} = offering;
-        {cpp_port("pixels__ready")} = (stall == 0 || rng_permille() >= stall);
-        top->clk = 0; top->eval();
-        const bool accepted = offering && {cpp_port("commands__ready")};
-        if (accepted) {{
-            offering = false; next++;
-            if (taken_log) {{ const int64_t c = (int64_t)clock; fwrite(&c, 8, 1, taken_log); }}
-        }}
-        const bool taken = {cpp_port("pixels__valid")} && {cpp_port("pixels__ready")};
-        if (taken) {{
-            int64_t row[5] = {{(int64_t)clock, {pixel_row}}};
-            rows.insert(rows.end(), row, row + 5);
-            received++;
-            if (rows.size() >= (1 << 20)) {{
-                fwrite(rows.data(), 8, rows.size(), out); rows.clear();
-            }}
-        }}
-        quiet = (taken || received < expected || next < n_cmds) ? 0 : quiet + 1;
-        stuck = (taken || accepted) ? 0 : stuck + 1;
-        hung = stuck >= max_quiet && (received < expected || next < n_cmds);
-        top->clk = 1; top->eval();
-        clock++;
-    }}
-    fwrite(rows.data(), 8, rows.size(), out);
-    fclose(out);
-    if (taken_log) fclose(taken_log);
-    printf("%llu %llu %llu {stats} %d\\n", (unsigned long long)clock,
-           (unsigned long long)top->errors, (unsigned long long)top->edge_errors, {stat_args},
-           hung ? 1 : 0);
-    top->final();
-    delete top;
-    delete ctx;
-    return 0;
-}}
-"""
-    )
-
-
-_BUILT: dict[tuple[TileConfig, str], Path] = {}
+@functools.cache
+def pipeline_top(tile: TileConfig) -> harness.HarnessTop:
+    """The pipeline as the harness drives it: `COMMAND_FORMAT` in, `PIXEL_FORMAT` out."""
+    return harness.harness_top(EdgePipeline(tile), TOP, COMMAND_FORMAT, PIXEL_FORMAT)
 
 
 def build(tile: TileConfig, *, optimize: str = "-O2") -> Path:
     """Compile the pipeline and the harness (cached by their text); returns the executable."""
-    known = _BUILT.get((tile, optimize))
-    if known is None or not known.exists():
-        source = pipeline_verilog(tile, name=TOP)
-        known = _BUILT[(tile, optimize)] = compile_harness(TOP, source, _harness_source(), optimize)
-    return known
+    verilog = functools.partial(pipeline_verilog, tile, name=TOP)
+    return harness.build(("pipeline", tile, optimize), pipeline_top(tile), verilog, optimize)
 
 
 def use_executable(tile: TileConfig, exe: Path, *, optimize: str = "-O2") -> None:
     """Run `tile`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
     workers are handed the driver's), instead of generating and hashing the Verilog again."""
-    _BUILT[(tile, optimize)] = Path(exe)
-
-
-class PipelineHang(RuntimeError):
-    """The pipeline did not deliver every expected pixel within the clock limit."""
+    harness.use_executable(("pipeline", tile, optimize), exe)
 
 
 def run(
@@ -195,33 +120,21 @@ def run(
     max_quiet: int | None = None,
 ) -> PipelineRun:
     """Simulate the pipeline on `commands`; `idle`/`stall` are probabilities per clock."""
-    for name, value in (("idle", idle), ("stall", stall)):
-        if not 0 <= value < 1:
-            raise ValueError(f"{name} must be a probability in [0, 1), not {value!r}")
-    exe = build(tile)
-    expected = expected_pixels(tile, commands)
-    if max_quiet is None:
-        max_quiet = stuck_limit(tile, idle, stall)
-    with tempfile.TemporaryDirectory(prefix="edgeaa-pipeline-") as tmp:
-        commands_path, pixels_path = Path(tmp) / "commands.bin", Path(tmp) / "pixels.bin"
-        taken_path = Path(tmp) / "taken.bin"
-        np.array(commands, dtype=np.int32).reshape(-1, len(Command._fields)).tofile(commands_path)
-        argv = [exe, commands_path, pixels_path, seed, round(idle * 1000), round(stall * 1000)]
-        argv += [expected, pixel_drain_clocks(tile), max_quiet, taken_path]
-        start = time.perf_counter()
-        proc = subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=False)
-        seconds = time.perf_counter() - start
-        if proc.returncode != 0:
-            raise RuntimeError(
-                f"pipeline harness failed ({proc.returncode}): {proc.stderr[-2000:]}"
-            )
-        values = [int(v) for v in proc.stdout.split()]
-        rows = np.fromfile(pixels_path, dtype=np.int64).reshape(-1, len(PIXEL_COLUMNS))
-        taken = np.fromfile(taken_path, dtype=np.int64)
-    clocks, errors, edge_errors, *counters, timed_out = values
-    if timed_out:
-        raise PipelineHang(
-            f"the pipeline gave {len(rows)} of {expected} pixels in {clocks:,} clocks (seed {seed})"
-        )
-    stats = dict(zip(STATS, counters, strict=True))
-    return PipelineRun(rows, clocks, errors, edge_errors, stats, seconds, commands=taken)
+    harness.check_probabilities(idle, stall)
+    done = harness.run_harness(
+        build(tile),
+        pipeline_top(tile),
+        np.array(commands, dtype=np.int64).reshape(-1, len(Command._fields)),
+        seed=seed,
+        idle=idle,
+        stall=stall,
+        expected=expected_pixels(tile, commands),
+        drain=pixel_drain_clocks(tile),
+        max_quiet=stuck_limit(tile, idle, stall) if max_quiet is None else max_quiet,
+    )
+    counters = done.counters
+    stats = {name: counters[f"stats__{name}"] for name in STATS}
+    return PipelineRun(
+        done.rows, done.clocks, counters["errors"], counters["edge_errors"], stats,
+        done.seconds, commands=done.taken,
+    )  # fmt: skip

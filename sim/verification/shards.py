@@ -43,7 +43,7 @@ from .workloads import iter_sim_edges
 
 ENGINES = ("verilator", "amaranth")
 
-# The workload, as the tests draw it (tests/test_cosim.py, tests/test_fastsim.py).
+# The workload, as the tests draw it (tests/test_fastsim.py).
 IDLE, STALL = 0.2, 0.3  # probability per clock of a source idle and of sink back-pressure
 BAD_FRACTION = 0.02  # zero-length edges and I_in == I_out: the core drops and counts them
 CLIP_FRACTION = 0.5  # edges with a random clip window (empty, start, end, both, loose)

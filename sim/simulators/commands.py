@@ -1,8 +1,9 @@
 """One edge command as the core's input ports see it: the ``edges`` payload and the ``clip``
 window the driver presents while offering it (sampled in the clock the edge is accepted).
 
-Every driver (the compiled harness's command file, the cocotb bench, the Amaranth runner and
-the core's unit tests) builds its port values here, so they cannot drift apart.
+Every driver (the compiled harness's command file, the Amaranth runner and the core's unit
+tests) builds its port values here, so they cannot drift apart. `COMMAND_FORMAT` is the same
+row for the harness generator (`edgeaa.sim.simulators.harness`).
 """
 
 from __future__ import annotations
@@ -12,12 +13,16 @@ from typing import NamedTuple
 from ...hdl.layouts import edge_layout
 from ...model import Clip, Edge, EdgeConfig
 from ...model.edge import validate_clip
+from .harness import StreamFormat
 
 # The ``edges`` payload's fields in port order (the core's `edge_layout`; widths aside, the
 # same in every configuration).
 EDGE_FIELDS = tuple(str(name) for name, _ in edge_layout(EdgeConfig()))
 CLIP_FIELDS = Clip._fields  # clip: x_min, y_min, x_max, y_max
 COMMAND_FIELDS = EDGE_FIELDS + CLIP_FIELDS  # a command file row
+COMMAND_FORMAT = StreamFormat(
+    "edges", tuple((name,) for name in EDGE_FIELDS), tuple(("clip", name) for name in CLIP_FIELDS)
+)
 
 
 class Command(NamedTuple):
