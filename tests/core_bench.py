@@ -19,7 +19,7 @@ differently inside the loop shows even when the rounded value hides it.
 The runner (`simulate`, and `drive` which the deltas core's tests share) is a configuration
 of the one Amaranth driver (`edgeaa.sim.simulators.amaranth_sim.run_core`) with probes on the
 setup bank, the error pulse and the stepper's registers;
-`edgeaa.sim.verification.streams` serves the small directed tests. The core simulates at
+`edgeaa.sim.simulators.streams` serves the small directed tests. The core simulates at
 2-4k clocks/s, so edges are short and many of them share one run; long sweeps are marked
 slow (``pytest -m slow``).
 """

@@ -17,7 +17,7 @@ from edgeaa.sim.simulators.amaranth_runner import (
     Source,
     run_component,
 )
-from edgeaa.sim.verification.streams import StreamProtocolError
+from edgeaa.sim.simulators.streams import StreamProtocolError
 
 
 class Stage(wiring.Component):

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from edgeaa.hdl.bresenham import BresenhamLine
 from edgeaa.model import EdgeConfig
-from edgeaa.sim.verification.streams import (
+from edgeaa.sim.simulators.streams import (
     StreamProtocolError,
     stream_get,
     stream_get_packet,

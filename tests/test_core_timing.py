@@ -21,7 +21,7 @@ from edgeaa.hdl import (
 from edgeaa.model import Edge, setup
 from edgeaa.model import timing as timing_model
 from edgeaa.sim.simulators.commands import edge_payload
-from edgeaa.sim.verification.streams import stream_put
+from edgeaa.sim.simulators.streams import stream_put
 
 
 @pytest.mark.parametrize("name", list(CORE_CONFIGS))

@@ -28,7 +28,7 @@ from amaranth.hdl import Shape, Value
 from amaranth.lib import data
 from amaranth.sim import Simulator
 
-from ..verification.streams import StreamProtocolError
+from .streams import StreamProtocolError
 
 
 class SimulationHang(RuntimeError):
