@@ -25,7 +25,9 @@ from edgeaa.render.pipeline import (
     render_pipeline,
     render_tiles,
     scene_commands,
+    tile_jobs,
 )
+from edgeaa.render.render import _write_boxes
 from edgeaa.sim.simulators.amaranth_sim import run_pipeline
 from edgeaa.sim.simulators.pipeline_harness import PIXEL_COLUMNS, PipelineHang, expected_pixels
 
@@ -61,6 +63,39 @@ def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
     assert np.array_equal(image, render_tiles(plan, tile))
     assert run.stats["core_busy"] > 0 and run.stats["resolve_busy"] >= 4 * tile.pixels
     assert run.stats["resolve_stall"] == 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.data(), st.sampled_from([(4, 2), (8, 4), (16, 8)]))
+def test_the_tiles_image_is_the_renderers_with_left_edges_merged(data, size):
+    """Small tiles put most edges wholly left of most tiles: sent as merged vertical edges,
+    the frames are still the renderer's image bit for bit."""
+    scene = data.draw(small_scenes(DEFAULT))
+    plan = plan_scene(scene, DEFAULT)
+    tile = TileConfig(DEFAULT, *size)
+    assert np.array_equal(render_tiles(plan, tile), render_scene(plan).image)
+
+
+@pytest.mark.parametrize("name", ["text", "starburst"])
+def test_no_edge_is_sent_to_a_tile_it_cannot_write_in(name):
+    """A tile gets the edges that can write in its columns and, for those wholly left of
+    it, vertical edges on the column left of it, at most one per such edge (the text's
+    glyphs left of a tile give none: a closed contour's windings cancel)."""
+    plan = plan_scene(builtin(name, DEFAULT), DEFAULT)
+    S, (ox, _) = DEFAULT.subpixel_scale, plan.offset
+    lo_x, _, hi_x, _ = _write_boxes(plan.coords, plan.offset, S)
+    columns = {tuple(c.tolist()): (a, b) for c, a, b in zip(plan.coords, lo_x, hi_x, strict=True)}
+    merged = left = 0
+    for job in tile_jobs(plan, TILE):
+        column = (ox + job.x - 1) * S
+        for edge in job.edges:
+            if edge.x0 == edge.x1 == column and job.projected:
+                continue
+            lo, hi = columns[edge.x0, edge.y0, edge.x1, edge.y1]
+            assert lo < job.x + TILE.width and hi >= job.x
+        assert job.projected <= job.left
+        merged, left = merged + job.projected, left + job.left
+    assert left > 0 and merged < left / 4
 
 
 def _square(x: int, y: int, size: int, scale: int) -> list[Command]:
