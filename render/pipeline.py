@@ -38,7 +38,7 @@ from .render import (
 from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
-# The most clocks (`clock_estimate`, an upper estimate: 2.1 to 5.6 times the cycle model's
+# The most clocks (`clock_estimate`, an upper estimate: 2.7 to 7.4 times the cycle model's
 # clocks on the built-ins) a scene may need in each simulator: 60 s of Verilator at its
 # measured 1 to 1.5 million clocks per second; for Amaranth's simulator (about 500 clocks
 # per second) the built-ins' 1.3 million (docs/scenes.md, "Errors and limits").
@@ -267,7 +267,7 @@ def render_pipeline(
 
 
 def clock_estimate(plan: Plan, tile: TileConfig) -> tuple[int, int]:
-    """An upper estimate of the pipeline's clocks on `scene_commands(plan, tile)`, and the
+    """An upper estimate of the pipeline's clocks on `scene_commands(plan, tile)`, and of the
     number of those commands, from the plan without making them (numpy, per row of tiles;
     no cycle model): every stage's work added as if none overlapped. Per edge, in every tile
     of its rows from its own rightwards (`tile_jobs` sends fewer: the ones wholly left of a
