@@ -45,13 +45,14 @@ costs the pixel memory's block RAMs again and a multiplexer per port.
 Observation points for the formal harness (``observe``, a namespace set when the resolve is
 elaborated; no logic of their own): ``memories`` the two pixel `Memory`, ``reads`` their read
 ports, ``bank`` the one the resolve writes, ``fwritten`` and ``fbackground`` the flushed
-tile's written rows and background, ``stages`` the pipeline's stages (s1 first; namespaces of registers, each with ``valid``;
-the values a stage carries are in the delay lines, ``delays`` (their `Memory` by name,
-``"xy"`` and ``"carry"``), at the address its ``delayed`` names per line (a value, no
-logic); the last stage's are its fields ``x``, ``y``, ``below``, ``zero`` and ``neg``, the
-read ports' data), ``acc`` the row's prefix sum, ``d2``, ``written``, ``background``,
-``p_valid`` and ``p`` the output register (``x``, ``y``, ``last``, ``written``), ``fx`` and
-``fy`` the flush position (the flush side reads while ``flushing``).
+tile's written rows and background, ``stages`` the pipeline's stages (s1 first; namespaces
+of registers, each with ``valid``; the values a stage carries are in the delay lines,
+``delays`` (their `Memory` by name, ``"xy"`` and ``"carry"``), at the address its
+``delayed`` names per line (a value, no logic); the last stage's are its fields ``x``,
+``y``, ``below``, ``zero`` and ``neg``, the read ports' data), ``acc`` the row's prefix
+sum, ``d2``, ``written``, ``background``, ``p_valid`` and ``p`` the output register (``x``,
+``y``, ``last``, ``written``), ``fx`` and ``fy`` the flush position (the flush side reads
+while ``flushing``).
 """
 
 from __future__ import annotations

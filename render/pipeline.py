@@ -38,7 +38,7 @@ from .render import (
 from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
-# The most clocks (`clock_estimate`, an upper estimate: 2.7 to 7.4 times the cycle model's
+# The most clocks (`clock_estimate`, an upper estimate: 3.2 to 9.5 times the cycle model's
 # clocks on the built-ins) a scene may need in each simulator: 60 s of Verilator at its
 # measured 1 to 1.5 million clocks per second; for Amaranth's simulator (about 500 clocks
 # per second) the built-ins' 1.3 million (docs/scenes.md, "Errors and limits").
