@@ -1,25 +1,43 @@
-"""The polygon pipeline in hardware: clocks per scene, where they go, and simulation speed.
+"""The polygon pipeline in hardware: display rate per scene, where the clocks go, and
+simulation speed (issue 26).
 
-For each built-in scene (default configuration, tile 64 x 32 unless --tile) the scene's
-pipeline commands (`edgeaa.render.pipeline.scene_commands`) run through the Verilated
-`EdgePipeline` (`edgeaa.sim.simulators.pipeline_harness`, build excluded, sink always ready)
-and the image is compared with the model's. Printed per scene: commands, the pipeline's
-clocks, the whole pipeline's cycle model's (`edgeaa.model.pipeline_timing`, plus the
-harness's drain: equal, or the model is wrong), the stepper alone's clocks on the same edges
-(`edgeaa.model.timing`, the edges the renderer sends once, without tiling), each stage's
-busy and stall counters as shares of the clocks, pixels out, and simulated clocks per second
-of wall time, beside the stepper-only harness's rate on the scene's edges in the same process
-(the ratio is the steadier figure on a shared machine).
+Scenes (default configuration, tile 64 x 32 unless --tile): the built-ins; a 640 x 480 HUD
+page (`hud_scene`: 20 lines of 12 px DejaVu Sans Mono, a frame, a ring and a pitch ladder);
+one line of serif text (`edgeaa.render.corpus.font_scene`) in STIX, DejaVu Serif and cmr10
+(fonts matplotlib ships) at 9 to 32 px; and 1920 x 1080 with 40 large polygons
+(`polygons_1080p`, seeded). For each, the scene's pipeline commands
+(`edgeaa.render.pipeline.scene_commands`) go through the whole pipeline's cycle model
+(`edgeaa.model.pipeline_timing.pipeline_cycles`, exact: tested against the Verilated
+pipeline) and through the Verilated `EdgePipeline` (`edgeaa.sim.simulators.pipeline_harness`,
+build excluded, sink always ready), whose image is compared with the renderer's and whose
+clocks with the model's plus the harness's drain (equal, or the model is wrong).
 
-    python benchmarks/bench_pipeline.py [--tile 64x32] [--repeats 3] [--json]
+The rate table: clocks (the cycle model's), pixels per clock, the floor (the pixels flushed
+or the cells the resolve scans, `TileTiming.cells_scanned`, whichever is more: each takes a
+clock, and with the resolve's second pixel memory a flush runs beside the next tile's scan)
+and the clocks' ratio to it, frames per second at the iCE40 HX8K's 33.3 MHz (docs/hardware.md,
+"Fits an iCE40 HX8K"), and AGG's time on one CPU core for the same polygons in the same run
+(aggdraw: the scene drawn into an 8-bit image, paths built beforehand, the fastest of
+--repeats draws) and the FPGA's time over it. The stage table: each stage's busy and stall
+counters as shares of the clocks, the stepper alone's clocks on the edges the renderer sends
+once (`edgeaa.model.timing`), and simulated clocks per second beside the stepper-only
+harness's on the same edges (the ratio is the steadier figure on a shared machine).
+--write puts both tables into docs/hardware.md between its markers.
+
+    python benchmarks/bench_pipeline.py [--tile 64x32] [--repeats 3] [--json] [--write]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import platform
+import random
 import re
 import sys
+import time
+from pathlib import Path
 
 import numpy as np
 
@@ -28,85 +46,223 @@ from edgeaa.model import EdgeConfig
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import TileConfig
 from edgeaa.render import builtin, plan_scene, render_scene
-from edgeaa.render.builtin import BUILTINS
+from edgeaa.render.builtin import BUILTINS, glyph_polygons
+from edgeaa.render.corpus import font_file, font_scene
 from edgeaa.render.pipeline import image_from_frames, scene_commands
+from edgeaa.render.scene import Polygon, Scene
 from edgeaa.sim.simulators import pipeline_harness, verilator_harness
 
+ROOT = Path(__file__).resolve().parent.parent
+DOC = ROOT / "docs" / "hardware.md"
+ICE40_MHZ = 33.3  # the pipeline's Fmax on the iCE40 HX8K (docs/hardware.md)
+SERIF_FONTS = ("STIXGeneral", "DejaVuSerif", "cmr10")
+FONT_SIZES = (9, 12, 16, 24, 32)
 
-def measure(name: str, tile: TileConfig, repeats: int) -> dict:
+
+def _circle(cx: float, cy: float, r: float, n: int, reverse: bool = False) -> tuple:
+    angles = [2 * math.pi * k / n for k in range(n)]
+    points = [(cx + r * math.cos(a), cy + r * math.sin(a)) for a in angles]
+    return tuple(points[::-1] if reverse else points)
+
+
+def _bar(cx: float, cy: float, width: float, height: float, angle: float) -> tuple:
+    c, s = math.cos(angle), math.sin(angle)
+    corners = ((-width / 2, -height / 2), (width / 2, -height / 2))
+    corners += ((width / 2, height / 2), (-width / 2, height / 2))
+    return tuple((cx + x * c - y * s, cy + x * s + y * c) for x, y in corners)
+
+
+def hud_scene(full: int = 255) -> Scene:
+    """640 x 480, bright on dark: a 2 px frame on pixel boundaries, a ring (radius 150 px,
+    2.5 px wide, 96 sides), a pitch ladder of 9 bars 2 px thick tilted 4 degrees, and 20
+    lines of 12 px DejaVu Sans Mono (one polygon per glyph), all off the pixel grid but the
+    frame."""
+    dark, bright = round(full * 24 / 255), full
+    outer = ((3.5, 3.5), (636.5, 3.5), (636.5, 476.5), (3.5, 476.5))
+    inner = ((5.5, 5.5), (5.5, 474.5), (634.5, 474.5), (634.5, 5.5))  # reversed: a hole
+    ring = (_circle(420.3, 240.2, 150, 96), _circle(420.3, 240.2, 147.5, 96, reverse=True))
+    polygons = [Polygon((outer, inner), bright, "nonzero", "frame")]
+    polygons.append(Polygon(ring, bright, "nonzero", "ring"))
+    for k in range(9):
+        bar = _bar(420.3, 240.2 + (k - 4) * 28, 220 if k == 4 else 120, 2.0, math.radians(4))
+        polygons.append(Polygon((bar,), bright, "nonzero", f"ladder {k}"))
+    mono = font_file("DejaVuSansMono")
+    for line in range(20):
+        text = f"{line:02d} ALT {12500 - 37 * line:5d} SPD {250 + 3 * line:3d} "
+        text += f"HDG {(275 + 11 * line) % 360:03d}"
+        glyphs, _, _ = glyph_polygons(mono, text, 12, 12.3, 24.37 + 22 * line, bright)
+        polygons.extend(glyphs)
+    return Scene(640, 480, tuple(polygons), background=dark, name="HUD 640x480")
+
+
+def polygons_1080p(full: int = 255, count: int = 40, seed: int = 1080) -> Scene:
+    """1920 x 1080, `count` filled polygons of 5 to 12 vertices, star-shaped around random
+    centres (radius 120 to 420 px, each vertex at 0.5 to 1 of it), cut to 10 px around the
+    image, random intensities over mid grey; seeded."""
+    rng = random.Random(seed)
+    polygons = []
+    for k in range(count):
+        cx, cy, r = rng.uniform(0, 1920), rng.uniform(0, 1080), rng.uniform(120, 420)
+        angles = sorted(rng.uniform(0, 2 * math.pi) for _ in range(rng.randint(5, 12)))
+        points = []
+        for a in angles:
+            x = cx + r * rng.uniform(0.5, 1) * math.cos(a)
+            y = cy + r * rng.uniform(0.5, 1) * math.sin(a)
+            points.append((min(max(x, -10.3), 1930.3), min(max(y, -10.3), 1090.3)))
+        polygons.append(Polygon((tuple(points),), rng.randint(0, full), "nonzero", f"{k}"))
+    return Scene(1920, 1080, tuple(polygons), background=full // 2, name="1080p 40 polygons")
+
+
+def scenes(config: EdgeConfig) -> list[Scene]:
+    out = [builtin(name, config) for name in BUILTINS]
+    out.append(hud_scene(config.full_scale))
+    for font in SERIF_FONTS:
+        out += [font_scene(font, size, config.full_scale)[0] for size in FONT_SIZES]
+    out.append(polygons_1080p(config.full_scale))
+    return out
+
+
+def agg_seconds(plan, repeats: int) -> float:
+    """AGG (aggdraw) drawing the plan's polygons (quantized, as edgeaa draws them) into an
+    8-bit image, on one core: the fastest of `repeats` draws, the paths built beforehand."""
+    import aggdraw
+    from PIL import Image
+
+    from edgeaa.analysis.compare import polygon_points
+
+    scene, full = plan.scene, plan.config.full_scale
+    jobs = []
+    for i, poly in enumerate(plan.polygons):
+        path = aggdraw.Path()
+        for pts in polygon_points(plan, i):
+            path.moveto(*(pts[0] + 0.5))
+            for p in pts[1:]:
+                path.lineto(*(p + 0.5))
+            path.close()
+        jobs.append((path, aggdraw.Brush(round(poly.intensity * 255 / full))))
+    pen = aggdraw.Pen(0, 0, 0)  # width 0: no 1/4 px widening (edgeaa.analysis.peers)
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        image = Image.new("L", (scene.width, scene.height), round(scene.background * 255 / full))
+        draw = aggdraw.Draw(image)
+        for path, brush in jobs:
+            draw.path(path, pen, brush)
+        draw.flush()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def measure(scene: Scene, tile: TileConfig, repeats: int) -> dict:
     config = tile.config
-    plan = plan_scene(builtin(name, config), config)
+    plan = plan_scene(scene, config)
     model = render_scene(plan)
     commands = scene_commands(plan, tile)
-    pipeline_harness.build(tile)
-    runs = [pipeline_harness.run(tile, commands) for _ in range(repeats)]
-    run = min(runs, key=lambda r: r.seconds)
+    timing = pipeline_cycles(tile, commands)
+    run = min(
+        (pipeline_harness.run(tile, commands) for _ in range(repeats)), key=lambda r: r.seconds
+    )
     image = image_from_frames(plan, tile, run.frames(tile))
-    drain = pipeline_harness.pixel_drain_clocks(tile)
-    model_clocks = pipeline_cycles(tile, commands).clocks + drain
     edges = [plan.edge(int(e), clip=True) for e in model.sent]
-    verilator_harness.build(config, output="deltas")
     core = min(
         (verilator_harness.run(config, edges, output="deltas") for _ in range(repeats)),
         key=lambda r: r.seconds,
     )
+    flushed = len(timing.pixels)
     return {
-        "scene": name,
+        "scene": scene.name,
+        "size": f"{scene.width}x{scene.height}",
+        "pixels": scene.width * scene.height,
         "commands": len(commands),
-        "clocks": run.clocks,
-        "model_clocks": model_clocks,
+        "clocks": timing.clocks,
+        "flushed": flushed,
+        "scanned": timing.tile.cells_scanned,
+        "floor": max(flushed, timing.tile.cells_scanned),
+        "verilator_clocks": run.clocks,
+        "drain": pipeline_harness.pixel_drain_clocks(tile),
         "stepper_cycles": model.cycles,
-        "pixels": len(run.pixels),
+        "pixels_out": len(run.pixels),
         "image_equal": bool(np.array_equal(image, model.image)),
         "stats": dict(run.stats),
+        "agg_seconds": agg_seconds(plan, repeats),
         "mclocks_per_s": run.clocks_per_second / 1e6,
         "core_mclocks_per_s": core.clocks_per_second / 1e6,
     }
 
 
-def table(rows: list[dict], tile: TileConfig) -> str:
-    head = ["scene", "commands", "pipeline clocks", "cycle model", "stepper alone", "pixels"]
-    head += ["same image"]
-    head += [f"{name} %" for name in STATS] + ["M clocks/s", "vs stepper harness"]
-    lines = [
-        f"tile {tile.width} x {tile.height}, {tile.config}",
-        "",
-        "| " + " | ".join(head) + " |",
-        "|" + "---|" * len(head),
-    ]
+def exact(r: dict) -> bool:
+    return r["clocks"] + r["drain"] == r["verilator_clocks"]
+
+
+def rate_table(rows: list[dict]) -> list[str]:
+    head = ["scene", "size", "clocks", "px/clock", "floor (flushed; scanned)", "clocks/floor"]
+    head += [f"fps at {ICE40_MHZ} MHz", "AGG (ms)", "FPGA/AGG", "Verilator: image, clocks"]
+    lines = ["| " + " | ".join(head) + " |", "|---|---|" + "---:|" * (len(head) - 3) + "---|"]
     for r in rows:
-        shares = [f"{100 * r['stats'][name] / r['clocks']:.1f}" for name in STATS]
-        model = "exact" if r["model_clocks"] == r["clocks"] else f"{r['model_clocks']:,} (WRONG)"
-        cells = [r["scene"], f"{r['commands']:,}", f"{r['clocks']:,}", model]
-        cells += [
-            f"{r['stepper_cycles']:,}",
-            f"{r['pixels']:,}",
-            "yes" if r["image_equal"] else "NO",
-            *shares,
-        ]
+        seconds = r["clocks"] / (ICE40_MHZ * 1e6)
+        check = ("same" if r["image_equal"] else "DIFFERENT") + ", "
+        check += "exact" if exact(r) else f"{r['verilator_clocks']:,} (MODEL WRONG)"
+        cells = [r["scene"], r["size"], f"{r['clocks']:,}", f"{r['pixels'] / r['clocks']:.3f}"]
+        floor = f"{r['floor']:,} ({r['flushed']:,}; {r['scanned']:,})"
+        cells += [floor, f"{r['clocks'] / r['floor']:.2f}", f"{1 / seconds:.1f}"]
+        cells += [f"{1e3 * r['agg_seconds']:.2f}", f"{seconds / r['agg_seconds']:.1f}", check]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+def stage_table(rows: list[dict]) -> list[str]:
+    head = ["scene", "commands", "stepper alone"] + [f"{name} %" for name in STATS]
+    head += ["M clocks/s", "vs stepper harness"]
+    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    for r in rows:
+        clocks = r["verilator_clocks"]
+        shares = [f"{100 * r['stats'][name] / clocks:.1f}" for name in STATS]
         ratio = r["mclocks_per_s"] / r["core_mclocks_per_s"]
+        cells = [r["scene"], f"{r['commands']:,}", f"{r['stepper_cycles']:,}", *shares]
         cells += [f"{r['mclocks_per_s']:.2f}", f"{ratio:.2f}"]
         lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    return lines
+
+
+def write_doc(section: str, lines: list[str]) -> None:
+    """Replace the text between this section's markers in docs/hardware.md."""
+    begin, end = f"<!-- begin {section} -->", f"<!-- end {section} -->"
+    text = DOC.read_text()
+    head, rest = text.split(begin + "\n")
+    _, tail = rest.split(end)
+    DOC.write_text(head + begin + "\n" + "\n".join(lines) + "\n" + end + tail)
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tile", default="64x32", help="tile WIDTHxHEIGHT")
     parser.add_argument("--repeats", type=int, default=3, help="runs per scene (fastest kept)")
-    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
+    parser.add_argument("--write", action="store_true", help="write the tables into the docs")
     args = parser.parse_args()
     match = re.fullmatch(r"(\d+)x(\d+)", args.tile)
     if not match:
         parser.error(f"--tile: expected WIDTHxHEIGHT, not {args.tile!r}")
+    if args.repeats < 1:
+        parser.error(f"--repeats: at least 1, not {args.repeats}")
     tile = TileConfig(EdgeConfig(), int(match[1]), int(match[2]))
+    pipeline_harness.build(tile)
+    verilator_harness.build(tile.config, output="deltas")
     rows = []
-    for name in BUILTINS:
-        print(f"{name} ...", file=sys.stderr, flush=True)
-        rows.append(measure(name, tile, args.repeats))
-    print(json.dumps(rows, indent=1) if args.json else table(rows, tile))
-    exact = all(r["model_clocks"] == r["clocks"] for r in rows)
-    return 0 if exact and all(r["image_equal"] for r in rows) else 1
+    for scene in scenes(tile.config):
+        print(f"{scene.name} ...", file=sys.stderr, flush=True)
+        rows.append(measure(scene, tile, args.repeats))
+    machine = f"{platform.processor() or platform.machine()}, Python {platform.python_version()}"
+    command = " ".join(["python benchmarks/bench_pipeline.py", *sys.argv[1:]])
+    title = [f"`{command}` ({time.strftime('%Y-%m-%d')}, {machine}; tile {args.tile}, "]
+    title[0] += f"{tile.config}):"
+    rate, stages = [*title, "", *rate_table(rows)], [*title, "", *stage_table(rows)]
+    print(json.dumps(rows, indent=1) if args.json else "\n".join([*rate, "", *stages[2:]]))
+    if args.write:
+        write_doc("pipeline rate", rate)
+        write_doc("pipeline stages", stages)
+        print(f"wrote {DOC.relative_to(ROOT)}", file=sys.stderr)
+    return 0 if all(exact(r) and r["image_equal"] for r in rows) else 1
 
 
 if __name__ == "__main__":

@@ -31,20 +31,28 @@ docs/hardware.md, "Polygon pipeline", Resolve.
 
 The pipeline never stalls: nothing leaves it but the write. A polygon's first cell, a tile op
 and a flush are taken only when no cell is in flight (the pixels they read must be written
-first). A flush reads the pixel memory row by row, one pixel per clock while the ``pixels``
-stream advances (the read port's enable is the advance, so a stalled pixel stays in the
-memory's output register), then forgets every written row: the tile is the background again.
-Its first pixel is offered two clocks after the flush is taken.
+first). Two pixel memories (ping-pong): the resolve reads and writes one (``bank``); a flush
+hands it, with its written rows and background, to the flush side and the resolve goes on
+with the other, the tile the background again (no row written). The flush side reads its
+memory row by row, one pixel per clock while the ``pixels`` stream advances (its read
+port's enable is the advance, so a stalled pixel stays in the memory's output register),
+while the resolve takes the next tile's ops and cells; its first pixel is offered two
+clocks after the flush is taken, and the next flush waits until the last pixel has gone
+(its memory is then the resolve's again). A memory's read port is the resolve's or the
+flush's as ``bank`` says; each memory is one block RAM port pair, so the second memory
+costs the pixel memory's block RAMs again and a multiplexer per port.
 
 Observation points for the formal harness (``observe``, a namespace set when the resolve is
-elaborated; no logic of their own): ``memory`` the pixel `Memory`, ``read`` its read port,
-``stages`` the pipeline's stages (s1 first; namespaces of registers, each with ``valid``;
-the values a stage carries are in the delay lines, ``delays`` (their `Memory` by name,
-``"xy"`` and ``"carry"``), at the address its ``delayed`` names per line (a value, no
-logic); the last stage's are its fields ``x``, ``y``, ``below``, ``zero`` and ``neg``, the
-read ports' data), ``acc`` the row's prefix sum, ``d2``, ``written``, ``background``,
-``p_valid`` and ``p`` the output register (``x``, ``y``, ``last``, ``written``), ``fx`` and
-``fy`` the flush position (FLUSH is ``flushing``).
+elaborated; no logic of their own): ``memories`` the two pixel `Memory`, ``reads`` their read
+ports, ``bank`` the one the resolve writes, ``fwritten`` and ``fbackground`` the flushed
+tile's written rows and background, ``stages`` the pipeline's stages (s1 first; namespaces
+of registers, each with ``valid``; the values a stage carries are in the delay lines,
+``delays`` (their `Memory` by name, ``"xy"`` and ``"carry"``), at the address its
+``delayed`` names per line (a value, no logic); the last stage's are its fields ``x``,
+``y``, ``below``, ``zero`` and ``neg``, the read ports' data), ``acc`` the row's prefix
+sum, ``d2``, ``written``, ``background``, ``p_valid`` and ``p`` the output register (``x``,
+``y``, ``last``, ``written``), ``fx`` and ``fy`` the flush position (the flush side reads
+while ``flushing``).
 """
 
 from __future__ import annotations
@@ -91,22 +99,45 @@ class TileResolve(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         tile = self._tile
-        m.submodules.pixels = mem = memory.Memory(
-            shape=unsigned(tile.config.intensity_bits), depth=tile.pixels, init=[]
-        )
-        rd, wr = mem.read_port(), mem.write_port()
-        self.observe = types.SimpleNamespace(memory=mem, read=rd)
+        # two pixel memories: the resolve writes one (``bank``) while a flush reads the other
+        mems = [
+            memory.Memory(shape=unsigned(tile.config.intensity_bits), depth=tile.pixels, init=[])
+            for _ in range(2)
+        ]
+        m.submodules.pixels0, m.submodules.pixels1 = mems
+        reads, writes = [mem.read_port() for mem in mems], [mem.write_port() for mem in mems]
+        bank = Signal()
+        self.observe = types.SimpleNamespace(memories=mems, reads=reads, bank=bank)
         written = Signal(tile.height)  # rows written since the tile started
         background = Signal(tile.config.intensity_bits)
         p_valid = Signal()
         advance = ~p_valid | self.pixels.ready
-        m.d.comb += rd.en.eq(advance)
+        # the resolve's side: the read port of ``bank``, always enabled (it never stalls),
+        # and its write port; the flush's: the other read port, enabled as the pixels advance
+        rd = types.SimpleNamespace(
+            addr=Signal(range(tile.pixels)), data=Mux(bank, reads[1].data, reads[0].data)
+        )
+        frd = types.SimpleNamespace(
+            addr=Signal(range(tile.pixels)), data=Mux(bank, reads[0].data, reads[1].data)
+        )
+        wr = types.SimpleNamespace(
+            addr=Signal(range(tile.pixels)), data=Signal(tile.config.intensity_bits), en=Signal()
+        )
+        for k in range(2):
+            mine = bank == k
+            m.d.comb += [
+                reads[k].addr.eq(Mux(mine, rd.addr, frd.addr)),
+                reads[k].en.eq(mine | advance),
+                writes[k].addr.eq(wr.addr),
+                writes[k].data.eq(wr.data),
+                writes[k].en.eq(wr.en & mine),
+            ]
         stages = self._pipeline(m, rd, wr, written, background)
         busy = sum((s.valid for s in stages), start=0) != 0
         self.observe.__dict__.update(
             stages=stages, written=written, background=background, p_valid=p_valid
         )
-        self._control(m, rd, written, background, p_valid, advance, busy)
+        self._control(m, rd, frd, bank, written, background, p_valid, advance, busy)
         return m
 
     def _pipeline(self, m, rd, wr, written, background) -> list:
@@ -214,54 +245,61 @@ class TileResolve(wiring.Component):
         x = Mux(evenodd, r, mag)
         return Mux(x > ifix, Mux(evenodd, (ifix << 1) - r, ifix), x)[:width]
 
-    def _control(self, m, rd, written, background, p_valid, advance, busy):
-        """Taking cells and ops, and the flush."""
+    def _control(self, m, rd, frd, bank, written, background, p_valid, advance, busy):
+        """Taking cells and ops, and the flush (of the other memory: the bank flips as a
+        flush is taken, which waits until the last flush's last pixel goes)."""
         tile, c = self._tile, self.cells.payload
         out = self.pixels.payload
         fx, fy = Signal(tile.x_bits), Signal(tile.y_bits)
         px, py, plast, pwritten = (Signal.like(out.x), Signal.like(out.y), Signal(), Signal())
+        fwritten = Signal(tile.height)  # the flushed tile's written rows and background
+        fbackground = Signal.like(background)
         gate = (c.op != OP["cell"]) | c.first  # waits for no cell in flight
+        is_flush = c.op == OP["flush"]
         self.observe.p = types.SimpleNamespace(x=px, y=py, last=plast, written=pwritten)
-        self.observe.fx, self.observe.fy = fx, fy
+        self.observe.__dict__.update(fx=fx, fy=fy, fwritten=fwritten, fbackground=fbackground)
         take = self.cells.valid & self.cells.ready
+        m.d.comb += [
+            self.cells.ready.eq(~(gate & busy) & ~(is_flush & (self.flushing | ~advance))),
+            rd.addr.eq(Cat(c.x, c.y)),
+            frd.addr.eq(Cat(fx, fy)),
+        ]
         with m.If(self._row_done):
             m.d.sync += written.eq(
                 written | (Const(1, tile.height) << self._row_done_y)[: tile.height]
             )
+        with m.If(take & (c.op == OP["tile"])):
+            m.d.sync += [background.eq(c.background), written.eq(0)]
+        with m.If(take & is_flush):
+            m.d.sync += [
+                fx.eq(0),
+                fy.eq(0),
+                fwritten.eq(written),
+                fbackground.eq(background),
+                written.eq(0),
+                bank.eq(~bank),
+                self.flushing.eq(1),
+            ]
         with m.If(advance):
             m.d.sync += p_valid.eq(0)
-        with m.FSM():
-            with m.State("RUN"):
-                m.d.comb += [
-                    self.cells.ready.eq(advance & ~(gate & busy)),
-                    rd.addr.eq(Cat(c.x, c.y)),
-                ]
-                with m.If(take & (c.op == OP["tile"])):
-                    m.d.sync += [background.eq(c.background), written.eq(0)]
-                with m.If(take & (c.op == OP["flush"])):
-                    m.d.sync += [fx.eq(0), fy.eq(0)]
-                    m.next = "FLUSH"
-            with m.State("FLUSH"):
-                m.d.comb += [self.flushing.eq(1), rd.addr.eq(Cat(fx, fy))]
-                with m.If(advance):
-                    end = (fx == tile.width - 1) & (fy == tile.height - 1)
-                    m.d.sync += [
-                        p_valid.eq(1),
-                        px.eq(fx),
-                        py.eq(fy),
-                        plast.eq(end),
-                        pwritten.eq(written.bit_select(fy, 1)),
-                        Cat(fx, fy).eq(Cat(fx, fy) + 1),
-                    ]
-                    with m.If(end):
-                        m.d.sync += written.eq(0)
-                        m.next = "RUN"
+        with m.If(self.flushing & advance):
+            end = (fx == tile.width - 1) & (fy == tile.height - 1)
+            m.d.sync += [
+                p_valid.eq(1),
+                px.eq(fx),
+                py.eq(fy),
+                plast.eq(end),
+                pwritten.eq(fwritten.bit_select(fy, 1)),
+                Cat(fx, fy).eq(Cat(fx, fy) + 1),
+            ]
+            with m.If(end):
+                m.d.sync += self.flushing.eq(0)
         m.d.comb += [
             self.pixels.valid.eq(p_valid),
             out.x.eq(px),
             out.y.eq(py),
             out.last.eq(plast),
-            out.value.eq(Mux(pwritten, rd.data, background)),
+            out.value.eq(Mux(pwritten, frd.data, fbackground)),
         ]
 
 

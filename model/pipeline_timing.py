@@ -163,7 +163,7 @@ class _Top:
             "core_stall": self.stall,
             "acc_busy": len(tile.accepts) + clock.holding + clock.scanning,
             "acc_stall": clock.acc_stall,
-            "resolve_busy": clock.resolve_ops + len(tile.pixels),
+            "resolve_busy": clock.resolve_ops + len(tile.pixels) - clock.overlap,
             "resolve_stall": 0,
         }
         return PipelineTiming(self.taken, self.beats, tile, stats)

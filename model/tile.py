@@ -300,8 +300,10 @@ class TileModel:
 # flush pass through its output register (offered in a + 1). The resolve takes a cell per
 # clock; a cell taken in r writes its pixel in clock r + `resolve_latency`. A polygon's first
 # cell, a tile and a flush wait until no cell is in flight (the pixels they read must be
-# written). A flush taken in f sends pixel k in f + 2 + k (row by row) and the resolve takes
-# its next op in f + width * height + 1.
+# written). The resolve has two pixel memories: a flush taken in f hands it the one the
+# resolve wrote, which it sends (pixel k in f + 2 + k, row by row) while the resolve takes
+# the next tile's ops and cells into the other; the next flush is taken from
+# f + width * height + 1 (the last pixel sent).
 
 SCAN_START = 3  # end taken in a: its first cell offered in a + 3
 EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
@@ -342,8 +344,10 @@ class TileClock:
         self.timing = TileTiming()
         self.ready = 0
         self.quiet = 0  # first clock no cell is in flight in the resolve
-        self.free = 0  # first clock the resolve is not flushing
+        self.free = 0  # first clock the resolve can take a flush (the last one is out)
+        self.flush_from = 0  # the first clock of the last flush's reads
         self.scanning = self.acc_stall = self.resolve_ops = 0
+        self.overlap = 0  # clocks the resolve took a cell or op while flushing
         self.holding = 0  # clocks a beat's cells were taken before its transfer
 
     def beats(self, clocks, holds) -> None:
@@ -369,9 +373,10 @@ class TileClock:
             if not result.cells:
                 self.ready = a + EMPTY_END
                 return a
-            r = t = max(a + SCAN_START, self.free, self.quiet)
+            r = t = max(a + SCAN_START, self.quiet)
             for n, stop in result.runs:  # a row that stops at hi: its next clock sends nothing
                 out.cells.extend(range(t, t + n))
+                self._overlap(t, t + n)
                 t += n + stop
             last, stop = out.cells[-1], result.runs[-1][1]
             # the first read in a + 2, the next ones as the cells are taken; SCAN ends after
@@ -382,15 +387,22 @@ class TileClock:
             self.acc_stall += r - a - SCAN_START
             self.resolve_ops += result.cells
             return a
-        r = max(a + 1, self.free, self.quiet)  # tile or flush: the output register
+        flush = isinstance(op, Flush)
+        r = max(a + 1, self.free if flush else 0, self.quiet)  # tile or flush: output register
         self.ready = r
         self.acc_stall += r - a - 1
         self.resolve_ops += 1
-        if isinstance(op, Flush):
+        self._overlap(r, r + 1)
+        if flush:
             out.pixels.extend(range(r + FLUSH_START, r + FLUSH_START + tile.pixels))
             out.frames.append(result)
-            self.free = r + tile.pixels + 1
+            self.flush_from, self.free = r + 1, r + tile.pixels + 1
         return a
+
+    def _overlap(self, start: int, stop: int) -> None:
+        """Count the clocks of `start` .. `stop` - 1 (resolve takes) within the last flush's
+        reads (`flush_from` .. `free` - 1; the sink always ready)."""
+        self.overlap += max(0, min(stop, self.free) - max(start, self.flush_from))
 
 
 def tile_cycles(tile: TileConfig, ops) -> TileTiming:

@@ -5,10 +5,14 @@ scene rendered by the simulated hardware pipeline (`render_pipeline`): the comma
 simulator, the image from the pixels it sends.
 
 The image is cut into tiles of `TileConfig` size, row by row. For each tile the polygons
-whose window meets it are sent in order, each edge with the tile as its clip window (without
-its left bound: columns left of the tile carry their cover into it). Edges wholly above,
-below or right of the tile, and the edges `edges_to_send` skips, are not sent. With the
-model's tile stages (`TileModel`) the image is the renderer's, bit for bit (tested).
+with an edge in its rows are sent in order, each edge with the tile as its clip window
+(without its left bound: columns left of the tile carry their cover into it). An edge that
+can write in the tile's columns is sent as it is; the edges wholly left of the tile are sent
+as their cover per row, merged per polygon into a few vertical edges on the column left of
+the tile (a glyph wholly left of it gives none), so no edge is set up and stepped again in
+every tile to its right. Edges wholly above, below or right of the tile, and the edges
+`edges_to_send` skips, are not sent. With the model's tile stages (`TileModel`) the image is
+the renderer's, bit for bit (tested).
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..model import Clip
+from ..model import Clip, Edge
 from ..model.pipeline import Command
 from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
 from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
@@ -34,7 +38,7 @@ from .render import (
 from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
-# The most clocks (`clock_estimate`, an upper estimate: 2.1 to 5.6 times the cycle model's
+# The most clocks (`clock_estimate`, an upper estimate: 3.2 to 9.5 times the cycle model's
 # clocks on the built-ins) a scene may need in each simulator: 60 s of Verilator at its
 # measured 1 to 1.5 million clocks per second; for Amaranth's simulator (about 500 clocks
 # per second) the built-ins' 1.3 million (docs/scenes.md, "Errors and limits").
@@ -44,30 +48,97 @@ MAX_PIPELINE_CLOCKS = {"verilator": 60_000_000, "amaranth": 1_500_000}
 @dataclass(frozen=True)
 class TileJob:
     """One tile's work: its image pixels (x, y), its edges (each a command with its clip
-    window), the polygon of each edge, and the polygons sent, in order."""
+    window), the polygon of each edge, the polygons sent, in order, and how many scene edges
+    wholly left of the tile its merged vertical edges (`projected`) stand for."""
 
     x: int
     y: int
     edges: list
     polygon_of_edge: np.ndarray
     polygons: list[int]
+    left: int = 0
+    projected: int = 0
 
 
 def tile_jobs(plan: Plan, tile: TileConfig) -> Iterator[TileJob]:
-    """The tiles of the image, row by row, with what each needs."""
+    """The tiles of the image, row by row, with what each needs. An edge that crosses the
+    tile's rows is sent if it can write in the tile's columns; the edges wholly left of them
+    (every write in a column left of the tile, which the accumulator adds into the row's
+    first column) are sent as their cover per row, merged per polygon into vertical edges on
+    the column left of the tile (`_merged_projection`)."""
     sent = edges_to_send(plan, skip=True)["sent"]
     lo_x, lo_y, hi_x, hi_y = (
         box[sent] for box in _write_boxes(plan.coords, plan.offset, S_of(plan))
     )
     width, height = plan.scene.width, plan.scene.height
     for ty in range(0, height, tile.height):
+        band = (hi_y >= ty) & (lo_y < ty + tile.height)
         for tx in range(0, width, tile.width):
-            meets = (hi_y >= ty) & (lo_y < ty + tile.height) & (lo_x < tx + tile.width)
-            chosen = sent[meets]
             clip = _tile_clip(plan, tile, tx, ty)
-            edges = [_clipped(plan.edge(int(e), clip=True), clip) for e in chosen]
-            owners = plan.polygon[chosen]
-            yield TileJob(tx, ty, edges, owners, list(dict.fromkeys(owners.tolist())))
+            crossing = sent[band & (lo_x < tx + tile.width) & (hi_x >= tx)]
+            left = sent[band & (hi_x < tx)]
+            edges = [_clipped(plan.edge(int(e), clip=True), clip) for e in crossing]
+            column = plan.offset[0] + tx - 1  # engine pixels: the column left of the tile
+            merged, merged_owners = _merged_projection(plan, left, clip, column)
+            owners = np.concatenate([plan.polygon[crossing], merged_owners]).astype(np.int64)
+            polygons = sorted(set(owners.tolist()))  # the scene's order: they composite
+            yield TileJob(tx, ty, edges + merged, owners, polygons, len(left), len(merged))
+
+
+def _merged_projection(
+    plan: Plan, left: np.ndarray, clip: Clip, column: int
+) -> tuple[list, np.ndarray]:
+    """Vertical edges on `column` (the centre of the one left of the tile) with the same
+    cover per tile row as the edges `left`, per polygon. Every write of `left` lands left of
+    the tile, where only each row's sum reaches its pixels (the accumulator adds it into the
+    row's first column), and an edge's sum over a row is its signed height in the row; so
+    the frames are the same. Each edge adds its winding sign over its rows (cut to the
+    tile's); the sum w(y) is drawn by `_winding_edges` with as few edges as it has rises of
+    |w| (at most one per edge of `left`; a closed contour wholly left of the tile gives
+    none)."""
+    S = S_of(plan)
+    top, bottom = clip.y_min * S - S // 2, clip.y_max * S + S // 2  # the tile's rows
+    window = _both(plan.accumulation_clip, clip)
+    edges, owners = [], []
+    coords, polygon = plan.coords[left], plan.polygon[left]
+    inside_left = plan.inside[left] == "left"
+    for i in dict.fromkeys(polygon.tolist()):
+        mine = polygon == i
+        y0, y1 = coords[mine, 1], coords[mine, 3]
+        # going down with the inside on the left adds +1 to the winding right of the edge
+        sign = np.where((y1 > y0) == inside_left[mine], 1, -1)
+        lo, hi = np.maximum(np.minimum(y0, y1), top), np.minimum(np.maximum(y0, y1), bottom)
+        keep = lo < hi
+        steps: dict[int, int] = {}
+        for a, b, s in zip(lo[keep].tolist(), hi[keep].tolist(), sign[keep].tolist(), strict=True):
+            steps[a] = steps.get(a, 0) + s
+            steps[b] = steps.get(b, 0) - s
+        poly = plan.polygons[i]
+        for a, b, side in _winding_edges(steps):
+            edges.append(
+                Edge(column * S, a, column * S, b, side, poly.intensity, poly.i_out, window)
+            )
+            owners.append(i)
+    return edges, np.array(owners, dtype=np.int64)
+
+
+def _winding_edges(steps: dict[int, int]) -> list[tuple[int, int, str]]:
+    """Downward vertical edges (y0, y1, inside) whose winding signs add up to the step
+    function with `steps` (y: change of w there): an edge opens where |w| rises and the
+    latest open one closes where it falls (all close where w changes sign)."""
+    out: list[tuple[int, int, str]] = []
+    opened: list[int] = []
+    w = 0
+    for y in sorted(steps):
+        new = w + steps[y]
+        if new * w <= 0:  # through zero, or to or from it: close every open edge
+            while opened:
+                out.append((opened.pop(), y, "left" if w > 0 else "right"))
+        while len(opened) > abs(new):
+            out.append((opened.pop(), y, "left" if w > 0 else "right"))
+        opened += [y] * (abs(new) - len(opened))
+        w = new
+    return out
 
 
 def S_of(plan: Plan) -> int:
@@ -85,15 +156,14 @@ def _tile_clip(plan: Plan, tile: TileConfig, tx: int, ty: int) -> Clip:
     )
 
 
-def _clipped(edge, clip: Clip):
-    own = edge.clip
-    both = Clip(
-        max(own.x_min, clip.x_min),
-        max(own.y_min, clip.y_min),
-        min(own.x_max, clip.x_max),
-        min(own.y_max, clip.y_max),
+def _both(a: Clip, b: Clip) -> Clip:
+    return Clip(
+        max(a.x_min, b.x_min), max(a.y_min, b.y_min), min(a.x_max, b.x_max), min(a.y_max, b.y_max)
     )
-    return replace(edge, clip=both)
+
+
+def _clipped(edge, clip: Clip):
+    return replace(edge, clip=_both(edge.clip, clip))
 
 
 def tile_ops(plan: Plan, tile: TileConfig, job: TileJob, engine: str = "model") -> list:
@@ -197,10 +267,11 @@ def render_pipeline(
 
 
 def clock_estimate(plan: Plan, tile: TileConfig) -> tuple[int, int]:
-    """An upper estimate of the pipeline's clocks on `scene_commands(plan, tile)`, and the
+    """An upper estimate of the pipeline's clocks on `scene_commands(plan, tile)`, and of the
     number of those commands, from the plan without making them (numpy, per row of tiles;
-    no cycle model): every stage's work added as if none overlapped. Per edge sent to a
-    tile (`tile_jobs`: every tile of its rows from its own rightwards) its setup
+    no cycle model): every stage's work added as if none overlapped. Per edge, in every tile
+    of its rows from its own rightwards (`tile_jobs` sends fewer: the ones wholly left of a
+    tile merged into at most as many vertical edges, none longer than the rows), its setup
     (`unit_cycles`, `start_clip_cycles`) and one clock per pixel of its major axis (of its
     height when projected); per polygon in a tile a scan of the tile's rows its edges
     reach (whole rows); per tile a flush of its pixels; and the clear pass after reset.
@@ -266,11 +337,12 @@ class PipelineSaving:
 
 def pipeline_savings(plan: Plan, tile: TileConfig) -> list[PipelineSaving]:
     """The savings of `scene_commands` and the tile stages on `plan`."""
-    sent = len(edges_to_send(plan, skip=True)["sent"])
+    sent = edges_to_send(plan, skip=True)["sent"]
     model = TileModel(tile)
-    edges_not_sent = polygons_not_sent = ends = rows = cells = 0
+    edges_not_sent = polygons_not_sent = ends = rows = cells = left = merged = 0
     for job in tile_jobs(plan, tile):
-        edges_not_sent += sent - len(job.edges)
+        edges_not_sent += len(sent) - (len(job.edges) - job.projected) - job.left
+        left, merged = left + job.left, merged + job.projected
         polygons_not_sent += len(plan.polygons) - len(job.polygons)
         for op in tile_ops(plan, tile, job):
             result = model.feed(op)
@@ -282,6 +354,11 @@ def pipeline_savings(plan: Plan, tile: TileConfig) -> list[PipelineSaving]:
             "edges not meeting a tile (not sent to it; each would take the setup)",
             edges_not_sent,
             edges_not_sent * EMPTY_EDGE_CYCLES,
+        ),
+        PipelineSaving(
+            "edges wholly left of a tile (merged into vertical edges; a setup each)",
+            left - merged,
+            (left - merged) * EMPTY_EDGE_CYCLES,
         ),
         PipelineSaving(
             "polygons not meeting a tile (no begin, no end)",

@@ -971,7 +971,7 @@ def test_the_clock_estimate_is_above_the_simulated_clocks():
         commands = pipeline.scene_commands(p, tile)
         exact = pipeline_cycles(tile, commands).clocks
         estimate, count = pipeline.clock_estimate(p, tile)
-        assert exact <= estimate <= 8 * exact and count == len(commands), name
+        assert exact <= estimate <= 10 * exact and len(commands) <= count, name
 
 
 def test_the_inside_test_and_the_engine_refuse_work_past_their_limits(monkeypatch):

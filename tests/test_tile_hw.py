@@ -19,6 +19,7 @@ from edgeaa.hdl.accumulator import TileAccumulator
 from edgeaa.hdl.resolve import TileResolve
 from edgeaa.model import EdgeConfig
 from edgeaa.model.tile import (
+    FLUSH_START,
     Beats,
     Flush,
     PolygonEnd,
@@ -142,6 +143,24 @@ def test_back_to_back_polygons_with_no_gap_wait_for_the_pixels_below():
     ops = [TileStart(0, 0, 0), one, PolygonEnd(15, 0), one, PolygonEnd(7, 0), PolygonEnd(3, 9)]
     ops += [one, PolygonEnd(9, 9), Flush(), TileStart(1, 0, 5), Flush()]
     check_exact(tile, ops)
+
+
+def test_a_flush_goes_out_while_the_next_tile_resolves():
+    """Two pixel memories: the next tile's start and its polygon's cells are taken while the
+    flush sends the last tile's pixels, which stay the last tile's; the next flush waits
+    for the last pixel."""
+    tile = TileConfig(SMALL, 8, 4)
+    ifix = 15 << SMALL.F
+    one = Beats(np.array([[[1, 0, ifix], [2, 0, -ifix], [1, 1, ifix], [2, 1, -ifix]]]))
+    ops = [TileStart(0, 0, 0), one, PolygonEnd(15, 0), Flush(), TileStart(8, 0, 6)]
+    ops += [Beats(one.cells + [8, 0, 0]), PolygonEnd(9, 6), Flush()]
+    check_exact(tile, ops)
+    timing = tile_cycles(tile, ops)
+    first, second = timing.pixels[: tile.pixels], timing.pixels[tile.pixels :]
+    resolved = [c for c in timing.cells if first[0] <= c <= first[-1]]
+    assert len(resolved) == 2 * tile.width  # the second polygon's rows, within the flush
+    assert second[0] == first[-1] + FLUSH_START
+    assert timing.frames[0][0, 1] == 15 and timing.frames[1][0, 1] == 9
 
 
 def _block(x, y, deltas):

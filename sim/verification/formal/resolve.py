@@ -17,14 +17,15 @@
     cells, the wrapping prefix sum and the ``h + 1``-step even-odd fold are exact in the
     documented range (no overflow); outside it they are not (fault ``wide_range``).
 
-Invariants (`_resolve_invariants`): (X, Y) not in flight holds the shadow: its pixel memory
-row if its row was written since the tile started or in the row's first pass ((X, Y) taken
-while the row is open, or the row's end in flight), else the background; a row begun since
-the tile or flush op (not in a flush) is written unless its first pass is open or its end in
-flight, and the last cell's row was begun; in a flush the frame equals that until (X, Y) is
-read and the waiting pixel (X, Y) equals the frame, the shadow being the background; the
-row's prefix sum register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells
-in taken order, none after the last taken and none in a flush, with a pixel waiting or
+Invariants (`_resolve_invariants`): (X, Y) not in flight holds the shadow: its word in the
+pixel memory the resolve writes (``bank``) if its row was written since the tile started or
+in the row's first pass ((X, Y) taken while the row is open, or the row's end in flight),
+else the background; a row begun since the tile or flush op is written unless its first
+pass is open or its end in flight, and the last cell's row was begun; in a flush the frame
+equals what the flush side reads of (X, Y) (the other memory's word if the flushed tile
+wrote its row, else that tile's background) until (X, Y) is read, and the waiting pixel
+(X, Y) equals the frame; the row's prefix sum register is the exact prefix modulo
+``2**cell_bits``; the pipeline's cells in taken order, none after the last taken and none
 before a polygon's first cell (a cell's position as read from the resolve's delay memory at
 the address its stage names, the last stage's the delay line's read port data:
 `_resolve_stages`); the flush and output positions and ``last`` follow the pixel count; the
@@ -181,8 +182,10 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
         return any_(st.valid & (Cat(st.x, st.y) == position) for st in stages)
 
     written_y = written.bit_select(g.Y, 1)
-    pixel = read(tracked)
+    pixel = read(tracked, obs.bank)  # the memory the resolve writes
     shown = Mux(written_y, pixel, obs.background)  # what a read of (X, Y) gives
+    # what the flush reads of (X, Y): the other memory, the flushed tile's rows and background
+    flushed = Mux(obs.fwritten.bit_select(g.Y, 1), read(tracked, ~obs.bank), obs.fbackground)
     row_end = Cat(Const(tile.width - 1, tile.x_bits), g.Y)
     # written in this pass of its row, the row not yet marked written: the row's end is in
     # flight, or the row is still open and (X, Y) was taken
@@ -196,12 +199,10 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
         (g.background == obs.background, "background"),
         (obs.acc[:n] == g.prev[:n], "row prefix sum"),
         (g.flushing == (flush | obs.p_valid), "flushing"),
-        (When(flush | obs.p_valid | g.need_first, ~busy), "nothing in flight"),
-        (When(flush | obs.p_valid, g.need_first), "no cell since the flush"),
+        (When(g.need_first, ~busy), "nothing in flight"),
         (When(g.row_open, ~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
         (When(~g.need_first, g.seen.bit_select(g.last[1], 1)), "last row seen"),
-        (When(g.flushing, g.seen == 0), "no row seen in a flush"),
-        (When(seen_y & ~row_open & ~in_flight(row_end) & ~flush, written_y), "seen row written"),
+        (When(seen_y & ~row_open & ~in_flight(row_end), written_y), "seen row written"),
         (
             When(obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))),
             "output position",
@@ -212,18 +213,14 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
             "flush position",
         ),
         (
-            When(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == shown),
+            When(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == flushed),
             "frame not yet read",
         ),
         (
             When(obs.p_valid & (Cat(p.x, p.y) == tracked), g.pixels.payload.value == g.frame),
             "frame waiting",
         ),
-        (When(flush, g.value == g.background), "value in a flush"),
-        (
-            When(~flush & ~in_flight(tracked), g.value == Mux(done, pixel, shown)),
-            "value",
-        ),
+        (When(~in_flight(tracked), g.value == Mux(done, pixel, shown)), "value"),
     ]
     for i, st in enumerate(stages):
         position = Cat(st.x, st.y)

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, ClockDomain, Elaboratable, Module, Signal, Value
+from amaranth.hdl import Assert, ClockDomain, Elaboratable, Module, Mux, Signal, Value
 
 from ....hdl.accumulator import TileAccumulator
 from ....hdl.resolve import TileResolve
@@ -118,8 +118,13 @@ class TileHarness(Elaboratable):
             # elaborated here: the invariants read its observation points, and the harness
             # adds read ports to its memories
             m.submodules.dut = dut.elaborate(platform)
-            if {"sums", "pixels"} & set(self.checks):
+            if "sums" in self.checks:
                 read = memory_reader(m, dut.observe.memory)
+            elif "pixels" in self.checks:  # the resolve's two pixel memories, by bank
+                readers = [memory_reader(m, mem) for mem in dut.observe.memories]
+
+                def read(address, bank):
+                    return Mux(bank, readers[1](address), readers[0](address))
         else:
             m.submodules.dut = dut
         m.domains.sync = self.domain
