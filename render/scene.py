@@ -60,6 +60,9 @@ class Polygon:
     intensity: int | None = None
     fill_rule: str = "nonzero"
     name: str = ""
+    # A colour instead of the intensity: red, green, blue and alpha in [0, 1] (sRGB values),
+    # composited per channel (`edgeaa.render.paint`).
+    paint: tuple[float, float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -70,6 +73,14 @@ class Scene:
     background: int = 0
     name: str = "scene"
     tolerance: float = DEFAULT_TOLERANCE
+    # A colour background (red, green, blue, alpha in [0, 1]) instead of `background`; SVG
+    # files start transparent.
+    background_paint: tuple[float, float, float, float] | None = None
+
+    @property
+    def colour(self) -> bool:
+        """Whether any paint is a colour: rendered per channel (`edgeaa.render.paint`)."""
+        return self.background_paint is not None or any(p.paint for p in self.polygons)
 
     @property
     def edge_count(self) -> int:
@@ -374,7 +385,7 @@ def flatten_cubic(p0: Point, p1: Point, p2: Point, p3: Point, tolerance: float) 
     return out
 
 
-def _close(points: list[Point], contours: list[Contour]) -> None:
+def close_subpath(points: list[Point], contours: list[Contour]) -> None:
     """End a subpath: drop a repeated start point; keep it if it encloses anything."""
     while len(points) > 1 and points[-1] == points[0]:
         points.pop()
@@ -391,7 +402,8 @@ def parse_path(
 ) -> tuple[Contour, ...]:
     """SVG path data to closed contours: M/L/H/V/Z, C/S cubic and Q/T quadratic curves,
     absolute and relative; every subpath is closed for filling (as SVG fills do). Subpaths
-    with fewer than 3 distinct vertices enclose nothing and are dropped. A command without
+    with fewer than 3 distinct vertices enclose nothing and are dropped (a path of only such
+    subpaths draws nothing, as in SVG). A command without
     its numbers is an error; so is a path whose points (curve pieces included) would pass
     `limit`, refused before a curve is flattened."""
     path = _PathReader(where, tolerance, limit)
@@ -451,7 +463,7 @@ class _PathReader:
         self.name, self.name_pos = token, pos
         self.waiting = token not in "Zz"
         if not self.waiting:
-            _close(self.points, self.contours)
+            close_subpath(self.points, self.contours)
             self.points, self.cur = [], self.start
             self.last_cubic = self.last_quad = None
 
@@ -474,7 +486,7 @@ class _PathReader:
         upper, relative = self.name.upper(), self.name.islower()
         ox, oy = self.cur if relative else (0.0, 0.0)
         if upper == "M":
-            _close(self.points, self.contours)
+            close_subpath(self.points, self.contours)
             self.cur = self.start = self._point(ox + args[0], oy + args[1])
             self.points = [self.cur]
             self.name = "l" if relative else "L"  # further pairs are lines
@@ -549,9 +561,5 @@ class _PathReader:
 
     def finish(self) -> tuple[Contour, ...]:
         self._check_waiting()
-        _close(self.points, self.contours)
-        if not self.contours:
-            raise SceneError(
-                f"{self.where}: the path encloses nothing (no subpath with 3 vertices)"
-            )
-        return tuple(self.contours)
+        close_subpath(self.points, self.contours)
+        return tuple(self.contours)  # empty when every subpath is degenerate: draws nothing
