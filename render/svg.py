@@ -56,8 +56,7 @@ def _refuse(what: str, lenient: bool, warn: Callable[[str], None]) -> None:
     """`what` (the file and element) refused, or with `lenient` skipped with a warning."""
     if not lenient:
         raise SceneError(
-            f"{what} is outside the SVG subset (docs/scenes.md); --lenient skips it with a "
-            "warning"
+            f"{what} is outside the SVG subset (docs/scenes.md); --lenient skips it with a warning"
         )
     warn(f"skipped {what} (outside the SVG subset)")
 
@@ -82,10 +81,7 @@ def load_svg(
         raise SceneError(f"{path}: the SVG has no positive width and height (or viewBox)")
     outer = se.Matrix()
     if size is not None:
-        aspect = svg.values.get("preserveAspectRatio") or "xMidYMid meet"
-        fitted = se.Viewbox.viewbox_transform(0, 0, size[0], size[1], 0, 0, width, height, aspect)
-        outer = se.Matrix(fitted)
-        pixels = size
+        outer, pixels = _fitted(se, svg, size, width, height), size
     else:
         factor = 1.0 if scale is None else scale
         outer = se.Matrix.scale(factor)
@@ -93,6 +89,8 @@ def load_svg(
     if pixels[0] * pixels[1] > (1 << 40) or min(pixels) < 1:
         raise SceneError(f"{path}: the image would be {pixels[0]} x {pixels[1]} px")
     check_pixels(path, *pixels)
+    # SVG's pixel i covers [i, i + 1]; the model's is centred on i
+    outer = outer * se.Matrix.translate(-0.5, -0.5)
     polygons: list[Polygon] = []
     budget = [MAX_EDGES]
     said: set[str] = set()
@@ -102,6 +100,22 @@ def load_svg(
     name = path.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     transparent = (0.0, 0.0, 0.0, 0.0)  # SVG's canvas
     return Scene(pixels[0], pixels[1], tuple(polygons), 0, name, tolerance, transparent)
+
+
+def _fitted(se, svg, size: tuple[int, int], width: float, height: float):
+    """The matrix that redraws the SVG on `size` pixels as if its root's width and height
+    were those: its view box mapped there by its preserveAspectRatio instead (svgelements
+    has already mapped it onto width x height); without a view box, width x height is
+    fitted (xMidYMid meet)."""
+    box = svg.viewbox
+    if box is None or not (box.width and box.height):
+        fit = se.Viewbox.viewbox_transform(0, 0, *size, 0, 0, width, height, "xMidYMid meet")
+        return se.Matrix(fit)
+    aspect = box.preserve_aspect_ratio or "xMidYMid meet"
+    args = (box.x, box.y, box.width, box.height, aspect)
+    before = se.Matrix(se.Viewbox.viewbox_transform(0, 0, width, height, *args))
+    after = se.Matrix(se.Viewbox.viewbox_transform(0, 0, *size, *args))
+    return ~before * after  # svgelements: a * b applies a, then b
 
 
 def _once(warn: Callable[[str], None], said: set[str]) -> Callable[[str], None]:
@@ -155,7 +169,7 @@ def _element(se, element, outer, tol, lenient, warn, source, budget) -> list[Pol
             return []
     if values.get("display") == "none" or values.get("visibility") in ("hidden", "collapse"):
         return []
-    matrix = outer * element.transform if element.transform is not None else outer
+    matrix = element.transform * outer if element.transform is not None else outer
     stretch = _stretch(matrix)
     if stretch == 0:
         return []  # scaled to nothing
