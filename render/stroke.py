@@ -202,7 +202,7 @@ def dash(path: Subpath, dashes: tuple[float, ...], offset: float) -> list[Subpat
     pts = list(path.points) + ([path.points[0]] if path.closed else [])
     corners = list(path.corners) + ([path.corners[0]] if path.closed else [])
     k, left = 0, offset % sum(dashes)
-    while left >= dashes[k]:
+    while left > dashes[k] or 0 < left == dashes[k]:  # a zero-length dash at 0 stays
         left -= dashes[k]
         k = (k + 1) % len(dashes)
     left = dashes[k] - left  # what remains of dash or gap k

@@ -279,3 +279,36 @@ def test_lenient_skips_with_a_warning_and_svg_options_need_an_svg(tmp_path, caps
     for option in (["--lenient"], ["--scale", "2"], ["--size", "4x4"]):
         assert main(["render", str(scene), *option]) == 2
         assert "applies to an .svg scene file" in capsys.readouterr().err
+
+
+def test_strokes_in_svg_have_the_stroked_area(tmp_path):
+    """Strokes of a polyline (shapely's buffer), a circle (an annulus), dashed and under a
+    non-uniform scale (SVG strokes in the element's own coordinates)."""
+    from shapely import affinity
+    from shapely.geometry import LineString
+    from shapely.geometry import Polygon as ShapelyPolygon
+    from shapely.ops import unary_union
+
+    def union_area(polygon: Polygon) -> float:
+        return unary_union([ShapelyPolygon(c) for c in polygon.contours]).area
+
+    line = LineString([(5, 5), (30, 5), (30, 30)])
+    cases = [
+        ('<path d="M5 5 H30 V30" stroke="#000" stroke-width="4" fill="none"/>',
+         line.buffer(2, cap_style="flat", join_style="mitre").area, 0),
+        ('<path d="M5 5 H30 V30" stroke="#000" stroke-width="4" fill="none" '
+         'stroke-linecap="round" stroke-linejoin="round"/>', line.buffer(2, quad_segs=64).area,
+         2 * math.pi * 2),
+        ('<circle cx="20" cy="20" r="10" stroke="#000" stroke-width="3" fill="none"/>',
+         math.pi * (11.5**2 - 8.5**2), 2 * math.pi * 11.5),
+        ('<g transform="scale(1 0.5)"><path d="M5 5 H30 V30" stroke="#000" stroke-width="4" '
+         'fill="none"/></g>', affinity.scale(line.buffer(2, cap_style="flat", join_style="mitre"),
+                                             1, 0.5, origin=(0, 0)).area, 0),
+        ('<path d="M5 5 H30 V30" stroke="#000" stroke-width="2" fill="none" '
+         'stroke-dasharray="5 5"/>', 2 * 25, 0),  # five dashes of 5 x 2: 50 px
+    ]  # fmt: skip
+    for element, exact, round_length in cases:
+        scene = load_svg(write(tmp_path, element))
+        (stroke,) = scene.polygons
+        assert stroke.fill_rule == "nonzero" and stroke.name.endswith("stroke")
+        assert abs(union_area(stroke) - exact) <= DEFAULT_TOLERANCE * round_length + 1e-6, element
