@@ -94,7 +94,7 @@ def _write_colour_png(image: np.ndarray, full_scale: int, path: str) -> str:
     return f"8-bit {mode}"
 
 
-def _load(args, config):
+def _load(args, config, warnings: list[str]):
     from .builtin import builtin
     from .scene import load_scene
 
@@ -108,10 +108,7 @@ def _load(args, config):
     if args.scene.lower().endswith(".svg"):
         from .svg import load_svg
 
-        def warn(message: str) -> None:
-            print(f"{PROG}: warning: {message}", file=sys.stderr)
-
-        return load_svg(args.scene, args.size, args.scale, args.lenient, warn)
+        return load_svg(args.scene, args.size, args.scale, args.lenient, warnings.append)
     return load_scene(args.scene)
 
 
@@ -244,8 +241,9 @@ class RenderCommand(Command):
         config = config_from_args(args)
         _check_options(args, config)
         crop = args.crop
+        warnings: list[str] = []  # what --lenient skipped, said when the render succeeded
         try:
-            scene = _load(args, config)
+            scene = _load(args, config, warnings)
             if args.compare:
                 check_pixels("--compare", scene.width, scene.height, MAX_COMPARE_PIXELS)
             if args.error:
@@ -277,8 +275,12 @@ class RenderCommand(Command):
             f"engine {args.engine}; {config}"
         )
         if args.compare:
-            return _compare(args, scene, config, crop, bar)
-        return _render(args, scene, plan, bar)
+            status = _compare(args, scene, config, crop, bar)
+        else:
+            status = _render(args, scene, plan, bar)
+        for message in warnings if status == 0 else ():  # a failure says one line only
+            print(f"{PROG}: warning: {message}", file=sys.stderr)
+        return status
 
 
 # Options that do nothing or contradict each other: (given, with, why they cannot be mixed).
