@@ -456,11 +456,8 @@ def _render(args: argparse.Namespace, scene, plan, bar: ProgressBar) -> int:
         say(f"wrote {args.output} ({kind})")
     for text in report:
         say(text)
-    if args.error:  # a colour scene: its outlines' coverage, white on black
-        from .render import render_scene
-
-        grey = render_scene(plan, skip=not args.no_skip) if scene.colour else result
-        figures.update(_error(grey, plan, bar, say))
+    if args.error:
+        figures.update(_error(result, scene, plan, bar, say))
     if args.json:
         print(json.dumps(figures, indent=1))
     elif args.output is None and not args.quiet:  # the last line: what happened to the image
@@ -502,12 +499,14 @@ def _pipeline_figures(result) -> dict:
     }
 
 
-def _error(result, plan, bar: ProgressBar, say) -> dict:
-    """Measure against the exact area; print the table (text mode) and return the figures."""
+def _error(result, scene, plan, bar: ProgressBar, say) -> dict:
+    """Measure against the exact area (a colour scene: per channel, premultiplied, the worst
+    channel of each pixel); print the table (text mode) and return the figures."""
     from .exact import error_rows, error_table, exact_image
+    from .paint import exact_colour
 
     start = time.perf_counter()
-    exact = exact_image(plan, progress=bar)
+    exact = exact_colour(plan, scene) if scene.colour else exact_image(plan, progress=bar)
     bar.close()
     rows = error_rows(result, exact)
     say(

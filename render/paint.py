@@ -73,6 +73,27 @@ class Canvas:
             self.image[rows, cols, channel] = composite(below, q, value, self.full)
 
 
+def exact_colour(plan, scene: Scene) -> np.ndarray:
+    """The colour reference (float64, premultiplied, (height, width, 4)): each polygon's
+    exact coverage (`edgeaa.render.exact`, of the plan's quantized outlines) times its
+    alpha, composited source-over per channel in floating point, with the canvas's
+    quantized paints: the error then measures the coverage and the integer composite."""
+    from .exact import exact_coverage
+
+    canvas = Canvas(scene, plan.config.full_scale)
+    full = canvas.full
+    image = canvas.image.astype(np.float64)
+    for i in range(len(plan.polygons)):
+        (x0, y0, x1, y1), cover = exact_coverage(plan, i)
+        if cover.size:
+            paint = canvas.paints[i].astype(np.float64)
+            weight = cover * (paint[3] / full)
+            paint[3] = full
+            view = image[y0:y1, x0:x1]
+            view += weight[..., None] * (paint - view)
+    return image
+
+
 def straight(image: np.ndarray, full: int) -> tuple[np.ndarray, bool]:
     """Premultiplied RGBA to straight (the PNG's), rounded half up; and whether every pixel
     is opaque (then RGB is enough)."""
