@@ -145,7 +145,8 @@ class RenderCommand(Command):
     name = "render"
     help = "render a scene (polygons, text) to an antialiased PNG with the model or the core"
     description = (
-        "Render a scene (a JSON file of polygons and SVG paths, or a built-in) "
+        "Render a scene (a JSON file of polygons and SVG paths, an SVG file with shapes, "
+        "arcs, strokes and colour, or a built-in) "
         "through the model or the cycle-accurate hardware pipeline: each edge adds the "
         "signed area of its own piece into an accumulation buffer, a prefix sum per row "
         "gives the coverage, the fill rule and intensity apply, and polygons are "
