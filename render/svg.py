@@ -35,6 +35,7 @@ from .scene import (
     check_pixels,
     close_subpath,
     cubic_pieces,
+    flatten_arc,
     flatten_cubic,
     flatten_quadratic,
     quadratic_pieces,
@@ -304,24 +305,10 @@ def _check_pieces(n: int) -> None:
 
 
 def _flatten_arc(arc, start: Point, end: Point, tol: float) -> list[Point]:
-    """An elliptical arc P(t) = c + u cos t + v sin t from t0 over the sweep, in n chords:
-    |P''| <= sqrt(|u|^2 + |v|^2) = R, so h**2 / 8 R <= tol with h = sweep / n. A zero
-    radius or sweep is a line (SVG's rule)."""
+    """svgelements' arc (centre, semi-axis end points, start angle, sweep) flattened."""
     c, u, v = _xy(arc.center), _xy(arc.prx), _xy(arc.pry)
     u, v = (u[0] - c[0], u[1] - c[1]), (v[0] - c[0], v[1] - c[1])
-    radius = math.sqrt(u[0] ** 2 + u[1] ** 2 + v[0] ** 2 + v[1] ** 2)
-    sweep = float(arc.sweep)
-    if radius == 0 or sweep == 0 or math.hypot(*u) == 0 or math.hypot(*v) == 0:
-        return [end]
-    n = max(1, math.ceil(abs(sweep) * math.sqrt(radius / (8 * tol))))
-    _check_pieces(n)
-    t0 = float(arc.get_start_t())
-    out = []
-    for i in range(1, n):
-        t = t0 + sweep * i / n
-        ct, st = math.cos(t), math.sin(t)
-        out.append((c[0] + u[0] * ct + v[0] * st, c[1] + u[1] * ct + v[1] * st))
-    return [*out, end]
+    return flatten_arc(c, u, v, float(arc.get_start_t()), float(arc.sweep), end, tol)
 
 
 def _transform(matrix, points, where: str) -> tuple[Point, ...]:

@@ -27,7 +27,21 @@ ADDED_POLYGONS = [
     ({"path": "M 0 0 L 10 0 L 10 10 C 1 2"}, "path command without its numbers"),
     ({"path": "M 0 0 L 10 0 L 10 10 Q"}, "path command without its numbers"),
     ({"path": "M 0 0 L 10 0 L 10 10 m"}, None),
-    ({"path": "M 0 0 L 10 0 L 10 10 A 1 1 0 0 0 5 5 Z"}, "arcs are not supported"),
+    ({"path": "M 0 0 L 10 0 L 10 10 A 1 1 0 0 0 5 5 Z"}, None),
+    ({"path": "M 0 0 A 1 1 0 3 0 5 5 Z"}, "an arc flag of 3"),
+    ({"path": "M 0 0 h 9 v 9", "stroke": {"width": 2, "dash": [1e-9]}}, "too many dashes"),
+    ({"path": "M 0 0 h 9", "stroke": {"width": 2, "join": "sharp"}}, "unknown join"),
+    ({"points": [[0, 0], [9, 0], [0, 9]], "color": "#zz0000"}, "a bad colour"),
+    ({"points": [[0, 0], [9, 0], [0, 9]], "transform": [1e9, 0, 0, 1, 0, 0]}, "transform 1e9"),
+    (
+        {
+            "path": "M 2 2 a 4 6 30 1 1 9 9",
+            "stroke": {"width": 1.5, "cap": "round"},
+            "color": [0.2, 0.4, 0.6, 0.5],
+            "transform": [1, 0.2, 0, 1, 3, 0],
+        },
+        None,
+    ),
     ({"points": [[0, 0], [0, 0], [0, 0]]}, None),
     ({"points": [[0, 0], [4, 4], [0, 4], [4, 0]], "fill_rule": ["evenodd"]}, "fill_rule a list"),
     ({"contours": [[[0, 0], [8, 0], [8, 8]], [[0, 0], [8, 0], [8, 8]]]}, None),
@@ -74,7 +88,16 @@ def _polygon(rng: random.Random, whys: list) -> dict:
         item = {"path": _path(rng)}
     if rng.random() < 0.7:
         item["intensity"] = rng.randint(0, 255)
-    if rng.random() < 0.4:
+    elif rng.random() < 0.4:
+        item["color"] = rng.choice(["#0a0", "#123456", "#12345678", [0.1, 0.5, 1], [1, 0, 0, 0.3]])
+    if rng.random() < 0.15:
+        item["transform"] = [rng.uniform(-2, 2) for _ in range(4)] + [_coordinate(rng)] * 2
+    if rng.random() < 0.2:
+        item["stroke"] = {"width": rng.choice([0.25, 1, 3]), "cap": rng.choice(["butt", "round"]),
+                          "join": rng.choice(["miter", "round", "bevel"])}  # fmt: skip
+        if rng.random() < 0.3:
+            item["stroke"]["dash"] = [rng.choice([0, 1, 2.5]), rng.choice([1, 3])]
+    elif rng.random() < 0.4:
         item["fill_rule"], why = rng.choice(FILL_RULES)
         whys += [why] if why else []
     return item

@@ -172,8 +172,40 @@ BAD_SCENES = [
     ),
     ({"width": 5, "height": 5, "polygons": [{"intensity": 3}]}, "needs exactly one of"),
     (
-        {"width": 5, "height": 5, "polygons": [{"path": "M 0 0 A 1 1 0 0 1 2 2 Z"}]},
-        "arc commands (A/a) are not supported",
+        {"width": 5, "height": 5, "polygons": [{"path": "M 0 0 A 1 1 0 2 1 2 2 Z"}]},
+        "arc flag 2 at command 'A' (position 6) must be 0 or 1",
+    ),
+    (
+        {"width": 5, "height": 5, "polygons": [{"path": "M 0 0 h 3 v 3", "color": "red"}]},
+        "color must be",
+    ),
+    (
+        {"width": 5, "height": 5, "polygons": [{"path": "M0 0h3v3", "transform": [1, 0, 0]}]},
+        "transform must be [a, b, c, d, e, f]",
+    ),
+    (
+        {
+            "width": 5,
+            "height": 5,
+            "polygons": [{"path": "M0 0h3", "stroke": {"width": 1, "cap": "hat"}}],
+        },
+        "stroke cap 'hat' (allowed: butt, round, square)",
+    ),
+    (
+        {
+            "width": 5,
+            "height": 5,
+            "polygons": [{"path": "M0 0h3", "stroke": {"width": 1}, "fill_rule": "evenodd"}],
+        },
+        "fill_rule does not apply to a stroke",
+    ),
+    (
+        {
+            "width": 5,
+            "height": 5,
+            "polygons": [{"path": "M0 0h3v3", "intensity": 3, "color": "#fff"}],
+        },
+        "give intensity or color, not both",
     ),
     ({"width": 5, "height": 5, "polygons": [{"path": "M 0 0 L 1 # Z"}]}, "unexpected '#'"),
     ({"width": 5, "height": 5, "polygons": [{"path": "L 1 1 2 2"}]}, "must start with M"),

@@ -312,3 +312,37 @@ def test_strokes_in_svg_have_the_stroked_area(tmp_path):
         (stroke,) = scene.polygons
         assert stroke.fill_rule == "nonzero" and stroke.name.endswith("stroke")
         assert abs(union_area(stroke) - exact) <= DEFAULT_TOLERANCE * round_length + 1e-6, element
+
+
+def test_json_and_svg_give_the_same_polygons_for_arcs_transforms_strokes_colours(tmp_path):
+    """The JSON format's transform, arcs, stroke and color read into the polygons an SVG
+    file with the same content gives (its -1/2 px pixel shift written into the transform),
+    and both render to the same image."""
+    from edgeaa.render.scene import parse_scene
+
+    svg = write(
+        tmp_path,
+        '<path d="M 2 2 A 5 3 20 0 1 15 12 Z" fill="#abc" fill-opacity="0.5"/>'
+        '<path d="M 2 2 a 4 6 30 1 1 9 9 l 3 -7" stroke="#336699" stroke-width="1.5" '
+        'stroke-linecap="round" stroke-linejoin="bevel" fill="none" '
+        'transform="matrix(1 0.2 0 1 3 0)" stroke-dasharray="3 1"/>',
+        'width="24" height="24"',
+    )
+    data = {
+        "width": 24, "height": 24, "background_color": [0, 0, 0, 0],
+        "polygons": [
+            {"path": "M 2 2 A 5 3 20 0 1 15 12 Z", "transform": [1, 0, 0, 1, -0.5, -0.5],
+             "color": "#aabbcc80"},  # svgelements keeps fill-opacity 0.5 as 128 / 255
+            {"path": "M 2 2 a 4 6 30 1 1 9 9 l 3 -7", "color": "#336699",
+             "stroke": {"width": 1.5, "cap": "round", "join": "bevel", "dash": [3, 1]},
+             "transform": [1, 0.2, 0, 1, 2.5, -0.5]},
+        ],
+    }  # fmt: skip
+    from_svg, from_json = load_svg(svg), parse_scene(data)
+    for a, b in zip(from_svg.polygons, from_json.polygons, strict=True):
+        assert (a.fill_rule, len(a.contours)) == (b.fill_rule, len(b.contours))
+        assert np.allclose(a.paint, b.paint, atol=1e-12)
+        for p, q in zip(a.contours, b.contours, strict=True):
+            assert np.abs(np.array(p) - np.array(q)).max() < 1e-9
+    assert len(from_json.polygons[1].contours) > 20  # dashes, caps, joins: many pieces
+    assert np.array_equal(colour_render(from_svg), colour_render(from_json))
