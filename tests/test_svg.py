@@ -346,3 +346,16 @@ def test_json_and_svg_give_the_same_polygons_for_arcs_transforms_strokes_colours
             assert np.abs(np.array(p) - np.array(q)).max() < 1e-9
     assert len(from_json.polygons[1].contours) > 20  # dashes, caps, joins: many pieces
     assert np.array_equal(colour_render(from_svg), colour_render(from_json))
+
+
+def test_smooth_curves_after_a_line_start_at_the_current_point(tmp_path):
+    """S and T reflect the previous control point only after a C/S or Q/T; after a line
+    (or an arc) the first control point is the current point (SVG's rule): the JSON reader
+    agrees with svgelements' reading of the same path."""
+    from edgeaa.render.scene import parse_path
+
+    d = "M0 0 C 0 10 10 10 10 0 L 20 0 S 30 10 30 0 Q 35 -8 40 0 A 3 3 0 0 1 46 0 T 52 0 Z"
+    (svg,) = load_svg(write(tmp_path, f'<path d="{d}"/>', 'width="60" height="20"')).polygons
+    (json_contour,) = parse_path(d)
+    shifted = [(x - 0.5, y - 0.5) for x, y in json_contour]
+    assert np.abs(np.array(svg.contours[0]) - np.array(shifted)).max() < 1e-9
