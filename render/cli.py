@@ -112,7 +112,7 @@ def _load(args, config, warnings: list[str]):
     return load_scene(args.scene)
 
 
-MAX_SCALE = 1024.0  # --scale: past it no SVG image fits the pixel limit
+MAX_SCALE = 1024.0  # --scale: a 4 px icon to the 4096 px limit; larger images are refused
 
 
 def svg_size(text: str) -> tuple[int, int]:

@@ -168,6 +168,9 @@ def _element(se, element, outer, tol, lenient, warn, source, budget) -> list[Pol
         if values.get(attribute) not in (None, "", "none"):
             _refuse(f"{where} {attribute}={values[attribute]!r}", lenient, warn)
             return []
+    if values.get("vector-effect") not in (None, "", "none"):  # strokes in screen space
+        _refuse(f"{where} vector-effect={values['vector-effect']!r}", lenient, warn)
+        return []
     if values.get("display") == "none" or values.get("visibility") in ("hidden", "collapse"):
         return []
     matrix = element.transform * outer if element.transform is not None else outer

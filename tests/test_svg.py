@@ -251,6 +251,7 @@ def test_render_writes_rgba_and_rgb_pngs(tmp_path, capsys):
         ('<rect width="3" height="3" filter="url(#f)"/>', [], "<rect> filter='url(#f)'"),
         ('<rect width="3" height="3" mask="url(#m)"/>', [], "<rect> mask='url(#m)'"),
         ('<circle r="3" clip-path="url(#c)"/>', [], "<circle> clip-path='url(#c)'"),
+        ('<circle r="3" vector-effect="non-scaling-stroke"/>', [], "vector-effect="),
         ('<rect width="3" height="3" stroke="red" stroke-dasharray="1 -2"/>', [], "negative"),
         ('<rect width="3" height="3" stroke="red" stroke-linecap="hat"/>', [], "'hat'"),
         ('<path d="M0 0 L 1e9 0 L 0 3 Z"/>', [], "beyond the limit"),
