@@ -105,11 +105,16 @@ def _load(args, config, warnings: list[str]):
         )
     if args.builtin is not None:
         return builtin(args.builtin, config)
-    if args.scene.lower().endswith(".svg"):
+    if is_svg(args.scene):
         from .svg import load_svg
 
         return load_svg(args.scene, args.size, args.scale, args.lenient, warnings.append)
     return load_scene(args.scene)
+
+
+def is_svg(path: str | None) -> bool:
+    """Whether the scene file is read as SVG (by its suffix, any case); JSON otherwise."""
+    return path is not None and path.lower().endswith(".svg")
 
 
 MAX_SCALE = 1024.0  # --scale: a 4 px icon to the 4096 px limit; larger images are refused
@@ -311,9 +316,8 @@ def _check_options(args: argparse.Namespace, config) -> None:
         raise usage_error(
             PROG, "--no-skip applies to the model: the pipeline always skips (docs/hardware.md)"
         )
-    svg = args.scene is not None and args.scene.lower().endswith(".svg")
     for option in ("size", "scale", "lenient"):
-        if getattr(args, option) not in (None, False) and not svg:
+        if getattr(args, option) not in (None, False) and not is_svg(args.scene):
             raise usage_error(PROG, f"--{option} applies to an .svg scene file")
     if args.size is not None and args.scale is not None:
         raise usage_error(PROG, "--size and --scale cannot be combined: each sets the image size")
