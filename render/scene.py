@@ -41,8 +41,9 @@ MAX_COORD = float(1 << 20)  # px, |x| and |y|: 16 times the widest coordinate ra
 FILL_RULES = {"nonzero": "nonzero", "non-zero": "nonzero", "evenodd": "evenodd"}
 FILL_RULES["even-odd"] = "evenodd"
 SCENE_KEYS = ("width", "height", "background", "background_color", "tolerance", "polygons", "name")
+GEOMETRY_KEYS = ("points", "contours", "path", "rect", "circle", "ellipse")
 POLYGON_KEYS = (
-    "points", "contours", "path", "intensity", "color", "fill_rule", "stroke", "transform", "name",
+    *GEOMETRY_KEYS, "intensity", "color", "fill_rule", "stroke", "transform", "name",
 )  # fmt: skip
 STROKE_KEYS = ("width", "cap", "join", "miter_limit", "dash", "dash_offset")
 
@@ -274,12 +275,14 @@ def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Pol
     if not isinstance(item, dict):
         raise SceneError(f"{where} must be an object with points, contours or path")
     _check_keys(where, item, POLYGON_KEYS)
-    given = [key for key in ("points", "contours", "path") if key in item]
+    given = [key for key in GEOMETRY_KEYS if key in item]
     if len(given) != 1:
         raise SceneError(
-            f"{where} needs exactly one of points, contours or path"
+            f"{where} needs exactly one of {', '.join(GEOMETRY_KEYS)}"
             + (f", not {' and '.join(given)}" if given else "")
         )
+    if given[0] in ("rect", "circle", "ellipse"):  # SVG's shapes, as SVG's path data
+        item = {**item, "path": shape_path(where, given[0], item[given[0]])}
     matrix = _matrix(where, item.get("transform"))
     stretch = _stretch(matrix)
     local = tolerance / stretch if stretch > 0 else tolerance  # chords within tol in pixels
@@ -287,7 +290,7 @@ def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Pol
         contours = (_contour(f"{where}", item["points"]),)
     elif "contours" in item:
         contours = _contours(where, item["contours"])
-    else:
+    else:  # path, or a shape made path
         if not isinstance(item["path"], str):
             raise SceneError(f"{where}: path must be a string of SVG path data")
         reader = read_path(item["path"], local, where=where)
@@ -311,6 +314,44 @@ def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Pol
     if not isinstance(label, str):
         raise SceneError(f"{where}: name must be a string")
     return Polygon(contours, intensity, FILL_RULES[rule], label, paint)
+
+
+def shape_path(where: str, shape: str, value) -> str:
+    """SVG's rect [x, y, width, height(, rx(, ry))], circle [cx, cy, r] and ellipse [cx, cy,
+    rx, ry] as the path data SVG defines for them (rx, ry clamped to half the sides, one
+    given for both); a zero size draws nothing, as in SVG."""
+    sizes = {"rect": (4, 6), "circle": (3, 3), "ellipse": (4, 4)}[shape]
+    if not isinstance(value, list) or not sizes[0] <= len(value) <= sizes[1]:
+        raise SceneError(
+            f"{where}: {shape} must be a list of {' to '.join(map(str, sorted(set(sizes))))} "
+            f"numbers, not {shown(value)}"
+        )
+    v = [_coordinate(f"{where}: {shape} {i}", n) for i, n in enumerate(value)]
+    if min(v[2:]) < 0:
+        raise SceneError(f"{where}: {shape} sizes and radii must not be negative")
+    if shape == "rect":
+        x, y, w, h = v[:4]
+        rx = v[4] if len(v) > 4 else None
+        ry = v[5] if len(v) > 5 else rx
+        rx = ry if rx is None else rx
+        rx, ry = min(rx or 0.0, w / 2), min(ry or 0.0, h / 2)
+        if rx == 0 or ry == 0:
+            return f"M {x!r} {y!r} h {w!r} v {h!r} h {-w!r} Z" if w and h else ""
+        arc = f"A {rx!r} {ry!r} 0 0 1"
+        return (
+            f"M {x + rx!r} {y!r} H {x + w - rx!r} {arc} {x + w!r} {y + ry!r} "
+            f"V {y + h - ry!r} {arc} {x + w - rx!r} {y + h!r} H {x + rx!r} "
+            f"{arc} {x!r} {y + h - ry!r} V {y + ry!r} {arc} {x + rx!r} {y!r} Z"
+        )
+    cx, cy, rx = v[:3]
+    ry = v[3] if shape == "ellipse" else rx
+    if rx == 0 or ry == 0:
+        return ""
+    arc = f"A {rx!r} {ry!r} 0 0 1"
+    return (
+        f"M {cx + rx!r} {cy!r} {arc} {cx!r} {cy + ry!r} {arc} {cx - rx!r} {cy!r} "
+        f"{arc} {cx!r} {cy - ry!r} {arc} {cx + rx!r} {cy!r} Z"
+    )
 
 
 def _paint(where: str, item: dict) -> tuple[int | None, tuple | None]:

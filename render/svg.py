@@ -274,13 +274,22 @@ def _xy(point) -> Point:
 
 
 def _clean(points: list[Point], corners: list[bool], closed: bool) -> Subpath:
-    """Drop repeated points (and the closing point of a closed subpath)."""
-    keep = [i for i in range(len(points)) if i == 0 or points[i] != points[i - 1]]
+    """Drop repeated points (and the closing point of a closed subpath): equal within
+    SAME px, the float noise of svgelements' shapes (a circle's last arc ends 2e-15 px off
+    its start)."""
+    keep = [i for i in range(len(points)) if i == 0 or not _same(points[i], points[i - 1])]
     pts, flags = [points[i] for i in keep], [corners[i] for i in keep]
-    if closed and len(pts) > 1 and pts[-1] == pts[0]:
+    if closed and len(pts) > 1 and _same(pts[-1], pts[0]):
         pts.pop()
         flags.pop()
     return Subpath(tuple(pts), closed, tuple(flags))
+
+
+SAME = 1e-9  # px: points this close are one (far below the 1/256 px finest grid)
+
+
+def _same(p: Point, q: Point) -> bool:
+    return abs(p[0] - q[0]) <= SAME and abs(p[1] - q[1]) <= SAME
 
 
 def _flatten(se, segment, tol: float) -> list[Point]:

@@ -207,6 +207,12 @@ BAD_SCENES = [
         },
         "give intensity or color, not both",
     ),
+    ({"width": 5, "height": 5, "polygons": [{"circle": [1, 1]}]}, "circle must be a list of 3"),
+    ({"width": 5, "height": 5, "polygons": [{"rect": [0, 0, 3, -3]}]}, "must not be negative"),
+    (
+        {"width": 5, "height": 5, "polygons": [{"rect": [0, 0, 3, 3], "path": "M0 0h1v1"}]},
+        "not path and rect",
+    ),
     ({"width": 5, "height": 5, "polygons": [{"path": "M 0 0 L 1 # Z"}]}, "unexpected '#'"),
     ({"width": 5, "height": 5, "polygons": [{"path": "L 1 1 2 2"}]}, "must start with M"),
     ({"width": 5, "height": 5, "polygons": [{"path": "M 0 0 C 1 1 2"}]}, "needs 6 numbers"),

@@ -360,3 +360,28 @@ def test_smooth_curves_after_a_line_start_at_the_current_point(tmp_path):
     (json_contour,) = parse_path(d)
     shifted = [(x - 0.5, y - 0.5) for x, y in json_contour]
     assert np.abs(np.array(svg.contours[0]) - np.array(shifted)).max() < 1e-9
+
+
+def test_json_shapes_are_svgs_shapes(tmp_path):
+    """rect (rx, ry, clamped), circle and ellipse in JSON give an SVG file's polygons of the
+    same shapes (to 1e-9 px after its -1/2 px shift), filled and stroked."""
+    from edgeaa.render.scene import parse_scene
+
+    shapes = [
+        ("rect", [1, 2, 10, 6], '<rect x="1" y="2" width="10" height="6"/>'),
+        ("rect", [1, 2, 10, 6, 2], '<rect x="1" y="2" width="10" height="6" rx="2"/>'),
+        ("rect", [1, 2, 10, 6, 9, 1], '<rect x="1" y="2" width="10" height="6" rx="9" ry="1"/>'),
+        ("circle", [15, 15, 5.5], '<circle cx="15" cy="15" r="5.5"/>'),
+        ("ellipse", [15, 12, 7, 3], '<ellipse cx="15" cy="12" rx="7" ry="3"/>'),
+    ]
+    for key, numbers, element in shapes:
+        for stroke in (False, True):
+            painted = element.replace("/>", ' fill="none" stroke="#000"/>') if stroke else element
+            (mine,) = load_svg(write(tmp_path, painted, 'width="30" height="30"')).polygons
+            item = {key: numbers, "transform": [1, 0, 0, 1, -0.5, -0.5]}
+            if stroke:
+                item["stroke"] = {"width": 1}
+            (theirs,) = parse_scene({"width": 30, "height": 30, "polygons": [item]}).polygons
+            assert len(mine.contours) == len(theirs.contours), (element, stroke)
+            for p, q in zip(mine.contours, theirs.contours, strict=True):
+                assert np.abs(np.array(p) - np.array(q)).max() < 1e-9, (element, stroke)
