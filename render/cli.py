@@ -65,6 +65,8 @@ def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str
     PNG's full scale, rounding half up. Returns a description."""
     from PIL import Image
 
+    if image.ndim == 3:
+        return _write_colour_png(image, full_scale, path)
     bits = 8 if intensity_bits <= 8 else 16
     top = (1 << bits) - 1
     data = image.astype(np.int64)
@@ -76,7 +78,23 @@ def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str
     return f"{bits}-bit greyscale{scaled}"
 
 
-def _load(args, config):
+def _write_colour_png(image: np.ndarray, full_scale: int, path: str) -> str:
+    """A colour canvas (premultiplied, `paint`) as an 8-bit RGB PNG, RGBA where any pixel is
+    not opaque; channels scaled from full scale to 255 half up."""
+    from PIL import Image
+
+    from .paint import straight
+
+    data, opaque = straight(image, full_scale)
+    if full_scale != 255:
+        data = (2 * data * 255 + full_scale) // (2 * full_scale)
+    mode = "RGB" if opaque else "RGBA"
+    array = data[..., :3] if opaque else data
+    Image.fromarray(np.ascontiguousarray(array.astype(np.uint8)), mode).save(path, format="PNG")
+    return f"8-bit {mode}"
+
+
+def _load(args, config, warnings: list[str]):
     from .builtin import builtin
     from .scene import load_scene
 
@@ -87,14 +105,53 @@ def _load(args, config):
         )
     if args.builtin is not None:
         return builtin(args.builtin, config)
+    if is_svg(args.scene):
+        from .svg import load_svg
+
+        return load_svg(args.scene, args.size, args.scale, args.lenient, warnings.append)
     return load_scene(args.scene)
+
+
+def is_svg(path: str | None) -> bool:
+    """Whether the scene file is read as SVG (by its suffix, any case); JSON otherwise."""
+    return path is not None and path.lower().endswith(".svg")
+
+
+MAX_SCALE = 1024.0  # --scale: a 4 px icon to the 4096 px limit; larger images are refused
+
+
+def svg_size(text: str) -> tuple[int, int]:
+    """An argparse type: `--size WxH`, the image of an SVG file in pixels."""
+    parts = text.split("x")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return tuple(read_integer(part, 1, 1 << 16) for part in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"must be WIDTHxHEIGHT, integers in [1, 65536], not {shown(text)}"
+        ) from None
+
+
+def svg_scale(text: str) -> float:
+    """An argparse type: `--scale S`, a number in (0, MAX_SCALE]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 0 < value <= MAX_SCALE:
+        raise argparse.ArgumentTypeError(
+            f"must be a number in (0, {MAX_SCALE:g}], not {shown(text)}"
+        )
+    return value
 
 
 class RenderCommand(Command):
     name = "render"
     help = "render a scene (polygons, text) to an antialiased PNG with the model or the core"
     description = (
-        "Render a scene (a JSON file of polygons and SVG paths, or a built-in) "
+        "Render a scene (a JSON file of polygons and SVG paths, an SVG file with shapes, "
+        "arcs, strokes and colour, or a built-in) "
         "through the model or the cycle-accurate hardware pipeline: each edge adds the "
         "signed area of its own piece into an accumulation buffer, a prefix sum per row "
         "gives the coverage, the fill rule and intensity apply, and polygons are "
@@ -106,7 +163,25 @@ class RenderCommand(Command):
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
         from .engines import ENGINES
 
-        parser.add_argument("scene", nargs="?", help="scene file (JSON, see docs/scenes.md)")
+        parser.add_argument(
+            "scene", nargs="?", help="scene file: JSON, or an .svg file (docs/scenes.md)"
+        )
+        parser.add_argument(
+            "--size",
+            type=svg_size,
+            metavar="WxH",
+            help="an SVG file's image in pixels, the drawing fitted by its preserveAspectRatio "
+            "(default: the SVG's width and height)",
+        )
+        parser.add_argument(
+            "--scale", type=svg_scale, help="an SVG file's width and height times S"
+        )
+        parser.add_argument(
+            "--lenient",
+            action="store_true",
+            help="skip, with a warning, the SVG elements outside the subset (text, images, "
+            "gradients, masks, filters, clip paths) instead of refusing the file",
+        )
         parser.add_argument(
             "--builtin", choices=BUILTINS, help="a built-in scene instead of a file"
         )
@@ -172,15 +247,21 @@ class RenderCommand(Command):
         config = config_from_args(args)
         _check_options(args, config)
         crop = args.crop
+        warnings: list[str] = []  # what --lenient skipped, said when the render succeeded
         try:
-            scene = _load(args, config)
+            scene = _load(args, config, warnings)
             if args.compare:
                 check_pixels("--compare", scene.width, scene.height, MAX_COMPARE_PIXELS)
             if args.error:
                 check_pixels("--error", scene.width, scene.height, MAX_ERROR_PIXELS)
+            if scene.colour and args.engine != "model":
+                raise SceneError(
+                    f"the scene has colour, which the {args.engine} pipeline does not draw yet: "
+                    "colour is model-only for now (--engine model)"
+                )
             bar = ProgressBar("render", enabled=not args.quiet)
             with bar.ticking("plan"):
-                plan = plan_scene(scene, config)
+                plan = plan_scene(_outlines(scene), config)
             bar.close()
             if args.stats or args.no_skip:
                 edges_to_send(plan, skip=False)  # refused if not every edge fits the range
@@ -200,8 +281,12 @@ class RenderCommand(Command):
             f"engine {args.engine}; {config}"
         )
         if args.compare:
-            return _compare(args, scene, config, crop, bar)
-        return _render(args, plan, bar)
+            status = _compare(args, scene, config, crop, bar)
+        else:
+            status = _render(args, scene, plan, bar)
+        for message in warnings if status == 0 else ():  # a failure says one line only
+            print(f"{PROG}: warning: {message}", file=sys.stderr)
+        return status
 
 
 # Options that do nothing or contradict each other: (given, with, why they cannot be mixed).
@@ -231,6 +316,11 @@ def _check_options(args: argparse.Namespace, config) -> None:
         raise usage_error(
             PROG, "--no-skip applies to the model: the pipeline always skips (docs/hardware.md)"
         )
+    for option in ("size", "scale", "lenient"):
+        if getattr(args, option) not in (None, False) and not is_svg(args.scene):
+            raise usage_error(PROG, f"--{option} applies to an .svg scene file")
+    if args.size is not None and args.scale is not None:
+        raise usage_error(PROG, "--size and --scale cannot be combined: each sets the image size")
     if args.crop is not None and not args.compare:
         raise usage_error(PROG, "--crop selects the pixels of the --compare figure; add --compare")
     if args.output is not None:
@@ -241,11 +331,18 @@ def _check_options(args: argparse.Namespace, config) -> None:
         require_extra(PROG, "peers", PEER_MODULES)
 
 
+def _outlines(scene):
+    """What is planned: a grey scene itself; a colour scene's coverage (`paint`)."""
+    from .paint import coverage_scene
+
+    return coverage_scene(scene) if scene.colour else scene
+
+
 def _compare(args: argparse.Namespace, scene, config, crop, bar: ProgressBar) -> int:
     from ..analysis.compare import plot_compare
 
-    with atomic_output(PROG, args.output) as temporary:
-        rows = plot_compare(scene, config, temporary, crop, bar)
+    with atomic_output(PROG, args.output) as temporary:  # a colour scene: its coverage
+        rows = plot_compare(_outlines(scene), config, temporary, crop, bar)
     bar.close()
     print(f"{'method':22} {'max |err| LSB':>14} {'RMS LSB':>8}")
     for label, worst, rms in rows:
@@ -276,17 +373,21 @@ def _build_engine(engine: str, tile, bar: ProgressBar) -> None:
         bar.close()
 
 
-def _run_engine(args: argparse.Namespace, plan, bar: ProgressBar):
+def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
     """The render (the model's, or the hardware pipeline's) and with --stats the model's
-    render without skipping."""
+    render without skipping; a colour scene composited on a canvas (`paint`)."""
+    from .paint import Canvas
     from .pipeline import check_clocks, render_pipeline
     from .render import render_scene
 
+    def canvas():
+        return Canvas(scene, plan.config.full_scale) if scene.colour else None
+
     baseline = None
     if args.stats:
-        baseline = render_scene(plan, skip=False, progress=bar)
+        baseline = render_scene(plan, skip=False, progress=bar, canvas=canvas())
     if args.engine == "model":
-        return render_scene(plan, skip=not args.no_skip, progress=bar), baseline
+        return render_scene(plan, skip=not args.no_skip, progress=bar, canvas=canvas()), baseline
     tile = tile_from_args(args.tile, plan.config)
     check_clocks(plan, tile, args.engine)  # before the build
     _build_engine(args.engine, tile, bar)
@@ -326,13 +427,13 @@ def _stats(plan, result, baseline, figures: dict) -> list[str]:
     return report
 
 
-def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
+def _render(args: argparse.Namespace, scene, plan, bar: ProgressBar) -> int:
     """Render the plan (and without skipping with --stats), write the PNG and print what was
     asked for."""
     from .scene import SceneError
 
     try:
-        result, baseline = _run_engine(args, plan, bar)
+        result, baseline = _run_engine(args, scene, plan, bar)
     except SceneError as error:  # beyond an engine's limit
         bar.close()
         raise usage_error(PROG, str(error)) from None
@@ -361,7 +462,7 @@ def _render(args: argparse.Namespace, plan, bar: ProgressBar) -> int:
     for text in report:
         say(text)
     if args.error:
-        figures.update(_error(result, plan, bar, say))
+        figures.update(_error(result, scene, plan, bar, say))
     if args.json:
         print(json.dumps(figures, indent=1))
     elif args.output is None and not args.quiet:  # the last line: what happened to the image
@@ -403,12 +504,14 @@ def _pipeline_figures(result) -> dict:
     }
 
 
-def _error(result, plan, bar: ProgressBar, say) -> dict:
-    """Measure against the exact area; print the table (text mode) and return the figures."""
+def _error(result, scene, plan, bar: ProgressBar, say) -> dict:
+    """Measure against the exact area (a colour scene: per channel, premultiplied, the worst
+    channel of each pixel); print the table (text mode) and return the figures."""
     from .exact import error_rows, error_table, exact_image
+    from .paint import exact_colour
 
     start = time.perf_counter()
-    exact = exact_image(plan, progress=bar)
+    exact = exact_colour(plan, scene) if scene.colour else exact_image(plan, progress=bar)
     bar.close()
     rows = error_rows(result, exact)
     say(

@@ -196,9 +196,12 @@ def sum_errors(result: Render) -> np.ndarray:
 
 def error_rows(result: Render, exact: np.ndarray) -> list[ErrorRow]:
     """Max and RMS error against the reference: all pixels, then by the number of edges
-    passing through the pixel (0: wholly inside or outside every polygon)."""
+    passing through the pixel (0: wholly inside or outside every polygon); a colour image
+    against its colour reference (`edgeaa.render.paint.exact_colour`) by its worst channel."""
     full = result.plan.config.full_scale
     err = np.abs(result.image.astype(np.float64) - exact)
+    if err.ndim == 3:  # a colour image (`paint`): each pixel's worst channel
+        err = err.max(axis=2)
     crossers = edges_per_pixel(result)
     rows = []
     for label, mask in (

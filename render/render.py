@@ -647,11 +647,13 @@ def render_scene(
     engine: str = "model",
     skip: bool = True,
     progress=None,
+    canvas=None,
 ) -> Render:
     """Render a scene (or a plan of one): the deltas from `engine` (the model, or the
     stepper core alone in a simulator), accumulated and resolved by the model. The whole
     pipeline in hardware is `edgeaa.render.pipeline.render_pipeline`. progress(done, total,
-    stage)."""
+    stage). A `canvas` (`edgeaa.render.paint.Canvas`, for a colour scene planned as its
+    coverage) composites instead, and its image is the render's."""
     start = time.perf_counter()
     plan = scene if isinstance(scene, Plan) else plan_scene(scene, config or EdgeConfig())
     config = plan.config
@@ -671,6 +673,8 @@ def render_scene(
     # The narrowest unsigned type that holds full scale: a 16384 x 16384 image is 256 MiB.
     dtype = np.min_scalar_type(config.full_scale)
     image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, dtype=dtype)
+    if canvas is not None:
+        image = canvas.image
     counts = {"rows": 0, "cells": 0, "stores": 0}
     polygon_of = plan.polygon[deltas.edge]
     order = np.argsort(polygon_of, kind="stable")
@@ -680,7 +684,7 @@ def render_scene(
             progress(i, len(plan.polygons), "accumulate")
         rows = order[by_poly[i] : by_poly[i + 1]]
         if len(rows):
-            _draw_polygon(plan, poly, deltas.take(rows), image, skip, counts)
+            _draw_polygon(plan, poly, deltas.take(rows), image, skip, counts, canvas)
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t
@@ -718,8 +722,11 @@ def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
         )
 
 
-def _draw_polygon(plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts):
-    """Accumulate one polygon's deltas over its window, resolve, composite over the image."""
+def _draw_polygon(
+    plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts, canvas=None
+):
+    """Accumulate one polygon's deltas over its window, resolve, composite over the image
+    (or over the canvas's channels)."""
     config, scene = plan.config, plan.scene
     d = abs(poly.intensity - poly.i_out)
     x0, y0, x1, y1 = poly.window if skip else (0, 0, scene.width, scene.height)
@@ -731,8 +738,12 @@ def _draw_polygon(plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: 
         q = intensity_offset(block.coverage, config.F)
         rows, cols = np.nonzero(q)  # only covered pixels change
         rows, cols = block.rows[rows], cols + x0
-        below = image[rows, cols].astype(np.int64)
         qq = q[q != 0].astype(np.int64)
+        if canvas is not None:
+            canvas.draw(poly.index, rows, cols, qq, d)
+            counts["stores"] += len(qq)
+            continue
+        below = image[rows, cols].astype(np.int64)
         full = qq == d  # whole pixels take the intensity, no division
         new = np.where(full, poly.intensity, composite(below, qq, poly.intensity, d))
         changed = new != below

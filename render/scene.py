@@ -40,8 +40,12 @@ MAX_STEPPED_COLUMNS = 4_000_000  # columns the engine steps in a scene: about 1.
 MAX_COORD = float(1 << 20)  # px, |x| and |y|: 16 times the widest coordinate range
 FILL_RULES = {"nonzero": "nonzero", "non-zero": "nonzero", "evenodd": "evenodd"}
 FILL_RULES["even-odd"] = "evenodd"
-SCENE_KEYS = ("width", "height", "background", "tolerance", "polygons", "name")
-POLYGON_KEYS = ("points", "contours", "path", "intensity", "fill_rule", "name")
+SCENE_KEYS = ("width", "height", "background", "background_color", "tolerance", "polygons", "name")
+GEOMETRY_KEYS = ("points", "contours", "path", "rect", "circle", "ellipse")
+POLYGON_KEYS = (
+    *GEOMETRY_KEYS, "intensity", "color", "fill_rule", "stroke", "transform", "name",
+)  # fmt: skip
+STROKE_KEYS = ("width", "cap", "join", "miter_limit", "dash", "dash_offset")
 
 Point = tuple[float, float]
 Contour = tuple[Point, ...]
@@ -60,6 +64,9 @@ class Polygon:
     intensity: int | None = None
     fill_rule: str = "nonzero"
     name: str = ""
+    # A colour instead of the intensity: red, green, blue and alpha in [0, 1] (sRGB values),
+    # composited per channel (`edgeaa.render.paint`).
+    paint: tuple[float, float, float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -70,6 +77,14 @@ class Scene:
     background: int = 0
     name: str = "scene"
     tolerance: float = DEFAULT_TOLERANCE
+    # A colour background (red, green, blue, alpha in [0, 1]) instead of `background`; SVG
+    # files start transparent.
+    background_paint: tuple[float, float, float, float] | None = None
+
+    @property
+    def colour(self) -> bool:
+        """Whether any paint is a colour: rendered per channel (`edgeaa.render.paint`)."""
+        return self.background_paint is not None or any(p.paint for p in self.polygons)
 
     @property
     def edge_count(self) -> int:
@@ -216,6 +231,9 @@ def parse_scene(data, source: str = "scene", name: str = "scene") -> Scene:
     height = _integer(f"{source}: height", data["height"], 1)
     check_pixels(source, width, height)
     background = _integer(f"{source}: background", data.get("background", 0), 0)
+    backdrop = data.get("background_color")
+    if backdrop is not None:
+        backdrop = color(f"{source}: background_color", backdrop)
     tolerance = _number(
         f"{source}: tolerance", data.get("tolerance", DEFAULT_TOLERANCE), positive=True
     )
@@ -240,7 +258,7 @@ def parse_scene(data, source: str = "scene", name: str = "scene") -> Scene:
     name = data.get("name", name)
     if not isinstance(name, str):
         raise SceneError(f"{source}: name must be a string")
-    return Scene(width, height, tuple(parsed), background, name, tolerance)
+    return Scene(width, height, tuple(parsed), background, name, tolerance, backdrop)
 
 
 def check_pixels(source: str, width: int, height: int, limit: int = MAX_PIXELS) -> None:
@@ -257,33 +275,186 @@ def parse_polygon(item, where: str, tolerance: float = DEFAULT_TOLERANCE) -> Pol
     if not isinstance(item, dict):
         raise SceneError(f"{where} must be an object with points, contours or path")
     _check_keys(where, item, POLYGON_KEYS)
-    given = [key for key in ("points", "contours", "path") if key in item]
+    given = [key for key in GEOMETRY_KEYS if key in item]
     if len(given) != 1:
         raise SceneError(
-            f"{where} needs exactly one of points, contours or path"
+            f"{where} needs exactly one of {', '.join(GEOMETRY_KEYS)}"
             + (f", not {' and '.join(given)}" if given else "")
         )
+    if given[0] in ("rect", "circle", "ellipse"):  # SVG's shapes, as SVG's path data
+        item = {**item, "path": shape_path(where, given[0], item[given[0]])}
+    matrix = _matrix(where, item.get("transform"))
+    stretch = _stretch(matrix)
+    local = tolerance / stretch if stretch > 0 else tolerance  # chords within tol in pixels
     if "points" in item:
         contours = (_contour(f"{where}", item["points"]),)
     elif "contours" in item:
         contours = _contours(where, item["contours"])
-    else:
+    else:  # path, or a shape made path
         if not isinstance(item["path"], str):
             raise SceneError(f"{where}: path must be a string of SVG path data")
-        contours = parse_path(item["path"], tolerance, where=where)
-    intensity = item.get("intensity")
-    if intensity is not None:
-        intensity = _integer(f"{where}: intensity", intensity, 0)
+        reader = read_path(item["path"], local, where=where)
+        contours = tuple(reader.contours)
     rule = item.get("fill_rule", "nonzero")
     if not isinstance(rule, str) or rule not in FILL_RULES:
         raise SceneError(
             f"{where}: unknown fill_rule {shown(rule)} (allowed: nonzero, evenodd; "
             "also non-zero, even-odd)"
         )
+    if "stroke" in item:
+        if "fill_rule" in item:
+            raise SceneError(f"{where}: fill_rule does not apply to a stroke (filled non-zero)")
+        subpaths = reader.subpaths if "path" in item else _closed_subpaths(contours)
+        contours, rule = _stroked(where, item["stroke"], subpaths, local), "nonzero"
+    if stretch == 0:
+        contours = ()  # a transform that scales to nothing draws nothing, as in SVG
+    contours = tuple(_transformed(where, matrix, c) for c in contours)
+    intensity, paint = _paint(where, item)
     label = item.get("name", "")
     if not isinstance(label, str):
         raise SceneError(f"{where}: name must be a string")
-    return Polygon(contours, intensity, FILL_RULES[rule], label)
+    return Polygon(contours, intensity, FILL_RULES[rule], label, paint)
+
+
+def shape_path(where: str, shape: str, value) -> str:
+    """SVG's rect [x, y, width, height(, rx(, ry))], circle [cx, cy, r] and ellipse [cx, cy,
+    rx, ry] as the path data SVG defines for them (rx, ry clamped to half the sides, one
+    given for both); a zero size draws nothing, as in SVG."""
+    sizes = {"rect": (4, 6), "circle": (3, 3), "ellipse": (4, 4)}[shape]
+    if not isinstance(value, list) or not sizes[0] <= len(value) <= sizes[1]:
+        raise SceneError(
+            f"{where}: {shape} must be a list of {' to '.join(map(str, sorted(set(sizes))))} "
+            f"numbers, not {shown(value)}"
+        )
+    v = [_coordinate(f"{where}: {shape} {i}", n) for i, n in enumerate(value)]
+    if min(v[2:]) < 0:
+        raise SceneError(f"{where}: {shape} sizes and radii must not be negative")
+    if shape == "rect":
+        x, y, w, h = v[:4]
+        rx = v[4] if len(v) > 4 else None
+        ry = v[5] if len(v) > 5 else rx
+        rx = ry if rx is None else rx
+        rx, ry = min(rx or 0.0, w / 2), min(ry or 0.0, h / 2)
+        if rx == 0 or ry == 0:
+            return f"M {x!r} {y!r} h {w!r} v {h!r} h {-w!r} Z" if w and h else ""
+        arc = f"A {rx!r} {ry!r} 0 0 1"
+        return (
+            f"M {x + rx!r} {y!r} H {x + w - rx!r} {arc} {x + w!r} {y + ry!r} "
+            f"V {y + h - ry!r} {arc} {x + w - rx!r} {y + h!r} H {x + rx!r} "
+            f"{arc} {x!r} {y + h - ry!r} V {y + ry!r} {arc} {x + rx!r} {y!r} Z"
+        )
+    cx, cy, rx = v[:3]
+    ry = v[3] if shape == "ellipse" else rx
+    if rx == 0 or ry == 0:
+        return ""
+    arc = f"A {rx!r} {ry!r} 0 0 1"
+    return (
+        f"M {cx + rx!r} {cy!r} {arc} {cx!r} {cy + ry!r} {arc} {cx - rx!r} {cy!r} "
+        f"{arc} {cx!r} {cy - ry!r} {arc} {cx + rx!r} {cy!r} Z"
+    )
+
+
+def _paint(where: str, item: dict) -> tuple[int | None, tuple | None]:
+    """The polygon's intensity or colour (not both)."""
+    if "intensity" in item and "color" in item:
+        raise SceneError(f"{where}: give intensity or color, not both")
+    intensity = item.get("intensity")
+    if intensity is not None:
+        intensity = _integer(f"{where}: intensity", intensity, 0)
+    paint = color(f"{where}: color", item["color"]) if "color" in item else None
+    return intensity, paint
+
+
+def color(where: str, value) -> tuple[float, float, float, float]:
+    """A colour: "#rgb", "#rrggbb", "#rrggbbaa", or [r, g, b] / [r, g, b, a] in [0, 1]."""
+    if isinstance(value, str) and re.fullmatch(r"#(?:[0-9a-fA-F]{3}|[0-9a-fA-F]{6,8})", value):
+        digits = value[1:] if len(value) != 4 else "".join(c * 2 for c in value[1:])
+        if len(digits) in (6, 8):
+            channels = [int(digits[i : i + 2], 16) / 255 for i in range(0, len(digits), 2)]
+            return tuple(channels + [1.0] * (4 - len(channels)))
+    if isinstance(value, list) and len(value) in (3, 4):
+        numbers = [_number(f"{where} channel {i}", v) for i, v in enumerate(value)]
+        if all(0 <= v <= 1 for v in numbers):
+            return tuple(numbers + [1.0] * (4 - len(numbers)))
+    raise SceneError(
+        f'{where} must be "#rrggbb", "#rgb", "#rrggbbaa" or [r, g, b(, a)] in [0, 1], '
+        f"not {shown(value)}"
+    )
+
+
+def _matrix(where: str, value) -> tuple[float, ...]:
+    """`transform`: [a, b, c, d, e, f], SVG's matrix(a b c d e f): x' = a x + c y + e,
+    y' = b x + d y + f."""
+    if value is None:
+        return (1.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+    if not isinstance(value, list) or len(value) != 6:
+        raise SceneError(f"{where}: transform must be [a, b, c, d, e, f], not {shown(value)}")
+    numbers = tuple(_number(f"{where}: transform {i}", v) for i, v in enumerate(value))
+    if max(abs(v) for v in numbers) > MAX_COORD:
+        raise SceneError(f"{where}: transform numbers must be within +-{MAX_COORD:,.0f}")
+    return numbers
+
+
+def _stretch(m: tuple[float, ...]) -> float:
+    """The largest singular value of the matrix's linear part: how far it moves a chord."""
+    a, b, c, d = m[:4]
+    half = (a * a + b * b + c * c + d * d) / 2
+    det = a * d - b * c
+    return math.sqrt(half + math.sqrt(max(0.0, half * half - det * det)))
+
+
+def _transformed(where: str, m: tuple[float, ...], contour: Contour) -> Contour:
+    a, b, c, d, e, f = m
+    if m == (1.0, 0.0, 0.0, 1.0, 0.0, 0.0):
+        return contour
+    out = tuple((a * x + c * y + e, b * x + d * y + f) for x, y in contour)
+    for x, y in out:
+        if not (abs(x) <= MAX_COORD and abs(y) <= MAX_COORD):
+            raise SceneError(
+                f"{where}: its transform takes a vertex to ({x:g}, {y:g}) px, beyond the limit "
+                f"of +-{MAX_COORD:,.0f} px"
+            )
+    return out
+
+
+def _closed_subpaths(contours: tuple[Contour, ...]) -> list:
+    from .stroke import Subpath
+
+    return [Subpath(tuple(c), True, (True,) * len(c)) for c in contours]
+
+
+def _stroked(where: str, data, subpaths: list, tolerance: float) -> tuple[Contour, ...]:
+    """`stroke`: {"width", "cap", "join", "miter_limit", "dash", "dash_offset"}, the
+    outline's pieces (`edgeaa.render.stroke`)."""
+    from .stroke import CAPS, JOINS, StrokeStyle, stroke_outline
+
+    if not isinstance(data, dict) or "width" not in data:
+        raise SceneError(f"{where}: stroke must be an object with at least a width")
+    _check_keys(f"{where}: stroke", data, STROKE_KEYS)
+    width = _number(f"{where}: stroke width", data["width"])
+    limit = _number(f"{where}: stroke miter_limit", data.get("miter_limit", 4))
+    offset = _number(f"{where}: stroke dash_offset", data.get("dash_offset", 0))
+    if not 0 <= width <= MAX_COORD or limit < 1:
+        raise SceneError(
+            f"{where}: stroke width must be in [0, {MAX_COORD:,.0f}] and miter_limit at least 1"
+        )
+    cap, join = data.get("cap", "butt"), data.get("join", "miter")
+    for name, value, allowed in (("cap", cap, CAPS), ("join", join, JOINS)):
+        if value not in allowed:
+            raise SceneError(
+                f"{where}: stroke {name} {shown(value)} (allowed: {', '.join(allowed)})"
+            )
+    dashes = data.get("dash", [])
+    if not isinstance(dashes, list) or len(dashes) > 64:
+        raise SceneError(f"{where}: stroke dash must be a list of at most 64 lengths")
+    dashes = tuple(_number(f"{where}: stroke dash {i}", v) for i, v in enumerate(dashes))
+    if any(v < 0 for v in dashes):
+        raise SceneError(f"{where}: stroke dash lengths must not be negative")
+    style = StrokeStyle(width, cap, join, limit, dashes if sum(dashes) > 0 else (), offset)
+    try:
+        return tuple(stroke_outline(subpaths, style, tolerance, MAX_POLYGON_EDGES))
+    except ValueError as error:
+        raise SceneError(f"{where}: {error}") from None
 
 
 def _contours(where: str, data) -> tuple[Contour, ...]:
@@ -304,7 +475,7 @@ def _contours(where: str, data) -> tuple[Contour, ...]:
 # -- SVG path data -----------------------------------------------------------------------------
 
 _TOKEN = re.compile(r"[A-Za-z]|[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
-_ARGS = {"M": 2, "L": 2, "H": 1, "V": 1, "C": 6, "S": 4, "Q": 4, "T": 2, "Z": 0}
+_ARGS = {"M": 2, "L": 2, "H": 1, "V": 1, "C": 6, "S": 4, "Q": 4, "T": 2, "A": 7, "Z": 0}
 
 
 SEPARATORS = " \t\n\f\r,"  # SVG's whitespace (space, tab, LF, FF, CR) and the comma
@@ -374,7 +545,56 @@ def flatten_cubic(p0: Point, p1: Point, p2: Point, p3: Point, tolerance: float) 
     return out
 
 
-def _close(points: list[Point], contours: list[Contour]) -> None:
+def flatten_arc(
+    center: Point,
+    u: Point,
+    v: Point,
+    t0: float,
+    sweep: float,
+    end: Point,
+    tolerance: float,
+    limit: int = MAX_POLYGON_EDGES,
+) -> list[Point]:
+    """An elliptical arc P(t) = c + u cos t + v sin t, t from t0 over `sweep`, as the points
+    after its start (the last is `end`): |P''| <= sqrt(|u|^2 + |v|^2) = R, so n = ceil(|sweep|
+    sqrt(R / (8 tol))) chords keep it within tol (h**2 / 8 R with h = sweep / n). A zero
+    radius or sweep is a line (SVG's rule). SceneError when n passes `limit`."""
+    radius = math.sqrt(u[0] ** 2 + u[1] ** 2 + v[0] ** 2 + v[1] ** 2)
+    if radius == 0 or sweep == 0 or math.hypot(*u) == 0 or math.hypot(*v) == 0:
+        return [end]
+    n = max(1, math.ceil(abs(sweep) * math.sqrt(radius / (8 * tolerance))))
+    if n > limit:
+        raise SceneError(
+            f"an arc needs {n:,} pieces at tolerance {tolerance:g}, more than the limit of "
+            f"{limit:,} edges per polygon"
+        )
+    out = []
+    for i in range(1, n):
+        t = t0 + sweep * i / n
+        ct, st = math.cos(t), math.sin(t)
+        out.append((center[0] + u[0] * ct + v[0] * st, center[1] + u[1] * ct + v[1] * st))
+    return [*out, end]
+
+
+def arc_points(start: Point, params: list[float], end: Point, tolerance: float, limit: int):
+    """SVG's arc from `start` (rx, ry, rotation in degrees, large-arc flag, sweep flag) to
+    `end`, flattened: svgelements converts the endpoints to the centre form with its radius
+    correction (the same reading as an SVG file's), `flatten_arc` cuts it."""
+    import svgelements as se
+
+    rx, ry, rotation, large, sweep = params
+    data = f"M {start[0]!r} {start[1]!r} A {rx!r} {ry!r} {rotation!r} {int(large)} {int(sweep)} "
+    arc = se.Path(data + f"{end[0]!r} {end[1]!r}").segments()[-1]
+    if not isinstance(arc, se.Arc):
+        return [end]
+    c, u, v = arc.center, arc.prx, arc.pry
+    return flatten_arc(
+        (c[0], c[1]), (u[0] - c[0], u[1] - c[1]), (v[0] - c[0], v[1] - c[1]),
+        float(arc.get_start_t()), float(arc.sweep), end, tolerance, limit,
+    )  # fmt: skip
+
+
+def close_subpath(points: list[Point], contours: list[Contour]) -> None:
     """End a subpath: drop a repeated start point; keep it if it encloses anything."""
     while len(points) > 1 and points[-1] == points[0]:
         points.pop()
@@ -389,9 +609,21 @@ def parse_path(
     where: str = "path",
     limit: int = MAX_POLYGON_EDGES,
 ) -> tuple[Contour, ...]:
-    """SVG path data to closed contours: M/L/H/V/Z, C/S cubic and Q/T quadratic curves,
+    """The path's contours for filling (`read_path`)."""
+    return tuple(read_path(data, tolerance, where, limit).contours)
+
+
+def read_path(
+    data: str,
+    tolerance: float = DEFAULT_TOLERANCE,
+    where: str = "path",
+    limit: int = MAX_POLYGON_EDGES,
+):
+    """SVG path data read: closed contours for filling and the subpaths as written (for
+    strokes; `_PathReader`): M/L/H/V/Z, C/S cubic and Q/T quadratic curves, A arcs,
     absolute and relative; every subpath is closed for filling (as SVG fills do). Subpaths
-    with fewer than 3 distinct vertices enclose nothing and are dropped. A command without
+    with fewer than 3 distinct vertices enclose nothing and are dropped (a path of only such
+    subpaths draws nothing, as in SVG). A command without
     its numbers is an error; so is a path whose points (curve pieces included) would pass
     `limit`, refused before a curve is flattened."""
     path = _PathReader(where, tolerance, limit)
@@ -410,7 +642,8 @@ def parse_path(
             )
         path.draw([_path_number(where, p, t) for p, t in tokens[i : i + n]])
         i += n
-    return path.finish()
+    path.finish()
+    return path
 
 
 def _path_number(where: str, pos: int, token: str) -> float:
@@ -430,6 +663,8 @@ class _PathReader:
         self.where, self.tolerance, self.limit = where, tolerance, limit
         self.contours: list[Contour] = []
         self.points: list[Point] = []
+        self.corners: list[bool] = []  # per point: a corner between segments (not in a curve)
+        self.subpaths: list = []  # every subpath as written (`stroke.Subpath`), for strokes
         self.count = 0  # points so far, every subpath: the limit counts them
         self.cur = self.start = (0.0, 0.0)
         self.name = self.name_pos = None  # the current command and where it was named
@@ -438,11 +673,6 @@ class _PathReader:
 
     def command(self, token: str, pos: int) -> None:
         where = self.where
-        if token.upper() == "A":
-            raise SceneError(
-                f"{where}: arc commands (A/a) are not supported (position {pos}); "
-                "convert arcs to curves"
-            )
         if token.upper() not in _ARGS:
             raise SceneError(f"{where}: unknown path command {token!r} at position {pos}")
         if self.name_pos is None and token not in "Mm":
@@ -451,8 +681,8 @@ class _PathReader:
         self.name, self.name_pos = token, pos
         self.waiting = token not in "Zz"
         if not self.waiting:
-            _close(self.points, self.contours)
-            self.points, self.cur = [], self.start
+            self._end(closed=True)
+            self.points, self.corners, self.cur = [], [], self.start
             self.last_cubic = self.last_quad = None
 
     def _check_waiting(self) -> None:
@@ -474,21 +704,26 @@ class _PathReader:
         upper, relative = self.name.upper(), self.name.islower()
         ox, oy = self.cur if relative else (0.0, 0.0)
         if upper == "M":
-            _close(self.points, self.contours)
+            self._end(closed=False)
             self.cur = self.start = self._point(ox + args[0], oy + args[1])
-            self.points = [self.cur]
+            self.points, self.corners = [self.cur], [True]
             self.name = "l" if relative else "L"  # further pairs are lines
             self.last_cubic = self.last_quad = None
             return
         if not self.points:  # drawing after Z without M starts at the subpath's start
-            self.points = [self.cur]
+            self.points, self.corners = [self.cur], [True]
         if upper in "LHV":
             new = [self._line(upper, relative, args)]
         elif upper in "CS":
             new = self._cubic(upper, (ox, oy), args)
+        elif upper == "A":
+            new = self._arc((ox, oy), args)
         else:
             new = self._quadratic(upper, (ox, oy), args)
+        if upper not in "CSQT":
+            self.last_cubic = self.last_quad = None
         self.points.extend(new)
+        self.corners += [False] * (len(new) - 1) + [True]
         self.cur = new[-1]
 
     def _point(self, x: float, y: float, count: bool = True) -> Point:
@@ -547,11 +782,36 @@ class _PathReader:
         self.last_cubic, self.last_quad = None, c1
         return flatten_quadratic(cur, c1, end, self.tolerance)
 
+    def _arc(self, origin: Point, args: list[float]) -> list[Point]:
+        """An elliptical arc (rx ry rotation large-arc sweep x y), SVG's out-of-range radius
+        and flag rules, flattened within the tolerance (`arc_points`)."""
+        ox, oy = origin
+        for flag in args[3:5]:
+            if flag not in (0.0, 1.0):
+                raise SceneError(
+                    f"{self.where}: arc flag {flag:g} at command {self.name!r} (position "
+                    f"{self.name_pos}) must be 0 or 1"
+                )
+        end = self._point(ox + args[5], oy + args[6], count=False)  # counted in the pieces
+        points = arc_points(self.cur, args[:5], end, self.tolerance, self.limit - self.count)
+        self._count(len(points))
+        return points
+
+    def _end(self, closed: bool) -> None:
+        """End a subpath: its contour for filling, and the subpath as written for strokes."""
+        from .stroke import Subpath
+
+        if self.points:
+            keep = [i for i, p in enumerate(self.points) if i == 0 or p != self.points[i - 1]]
+            points = [self.points[i] for i in keep]
+            corners = [self.corners[i] for i in keep]
+            if closed and len(points) > 1 and points[-1] == points[0]:
+                points.pop()
+                corners.pop()
+            self.subpaths.append(Subpath(tuple(points), closed, tuple(corners)))
+        close_subpath(self.points, self.contours)
+
     def finish(self) -> tuple[Contour, ...]:
         self._check_waiting()
-        _close(self.points, self.contours)
-        if not self.contours:
-            raise SceneError(
-                f"{self.where}: the path encloses nothing (no subpath with 3 vertices)"
-            )
-        return tuple(self.contours)
+        self._end(closed=False)
+        return tuple(self.contours)  # empty when every subpath is degenerate: draws nothing

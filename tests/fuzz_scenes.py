@@ -27,7 +27,21 @@ ADDED_POLYGONS = [
     ({"path": "M 0 0 L 10 0 L 10 10 C 1 2"}, "path command without its numbers"),
     ({"path": "M 0 0 L 10 0 L 10 10 Q"}, "path command without its numbers"),
     ({"path": "M 0 0 L 10 0 L 10 10 m"}, None),
-    ({"path": "M 0 0 L 10 0 L 10 10 A 1 1 0 0 0 5 5 Z"}, "arcs are not supported"),
+    ({"path": "M 0 0 L 10 0 L 10 10 A 1 1 0 0 0 5 5 Z"}, None),
+    ({"path": "M 0 0 A 1 1 0 3 0 5 5 Z"}, "an arc flag of 3"),
+    ({"path": "M 0 0 h 9 v 9", "stroke": {"width": 2, "dash": [1e-9]}}, "too many dashes"),
+    ({"path": "M 0 0 h 9", "stroke": {"width": 2, "join": "sharp"}}, "unknown join"),
+    ({"points": [[0, 0], [9, 0], [0, 9]], "color": "#zz0000"}, "a bad colour"),
+    ({"points": [[0, 0], [9, 0], [0, 9]], "transform": [1e9, 0, 0, 1, 0, 0]}, "transform 1e9"),
+    (
+        {
+            "path": "M 2 2 a 4 6 30 1 1 9 9",
+            "stroke": {"width": 1.5, "cap": "round"},
+            "color": [0.2, 0.4, 0.6, 0.5],
+            "transform": [1, 0.2, 0, 1, 3, 0],
+        },
+        None,
+    ),
     ({"points": [[0, 0], [0, 0], [0, 0]]}, None),
     ({"points": [[0, 0], [4, 4], [0, 4], [4, 0]], "fill_rule": ["evenodd"]}, "fill_rule a list"),
     ({"contours": [[[0, 0], [8, 0], [8, 8]], [[0, 0], [8, 0], [8, 8]]]}, None),
@@ -74,7 +88,16 @@ def _polygon(rng: random.Random, whys: list) -> dict:
         item = {"path": _path(rng)}
     if rng.random() < 0.7:
         item["intensity"] = rng.randint(0, 255)
-    if rng.random() < 0.4:
+    elif rng.random() < 0.4:
+        item["color"] = rng.choice(["#0a0", "#123456", "#12345678", [0.1, 0.5, 1], [1, 0, 0, 0.3]])
+    if rng.random() < 0.15:
+        item["transform"] = [rng.uniform(-2, 2) for _ in range(4)] + [_coordinate(rng)] * 2
+    if rng.random() < 0.2:
+        item["stroke"] = {"width": rng.choice([0.25, 1, 3]), "cap": rng.choice(["butt", "round"]),
+                          "join": rng.choice(["miter", "round", "bevel"])}  # fmt: skip
+        if rng.random() < 0.3:
+            item["stroke"]["dash"] = [rng.choice([0, 1, 2.5]), rng.choice([1, 3])]
+    elif rng.random() < 0.4:
         item["fill_rule"], why = rng.choice(FILL_RULES)
         whys += [why] if why else []
     return item
@@ -193,7 +216,117 @@ def scene_file(rng: random.Random) -> tuple[bytes, list[str], tuple[int, int]]:
 # -- edgeaa render ---------------------------------------------------------------------------
 
 
+# -- SVG files -------------------------------------------------------------------------------
+
+SVG_SHAPES = [  # valid elements of the subset
+    '<rect x="{a}" y="{b}" width="{c}" height="{d}" rx="{e}"/>',
+    '<circle cx="{a}" cy="{b}" r="{c}"/>',
+    '<ellipse cx="{a}" cy="{b}" rx="{c}" ry="{d}" transform="rotate({e})"/>',
+    '<line x1="{a}" y1="{b}" x2="{c}" y2="{d}" stroke="red" stroke-width="{e}"/>',
+    '<polyline points="{a},{b} {c},{d} {e},{a}" fill="none" stroke="#0a0" '
+    'stroke-linejoin="bevel"/>',
+    '<polygon points="{a},{b} {c},{d} {e},{a}" fill-rule="evenodd" fill-opacity="0.5"/>',
+    '<path d="M{a} {b} A {c} {d} {e} 1 0 {b} {a} Z" fill="rgb(10,20,30)"/>',
+    '<path d="M{a} {b} q {c} {d} {e} 3 t 4 5 s 1 2 3 4 z M12 5v1" opacity="0.3"/>',
+    '<path d="M{a} {b} L {c} {d} L {e} 1" fill="none" stroke="navy" stroke-linecap="round" '
+    'stroke-dasharray="{c} 2" stroke-dashoffset="{e}"/>',
+    '<g transform="skewX({e}) scale(0.5)" fill="currentColor" color="gold">'
+    '<rect width="{c}" height="{d}"/></g>',
+    '<use href="#d" x="{a}" y="{b}"/>',
+]
+# (element, why it must be refused; None: either answer, cleanly). "subset: ..." reasons are
+# the elements outside the subset, which --lenient skips with a warning.
+SVG_ODD = [
+    ("<text>hi</text>", "subset: <text>"),
+    ('<image href="x.png" width="4" height="4"/>', "subset: <image>"),
+    ('<rect width="4" height="4" fill="url(#g)"/>', "subset: gradient paint"),
+    ('<rect width="4" height="4" filter="url(#f)"/>', "subset: filter"),
+    ('<circle r="3" clip-path="url(#c)"/>', "subset: clip-path"),
+    ('<mask id="m"/>', "subset: <mask>"),
+    ('<path d="M0 0 L 1e300 0 L 0 9 Z"/>', "svg coordinate past the limit"),
+    ('<path d="M0 0 A 1e6 1e6 0 1 1 0 1e-9"/>', None), ('<circle r="nan"/>', None),
+    ('<rect width="-4" height="4"/>', None), ('<path d="M 0 0 L 5 x 7 Z"/>', None),
+    ('<g transform="scale(1e12)"><circle r="3"/></g>', None),
+    ('<path d="M0 0 H 60" stroke="red" stroke-dasharray="0.0001"/>', "svg too many dashes"),
+    ('<path d="M0 0 H 60" stroke="red" stroke-dasharray="1 -1"/>', "svg negative dash"),
+    ('<path d="M0 0 H 60" stroke="red" stroke-linejoin="sharp"/>', "svg unknown linejoin"),
+    ('<path d="M0 0 H 60 V 9" stroke="red" stroke-width="1e9" stroke-linejoin="round"/>', None),
+    ('<rect width="4" height="4" style="fill:#zzz;stroke-miterlimit:0.5" stroke="red"/>', None),
+    ('<g>' * 3000 + "</g>" * 3000, None), ('<rect width="4" height="4" opacity="1e999"/>', None),
+]  # fmt: skip
+SVG_ROOTS = [  # (attributes of <svg>, why it must be refused)
+    ('width="48" height="32"', None), ('viewBox="0 0 24 24"', None),
+    ('width="2in" height="1cm" viewBox="-4 -4 8 8" preserveAspectRatio="xMaxYMin slice"', None),
+    ('width="0" height="10"', "svg of width 0"), ('width="1e9" height="1e9"', "svg of 1e18 px"),
+    ('width="nan" height="4"', None), ('viewBox="0 0 0 0"', None), ("", None),
+]  # fmt: skip
+
+
+def svg_file(rng: random.Random) -> tuple[bytes, list[str]]:
+    """An SVG file's bytes and why it is invalid (empty: maybe valid)."""
+    whys: list[str] = []
+    root, why = rng.choice(SVG_ROOTS) if rng.random() < 0.4 else SVG_ROOTS[rng.randrange(3)]
+    whys += [why] if why else []
+    parts = ['<defs><path id="d" d="M0 0h3v3z"/></defs>']
+    for _ in range(rng.randint(1, 5)):
+        numbers = {k: round(rng.uniform(-5, 40), rng.choice([0, 2])) for k in "abcde"}
+        parts.append(rng.choice(SVG_SHAPES).format(**numbers))
+    if rng.random() < 0.4:
+        element, why = rng.choice(SVG_ODD)
+        parts.insert(rng.randrange(len(parts) + 1), element)
+        whys += [why] if why else []
+    text = f'<svg xmlns="http://www.w3.org/2000/svg" {root}>{"".join(parts)}</svg>'.encode()
+    kind = rng.randrange(10)
+    if kind == 0:
+        text, why = text[: rng.randrange(len(text))], "svg cut short"
+        whys += [why]
+    elif kind == 1:
+        at = rng.randrange(len(text))
+        text = text[:at] + rng.choice([b"\xff", b"\x00", b"<", b"&x;"]) + text[at:]
+    elif kind == 2:  # entities that expand a billion times
+        lol = b'<!DOCTYPE s [<!ENTITY a "aaaaaaaaaa">' + b"".join(
+            b'<!ENTITY %c "%s">' % (98 + i, (b"&%c;" % (97 + i)) * 10) for i in range(8)
+        )
+        text = lol + b"]>" + text.replace(b"<defs>", b"<desc>&i;</desc><defs>", 1)
+    return text, whys
+
+
+def _svg_options(d: Draft, svg: bool) -> None:
+    """--size, --scale, --lenient: with an .svg file, or refused with any other."""
+    if d.chance(0.25):
+        value, why = d.rng.choice(
+            [
+                ("64x48", None),
+                ("1x1", None),
+                ("0x4", "--size 0"),
+                ("4", "--size without x"),
+                ("9999x9999", "--size too large"),
+            ]
+        )
+        d.add("--size", value)
+        d.bad(why if svg else "--size without an .svg file")
+    if d.chance(0.2):
+        value, why = d.rng.choice(
+            [
+                ("2", None),
+                ("0.25", None),
+                ("0", "--scale 0"),
+                ("nan", "--scale nan"),
+                ("1e9", "--scale past the limit"),
+            ]
+        )
+        d.add("--scale", value)
+        d.bad(why if svg else "--scale without an .svg file")
+    if "--size" in d.case.argv and "--scale" in d.case.argv:
+        d.bad("--size with --scale")
+    if not svg and d.chance(0.1):  # an SVG case chooses --lenient itself
+        d.add("--lenient")
+        d.bad("--lenient without an .svg file")
+
+
 def render_case(d: Draft, quick: bool) -> None:
+    if d.chance(0.25):
+        return _svg_case(d, quick)
     name = "scene.json"
     if d.chance(0.05):
         name = d.rng.choice(["sc\nene.json", "sc\udcffene.json", "scène.json", "a b.json"])
@@ -206,6 +339,26 @@ def render_case(d: Draft, quick: bool) -> None:
         for why in whys if exists else ["the scene file does not exist"]:
             d.bad(why)
     render_options(d, quick, name, size)
+    _svg_options(d, False)
+
+
+def _svg_case(d: Draft, quick: bool) -> None:
+    """An SVG file, valid or damaged, with the SVG options."""
+    name = "icon.svg" if d.chance(0.9) else "ICON.SVG"
+    text, whys = svg_file(d.rng)
+    d.case.files[name] = text
+    d.add(name)
+    lenient = d.chance(0.3)
+    if lenient:
+        d.add("--lenient")
+    render_options(d, quick, name, (0, 0))
+    _svg_options(d, True)
+    sized = "--size" in d.case.argv
+    for why in whys:  # --lenient skips the subset's refusals; --size sets the image
+        skipped = lenient and why.startswith("subset:")
+        d.bad(None if skipped or (sized and why == "svg of 1e18 px") else why)
+    if any(word in d.case.argv for word in ("amaranth", "verilator")):
+        d.bad("colour on a hardware engine")
 
 
 CONFLICTS = [("--compare", "--error"), ("--compare", "--stats"), ("--compare", "--no-skip"),

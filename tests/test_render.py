@@ -172,14 +172,64 @@ BAD_SCENES = [
     ),
     ({"width": 5, "height": 5, "polygons": [{"intensity": 3}]}, "needs exactly one of"),
     (
-        {"width": 5, "height": 5, "polygons": [{"path": "M 0 0 A 1 1 0 0 1 2 2 Z"}]},
-        "arc commands (A/a) are not supported",
+        {"width": 5, "height": 5, "polygons": [{"path": "M 0 0 A 1 1 0 2 1 2 2 Z"}]},
+        "arc flag 2 at command 'A' (position 6) must be 0 or 1",
+    ),
+    (
+        {"width": 5, "height": 5, "polygons": [{"path": "M 0 0 h 3 v 3", "color": "red"}]},
+        "color must be",
+    ),
+    (
+        {"width": 5, "height": 5, "polygons": [{"path": "M0 0h3v3", "transform": [1, 0, 0]}]},
+        "transform must be [a, b, c, d, e, f]",
+    ),
+    (
+        {
+            "width": 5,
+            "height": 5,
+            "polygons": [{"path": "M0 0h3", "stroke": {"width": 1, "cap": "hat"}}],
+        },
+        "stroke cap 'hat' (allowed: butt, round, square)",
+    ),
+    (
+        {
+            "width": 5,
+            "height": 5,
+            "polygons": [{"path": "M0 0h3", "stroke": {"width": 1}, "fill_rule": "evenodd"}],
+        },
+        "fill_rule does not apply to a stroke",
+    ),
+    (
+        {
+            "width": 5,
+            "height": 5,
+            "polygons": [{"path": "M0 0h3v3", "intensity": 3, "color": "#fff"}],
+        },
+        "give intensity or color, not both",
+    ),
+    ({"width": 5, "height": 5, "polygons": [{"circle": [1, 1]}]}, "circle must be a list of 3"),
+    ({"width": 5, "height": 5, "polygons": [{"rect": [0, 0, 3, -3]}]}, "must not be negative"),
+    (
+        {"width": 5, "height": 5, "polygons": [{"rect": [0, 0, 3, 3], "path": "M0 0h1v1"}]},
+        "not path and rect",
     ),
     ({"width": 5, "height": 5, "polygons": [{"path": "M 0 0 L 1 # Z"}]}, "unexpected '#'"),
     ({"width": 5, "height": 5, "polygons": [{"path": "L 1 1 2 2"}]}, "must start with M"),
     ({"width": 5, "height": 5, "polygons": [{"path": "M 0 0 C 1 1 2"}]}, "needs 6 numbers"),
-    ({"width": 5, "height": 5, "polygons": [{"path": "M 0 0 L 3 3 Z"}]}, "encloses nothing"),
 ]
+
+
+def test_degenerate_subpaths_draw_nothing():
+    """SVG draws nothing for a subpath without area (`M12 5v1`): it is dropped, the rest of
+    the path drawn; a path of nothing else is an empty polygon, not an error."""
+    data = {"width": 16, "height": 16, "polygons": [
+        {"path": "M 12 5 v 1 M 1 1 L 9 1 L 9 9 Z"}, {"path": "M 0 0 L 3 3 Z"}, {"path": "M2 2"},
+    ]}  # fmt: skip
+    scene = parse_scene(data)
+    assert [len(p.contours) for p in scene.polygons] == [1, 0, 0]
+    image = render_scene(scene, DEFAULT).image
+    alone = render_scene(parse_scene({**data, "polygons": data["polygons"][:1]}), DEFAULT).image
+    assert image[3, 5] == 255 and np.array_equal(image, alone)  # the triangle alone
 
 
 @pytest.mark.parametrize(("data", "message"), BAD_SCENES, ids=[m for _, m in BAD_SCENES])
