@@ -23,6 +23,7 @@ import sys
 
 import numpy as np
 
+from edgeaa.hdl.core import PolygonCore
 from edgeaa.hdl.pipeline import STATS
 from edgeaa.model import EdgeConfig
 from edgeaa.model.pipeline_timing import pipeline_cycles
@@ -45,9 +46,9 @@ def measure(name: str, tile: TileConfig, repeats: int) -> dict:
     drain = pipeline_harness.pixel_drain_clocks(tile)
     model_clocks = pipeline_cycles(tile, commands).clocks + drain
     edges = [plan.edge(int(e), clip=True) for e in model.sent]
-    verilator_harness.build(config, output="deltas")
+    verilator_harness.build(config, top=PolygonCore)
     core = min(
-        (verilator_harness.run(config, edges, output="deltas") for _ in range(repeats)),
+        (verilator_harness.run(config, edges, top=PolygonCore) for _ in range(repeats)),
         key=lambda r: r.seconds,
     )
     return {

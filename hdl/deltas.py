@@ -73,6 +73,11 @@ class DeltaStepper(ColumnLoop):
         self.start = Signal(name="start")
         self.delta_regs = delta_registers(config)
 
+    @property
+    def stages(self) -> list:
+        """The registers of p1 and p2 (``delta_stages``; set when elaborated)."""
+        return self.delta_stages
+
     def _handshake(self, last) -> list:
         """Start an edge when idle; take its bank when its last column steps."""
         return [

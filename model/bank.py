@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 from .config import EdgeConfig, RegisterWidth
 
+
 class BankField(NamedTuple):
     """One field of the bank: its name (an `EdgeSetup` attribute, or an `EndPieces` one for
     ``pieces``), the entry of `EdgeConfig.register_widths` that sizes it, and whether it is a

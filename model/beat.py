@@ -32,6 +32,7 @@ import numpy as np
 from .bank import BankField, bank_fields
 from .config import EdgeConfig
 from .edge import Edge, EdgeError, setup
+from .step import run_edge, run_edge_deltas
 
 LANES = ("lane0", "lane1")
 PIXEL_FIELDS = ("x", "y", "value")  # x, y signed (register "x", "y"), value unsigned
@@ -197,8 +198,8 @@ def delta_beats_from_array(rows: np.ndarray) -> list[DeltaBeat]:
 class BeatFormat:
     """One output of the core, declared once: its stream's name, payload leaves in array
     order, the register sizing each leaf (None: a one-bit flag), the decoders to Python
-    beats, the encoder to array rows and the model's beats of one edge's columns
-    (`EdgeResult.columns` or `run_edge_deltas`); and what the output asks of the core:
+    beats, the encoder to array rows, the model's columns of an edge (`run_edge`'s or
+    `run_edge_deltas`) and its beats of them (`edge_beats`); and what the output asks of the core:
     whether its bank carries the end pieces (`pieces`), whether its stepper reads the bank
     live and takes it when it steps the edge's last column (`live_bank`; else it copies the
     bank when it loads it), its pipeline depth and its setup's FINAL clocks
@@ -211,6 +212,7 @@ class BeatFormat:
     from_array: Callable
     to_array: Callable
     from_columns: Callable
+    model_columns: Callable[[EdgeConfig, Edge], Sequence]  # the model's columns of an edge
     pieces: bool  # the bank carries the end pieces (`BankField.pieces`)
     live_bank: bool  # the stepper reads the held bank and takes it at the edge's end
     depth: Callable[[EdgeConfig], int]  # clocks from a column's step to its beat
@@ -219,6 +221,10 @@ class BeatFormat:
     @property
     def run_columns(self) -> tuple[str, ...]:
         return ("clock", *("_".join(path) for path in self.paths))
+
+    def edge_beats(self, config: EdgeConfig, edge: Edge) -> list:
+        """The model's beats of one edge (`EdgeError` for a bad command)."""
+        return self.from_columns(self.model_columns(config, edge))
 
     def pipeline_depth(self, config: EdgeConfig) -> int:
         return self.depth(config)
@@ -243,6 +249,7 @@ WRITES = BeatFormat(
     beats_from_array,
     beats_to_array,
     column_beats,
+    lambda config, edge: run_edge(config, edge).columns,
     pieces=False,
     live_bank=False,
     # the output register behind one estimate stage (at most one segment) or two
@@ -259,6 +266,7 @@ DELTAS = BeatFormat(
     delta_beats_from_array,
     delta_beats_to_array,
     delta_column_beats,
+    run_edge_deltas,
     pieces=True,
     live_bank=True,
     # p1 (the piece's depth), p2 (the estimate and covers), the output register (the cells)
@@ -267,3 +275,11 @@ DELTAS = BeatFormat(
     final=lambda config: config.subpixel_bits + 2,
 )
 """The polygon core's output: the accumulation deltas, four cells a column."""
+
+
+def format_of(stream: str) -> BeatFormat:
+    """The output whose stream is named `stream` (a job file names it across processes)."""
+    for fmt in (WRITES, DELTAS):
+        if fmt.stream == stream:
+            return fmt
+    raise ValueError(f"no output stream named {stream!r}: writes or deltas")

@@ -16,10 +16,9 @@ import time
 import numpy as np
 from amaranth.sim import Simulator
 
-from ...hdl import EdgeAntialiaser
+from ...hdl import LineCore
 from ...hdl.pipeline import STATS, EdgePipeline, command_layout
 from ...model import Edge, EdgeConfig
-from ...model.beat import BEAT_FORMATS
 from ...model.pipeline import Command
 from ...model.tile import TileConfig
 from ..verification.commands import edge_command
@@ -42,13 +41,13 @@ def payload_leaf(payload, path: tuple[str, ...]) -> int:
     return int(payload)
 
 
-def run(config: EdgeConfig, edges: list[Edge], *, progress=None, output: str = "writes") -> FastRun:
-    """Simulate the core (with `output`: ``"writes"`` or ``"deltas"``) on `edges`;
-    `progress(done, total)` is called as commands go in."""
-    dut = EdgeAntialiaser(config, output=output)
-    paths = BEAT_FORMATS[output].paths
+def run(config: EdgeConfig, edges: list[Edge], *, progress=None, top=LineCore) -> FastRun:
+    """Simulate the core `top` (`LineCore` or `PolygonCore`) on `edges`; `progress(done,
+    total)` is called as commands go in."""
+    dut = top(config)
+    paths = top.format.paths
     commands = [edge_command(config, edge) for edge in edges]
-    drain = drain_clocks(config, output)  # clocks with no beat before the run may end
+    drain = drain_clocks(config, top.format)  # clocks with no beat before the run may end
     rows: list[list[int]] = []
     clocks = errors = 0
 
@@ -83,7 +82,7 @@ def run(config: EdgeConfig, edges: list[Edge], *, progress=None, output: str = "
     sim.run()
     seconds = time.perf_counter() - start
     beats = np.array(rows, dtype=np.int64).reshape(-1, len(paths) + 1)
-    return FastRun(beats, clocks, errors, seconds, output)
+    return FastRun(beats, clocks, errors, seconds, top.format)
 
 
 def run_pipeline(

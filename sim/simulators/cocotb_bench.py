@@ -10,9 +10,10 @@ handshakes. Every beat is checked against the scoreboard as it arrives, stalled 
 hold their payload, and after the last expected beat the sink must stay empty. The outcome
 goes to ``EDGEAA_COSIM_RESULT``.
 
-The job's ``output`` names the core's output stream (`edgeaa.model.beat.BEAT_FORMATS`):
-``writes`` (two-lane beats of `run_edge`) or ``deltas`` (four-cell beats of
-`run_edge_deltas`); the ports, the payload's decoding and the beats follow from it.
+The job's ``stream`` names the core's output stream (`edgeaa.model.beat.format_of`):
+``writes`` (the line core's two-lane beats of `run_edge`) or ``deltas`` (the polygon core's
+four-cell beats of `run_edge_deltas`); the ports, the payload's decoding and the beats follow
+from its format.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
 
 from ...model import Clip, Edge, EdgeConfig
-from ...model.beat import BEAT_FORMATS, BeatFormat, port_name
+from ...model.beat import BeatFormat, format_of, port_name
 from ..verification.commands import edge_command
 from ..verification.scoreboard import Scoreboard
 
@@ -67,7 +68,7 @@ async def edges_match_model(dut):
     with open(os.environ["EDGEAA_COSIM_JOB"]) as file:
         job = json.load(file)
     config = EdgeConfig(**job["config"])
-    fmt = BEAT_FORMATS[job.get("output", "writes")]
+    fmt = format_of(job["stream"])
     out_valid, out_ready = (getattr(dut, f"{fmt.stream}__{name}") for name in ("valid", "ready"))
     edges = [_job_edge(fields) for fields in job["edges"]]
     rng = random.Random(job["seed"])

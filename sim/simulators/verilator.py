@@ -24,9 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...hdl import verilog
+from ...hdl import LineCore, core_verilog
 from ...model import Edge, EdgeConfig
-from ...model.beat import BEAT_FORMATS
 from ..verification.scoreboard import expected_beats
 
 # No blanket -Wno-... flag: the waivers are the targeted configuration file that `edgeaa
@@ -120,10 +119,10 @@ class CosimResult:
         return self.clocks / self.seconds if self.seconds else 0.0
 
 
-def build(config: EdgeConfig, *, optimize: str = "-O2", output: str = "writes") -> Path:
-    """Compile the core (`output` ``"writes"`` or ``"deltas"``) for cocotb once; later calls
+def build(config: EdgeConfig, *, optimize: str = "-O2", top=LineCore) -> Path:
+    """Compile the core `top` (`LineCore` or `PolygonCore`) for cocotb once; later calls
     with the same Verilog reuse the build."""
-    return cocotb_build(verilog(config, output=output), TOP, optimize)
+    return cocotb_build(core_verilog(top(config)), TOP, optimize)
 
 
 def cocotb_build(source: str, top: str, optimize: str = "-O2") -> Path:
@@ -174,27 +173,26 @@ def cosimulate(
     seed: int,
     idle: float = 0.0,
     stall: float = 0.0,
-    output: str = "writes",
+    top=LineCore,
 ) -> CosimResult:
-    """Run `edges` through the Verilated core and check every beat against the model.
-
-    `output`: the core built with ``"writes"`` (beats of `run_edge`) or ``"deltas"`` (beats
-    of `edgeaa.model.step.run_edge_deltas`)."""
-    build_dir = build(config, output=output)
+    """Run `edges` through the Verilated core `top` and check every beat against the model
+    (`LineCore`: beats of `run_edge`; `PolygonCore`: of `edgeaa.model.step.run_edge_deltas`)."""
+    fmt = top.format
+    build_dir = build(config, top=top)
     from cocotb_tools.runner import get_runner
 
     runner = get_runner("verilator")
     with tempfile.TemporaryDirectory(prefix="edgeaa-cosim-") as tmp:
         job_path, result_path = Path(tmp) / "job.json", Path(tmp) / "result.json"
-        expected, dropped = expected_beats(config, edges, output)
-        np.save(Path(tmp) / "expected.npy", BEAT_FORMATS[output].to_array(expected))
+        expected, dropped = expected_beats(config, edges, fmt)
+        np.save(Path(tmp) / "expected.npy", fmt.to_array(expected))
         config_fields = {
             f.name: getattr(config, f.name) for f in dataclasses.fields(config) if f.init
         }
         job = {
             "config": config_fields,
             "edges": [dataclasses.asdict(edge) for edge in edges],
-            "output": output,
+            "stream": fmt.stream,
             "seed": seed,
             "idle": idle,
             "stall": stall,

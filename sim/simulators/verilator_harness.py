@@ -9,7 +9,7 @@ File formats (little-endian):
 - commands: int32 rows ``x0 y0 x1 y1 i_in i_out inside x_min y_min x_max y_max`` (the
   ``edges`` payload, then the ``clip`` window presented while the edge is offered);
 - beats: int64 rows of `edgeaa.model.beat.RUN_COLUMNS`: the clock, then the beat's
-  `BEAT_COLUMNS` (x and y sign-extended); for the deltas core (``output="deltas"``) rows of
+  `BEAT_COLUMNS` (x and y sign-extended); for the polygon core (`PolygonCore`) rows of
   `DELTA_RUN_COLUMNS` (x, y and delta sign-extended).
 """
 
@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...hdl import verilog
+from ...hdl import LineCore, core_verilog
 from ...model import Edge, EdgeConfig
-from ...model.beat import BEAT_FORMATS, RUN_COLUMNS, port_name
+from ...model.beat import RUN_COLUMNS, WRITES, BeatFormat, port_name
 from ...model.timing import setup_latency, start_clip_cycles
 from ..verification.commands import CLIP_FIELDS, COMMAND_FIELDS, EDGE_FIELDS, edge_command
 from .verilator import build_lock, cache_dir, private_build_dir, publish, verilator_env
@@ -81,8 +81,7 @@ def cpp_reset(top: str) -> str:
     top->rst = 0;"""
 
 
-def _harness_source(config: EdgeConfig, output: str = "writes") -> str:
-    fmt = BEAT_FORMATS[output]
+def _harness_source(config: EdgeConfig, fmt: BeatFormat = WRITES) -> str:
     widths = config.register_widths()
     out = f"{fmt.stream}__"  # the output stream's ports
     ports = [f"edges__payload__{name}" for name in EDGE_FIELDS]
@@ -172,35 +171,36 @@ class FastRun:
     clocks: int  # clocks simulated, including the drain
     errors: int  # the core's bad-command counter at the end
     seconds: float  # harness wall time (simulation only, build excluded)
-    output: str = "writes"  # the core's output: the beats' format (`BEAT_FORMATS`)
+    fmt: BeatFormat = WRITES  # the core's output: the beats' format
 
     @property
     def clocks_per_second(self) -> float:
         return self.clocks / self.seconds if self.seconds else 0.0
 
     def as_beats(self) -> list:
-        """The rows as `Beat` (or `DeltaBeat` for the deltas core) values."""
-        return BEAT_FORMATS[self.output].from_array(self.beats)
+        """The rows as `Beat` (or `DeltaBeat` for the polygon core) values."""
+        return self.fmt.from_array(self.beats)
 
 
 # Executables built (or found in the cache) by this process: elaborating the core to Verilog
 # for the cache key takes a second or two, longer than many runs' simulation.
-_BUILT: dict[tuple[EdgeConfig, str, str], Path] = {}
+_BUILT: dict[tuple[EdgeConfig, str, type], Path] = {}
 
 
-def build(config: EdgeConfig, *, optimize: str = "-O2", output: str = "writes") -> Path:
-    """Compile core + harness once per (Verilog, harness, flags); returns the executable."""
-    known = _BUILT.get((config, optimize, output))
+def build(config: EdgeConfig, *, optimize: str = "-O2", top=LineCore) -> Path:
+    """Compile the core `top` (`LineCore` or `PolygonCore`) + harness once per (Verilog,
+    harness, flags); returns the executable."""
+    known = _BUILT.get((config, optimize, top))
     if known is not None and known.exists():
         return known
-    exe = _build(config, optimize, output)
-    _BUILT[(config, optimize, output)] = exe
+    exe = _build(config, optimize, top)
+    _BUILT[(config, optimize, top)] = exe
     return exe
 
 
-def _build(config: EdgeConfig, optimize: str, output: str) -> Path:
-    source = verilog(config, name=TOP, output=output)
-    return compile_harness(TOP, source, _harness_source(config, output), optimize)
+def _build(config: EdgeConfig, optimize: str, top) -> Path:
+    source = core_verilog(top(config), name=TOP)
+    return compile_harness(TOP, source, _harness_source(config, top.format), optimize)
 
 
 def compile_harness(top: str, source: str, harness: str, optimize: str = "-O2") -> Path:
@@ -247,10 +247,11 @@ def edge_commands(config: EdgeConfig, edges: list[Edge]) -> np.ndarray:
     return rows
 
 
-def drain_clocks(config: EdgeConfig, output: str = "writes") -> int:
+def drain_clocks(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
     """Clocks with no beat, after the last command is accepted, before a run may end: more
-    than the longest wait for the first beat of an edge (one clipped at its start)."""
-    return setup_latency(config, output) + start_clip_cycles(config) + 16
+    than the longest wait for the first beat of an edge (one clipped at its start) of the
+    core whose output is `fmt`."""
+    return setup_latency(config, fmt) + start_clip_cycles(config) + 16
 
 
 def run(
@@ -261,20 +262,20 @@ def run(
     idle: float = 0.0,
     stall: float = 0.0,
     exe: Path | None = None,
-    output: str = "writes",
+    top=LineCore,
 ) -> FastRun:
-    """Simulate the core (with `output`: ``"writes"`` or ``"deltas"``) on `edges`;
-    `idle`/`stall` are probabilities per clock. `exe` is the harness `build(config, output=
-    output)` made, if the caller has it already (a worker with a shipped build)."""
+    """Simulate the core `top` (`LineCore` or `PolygonCore`) on `edges`; `idle`/`stall` are
+    probabilities per clock. `exe` is the harness `build(config, top=top)` made, if the
+    caller has it already (a worker with a shipped build)."""
     for name, value in (("idle", idle), ("stall", stall)):
         if not 0 <= value < 1:
             raise ValueError(f"{name} must be a probability in [0, 1), not {value!r}")
     if exe is None:
-        exe = build(config, output=output)
+        exe = build(config, top=top)
     with tempfile.TemporaryDirectory(prefix="edgeaa-fast-") as tmp:
         commands, beats = Path(tmp) / "commands.bin", Path(tmp) / "beats.bin"
         edge_commands(config, edges).tofile(commands)
-        drain = drain_clocks(config, output)
+        drain = drain_clocks(config, top.format)
         argv = [exe, commands, beats, seed, round(idle * 1000), round(stall * 1000), drain]
         start = time.perf_counter()
         proc = subprocess.run([str(a) for a in argv], capture_output=True, text=True, check=False)
@@ -282,6 +283,6 @@ def run(
         if proc.returncode != 0:
             raise RuntimeError(f"harness failed ({proc.returncode}): {proc.stderr[-2000:]}")
         clocks, errors = (int(v) for v in proc.stdout.split())
-        width = len(BEAT_FORMATS[output].run_columns)
+        width = len(top.format.run_columns)
         rows = np.fromfile(beats, dtype=np.int64).reshape(-1, width)
-    return FastRun(rows, clocks, errors, seconds, output)
+    return FastRun(rows, clocks, errors, seconds, top.format)
