@@ -85,13 +85,16 @@ class _Core(wiring.Component):
     format = WRITES  # each top's own
 
     def __init__(self, config, stepper, pieces, errors_bits: int, setup_units: int):
+        """`stepper`: the stepper's class; `pieces`: the setup's end-pieces part's class (each
+        unit gets its own), or None."""
         self._config = check_config(config)
         self._setup_units = check_setup_units(setup_units)
         if setup_units == 1:
-            self.setup = EdgeSetupUnit(config, errors_bits=errors_bits, pieces=pieces())
+            part = None if pieces is None else pieces(config)
+            self.setup = EdgeSetupUnit(config, errors_bits=errors_bits, pieces=part)
         else:
             self.setup = SetupArray(config, setup_units, errors_bits=errors_bits, pieces=pieces)
-        self.stepper = stepper
+        self.stepper = stepper = stepper(config)
         for unit in getattr(self.setup, "units", [self.setup]):
             if unit.final_cycles != timing.final_cycles(config, self.format):
                 raise ValueError("FINAL's clocks are not the timing model's")
@@ -166,10 +169,6 @@ class _Core(wiring.Component):
         return m
 
 
-def _no_pieces():
-    return None
-
-
 class LineCore(_Core):
     """The line core, the paper's method: edge commands in, one beat of pixel writes per
     column out (``writes``, `edgeaa.model.beat.WRITES`), `run_edge` bit for bit. Ports and
@@ -185,7 +184,7 @@ class LineCore(_Core):
         errors_bits: int = ERRORS_BITS,
         setup_units: int = timing.DEFAULT_SETUP_UNITS,
     ):
-        super().__init__(config, LineStepper(config), _no_pieces, errors_bits, setup_units)
+        super().__init__(config, LineStepper, None, errors_bits, setup_units)
 
 
 class PolygonCore(_Core):
@@ -203,8 +202,7 @@ class PolygonCore(_Core):
         errors_bits: int = ERRORS_BITS,
         setup_units: int = timing.DEFAULT_SETUP_UNITS,
     ):
-        stepper = DeltaStepper(config)
-        super().__init__(config, stepper, lambda: EndPieces(config), errors_bits, setup_units)
+        super().__init__(config, DeltaStepper, EndPieces, errors_bits, setup_units)
 
 
 # -- Verilog ---------------------------------------------------------------------------------

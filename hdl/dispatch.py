@@ -61,8 +61,8 @@ class SetupArray(wiring.Component):
     Ports as `EdgeSetupUnit`'s: ``edges``, ``clip``, ``bank``, ``errors``, ``error``.
     ``units`` (the `EdgeSetupUnit` list), ``busy`` (one bit per unit), ``dispatch`` and
     ``collect`` (the two pointers) and ``in_idle`` (no command anywhere in the array) are
-    attributes for tests and the core. `pieces` (None for the line core) makes each unit's
-    end-pieces part (e.g. ``lambda: EndPieces(config)``, `edgeaa.hdl.pieces`).
+    attributes for tests and the core. `pieces`: the class of each unit's end-pieces part
+    (`edgeaa.hdl.pieces.EndPieces`, called with `config`), None for the line core.
     """
 
     def __init__(
@@ -75,9 +75,11 @@ class SetupArray(wiring.Component):
     ):
         self._config = check_config(config)
         count = check_setup_units(units)
-        make = (lambda: None) if pieces is None else pieces
         self.units = [
-            EdgeSetupUnit(config, errors_bits=errors_bits, pieces=make()) for _ in range(count)
+            EdgeSetupUnit(
+                config, errors_bits=errors_bits, pieces=None if pieces is None else pieces(config)
+            )
+            for _ in range(count)
         ]
         self._errors_bits = errors_bits
         super().__init__(

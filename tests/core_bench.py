@@ -35,7 +35,7 @@ from amaranth.sim import Simulator
 from hypothesis import HealthCheck, Phase, settings
 
 from edgeaa.hdl import (
-    EdgeAntialiaser,
+    LineCore,
     setup_layout,
     write_layout,
 )
@@ -127,7 +127,7 @@ def simulate(
     """Offer `edges` in order (each with its window on ``clip``) and drain the writes; with
     `seed`, random idle source clocks (probability `idle` per clock before each offer), random
     sink stalls (`stall`) and a random window on ``clip`` whenever no edge is offered."""
-    dut = EdgeAntialiaser(config, setup_units=setup_units)
+    dut = LineCore(config, setup_units=setup_units)
     stepper = dut.stepper
     rng = random.Random(seed) if seed is not None else None
     tag = f"[{label} seed={seed} idle={idle} stall={stall} config={config}]"

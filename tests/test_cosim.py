@@ -4,12 +4,13 @@ Every beat of every edge is compared (`edgeaa.sim.simulators.cocotb_bench`), und
 source idles and sink back-pressure, with bad commands mixed in; some runs give edges random
 clip windows (empty ones among them). The default run checks 300 edges on the line-writes
 core (its volume is the C++ harness's, tests/test_fastsim.py) and 300 on the deltas core
-(``output="deltas"``, every beat against `run_edge_deltas`); the soak runs (`pytest -m slow`)
+(`PolygonCore`, every beat against `run_edge_deltas`); the soak runs (`pytest -m slow`)
 check 100 000 and 20 000.
 """
 
 import pytest
 
+from edgeaa.hdl import PolygonCore
 from edgeaa.model import EdgeConfig
 from edgeaa.sim.simulators.verilator import CosimError, cosimulate
 from edgeaa.sim.verification.workloads import random_sim_edges
@@ -89,7 +90,7 @@ def test_hundred_thousand_edges():
 def test_deltas_core_with_back_pressure():
     """The deltas core's four cells and last flag of every column against `run_edge_deltas`,
     with idles, stalls, bad commands and clip windows (empty ones among them)."""
-    run(DEFAULT, 300, seed=2028, clip_fraction=0.3, output="deltas")
+    run(DEFAULT, 300, seed=2028, clip_fraction=0.3, top=PolygonCore)
 
 
 def test_deltas_wrong_model_is_caught(monkeypatch):
@@ -106,9 +107,9 @@ def test_deltas_wrong_model_is_caught(monkeypatch):
     monkeypatch.setattr(step, "delta_cells", shifted)
     edges = random_sim_edges(DEFAULT, 5, seed=1)
     with pytest.raises(CosimError, match="the model says"):
-        cosimulate(DEFAULT, edges, seed=1, stall=0.3, output="deltas")
+        cosimulate(DEFAULT, edges, seed=1, stall=0.3, top=PolygonCore)
 
 
 @pytest.mark.slow
 def test_deltas_twenty_thousand_edges():
-    run(DEFAULT, 20_000, seed=20_000, clip_fraction=0.2, output="deltas")
+    run(DEFAULT, 20_000, seed=20_000, clip_fraction=0.2, top=PolygonCore)
