@@ -111,8 +111,8 @@ class LineStepper(ColumnLoop):
         for index in range(2, self.latency):
             prev = self.stages[index - 2]
             carried = {name: getattr(prev, name) for name in ("valid", "last", *_LANE_CONSTS)}
-            self._stage(m, index, en, {**carried, **self._p2(m, prev)})
-        t_clamped = self._estimate(m)
+            self._stage(m, index, en, {**carried, **_p2(m, self.config, prev)})
+        t_clamped = _estimate(m, self.config, self.stages)
         self._output(m, en, t_clamped)
         self._idle(m, [stage.valid for stage in self.stages])
         self._loop(m, advance, last)
@@ -194,42 +194,6 @@ class LineStepper(ColumnLoop):
                 reg = getattr(regs, name)
                 assert Value.cast(value).shape() == reg.shape(), (reg.name, value)
                 m.d.sync += reg.eq(value)
-
-    def _p2(self, m, p1):
-        """The estimate's stage p2 (N >= 2 segments): the segment's slope from p1's exit
-        depth, the triangle estimate clamped at 0."""
-        n = self._config.segments
-        acc = self._config.register_widths()["jq"].bits
-        shift = 2 + log2(n)
-        seg = Signal(range(n))
-        # dq >= threshold: carry out of dq + ~threshold + 1 (dq >= 0 when it is used).
-        ge = [(p1.dq_[: acc + 1] + getattr(p1, f"thr_inv{j}") + 1)[acc + 1] for j in range(1, n)]
-        m.d.comb += seg.eq(sum(ge))
-        t = Signal(register_shape(self._config.register_widths()["t"]), name="t")
-        with m.Switch(seg):
-            for j in range(n):
-                with m.Case(j):
-                    slope = const_mul(p1.dq_, 2 * j + 1) + getattr(p1, f"icpt_neg{j}")
-                    m.d.comb += t.eq(slope >> shift)
-        t_clamped = Signal(unsigned(len(t) - 1))  # t clamped at 0 has no sign bit
-        m.d.comb += t_clamped.eq(Mux(t < 0, 0, t))
-        return {"t_clamped": t_clamped}
-
-    # -- the triangle estimate, clamped -------------------------------------------------------
-
-    def _estimate(self, m):
-        """The clamped triangle estimate of the column in the last stage."""
-        widths = self._config.register_widths()
-        n = self._config.segments
-        t_clamped = Signal(unsigned(widths["t"].bits - 1), name="t_clamped")
-        if n == 1:
-            p1 = self.stages[0]
-            t = Signal(register_shape(widths["t"]), name="t")
-            m.d.comb += t.eq(Mux(p1.above, p1.t_above, ~p1.t_below_inv))
-            m.d.comb += t_clamped.eq(Mux(t < 0, 0, t))
-        elif n > 1:
-            m.d.comb += t_clamped.eq(self.stages[1].t_clamped)
-        return t_clamped
 
     # -- the last stage: areas (observation), values and lanes into the output register ------
 
@@ -313,6 +277,45 @@ class LineStepper(ColumnLoop):
             fields = BankView(bank, self._config.segments)
             for name, value in derived_values(self._config, fields).items():
                 m.d.sync += self.derived[name].eq(value)
+
+
+# -- the triangle estimate (module functions of the stepper's stages) -------------------------
+
+
+def _p2(m, config: EdgeConfig, p1) -> dict:
+    """The estimate's stage p2 (N >= 2 segments): the segment's slope from p1's exit depth,
+    the triangle estimate clamped at 0."""
+    n = config.segments
+    acc = config.register_widths()["jq"].bits
+    shift = 2 + log2(n)
+    seg = Signal(range(n))
+    # dq >= threshold: carry out of dq + ~threshold + 1 (dq >= 0 when it is used).
+    ge = [(p1.dq_[: acc + 1] + getattr(p1, f"thr_inv{j}") + 1)[acc + 1] for j in range(1, n)]
+    m.d.comb += seg.eq(sum(ge))
+    t = Signal(register_shape(config.register_widths()["t"]), name="t")
+    with m.Switch(seg):
+        for j in range(n):
+            with m.Case(j):
+                slope = const_mul(p1.dq_, 2 * j + 1) + getattr(p1, f"icpt_neg{j}")
+                m.d.comb += t.eq(slope >> shift)
+    t_clamped = Signal(unsigned(len(t) - 1))  # t clamped at 0 has no sign bit
+    m.d.comb += t_clamped.eq(Mux(t < 0, 0, t))
+    return {"t_clamped": t_clamped}
+
+
+def _estimate(m, config: EdgeConfig, stages):
+    """The clamped triangle estimate of the column in the last stage."""
+    widths = config.register_widths()
+    n = config.segments
+    t_clamped = Signal(unsigned(widths["t"].bits - 1), name="t_clamped")
+    if n == 1:
+        p1 = stages[0]
+        t = Signal(register_shape(widths["t"]), name="t")
+        m.d.comb += t.eq(Mux(p1.above, p1.t_above, ~p1.t_below_inv))
+        m.d.comb += t_clamped.eq(Mux(t < 0, 0, t))
+    elif n > 1:
+        m.d.comb += t_clamped.eq(stages[1].t_clamped)
+    return t_clamped
 
 
 def _stage_shapes(config: EdgeConfig) -> list[dict]:
