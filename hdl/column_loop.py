@@ -6,9 +6,9 @@ one column per clock, no multiplier or divider.
 chooses), the loop registers ``x, y, jq, jr, remaining``, ``active``, ``step`` and the
 per-edge constants derived from the bank (`derive`); it forms the one enable of the loop and
 the pipeline behind it and ``J += K`` with the remainder carried (`_advance`). The two
-steppers add their column pipeline and their handover of the bank: `edgeaa.hdl.stepper.
-LineStepper` (the paper's intensity writes; it copies the bank) and `edgeaa.hdl.deltas.
-DeltaStepper` (the accumulation deltas; it reads the held bank live).
+steppers add their column pipeline and their handover of the bank:
+`edgeaa.hdl.stepper.LineStepper` (the paper's intensity writes; it copies the bank) and
+`edgeaa.hdl.deltas.DeltaStepper` (the accumulation deltas; it reads the held bank live).
 """
 
 from __future__ import annotations

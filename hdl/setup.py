@@ -15,6 +15,12 @@ the unit checks at construction that its lane passes add up to `run_cycles`). Th
 is two lanes of a sequential multiply-divide unit (Horner shift-add multiplication
 interleaved with radix-2 restoring division, one bit per clock); the states, clock by clock,
 and the derivation of each step: docs/hardware.md, "The setup unit, clock by clock".
+
+Parts: the FOLD and WINDOW loads (`edgeaa.hdl.setup_fold`), the lanes and their RUN schedule
+(`edgeaa.hdl.lanes`), and for the polygon core the end pieces (`EdgeSetupUnit(config,
+pieces=EndPieces(config))`, `edgeaa.hdl.pieces`), which add their fields to the bank and hook
+into WINDOW, RUN and FINAL (``s + 2`` clocks instead of one); `EdgeSetupUnit(config)` is the
+line core's setup.
 """
 
 from __future__ import annotations
