@@ -63,7 +63,7 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model import timing
-from ..model.beat import DELTAS, WRITES
+from ..model.beat import DELTAS, WRITES, BeatFormat
 from ..model.config import EdgeConfig
 from .deltas import DeltaStepper
 from .dispatch import SetupArray, check_setup_units
@@ -82,7 +82,7 @@ class _Core(wiring.Component):
     is the output's declaration; the timing properties are the timing model's for it
     (`edgeaa.model.timing`), which the tests check against simulated clocks."""
 
-    format = WRITES  # each top's own
+    format: BeatFormat  # each top's own (a class attribute)
 
     def __init__(self, config, stepper, pieces, errors_bits: int, setup_units: int):
         """`stepper`: the stepper's class; `pieces`: the setup's end-pieces part's class (each
