@@ -248,6 +248,14 @@ def _synthesize(make, target: str, seed: int, stage):
         return again, cause
 
 
+def _core_top(word: str):
+    """The core the user's ``--core`` word names: writes, the line core; deltas, the polygon
+    core (the one place the word is mapped)."""
+    from .hdl import LineCore, PolygonCore
+
+    return {"writes": LineCore, "deltas": PolygonCore}[word]
+
+
 def _add_core_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--core",
@@ -281,6 +289,7 @@ def _check_top(prog: str, args: argparse.Namespace) -> None:
     if args.top == "pipeline" and getattr(args, "setup_units", None) is not None:
         raise usage_error(prog, "--setup-units sizes the core: --top pipeline has its own")
     args.core = args.core or "writes"
+    args.core_top = _core_top(args.core) if args.top == "core" else None
 
 
 class VerilogCommand(Command):
@@ -311,10 +320,10 @@ class VerilogCommand(Command):
         add_config_options(parser)
 
     def _source(self, args: argparse.Namespace, config) -> str:
-        from .hdl import verilog
+        from .hdl import core_verilog
 
         if args.top == "core":
-            return verilog(config, name=args.name, output=args.core)
+            return core_verilog(args.core_top(config), name=args.name)
         from .hdl.pipeline import pipeline_verilog
 
         return pipeline_verilog(tile_from_args(args.tile, config), name=args.name)
@@ -363,7 +372,8 @@ class VerilogCommand(Command):
         """The inputs that must be driven, on standard error (the file's header has them)."""
         from .hdl.integration import must_drive
 
-        items = must_drive(args.top, config, args.core)
+        stream = "" if args.core_top is None else args.core_top.format.stream
+        items = must_drive(args.top, config, stream)
         note = f"{self.prog}: note: drive every input: " + "; ".join(items)
         if args.output in (None, "-"):
             note += " (-o FILE.v also writes the lint waiver file FILE.vlt)"
@@ -460,7 +470,6 @@ class SynthCommand(Command):
 
     def _designs(self, args: argparse.Namespace, config) -> tuple[str, dict]:
         """The heading and the designs to synthesise, name -> constructor."""
-        from .hdl import EdgeAntialiaser
         from .hdl.bresenham import BresenhamLine
         from .hdl.pipeline import EdgePipeline
 
@@ -472,7 +481,7 @@ class SynthCommand(Command):
         heading = f"{args.core} core, {args.setup_units} setup units, {config}"
 
         def core():
-            return EdgeAntialiaser(config, output=args.core, setup_units=args.setup_units)
+            return args.core_top(config, setup_units=args.setup_units)
 
         return heading, {"edgeaa": core, **baseline}
 

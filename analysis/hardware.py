@@ -14,7 +14,7 @@ import hashlib
 import json
 from dataclasses import dataclass
 
-from ..hdl import EdgeAntialiaser, verilog
+from ..hdl import LineCore, verilog
 from ..model import MODES, Edge, EdgeConfig
 from ..sim.simulators import verilator_harness
 from ..sim.simulators.verilator import cache_dir
@@ -44,7 +44,7 @@ def synth_figures(config: EdgeConfig, target: str = SYNTH_TARGET, seed: int = 1)
     path = cache_dir().parent / "synth" / f"{key}.json"
     if path.exists():
         return json.loads(path.read_text())
-    result = synthesize(EdgeAntialiaser(config), target, wrap=True, seed=seed)
+    result = synthesize(LineCore(config), target, wrap=True, seed=seed)
     figures = {"luts": result.core_luts, "ffs": result.core_ffs, "fmax_mhz": result.fmax_mhz}
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(figures))

@@ -41,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+from edgeaa.hdl.core import PolygonCore
 from edgeaa.hdl.pipeline import STATS
 from edgeaa.model import EdgeConfig
 from edgeaa.model.pipeline_timing import pipeline_cycles
@@ -165,7 +166,7 @@ def measure(scene: Scene, tile: TileConfig, repeats: int) -> dict:
     image = image_from_frames(plan, tile, run.frames(tile))
     edges = [plan.edge(int(e), clip=True) for e in model.sent]
     core = min(
-        (verilator_harness.run(config, edges, output="deltas") for _ in range(repeats)),
+        (verilator_harness.run(config, edges, top=PolygonCore) for _ in range(repeats)),
         key=lambda r: r.seconds,
     )
     flushed = len(timing.pixels)
@@ -247,7 +248,7 @@ def main() -> int:
         parser.error(f"--repeats: at least 1, not {args.repeats}")
     tile = TileConfig(EdgeConfig(), int(match[1]), int(match[2]))
     pipeline_harness.build(tile)
-    verilator_harness.build(tile.config, output="deltas")
+    verilator_harness.build(tile.config, top=PolygonCore)
     rows = []
     for scene in scenes(tile.config):
         print(f"{scene.name} ...", file=sys.stderr, flush=True)

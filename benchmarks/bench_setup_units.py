@@ -4,6 +4,7 @@ deltas core, edges as `edgeaa render` sends them), random short edges (1-4 colum
 import random
 
 from edgeaa.model import Edge, EdgeConfig, setup, timing
+from edgeaa.model.beat import DELTAS
 from edgeaa.render.builtin import builtin
 from edgeaa.render.render import plan_scene, render_scene
 
@@ -47,8 +48,8 @@ for name, shapes in streams.items():
     cols = sum(c for c, _ in shapes)
     print(f"{name}: {len(shapes)} edges, {cols} columns, {cols / len(shapes):.2f} columns/edge")
     for units in (1, 2, 4, 9, 12):
-        t = timing.schedule(config, shapes, output="deltas", setup_units=units)
-        b = timing.clock_breakdown(t, timing.pipeline_depth(config, "deltas"))
+        t = timing.schedule(config, shapes, fmt=DELTAS, setup_units=units)
+        b = timing.clock_breakdown(t, timing.pipeline_depth(config, DELTAS))
         print(
             f"  units {units:2d}: {b.clocks:7d} clocks {b.columns_per_clock:.3f} col/clk "
             f"{b.edges_per_clock:.4f} edges/clk; setup-bound {b.setup_bound}, "

@@ -37,6 +37,7 @@ TESTS = {
     "hdl/accumulator.py": ("tests/test_tile_hw.py",),
     "hdl/resolve.py": ("tests/test_tile_hw.py",),
     "hdl/stepper.py": ("tests/test_core_equivalence.py",),
+    "hdl/column_loop.py": ("tests/test_core_equivalence.py",),
     "hdl/deltas.py": ("tests/test_core_deltas.py",),
     "render/render.py": ("tests/test_render.py", "tests/test_accumulation.py"),
 }
@@ -115,7 +116,7 @@ CANDIDATES = (
       "        mag = Mux(s < 0, -s, s)",
       "        mag = s",
       "dropped abs: non-zero rule on a negative winding"),
-    m("hdl/stepper.py",
+    m("hdl/column_loop.py",
       "            sums[1].eq(jq + self.kq + 1),",
       "            sums[1].eq(jq + self.kq),",
       "dropped term: the remainder's carry into J"),

@@ -1,7 +1,8 @@
-"""Amaranth gateware of the edge antialiaser: the top (`core`), its setup (`setup`) and
-stepper (`stepper`), and the payload layouts (`layouts`)."""
+"""Amaranth gateware of the edge antialiaser: the two cores (`core`: `LineCore`, `PolygonCore`),
+their setup (`setup`) and steppers (`stepper`, `deltas`), and the payload layouts (`layouts`)."""
 
-from .core import EdgeAntialiaser, verilog
+from .core import LineCore, PolygonCore, core_verilog, verilog
+from .deltas import DeltaStepper
 from .layouts import (
     clip_layout,
     delta_layout,
@@ -11,17 +12,20 @@ from .layouts import (
     write_layout,
 )
 from .setup import EdgeSetupUnit
-from .stepper import EdgeStepper
+from .stepper import LineStepper
 
 __all__ = [
-    "EdgeAntialiaser",
+    "DeltaStepper",
     "EdgeSetupUnit",
-    "EdgeStepper",
+    "LineCore",
+    "LineStepper",
+    "PolygonCore",
     "clip_layout",
     "delta_layout",
     "edge_layout",
     "pixel_layout",
     "setup_layout",
+    "core_verilog",
     "verilog",
     "write_layout",
 ]

@@ -1,6 +1,7 @@
-"""The deltas stepper's column pipeline: `edgeaa.model.step.run_edge_deltas` in hardware.
+"""The delta stepper (`DeltaStepper`): `edgeaa.model.step.run_edge_deltas` in hardware, the
+polygon core's stepper.
 
-`EdgeStepper` with output ``"deltas"`` steps the same loop (``x, y, jq, jr``) and adds three
+It steps the shared loop (`edgeaa.hdl.column_loop.ColumnLoop`: ``x, y, jq, jr``) and adds three
 loop registers: ``hs`` (where the column's piece starts, the model's hs), ``adj`` (P1's
 folded row minus the loop's row, one less per row step) and ``first_col`` (column 0).
 The column's piece end ``he`` (`piece_end`) is formed in the stepping clock; then, one
@@ -36,12 +37,86 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Mux, Signal, Value, signed
+from amaranth.hdl import Module, Mux, Signal, Value, signed
 
+from ..model.beat import DELTAS
 from ..model.config import EdgeConfig
-from .layouts import const_mul, log2, register_shape, signed_widened
+from .column_loop import ColumnLoop, derived_values
+from .layouts import const_mul, delta_layout, log2, register_shape, signed_widened
 
-__all__ = ["delta_pipeline", "delta_registers"]
+__all__ = ["DeltaStepper", "delta_pipeline", "delta_registers"]
+
+# The bank fields the loop steps: registers loaded from the bank when an edge starts. The
+# delta stepper reads every other field from the bank payload while it steps the edge.
+_LOOP_FIELDS = ("x", "y", "remaining", "jq", "jr")
+
+
+class DeltaStepper(ColumnLoop):
+    """The delta stepper: the accumulation deltas of `run_edge_deltas`, one beat per column.
+
+    ``setup`` (in stream, `setup_layout` with the end pieces): the stepper starts the edge
+    (``start``: loads its loop registers ``x, y, remaining, jq, jr`` and ``delta_regs``)
+    when the bank is valid and it is idle, reads every other field (wires of the same names)
+    and the derived constants from the payload, which the setup holds stable while it is
+    valid and not taken, and takes the bank in the clock it steps the edge's last column:
+    the transfer means "edge done". ``deltas`` (out stream, `delta_layout`, also ``out``):
+    one registered beat per column, ``latency`` = `edgeaa.model.beat.DELTAS.pipeline_depth`
+    (3) clocks after the column's step when nothing stalls (p1, p2, the output register).
+
+    Observation points (formal harness): `ColumnLoop`'s, ``delta_regs`` (name -> register),
+    and, once elaborated, ``delta_he``, ``delta_stages`` and ``delta_cells`` (this module's
+    docstring).
+    """
+
+    def __init__(self, config: EdgeConfig):
+        super().__init__(config, DELTAS, delta_layout(config))
+        self.start = Signal(name="start")
+        self.delta_regs = delta_registers(config)
+
+    @property
+    def stages(self) -> list:
+        """The registers of p1 and p2 (``delta_stages``; set when elaborated)."""
+        return self.delta_stages
+
+    def _handshake(self, last) -> list:
+        """Start an edge when idle; take its bank when its last column steps."""
+        return [
+            self.start.eq(self.setup.valid & ~self.active),
+            self.setup.ready.eq(self.step & last),
+        ]
+
+    def elaborate(self, platform):
+        m = Module()
+        en, last = self._control(m)
+        advance = self._advance(m)
+        valids = delta_pipeline(m, self, en, last, advance)
+        self._idle(m, valids)
+        self._loop(m, advance, last)
+        self._live(m)
+        return m
+
+    def _live(self, m):
+        """Load the loop registers when an edge starts; every other field, and the derived
+        constants, are wires of the bank payload, which the setup holds until the stepper
+        takes it in the clock it steps the edge's last column (what the output pipeline
+        needs after that clock travels in its stages)."""
+        bank = self.setup.payload
+        with m.If(self.start):
+            m.d.sync += self.active.eq(1)
+        for field in self.format.bank_fields(self.config):
+            reg = getattr(self, field.name)
+            if field.array is None:
+                pairs = [(reg, bank[field.name])]
+            else:
+                pairs = [(r, bank[field.name][j]) for j, r in enumerate(reg)]
+            for r, value in pairs:
+                if field.name in _LOOP_FIELDS:
+                    with m.If(self.start):
+                        m.d.sync += r.eq(value)
+                else:
+                    m.d.comb += r.eq(value)
+        for name, value in derived_values(self.config, self).items():
+            m.d.comb += self.derived[name].eq(value)
 
 
 def delta_registers(config: EdgeConfig) -> dict[str, Signal]:
@@ -77,8 +152,8 @@ def _stage(m, en, prefix: str, values: dict) -> types.SimpleNamespace:
 
 
 def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
-    """Add the deltas stepper's loop registers' updates and its pipeline to `m` (`st` the
-    `EdgeStepper`, `en` its enable, `last` its last-column flag, `advance` the loop step);
+    """Add the delta stepper's loop registers' updates and its pipeline to `m` (`st` the
+    `DeltaStepper`, `en` its enable, `last` its last-column flag, `advance` the loop step);
     returns the valid flags of the stages before the output register."""
     he = _piece_end(m, st, last)
     _loop(m, st, he, advance.row_step)

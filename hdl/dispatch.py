@@ -34,10 +34,9 @@ from amaranth.hdl import Array, Module, Mux, Signal, Value, unsigned
 from amaranth.lib import stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..model.bank import check_output
 from ..model.config import EdgeConfig
 from ..model.timing import MAX_SETUP_UNITS
-from .layouts import check_config, clip_layout, edge_layout, full_clip, setup_layout
+from .layouts import check_config, clip_layout, edge_layout, full_clip
 from .setup import ERRORS_BITS, EdgeSetupUnit
 
 __all__ = ["SetupArray", "check_setup_units"]
@@ -62,7 +61,8 @@ class SetupArray(wiring.Component):
     Ports as `EdgeSetupUnit`'s: ``edges``, ``clip``, ``bank``, ``errors``, ``error``.
     ``units`` (the `EdgeSetupUnit` list), ``busy`` (one bit per unit), ``dispatch`` and
     ``collect`` (the two pointers) and ``in_idle`` (no command anywhere in the array) are
-    attributes for tests and the core.
+    attributes for tests and the core. `pieces`: the class of each unit's end-pieces part
+    (`edgeaa.hdl.pieces.EndPieces`, called with `config`), None for the line core.
     """
 
     def __init__(
@@ -71,20 +71,22 @@ class SetupArray(wiring.Component):
         units: int,
         *,
         errors_bits: int = ERRORS_BITS,
-        output: str = "writes",
+        pieces=None,
     ):
         self._config = check_config(config)
-        self._output = check_output(output)
         count = check_setup_units(units)
         self.units = [
-            EdgeSetupUnit(config, errors_bits=errors_bits, output=output) for _ in range(count)
+            EdgeSetupUnit(
+                config, errors_bits=errors_bits, pieces=None if pieces is None else pieces(config)
+            )
+            for _ in range(count)
         ]
         self._errors_bits = errors_bits
         super().__init__(
             {
                 "edges": In(stream.Signature(edge_layout(config))),
                 "clip": In(clip_layout(config), init=full_clip(config)),
-                "bank": Out(stream.Signature(setup_layout(config, output))),
+                "bank": Out(stream.Signature(self.units[0].bank.payload.shape())),
                 "errors": Out(unsigned(errors_bits)),
                 "error": Out(unsigned(1)),
             }
@@ -101,10 +103,6 @@ class SetupArray(wiring.Component):
     @property
     def errors_bits(self) -> int:
         return self._errors_bits
-
-    @property
-    def output(self) -> str:
-        return self._output
 
     def elaborate(self, platform):
         m = Module()

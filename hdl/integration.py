@@ -312,13 +312,13 @@ def _assigns(line: str, name: str) -> bool:
 # -- what a user must drive, and the header -----------------------------------------------------
 
 
-def must_drive(top_kind: str, config, output: str = "writes") -> list[str]:
+def must_drive(top_kind: str, config, stream: str = "") -> list[str]:
     """The inputs that must be driven, one line each (`top_kind`: "core" or "pipeline";
-    `output`: the core's output stream, "writes" or "deltas")."""
+    `stream`: the core's output stream, `edgeaa.model.beat.BeatFormat.stream`)."""
     if top_kind == "core":
         full = 1 << config.coord_bits
         return [
-            f"clk, rst (synchronous, active high), edges__valid and {output}__ready",
+            f"clk, rst (synchronous, active high), edges__valid and {stream}__ready",
             f"clip__x_min, clip__y_min, clip__x_max, clip__y_max: no default; tie them to "
             f"0, 0, {full}, {full} to clip nothing (undriven, Verilator reads 0: the window "
             "(0, 0, 0, 0) steps only column 0 or row 0, most edges give no beat; a 4-state "
@@ -328,7 +328,7 @@ def must_drive(top_kind: str, config, output: str = "writes") -> list[str]:
 
 
 def header(
-    *, name: str, what: str, config, top_kind: str, output: str, signed: list[tuple[str, int]]
+    *, name: str, what: str, config, top_kind: str, stream: str, signed: list[tuple[str, int]]
 ) -> str:
     """The comment `edgeaa verilog` puts at the top of the file."""
     lines = [
@@ -343,7 +343,7 @@ def header(
     else:
         lines.append("Every port is unsigned.")
     lines.append("Must be driven (a Verilog input has no default):")
-    lines += [f"  {item}" for item in must_drive(top_kind, config, output)]
+    lines += [f"  {item}" for item in must_drive(top_kind, config, stream)]
     lines += [
         "Payload inputs are sampled only in the clock a command is accepted (valid & ready).",
         "Reset: while rst is high the input stream's ready is low (nothing is accepted);",
@@ -364,11 +364,11 @@ def annotate(source: str, component, name: str, signed: list[tuple[str, int]]) -
     declared signed and the `header` on top. `component` is the core or the pipeline."""
     tile = getattr(component, "tile", None)
     if tile is not None:
-        kind, config, output = "pipeline", tile.config, ""
+        kind, config, stream = "pipeline", tile.config, ""
         what = f"the edgeaa polygon pipeline, tile {tile.width}x{tile.height}"
     else:
-        kind, config, output = "core", component.config, component.output
-        what = f"the edgeaa {output} core"
+        kind, config, stream = "core", component.config, component.format.stream
+        what = f"the edgeaa {stream} core"
     source = sign_ports(source, name, [port for port, _ in signed])
-    text = header(name=name, what=what, config=config, top_kind=kind, output=output, signed=signed)
+    text = header(name=name, what=what, config=config, top_kind=kind, stream=stream, signed=signed)
     return text + source

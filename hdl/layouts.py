@@ -5,7 +5,7 @@
 * `setup_layout`: the register bank from the setup to the stepper, one field per
   `edgeaa.model.bank.bank_fields` entry, sized by its register in the width table;
 * `write_layout`: one output beat, the lanes and flags of `edgeaa.model.beat`;
-* `delta_layout`: one beat of the accumulation-delta core, the cells of `edgeaa.model.beat`;
+* `delta_layout`: one beat of the polygon core's deltas, the cells of `edgeaa.model.beat`;
 * `tile_op_layout`, `tile_cell_layout`, `tile_pixel_layout`: the tile stages' streams
   (`edgeaa.model.tile`: its ops, the resolve's cells, the tile's pixels).
 """
@@ -15,7 +15,7 @@ from __future__ import annotations
 from amaranth.hdl import Cat, Const, signed, unsigned
 from amaranth.lib import data
 
-from ..model.bank import bank_fields, check_output
+from ..model.bank import bank_fields
 from ..model.beat import CELL_FIELDS, CELLS, DELTA_PAYLOAD_PATHS, LANES, PAYLOAD_PATHS, PIXEL_FIELDS
 from ..model.config import EdgeConfig, RegisterWidth
 from ..model.tile import OPS, RESOLVE_OPS, TileConfig
@@ -28,7 +28,6 @@ __all__ = [
     "edge_layout",
     "full_clip",
     "log2",
-    "output_layout",
     "pixel_layout",
     "register_shape",
     "setup_layout",
@@ -127,16 +126,12 @@ def delta_layout(config: EdgeConfig) -> data.StructLayout:
     return data.StructLayout(fields)
 
 
-def output_layout(config: EdgeConfig, output: str) -> data.StructLayout:
-    """The payload of the core's output stream for `output` (``"writes"`` or ``"deltas"``)."""
-    return delta_layout(config) if check_output(output) == "deltas" else write_layout(config)
-
-
-def setup_layout(config: EdgeConfig, output: str = "writes") -> data.StructLayout:
+def setup_layout(config: EdgeConfig, pieces: bool = False) -> data.StructLayout:
     """The register bank handed from the setup to the stepper (the model's `EdgeSetup`): one
-    field per `bank_fields` entry for `output`, arrays of ``length`` registers."""
+    field per `bank_fields` entry (the end pieces with `pieces`: the polygon core's),
+    arrays of ``length`` registers."""
     fields = {}
-    for field in bank_fields(config, output):
+    for field in bank_fields(config, pieces):
         shape = register_shape(field.width(config))
         fields[field.name] = data.ArrayLayout(shape, field.length(config)) if field.array else shape
     return data.StructLayout(fields)

@@ -1,6 +1,8 @@
-"""The end pieces of the deltas core's setup (`edgeaa.model.edge.end_pieces` in hardware).
+"""The end pieces of the polygon core's setup (`edgeaa.model.edge.end_pieces` in hardware):
+`EndPieces`, the part `edgeaa.hdl.setup.EdgeSetupUnit` takes (``pieces=EndPieces(config)``).
 
-Only the setup of a core with output ``"deltas"`` has them. The values that need no lane
+Only the polygon core's setup has them (the line core's has `NO_END_PIECES`, whose hooks add
+nothing). The values that need no lane
 result are registered in RUN's last clock (``kq``, ``row0`` and the column count are known
 by then) and ``next_bank`` forms the two that need the accumulator's start ``jq`` (``hs0``
 of a whole first column, ``total0`` of a y-major edge) from FINAL on. The y-major
@@ -38,8 +40,11 @@ from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
 
 from ..model.config import EdgeConfig
 from .layouts import register_shape, signed_widened
+from .setup_fold import r_cut_end
 
 __all__ = [
+    "NO_END_PIECES",
+    "EndPieces",
     "final_pieces",
     "id_product_clear",
     "id_product_steps",
@@ -270,3 +275,80 @@ def final_pieces(m, unit) -> None:
         pc.m_mg.eq((2 * S - w.mg) * (2 * S - w.mg)),
         *(nb[name].eq(getattr(pc, name)) for name in _EARLY),
     ]
+
+
+class EndPieces:
+    """The end-pieces part of a setup unit: its registers (`pieces_registers`, as attributes)
+    and the hooks the unit calls. The bank gains the `edgeaa.model.bank` fields marked
+    ``pieces`` (``in_bank``); WINDOW loads ``cut_end`` and clears the kq products; RUN forms
+    the products by ``|I_d|`` beside lane A's pass 2 and by kq beside lane B, and loads
+    `run_end_loads` in its last clock; FINAL takes ``s + 2`` clocks (`total0_steps`);
+    ``next_bank`` gets `final_pieces`. One instance per setup unit (its registers)."""
+
+    in_bank = True
+
+    def __init__(self, config: EdgeConfig):
+        vars(self).update(vars(pieces_registers(config)))
+
+    @property
+    def final_cycles(self) -> int:
+        return len(self.w0)  # one a bit of w0 (`total0_steps`)
+
+    def window_loads(self, unit) -> list:
+        return [self.cut_end.eq(r_cut_end(unit.regs)), self.k_me.eq(0), self.k_mg.eq(0)]
+
+    def lane_a_steps(self, m, unit, lanes) -> None:
+        """The products by |I_d|: its bits lead lane A's pass 2."""
+        with m.If(lanes.fixup):
+            m.d.sync += id_product_clear(unit)
+        with m.Elif(lanes.id_bits):
+            m.d.sync += id_product_steps(unit, unit.lane_a.a[-1])
+
+    def lane_b_steps(self, m, unit, lanes, b_done) -> None:
+        """The products by kq, one quotient digit a clock, then k_bit (one adder each: the
+        digit is picked before it)."""
+        with m.If(unit.regs.counter <= lanes.b_bits):
+            twice = Mux(b_done, 0, unit.lane_b.twice)
+            once = Mux(b_done, lanes.k_bit, unit.lane_b.once)
+            m.d.sync += kq_product_steps(unit, twice, once)
+
+    def run_end(self, m, unit) -> None:
+        """RUN's last clock: kq, row0 and the column count are known."""
+        m.d.sync += run_end_loads(unit)
+
+    def final(self, m, unit) -> None:
+        """FINAL: the y-major total0 product, one bit of w0 a clock."""
+        m.d.sync += total0_steps(unit)
+        with m.If(unit.regs.counter == self.final_cycles - 1):
+            m.next = "HOLD"
+
+    def next_bank(self, m, unit) -> None:
+        final_pieces(m, unit)
+
+
+class _NoEndPieces:
+    """The line core's setup: no end pieces, one FINAL clock, hooks that add nothing."""
+
+    in_bank = False
+    final_cycles = 1
+
+    def window_loads(self, unit) -> list:
+        return []
+
+    def lane_a_steps(self, m, unit, lanes) -> None:
+        pass
+
+    def lane_b_steps(self, m, unit, lanes, b_done) -> None:
+        pass
+
+    def run_end(self, m, unit) -> None:
+        pass
+
+    def final(self, m, unit) -> None:
+        m.next = "HOLD"
+
+    def next_bank(self, m, unit) -> None:
+        pass
+
+
+NO_END_PIECES = _NoEndPieces()

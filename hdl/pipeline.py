@@ -1,6 +1,6 @@
 # amaranth: UnusedElaboratable=no
 """The polygon pipeline (`EdgePipeline`): polygon commands in (`edgeaa.model.pipeline`,
-version 1), a tile's pixels out. Setup and stepper (`EdgeAntialiaser`, output "deltas"),
+version 1), a tile's pixels out. Setup and stepper (`PolygonCore`),
 accumulation memory (`TileAccumulator`) and resolve (`TileResolve`), joined by streams.
 
 The command stage passes each edge of a polygon to the core with the polygon's intensities
@@ -25,7 +25,7 @@ from amaranth.lib.wiring import In, Out
 from ..model.pipeline import CODE, OP_BITS
 from ..model.tile import OPS, TileConfig
 from .accumulator import TileAccumulator
-from .core import ERRORS_BITS, EdgeAntialiaser, flat_verilog
+from .core import ERRORS_BITS, PolygonCore, flat_verilog
 from .layouts import tile_pixel_layout
 from .resolve import TileResolve
 
@@ -52,7 +52,7 @@ class EdgePipeline(wiring.Component):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
         self._tile = tile
-        self.core = EdgeAntialiaser(tile.config, output="deltas")
+        self.core = PolygonCore(tile.config)
         self.acc, self.res = TileAccumulator(tile), TileResolve(tile)
         stats = data.StructLayout({name: unsigned(STATS_BITS) for name in STATS})
         super().__init__(

@@ -5,9 +5,9 @@ declares one field per entry with the width of its register, the stepper loads t
 every harness that compares the core's bank with the model (`bank_values`) walks the same
 list, so a field added here reaches all of them.
 
-The accumulation-delta core (output ``"deltas"``) also needs the end pieces
-(`edgeaa.model.edge.EndPieces`, the `EdgeSetup.pieces` fields): they are in its bank only, so
-the line-mode core (output ``"writes"``) keeps its bank.
+The polygon core (accumulation deltas) also needs the end pieces
+(`edgeaa.model.edge.EndPieces`, the `EdgeSetup.pieces` fields): they are in its bank only
+(``pieces=True``, `edgeaa.model.beat.DELTAS`), so the line core keeps its bank.
 """
 
 from __future__ import annotations
@@ -15,14 +15,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 from .config import EdgeConfig, RegisterWidth
-
-OUTPUTS = ("writes", "deltas")  # the core's outputs: line-mode writes, accumulation deltas
-
-
-def check_output(output) -> str:
-    if output not in OUTPUTS:
-        raise ValueError(f"output must be one of {', '.join(OUTPUTS)}, not {output!r}")
-    return output
 
 
 class BankField(NamedTuple):
@@ -33,7 +25,7 @@ class BankField(NamedTuple):
     name: str
     register: str
     array: str | None = None  # None: a scalar; "thresholds" (N - 1) or "intercepts" (N)
-    pieces: bool = False  # an `EdgeSetup.pieces` field: in the deltas core's bank only
+    pieces: bool = False  # an `EdgeSetup.pieces` field: in the polygon core's bank only
 
     def value(self, setup):
         """The field's value in an `EdgeSetup`."""
@@ -84,20 +76,19 @@ BANK_FIELDS = (
 )
 
 
-def bank_fields(config: EdgeConfig, output: str = "writes") -> tuple[BankField, ...]:
-    """The fields present in `config`'s bank for `output` (array fields of length 0 left
-    out; the end pieces only for ``"deltas"``)."""
-    pieces = check_output(output) == "deltas"
+def bank_fields(config: EdgeConfig, pieces: bool = False) -> tuple[BankField, ...]:
+    """The fields present in `config`'s bank (array fields of length 0 left out; the end
+    pieces only with `pieces`)."""
     return tuple(f for f in BANK_FIELDS if f.length(config) != 0 and (pieces or not f.pieces))
 
 
 def bank_values(
-    config: EdgeConfig, setup, output: str = "writes"
+    config: EdgeConfig, setup, pieces: bool = False
 ) -> dict[str, int | tuple[int, ...]]:
     """The bank contents of an `EdgeSetup` (or any object with the fields): name -> value,
-    arrays as tuples, flags as 0 or 1."""
+    arrays as tuples, flags as 0 or 1 (the end pieces with `pieces`)."""
     out = {}
-    for f in bank_fields(config, output):
+    for f in bank_fields(config, pieces):
         value = f.value(setup)
         out[f.name] = tuple(value) if f.array else int(value)
     return out

@@ -8,26 +8,31 @@ and ``last`` on the edge's last column. Everything else is derived from the name
 * `Beat`, the Python value (``lane1`` None for a one-write column), and `column_beats`, the
   model's columns as beats;
 * the core's payload (`edgeaa.hdl.write_layout`): the struct ``lane0 {x, y, value}``,
-  ``lane1 {...}``, ``lane1_valid``, ``last``; its Verilog ports are `port_name` of each
+  ``lane1 {...}``, ``lane1_valid``, ``last``; its Verilog ports are `WRITES.port_name` of each
   `PAYLOAD_PATHS` entry;
 * the array encoding: int64 rows of `BEAT_COLUMNS` (`beats_to_array`, `beats_from_array`); a
   simulation run records the clock of each beat in front (`RUN_COLUMNS`).
 * `edge_columns`: how many beats each edge of a command stream gives (0 for an edge the core
   drops as bad or whose clip window holds none of its columns).
 
-The accumulation-delta core (output ``"deltas"``) has its own beat, declared the same way
-below (`DeltaBeat`, `DELTA_PAYLOAD_PATHS`); `BEAT_FORMATS` names both for the harnesses.
+The polygon core's accumulation deltas have their own beat, declared the same way below
+(`DeltaBeat`, `DELTA_PAYLOAD_PATHS`). `WRITES` and `DELTAS` are the two outputs, declared once
+(`BeatFormat`: stream, payload, decoders, bank fields, pipeline depth and FINAL clocks): what
+differs between the line core and the polygon core lives in these two objects.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
+from .bank import BankField, bank_fields
 from .config import EdgeConfig
 from .edge import Edge, EdgeError, setup
+from .step import run_edge, run_edge_deltas
 
 LANES = ("lane0", "lane1")
 PIXEL_FIELDS = ("x", "y", "value")  # x, y signed (register "x", "y"), value unsigned
@@ -52,8 +57,9 @@ class Beat(NamedTuple):
     last: bool  # the edge's last column
 
 
-def port_name(path: Sequence[str], stream: str = "writes") -> str:
-    """The Verilog port of a payload leaf (`edgeaa.hdl.verilog` joins paths with ``__``)."""
+def port_name(path: Sequence[str], stream: str) -> str:
+    """The Verilog port of a payload leaf of `stream` (`edgeaa.hdl.verilog` joins paths with
+    ``__``)."""
     return "__".join((stream, "payload", *path))
 
 
@@ -123,7 +129,7 @@ def beats_from_array(rows: np.ndarray) -> list[Beat]:
     ]
 
 
-# -- the accumulation-delta beat (the core with output "deltas") ------------------------------
+# -- the accumulation-delta beat (the polygon core's) ------------------------------------------
 #
 # One beat per stepped column: the four cells of `edgeaa.model.step.run_edge_deltas`, in the
 # order `edgeaa.model.column.delta_cells` gives them (zeros included), and ``last`` on the
@@ -188,11 +194,16 @@ def delta_beats_from_array(rows: np.ndarray) -> list[DeltaBeat]:
     ]
 
 
-class BeatFormat(NamedTuple):
-    """What a harness needs to know of one output of the core: its stream's name, payload
-    leaves in array order, the register sizing each leaf (None: a one-bit flag), the
-    decoders to Python beats, the encoder to array rows and the model's beats of one edge's
-    columns (`EdgeResult.columns` or `run_edge_deltas`)."""
+@dataclass(frozen=True, eq=False)
+class BeatFormat:
+    """One output of the core, declared once: its stream's name, payload leaves in array
+    order, the register sizing each leaf (None: a one-bit flag), the decoders to Python
+    beats, the encoder to array rows, the model's columns of an edge (`run_edge`'s or
+    `run_edge_deltas`) and its beats of them (`edge_beats`); and what the output asks of the core:
+    whether its bank carries the end pieces (`pieces`), whether its stepper reads the bank
+    live and takes it when it steps the edge's last column (`live_bank`; else it copies the
+    bank when it loads it), its pipeline depth and its setup's FINAL clocks
+    (`edgeaa.model.timing` reads both here)."""
 
     stream: str
     paths: tuple[tuple[str, ...], ...]
@@ -201,29 +212,74 @@ class BeatFormat(NamedTuple):
     from_array: Callable
     to_array: Callable
     from_columns: Callable
+    model_columns: Callable[[EdgeConfig, Edge], Sequence]  # the model's columns of an edge
+    pieces: bool  # the bank carries the end pieces (`BankField.pieces`)
+    live_bank: bool  # the stepper reads the held bank and takes it at the edge's end
+    depth: Callable[[EdgeConfig], int]  # clocks from a column's step to its beat
+    final: Callable[[EdgeConfig], int]  # clocks of the setup's FINAL state
 
     @property
     def run_columns(self) -> tuple[str, ...]:
         return ("clock", *("_".join(path) for path in self.paths))
 
+    def edge_beats(self, config: EdgeConfig, edge: Edge) -> list:
+        """The model's beats of one edge (`EdgeError` for a bad command)."""
+        return self.from_columns(self.model_columns(config, edge))
 
-BEAT_FORMATS = {
-    "writes": BeatFormat(
-        "writes",
-        PAYLOAD_PATHS,
-        {"x": "x", "y": "y", "value": "value", "lane1_valid": None, "last": None},
-        beat_from_fields,
-        beats_from_array,
-        beats_to_array,
-        column_beats,
-    ),
-    DELTA_STREAM: BeatFormat(
-        DELTA_STREAM,
-        DELTA_PAYLOAD_PATHS,
-        {"x": "x", "y": "y", "delta": "delta", "last": None},
-        delta_beat_from_fields,
-        delta_beats_from_array,
-        delta_beats_to_array,
-        delta_column_beats,
-    ),
-}
+    def pipeline_depth(self, config: EdgeConfig) -> int:
+        return self.depth(config)
+
+    def final_cycles(self, config: EdgeConfig) -> int:
+        return self.final(config)
+
+    def bank_fields(self, config: EdgeConfig) -> tuple[BankField, ...]:
+        """The fields of this output's bank (`edgeaa.model.bank.bank_fields`)."""
+        return bank_fields(config, pieces=self.pieces)
+
+    def port_name(self, path: Sequence[str]) -> str:
+        """The Verilog port of a payload leaf of this output's stream."""
+        return port_name(path, self.stream)
+
+
+WRITES = BeatFormat(
+    "writes",
+    PAYLOAD_PATHS,
+    {"x": "x", "y": "y", "value": "value", "lane1_valid": None, "last": None},
+    beat_from_fields,
+    beats_from_array,
+    beats_to_array,
+    column_beats,
+    lambda config, edge: run_edge(config, edge).columns,
+    pieces=False,
+    live_bank=False,
+    # the output register behind one estimate stage (at most one segment) or two
+    depth=lambda config: 2 if config.segments <= 1 else 3,
+    final=lambda config: 1,
+)
+"""The line core's output: the paper's intensity writes, two lanes a column."""
+
+DELTAS = BeatFormat(
+    DELTA_STREAM,
+    DELTA_PAYLOAD_PATHS,
+    {"x": "x", "y": "y", "delta": "delta", "last": None},
+    delta_beat_from_fields,
+    delta_beats_from_array,
+    delta_beats_to_array,
+    delta_column_beats,
+    run_edge_deltas,
+    pieces=True,
+    live_bank=True,
+    # p1 (the piece's depth), p2 (the estimate and covers), the output register (the cells)
+    depth=lambda config: 3,
+    # FINAL forms the y-major total0 product one bit of w0 (s + 2 bits) a clock
+    final=lambda config: config.subpixel_bits + 2,
+)
+"""The polygon core's output: the accumulation deltas, four cells a column."""
+
+
+def format_of(stream: str) -> BeatFormat:
+    """The output whose stream is named `stream` (a job file names it across processes)."""
+    for fmt in (WRITES, DELTAS):
+        if fmt.stream == stream:
+            return fmt
+    raise ValueError(f"no output stream named {stream!r}: writes or deltas")

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from .beat import DELTAS
 from .edge import EdgeError, setup
 from .pipeline import Decoded, decode_commands
 from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming, beat_clocks
@@ -124,7 +125,7 @@ class _Top:
         config = self.tile.config
         timings = iter(
             schedule(
-                config, shapes, output="deltas", idle=idle, sink_ready=self.clock.ready, holds=holds
+                config, shapes, fmt=DELTAS, idle=idle, sink_ready=self.clock.ready, holds=holds
             )
         )
         last, free, stalled, first_beat = self.first - 1, 0, 0, True
@@ -143,7 +144,7 @@ class _Top:
                 stalled += int(sum(hold)) - len(hold)
                 if first_beat:
                     stalled += (
-                        t.beats[0] - hold[0] + 1 - (t.load + 1 + pipeline_depth(config, "deltas"))
+                        t.beats[0] - hold[0] + 1 - (t.load + 1 + pipeline_depth(config, DELTAS))
                     )
                     first_beat = False
             else:

@@ -1,4 +1,4 @@
-"""Cycle timing model of the hardware core (`edgeaa.hdl.core.EdgeAntialiaser`).
+"""Cycle timing model of the hardware cores (`edgeaa.hdl.core.LineCore`, `PolygonCore`).
 
 Clocks are numbered from 0, the first clock after reset. A stream transfer "happens in clock
 c" when valid and ready are both high in clock c (it completes at the clock edge ending c).
@@ -31,16 +31,18 @@ takes them):
   after it otherwise).
 * The line-writes stepper loads (copies and takes) the bank in the first clock ``t`` where
   the bank is valid and the stepper is idle or stepping the previous edge's last column
-  (the handover has no bubble). The deltas stepper (output ``"deltas"``) starts the edge
+  (the handover has no bubble). The deltas stepper (the polygon core's) starts the edge
   (loads its loop registers) in the first clock ``t`` where the bank is valid and it is
   idle, reads the per-edge constants from the held bank and takes it in the clock it steps
   the edge's last column, ``t + C``: the setup works on the next edge only after that.
   Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
   pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
   register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
-  every mode for the accumulation-delta core, output ``"deltas"``): the beat is valid in
+  every mode for the polygon core's accumulation deltas): the beat is valid in
   clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
-  clocks, FINAL's ``s + 2`` included: only D and Phi differ between the two outputs.
+  clocks, FINAL's ``s + 2`` included: only D and Phi differ between the two outputs
+  (`edgeaa.model.beat.WRITES` and `DELTAS` declare both, and whether the stepper holds the
+  bank live; every function here takes the output's format, `WRITES` by default).
 
 With ``L = setup_latency = R + 4 + Phi + D`` (R of an edge not clipped at its start): an edge
 accepted in clock ``a`` by an idle core has its first beat in clock ``a + L`` (``a + L + W +
@@ -96,7 +98,7 @@ from __future__ import annotations
 import bisect
 from dataclasses import dataclass
 
-from .bank import check_output
+from .beat import WRITES, BeatFormat
 from .config import EdgeConfig
 from .edge import Edge, EdgeError, setup
 
@@ -122,7 +124,6 @@ __all__ = [
 
 BAD_COMMAND_CYCLES = 2  # accept + FOLD: a dropped command occupies the setup two clocks
 EMPTY_EDGE_CYCLES = 5  # accept, FOLD, WINDOW, two RUN clocks: an edge with no visible column
-DELTAS_PIPELINE_DEPTH = 3  # the deltas stepper: p1 (depth), p2 (estimate), output register
 # Setup units of the core by default (`edgeaa.hdl.dispatch.SetupArray`). One: the smallest
 # core (the polygon pipeline must fit an iCE40 HX8K). With R = 20 RUN clocks (the default
 # configuration, F = 11) nine units accept an edge every ceil(25 / 9) = 3 clocks, at about
@@ -140,13 +141,12 @@ def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:
     )
 
 
-def final_cycles(config: EdgeConfig, output: str = "writes") -> int:
-    """Clocks of the FINAL state: one for the line-writes core; ``s + 2`` for the deltas
-    core, whose setup forms the y-major ``total0`` product there one bit of the first
-    piece's width ``w0`` (``s + 2`` bits) a clock (`edgeaa.hdl.pieces.total0_steps`)."""
-    if check_output(output) == "deltas":
-        return config.subpixel_bits + 2
-    return 1
+def final_cycles(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
+    """Clocks of the FINAL state (`BeatFormat.final_cycles`): one for the line core; ``s +
+    2`` for the polygon core, whose setup forms the y-major ``total0`` product there one bit
+    of the first piece's width ``w0`` (``s + 2`` bits) a clock
+    (`edgeaa.hdl.pieces.total0_steps`)."""
+    return fmt.final_cycles(config)
 
 
 def start_clip_cycles(config: EdgeConfig) -> int:
@@ -154,24 +154,23 @@ def start_clip_cycles(config: EdgeConfig) -> int:
     return config.coord_bits + 1
 
 
-def pipeline_depth(config: EdgeConfig, output: str = "writes") -> int:
-    """Clocks from a column's step to its beat: the stepper's output pipeline, counting the
-    output register (2 with at most one segment, 3 with two or more; the deltas core's is 3
-    in every mode: the piece's depth and estimate, then the cells)."""
-    if check_output(output) == "deltas":
-        return DELTAS_PIPELINE_DEPTH
-    return 2 if config.segments <= 1 else 3
+def pipeline_depth(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
+    """Clocks from a column's step to its beat (`BeatFormat.pipeline_depth`): the stepper's
+    output pipeline, counting the output register (2 with at most one segment, 3 with two or
+    more; the polygon core's is 3 in every mode: the piece's depth and estimate, then the
+    cells)."""
+    return fmt.pipeline_depth(config)
 
 
-def setup_latency(config: EdgeConfig, output: str = "writes") -> int:
+def setup_latency(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
     """Clocks from accepting an edge (idle core, not clipped at its start) to its first beat:
     accept, FOLD, WINDOW, RUN, FINAL (`final_cycles`), bank, stepper load, the step of
     column 0, then the output pipeline: ``R + 4 + Phi + D``."""
-    return run_cycles(config) + 4 + final_cycles(config, output) + pipeline_depth(config, output)
+    return run_cycles(config) + 4 + final_cycles(config, fmt) + pipeline_depth(config, fmt)
 
 
 def setup_interval(
-    config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS, output: str = "writes"
+    config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS, fmt: BeatFormat = WRITES
 ) -> int:
     """Clocks per edge the setup sustains, rounded up: edges of at least this many columns
     keep the stepper busy (one column per clock). One unit: accept, FOLD, WINDOW, RUN,
@@ -181,18 +180,18 @@ def setup_interval(
     so ``ceil((R + 4 + Phi) / N)``. (The deltas core's setup also holds each edge while it
     steps: `sustained_rate`.)"""
     if setup_units == 1:
-        return unit_cycles(config, 1, output)
-    return -(-unit_cycles(config, setup_units, output) // setup_units)
+        return unit_cycles(config, 1, fmt)
+    return -(-unit_cycles(config, setup_units, fmt) // setup_units)
 
 
 def unit_cycles(
-    config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS, output: str = "writes"
+    config: EdgeConfig, setup_units: int = DEFAULT_SETUP_UNITS, fmt: BeatFormat = WRITES
 ) -> int:
     """Clocks one setup unit spends per edge in steady state: ``R + 3 + Phi`` alone (accept
     to the load, the next accept in the load's clock), ``R + 4 + Phi`` in an array (accept
     to retirement, then free the clock after); the deltas core's units hold the edge ``C``
     clocks more while it steps."""
-    return run_cycles(config) + 3 + final_cycles(config, output) + (setup_units != 1)
+    return run_cycles(config) + 3 + final_cycles(config, fmt) + (setup_units != 1)
 
 
 @dataclass(frozen=True)
@@ -216,7 +215,7 @@ def write_cycles(
     config: EdgeConfig,
     edges,
     setup_latency_: int | None = None,
-    output: str = "writes",
+    fmt: BeatFormat = WRITES,
     setup_units: int = DEFAULT_SETUP_UNITS,
 ) -> list[EdgeTiming]:
     """Predict the clock of every beat for an always-ready sink and a back-to-back source.
@@ -224,9 +223,10 @@ def write_cycles(
     `edges` are `Edge` commands offered in order from clock 0, each as soon as the previous
     one is accepted. Commands the model rejects (`EdgeError`) are dropped by the core and
     get no beats; so are edges with no column in their clip window. `setup_latency_`
-    defaults to `setup_latency(config, output)`; pass the core's ``setup_latency`` to check
-    the two agree. `output` is the core's (``"writes"`` or ``"deltas"``): one beat per
-    column either way, only the pipeline depth differs. `setup_units` is the core's.
+    defaults to `setup_latency(config, fmt)`; pass the core's ``setup_latency`` to check
+    the two agree. `fmt` is the core's output (`WRITES` or `DELTAS`): one beat per column
+    either way, the pipeline depth, FINAL and the bank's handover differ. `setup_units` is
+    the core's.
     """
     shapes = []
     for edge in edges:
@@ -236,7 +236,7 @@ def write_cycles(
             shapes.append(None)
             continue
         shapes.append((st.columns, st.clipped_start))
-    return schedule(config, shapes, edges, setup_latency_, output, setup_units)
+    return schedule(config, shapes, edges, setup_latency_, fmt, setup_units)
 
 
 def schedule(
@@ -244,7 +244,7 @@ def schedule(
     shapes,
     edges=None,
     setup_latency_: int | None = None,
-    output="writes",
+    fmt: BeatFormat = WRITES,
     setup_units: int = DEFAULT_SETUP_UNITS,
     *,
     idle=None,
@@ -261,9 +261,9 @@ def schedule(
     the sink is not ready before this clock and ready from it (`beat_wait`). `holds` (one unit
     only): per command, the clocks the sink takes each of its beats (`beat_wait`; default one).
     """
-    latency = setup_latency(config, output) if setup_latency_ is None else setup_latency_
-    depth = pipeline_depth(config, output)
-    live = check_output(output) == "deltas"  # the stepper takes the bank at the edge's end
+    latency = setup_latency(config, fmt) if setup_latency_ is None else setup_latency_
+    depth = pipeline_depth(config, fmt)
+    live = fmt.live_bank  # the stepper takes the bank at the edge's end
     if setup_units == 1:
         return _schedule_one(config, shapes, edges, latency, depth, live, idle, sink_ready, holds)
     if idle is not None or sink_ready or holds is not None:
@@ -401,11 +401,11 @@ def beat_cycles(
     config: EdgeConfig,
     edges,
     setup_latency_: int | None = None,
-    output: str = "writes",
+    fmt: BeatFormat = WRITES,
     setup_units: int = DEFAULT_SETUP_UNITS,
 ) -> list[int]:
     """The clock of every beat of the stream, in order (`write_cycles` flattened)."""
-    timings = write_cycles(config, edges, setup_latency_, output, setup_units)
+    timings = write_cycles(config, edges, setup_latency_, fmt, setup_units)
     return [beat for timing in timings for beat in timing.beats]
 
 
@@ -413,7 +413,7 @@ def sustained_rate(
     config: EdgeConfig,
     columns: int,
     setup_latency_: int | None = None,
-    output: str = "writes",
+    fmt: BeatFormat = WRITES,
     setup_units: int = DEFAULT_SETUP_UNITS,
 ) -> float:
     """Steady-state columns per clock of an endless stream of edges of `columns` columns
@@ -422,10 +422,10 @@ def sustained_rate(
     also holds the edge while it steps (``C`` more clocks) and its stepper starts an edge
     the clock after the previous one's last column: ``C / max(C + 1, unit clocks / N)``."""
     if setup_latency_ is None:
-        per_unit = unit_cycles(config, setup_units, output)
+        per_unit = unit_cycles(config, setup_units, fmt)
     else:
-        per_unit = setup_latency_ - pipeline_depth(config, output) - (setup_units == 1)
-    live = check_output(output) == "deltas"
+        per_unit = setup_latency_ - pipeline_depth(config, fmt) - (setup_units == 1)
+    live = fmt.live_bank
     per_unit += columns if live else 0
     return columns * setup_units / max((columns + live) * setup_units, per_unit)
 

@@ -2,8 +2,8 @@
 
 Line mode (`run_engine`'s writes) and the polygon renderer's accumulation deltas
 (`run_deltas`) each run through three engines giving the same ordered output: the model,
-and the core (built with ``output="writes"`` or ``output="deltas"``) in Verilator or in
-Amaranth's simulator.
+and the core (`edgeaa.hdl.LineCore` for the writes, `PolygonCore` for the deltas) in
+Verilator or in Amaranth's simulator.
 
 - ``model``: `edgeaa.model.vector.run_edges`, the vectorized bit-accurate model, in chunks
   of edges (for the progress bar; the writes do not depend on the chunking).
@@ -34,6 +34,8 @@ from ..model.beat import (
     LANES,
     PIXEL_FIELDS,
     RUN_COLUMNS,
+    WRITES,
+    BeatFormat,
     edge_columns,
 )
 from ..model.timing import schedule, write_cycles
@@ -61,20 +63,20 @@ class EngineRun:
         return len(self.edge_index)
 
 
-def cycles(config: EdgeConfig, edges: list[Edge], output: str = "writes") -> int:
+def cycles(config: EdgeConfig, edges: list[Edge], fmt: BeatFormat = WRITES) -> int:
     """Clocks from the first command to the last beat, inclusive, by the timing model
-    (back-to-back source, always-ready sink) of the core built with `output`: the last
+    (back-to-back source, always-ready sink) of the core whose output is `fmt`: the last
     beat's clock + 1; 0 for no edges."""
     last = -1
-    for timing in write_cycles(config, edges, output=output):
+    for timing in write_cycles(config, edges, fmt=fmt):
         if timing.beats:
             last = max(last, timing.beats[-1])
     return last + 1
 
 
-def beat_clocks(config: EdgeConfig, edges: list[Edge], output: str = "writes") -> np.ndarray:
+def beat_clocks(config: EdgeConfig, edges: list[Edge], fmt: BeatFormat = WRITES) -> np.ndarray:
     return np.array(
-        [clock for timing in write_cycles(config, edges, output=output) for clock in timing.beats],
+        [clock for timing in write_cycles(config, edges, fmt=fmt) for clock in timing.beats],
         dtype=np.int64,
     )
 
@@ -143,6 +145,7 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
     valid) through an engine, in order: four cells per stepped column. Returns the run and
     each edge's (columns, clipped_start) from its setup, for the timing model.
     progress(done, total) is called as edges complete."""
+    from ..hdl.core import PolygonCore
     from ..model.edge import setup_batch
 
     if engine not in ENGINES:
@@ -155,7 +158,7 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
         empty = np.zeros(0, dtype=np.int64)
         return DeltaRun(engine, empty, empty, empty, empty, 0.0, 0, empty), shapes
     edges = arrays.edges()
-    run = _simulate(config, edges, engine, progress, "deltas")
+    run = _simulate(config, edges, engine, progress, PolygonCore)
     if run.errors:
         raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
     beats = np.asarray(run.beats, dtype=np.int64).reshape(-1, len(DELTA_RUN_COLUMNS))
@@ -170,10 +173,10 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
     return run, shapes
 
 
-def cycles_of(config: EdgeConfig, shapes, output: str = "writes") -> int:
+def cycles_of(config: EdgeConfig, shapes, fmt: BeatFormat = WRITES) -> int:
     """`cycles` from each edge's (columns, clipped_start) (`edgeaa.model.timing.schedule`)."""
     last = -1
-    for timing in schedule(config, shapes, output=output):
+    for timing in schedule(config, shapes, fmt=fmt):
         if timing.beats:
             last = max(last, timing.beats[-1])
     return last + 1
@@ -195,21 +198,21 @@ def _model_deltas(config: EdgeConfig, arrays, progress):
     return run, list(zip(setups.columns.tolist(), setups.clipped_start.tolist(), strict=True))
 
 
-def _simulate(config: EdgeConfig, edges: list[Edge], engine: str, progress, output: str):
-    """Run the core built with `output` in a simulator (the Verilator build is cached and not
-    timed)."""
+def _simulate(config: EdgeConfig, edges: list[Edge], engine: str, progress, top):
+    """Run the core `top` (`LineCore` or `PolygonCore`) in a simulator (the Verilator build is
+    cached and not timed)."""
     if engine == "verilator":
         from ..sim.simulators import verilator_harness
 
         if progress is not None:
             progress(0, len(edges))
-        run = verilator_harness.run(config, edges, output=output)
+        run = verilator_harness.run(config, edges, top=top)
         if progress is not None:
             progress(len(edges), len(edges))
         return run
     from ..sim.simulators import amaranth_sim
 
-    expected = cycles(config, edges, output)
+    expected = cycles(config, edges, top.format)
     if expected / AMARANTH_CLOCKS_PER_SECOND > AMARANTH_WARN_SECONDS:
         minutes = expected / AMARANTH_CLOCKS_PER_SECOND / 60
         print(
@@ -220,7 +223,7 @@ def _simulate(config: EdgeConfig, edges: list[Edge], engine: str, progress, outp
             file=sys.stderr,
             flush=True,
         )
-    return amaranth_sim.run(config, edges, progress=progress, output=output)
+    return amaranth_sim.run(config, edges, progress=progress, top=top)
 
 
 def _check_lasts(last: np.ndarray, columns: np.ndarray) -> None:
@@ -250,7 +253,9 @@ def run_engine(config: EdgeConfig, edges: list[Edge], engine: str, progress=None
     if not edges:
         empty = np.zeros(0, dtype=np.int64)
         return EngineRun(engine, empty, empty, empty, empty, 0.0, 0, empty)
-    run = _simulate(config, edges, engine, progress, "writes")
+    from ..hdl.core import LineCore
+
+    run = _simulate(config, edges, engine, progress, LineCore)
     if run.errors:
         raise RuntimeError(f"the core dropped {run.errors} edge commands as bad")
     edge_index, x, y, value = beats_to_writes(run.beats, edge_columns(config, edges))

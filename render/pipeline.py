@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..model import Clip, Edge
+from ..model.beat import DELTAS
 from ..model.pipeline import Command
 from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
 from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
@@ -282,7 +283,7 @@ def clock_estimate(plan: Plan, tile: TileConfig) -> tuple[int, int]:
     lo_x, lo_y, hi_x, hi_y = (box[sent] for box in _write_boxes(plan.coords, plan.offset, S))
     c = plan.coords[sent]
     span = np.where(plan.left[sent], 0, abs(c[:, 2] - c[:, 0]))
-    cost = np.maximum(span, abs(c[:, 3] - c[:, 1])) // S + unit_cycles(config, output="deltas")
+    cost = np.maximum(span, abs(c[:, 3] - c[:, 1])) // S + unit_cycles(config, fmt=DELTAS)
     cost += start_clip_cycles(config) + 2
     owner = plan.polygon[sent]
     width, height = plan.scene.width, plan.scene.height

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..model import Clip, Edge, EdgeConfig
 from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
+from ..model.beat import DELTAS
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
     SAFE,
@@ -699,7 +700,7 @@ def render_scene(
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
         deltas=deltas,
-        cycles=cycles_of(config, shapes, "deltas"),
+        cycles=cycles_of(config, shapes, DELTAS),
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model import setup
+from ..model.beat import DELTAS
 from ..model.timing import (
     DEFAULT_SETUP_UNITS,
     ClockBreakdown,
@@ -27,7 +28,7 @@ from .render import Render
 
 def _cycles(config, edges) -> int:
     """Cycles of the polygon renderer's core (the one emitting deltas)."""
-    return cycles(config, edges, "deltas")
+    return cycles(config, edges, DELTAS)
 
 
 @dataclass(frozen=True)
@@ -113,12 +114,12 @@ def stats_numbers(result: Render) -> dict:
 
 
 def clock_split(result: Render) -> ClockBreakdown:
-    """The timing model's clocks of the render's edges (the deltas core, as sent: clipped
+    """The timing model's clocks of the render's edges (the polygon core, as sent: clipped
     when skipping), split by `edgeaa.model.timing.clock_breakdown`."""
     plan = result.plan
     edges = [plan.edge(int(e), clip=result.skip) for e in result.sent]
-    timings = write_cycles(plan.config, edges, output="deltas")
-    split = clock_breakdown(timings, pipeline_depth(plan.config, "deltas"))
+    timings = write_cycles(plan.config, edges, fmt=DELTAS)
+    split = clock_breakdown(timings, pipeline_depth(plan.config, DELTAS))
     if split.clocks != result.cycles:
         raise AssertionError(f"clock split {split.clocks} != render cycles {result.cycles}")
     return split

@@ -31,7 +31,10 @@ from dataclasses import dataclass, field, replace
 from amaranth.hdl import Value
 from hypothesis import HealthCheck, Phase, settings
 
-from edgeaa.hdl import EdgeAntialiaser, write_layout
+from edgeaa.hdl import (
+    LineCore,
+    write_layout,
+)
 from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
@@ -93,7 +96,7 @@ def simulate(
     `seed`, random idle source clocks (probability `idle` before each offer), random sink
     stalls (`stall`) and a random window on ``clip`` whenever no edge is offered. Observes
     the stepper's registers and areas besides the bank and the error pulses."""
-    dut = EdgeAntialiaser(config, setup_units=setup_units)
+    dut = LineCore(config, setup_units=setup_units)
     stepper = dut.stepper
     tag = f"[{label} seed={seed} idle={idle} stall={stall} config={config}"
     label = f"{tag} setup_units={setup_units}]"
@@ -110,13 +113,13 @@ def simulate(
     decode = decoder(write_layout(config))
     probe = Probe(signals, registers)
     drain = drain_clocks(config)
-    return drive(dut, run, "writes", decode=decode, drain=drain, seed=seed, idle=idle,
+    return drive(dut, run, decode=decode, drain=drain, seed=seed, idle=idle,
                  stall=stall, probes=(probe,))  # fmt: skip
 
 
-def drive(dut, run: Run, sink: str, *, decode, drain, seed, idle, stall, probes=()) -> Run:
+def drive(dut, run: Run, *, decode, drain, seed, idle, stall, probes=()) -> Run:
     """`run.edges` through the core `dut` (`amaranth_sim.run_core`) into `run`: the beats of
-    its stream `sink`, the clock of each accept, each bank the stepper takes, each error
+    its output stream, the clock of each accept, each bank the stepper takes, each error
     pulse, the error count and the idle state at the end; `probes` observe more."""
     stepper = dut.stepper
     decode_bank = decoder(stepper.setup.payload.shape())
@@ -128,7 +131,7 @@ def drive(dut, run: Run, sink: str, *, decode, drain, seed, idle, stall, probes=
             run.error_pulses.append(clock)
 
     bank = (stepper.setup.valid, stepper.setup.ready, Value.cast(stepper.setup.payload))
-    out = getattr(dut, sink)
+    out, sink = dut.out, dut.format.stream
     # The core is idle at the end: nothing in the output register, the bank, the stepper.
     idle_signals = (out.valid, stepper.setup.valid, stepper.active, dut.edges.ready)
     trace = run_core(

@@ -1,9 +1,9 @@
 # amaranth: UnusedElaboratable=no
-"""The deltas core (``EdgeAntialiaser(config, output="deltas")``) against the model's
+"""The polygon core (``PolygonCore(config)``) against the model's
 `run_edge_deltas`, beat for beat: the four cells of every column and the last flags, the bank
 (the end pieces included) against `setup()`, bad commands dropped and counted, and with an
 eager source and an always-ready sink every beat's clock against `edgeaa.model.timing`
-(output ``"deltas"``). In Amaranth's simulator (`simulate`, here) and in the compiled
+(of `DELTAS`). In Amaranth's simulator (`simulate`, here) and in the compiled
 Verilator harness, with random source idles and sink stalls (a stalled beat must hold).
 """
 
@@ -17,20 +17,24 @@ from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
-from edgeaa.hdl import EdgeAntialiaser, EdgeStepper, delta_layout, verilog
+from edgeaa.hdl import (
+    DeltaStepper,
+    LineCore,
+    PolygonCore,
+    core_verilog,
+    delta_layout,
+)
 from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Edge, EdgeConfig, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.model.bank import bank_fields, bank_values
-from edgeaa.model.beat import CELLS, DeltaBeat, delta_column_beats
+from edgeaa.model.bank import bank_values
+from edgeaa.model.beat import CELLS, DELTAS, WRITES, DeltaBeat, delta_column_beats
 from edgeaa.model.step import run_edge_deltas
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
 from edgeaa.sim.simulators.amaranth_runner import decoder
 from edgeaa.sim.simulators.verilator_harness import drain_clocks
 from edgeaa.sim.synthesis import muldiv_cells
 from edgeaa.sim.verification.workloads import random_sim_edges
-
-OUTPUT = "deltas"
 
 
 def expected_deltas(config: EdgeConfig, edges) -> list[list[DeltaBeat]]:
@@ -43,7 +47,7 @@ def expected_deltas(config: EdgeConfig, edges) -> list[list[DeltaBeat]]:
 def expected_bank(config: EdgeConfig, edge: Edge) -> dict[str, int]:
     """The deltas bank of `setup()`, keyed like `decoder` keys the core's (``name.j``)."""
     bank = {}
-    for name, value in bank_values(config, setup(config, edge), OUTPUT).items():
+    for name, value in bank_values(config, setup(config, edge), DELTAS.pieces).items():
         if isinstance(value, tuple):
             bank.update({f"{name}.{j}": item for j, item in enumerate(value)})
         else:
@@ -64,12 +68,12 @@ def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_u
     `DeltaBeat`s (`core_bench.drive`); with `seed`, random idle source clocks, sink stalls
     and clip windows between the edges; `setup_units` the core's."""
     units = timing_model.DEFAULT_SETUP_UNITS if setup_units is None else setup_units
-    dut = EdgeAntialiaser(config, output=OUTPUT, setup_units=units)
+    dut = PolygonCore(config, setup_units=units)
     tag = f"[{label} seed={seed} idle={idle} stall={stall} units={units} {config}]"
     run = Run(config, list(edges), tag, dut.setup_latency, setup_units=units)
     fields = decoder(delta_layout(config))
-    drain = drain_clocks(config, OUTPUT)
-    return drive(dut, run, OUTPUT, decode=lambda raw: _as_beat(fields(raw)), drain=drain,
+    drain = drain_clocks(config, DELTAS)
+    return drive(dut, run, decode=lambda raw: _as_beat(fields(raw)), drain=drain,
                  seed=seed, idle=idle, stall=stall)  # fmt: skip
 
 
@@ -98,9 +102,7 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
     if not exact_timing:
         return
-    timings = timing_model.write_cycles(
-        config, run.edges, output=OUTPUT, setup_units=run.setup_units
-    )
+    timings = timing_model.write_cycles(config, run.edges, fmt=DELTAS, setup_units=run.setup_units)
     assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
     want_clocks = [clock for t in timings for clock in t.beats]
     got_clocks = [clock for clock, _ in run.beats]
@@ -109,7 +111,7 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
         f"{first_difference(got_clocks, want_clocks)}"
     )
     # The stepper takes the bank (edge done) in the clock it steps the edge's last column.
-    depth = timing_model.pipeline_depth(config, OUTPUT)
+    depth = timing_model.pipeline_depth(config, DELTAS)
     taken = [t.beats[-1] - depth for t in timings if not t.dropped]
     assert [clock for clock, _ in run.banks] == taken, f"{tag} bank transfer clocks"
 
@@ -227,7 +229,7 @@ def test_handover():
     steps the edge's last column (whose pieces are still in the pipeline when the next edge
     starts), and the setup accepts the next command then."""
     config = CORE_CONFIGS["seg4"]
-    interval = timing_model.setup_interval(config, output=OUTPUT)
+    interval = timing_model.setup_interval(config, fmt=DELTAS)
     lengths = [60, 1, 2, 1, interval, interval - 1, 1, interval + 1, 1, 1, 3]
     edges = [
         run_of(config, 10 + n, 20 + 3 * n, c, inside="right" if n % 3 else "left")
@@ -248,10 +250,10 @@ def test_setup_and_stepping_take_turns(units):
     run = run_and_check(config, edges, label="take turns", setup_units=units)
     firsts = [clock for clock, _ in run.beats][::columns]
     spacing = firsts[-1] - firsts[-1 - units]  # one round of the units, in steady state
-    rate = timing_model.sustained_rate(config, columns, output=OUTPUT, setup_units=units)
+    rate = timing_model.sustained_rate(config, columns, fmt=DELTAS, setup_units=units)
     assert rate == columns * units / spacing
     if units == 1:
-        assert spacing == columns + timing_model.setup_interval(config, output=OUTPUT)
+        assert spacing == columns + timing_model.setup_interval(config, fmt=DELTAS)
 
 
 @pytest.mark.parametrize("units", [2, 3])
@@ -289,7 +291,7 @@ def test_a_wrong_model_is_caught(monkeypatch):
 
 @pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_deltas_stepper_has_no_multiplier(name):
-    assert muldiv_cells(EdgeStepper(CORE_CONFIGS[name], OUTPUT)) == {}
+    assert muldiv_cells(DeltaStepper(CORE_CONFIGS[name])) == {}
 
 
 def _mul_widths(design) -> list[tuple[int, int]]:
@@ -312,22 +314,26 @@ def test_deltas_setup_has_no_wide_product(name):
     """The products by kq and by |I_d| are shift-adds over the lanes' clocks, the y-major
     first area (the height sum times the first piece's width) one over FINAL's clocks
     (`edgeaa.hdl.pieces`): every $mul left has both factors of sub-pixel bits."""
+    from edgeaa.hdl.pieces import EndPieces
     from edgeaa.hdl.setup import EdgeSetupUnit
 
     config = CORE_CONFIGS[name]
-    widths = _mul_widths(EdgeSetupUnit(config, output=OUTPUT))
+    widths = _mul_widths(EdgeSetupUnit(config, pieces=EndPieces(config)))
     small = config.subpixel_bits + 3
     assert widths and all(max(a, b) <= small for a, b in widths), widths
     assert len(widths) <= 5, widths
 
 
-def test_the_writes_core_keeps_its_bank():
+def test_the_line_core_keeps_its_bank():
+    """The end pieces are in the polygon core's bank only: each core's bank stream carries
+    its format's fields."""
     config = CORE_CONFIGS["default"]
-    writes = {f.name for f in bank_fields(config)}
-    deltas = {f.name for f in bank_fields(config, OUTPUT)}
+    writes = {f.name for f in WRITES.bank_fields(config)}
+    deltas = {f.name for f in DELTAS.bank_fields(config)}
     assert writes < deltas and not writes & {"hs0", "sigma", "total0"}
-    with pytest.raises(ValueError, match="output must be one of writes, deltas"):
-        EdgeAntialiaser(config, output="pixels")
+    for top, names in ((LineCore, writes), (PolygonCore, deltas)):
+        layout = top(config).setup.bank.payload.shape()
+        assert {str(name) for name, _ in layout} == names, top
 
 
 @pytest.mark.parametrize("name", ["default", "seg4", "small"])
@@ -335,7 +341,7 @@ def test_verilog_lints(name):
     """verilator --lint-only -Wall with the documented waivers, like the writes core."""
     from edgeaa.sim.simulators.verilator import lint
 
-    text = verilog(CORE_CONFIGS[name], output=OUTPUT)
+    text = core_verilog(PolygonCore(CORE_CONFIGS[name]))
     assert "deltas__payload__cell3__delta" in text and "writes__valid" not in text
     proc = lint(text)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -356,11 +362,11 @@ def test_compiled_harness(name):
     seed = 30
     edges = random_sim_edges(config, 300, seed, max_pixels=40, bad_fraction=0.02, clip_fraction=0.4)
     want = _flat(config, edges)
-    run = verilator_harness.run(config, edges, output=OUTPUT)
+    run = verilator_harness.run(config, edges, top=PolygonCore)
     assert run.as_beats() == want, f"seed {seed}: beat {first_difference(run.as_beats(), want)}"
-    predicted = timing_model.beat_cycles(config, edges, output=OUTPUT)
+    predicted = timing_model.beat_cycles(config, edges, fmt=DELTAS)
     assert run.beats[:, 0].tolist() == predicted
-    stalled = verilator_harness.run(config, edges, seed=seed, idle=0.2, stall=0.4, output=OUTPUT)
+    stalled = verilator_harness.run(config, edges, seed=seed, idle=0.2, stall=0.4, top=PolygonCore)
     assert stalled.as_beats() == want, f"seed {seed}: lost, duplicated or wrong beats"
     assert stalled.errors == run.errors == len(edges) - sum(is_good(config, e) for e in edges)
 
@@ -368,8 +374,8 @@ def test_compiled_harness(name):
 def test_python_and_compiled_simulators_agree_clock_for_clock():
     config = CORE_CONFIGS["seg2"]
     edges = random_sim_edges(config, 20, 31, max_pixels=24, bad_fraction=0.1, clip_fraction=0.5)
-    slow = amaranth_sim.run(config, edges, output=OUTPUT)
-    fast = verilator_harness.run(config, edges, output=OUTPUT)
+    slow = amaranth_sim.run(config, edges, top=PolygonCore)
+    fast = verilator_harness.run(config, edges, top=PolygonCore)
     assert slow.beats.tolist() == fast.beats.tolist()
     assert slow.as_beats() == _flat(config, edges)
 
@@ -383,8 +389,8 @@ def test_long_edges_compiled_slow(name):
     edges = [edge for _, edge in corpus(config)]
     edges += random_sim_edges(config, 200, 40, max_pixels=1 << config.coord_bits, clip_fraction=0.3)
     want = _flat(config, edges)
-    run = verilator_harness.run(config, edges, output=OUTPUT)
+    run = verilator_harness.run(config, edges, top=PolygonCore)
     assert run.as_beats() == want
-    assert run.beats[:, 0].tolist() == timing_model.beat_cycles(config, edges, output=OUTPUT)
-    stalled = verilator_harness.run(config, edges, seed=41, idle=0.3, stall=0.5, output=OUTPUT)
+    assert run.beats[:, 0].tolist() == timing_model.beat_cycles(config, edges, fmt=DELTAS)
+    stalled = verilator_harness.run(config, edges, seed=41, idle=0.3, stall=0.5, top=PolygonCore)
     assert stalled.as_beats() == want

@@ -13,7 +13,7 @@ from amaranth.hdl import Shape, Value, signed, unsigned
 from amaranth.lib.wiring import In, Out
 from fixtures import CORE_CONFIGS
 
-from edgeaa.hdl import EdgeAntialiaser, EdgeStepper, clip_layout, verilog
+from edgeaa.hdl import LineCore, LineStepper, clip_layout, verilog
 from edgeaa.model import Clip
 from edgeaa.sim.simulators.verilator import lint
 from edgeaa.sim.synthesis import muldiv_cells
@@ -26,7 +26,7 @@ def test_interface(name):
     config = CORE_CONFIGS[name]
     W, s = config.coord_bits, config.subpixel_bits
     I = config.intensity_bits  # noqa: E741
-    dut = EdgeAntialiaser(config)
+    dut = LineCore(config)
     members = dut.signature.members
     assert set(members) == {"edges", "clip", "writes", "errors", "error"}
     assert members["edges"].flow == In and members["writes"].flow == Out
@@ -58,15 +58,15 @@ def test_interface(name):
     assert Shape.cast(out["lane1_valid"].shape) == unsigned(1)
     assert Shape.cast(out["last"].shape) == unsigned(1)
     with pytest.raises(TypeError, match="config must be an EdgeConfig"):
-        EdgeAntialiaser({"coord_bits": 11})
+        LineCore({"coord_bits": 11})
     with pytest.raises(TypeError, match="errors_bits must be a positive integer, not 0"):
-        EdgeAntialiaser(config, errors_bits=0)
+        LineCore(config, errors_bits=0)
 
 
 @pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_stepper_registers_use_the_width_table(name):
     config = CORE_CONFIGS[name]
-    stepper = EdgeAntialiaser(config).stepper
+    stepper = LineCore(config).stepper
     for reg_name, width in config.register_widths().items():
         sig = getattr(stepper, reg_name, None)
         if sig is None:  # a combinational value of the loop: checked in the RTLIL below
@@ -87,12 +87,12 @@ def test_stepper_registers_use_the_width_table(name):
 
 @pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_stepper_has_no_multiplier_or_divider(name):
-    assert muldiv_cells(EdgeStepper(CORE_CONFIGS[name])) == {}
+    assert muldiv_cells(LineStepper(CORE_CONFIGS[name])) == {}
 
 
 def test_setup_uses_bit_serial_units():
     # Not a requirement (the setup may multiply), but the design has no $mul/$div at all.
-    assert muldiv_cells(EdgeAntialiaser(CORE_CONFIGS["seg4"])) == {}
+    assert muldiv_cells(LineCore(CORE_CONFIGS["seg4"])) == {}
 
 
 # -- Verilog ---------------------------------------------------------------------------------

@@ -21,7 +21,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from edgeaa.hdl import (
-    EdgeAntialiaser,
+    LineCore,
     setup_layout,
 )
 from edgeaa.model import Edge, EdgeConfig
@@ -33,7 +33,7 @@ from edgeaa.sim.simulators.commands import edge_clip, edge_payload
 def simulate_setup(config: EdgeConfig, edges: list[Edge]) -> list[dict | None]:
     """The bank each edge's setup produces (None: dropped, or no column in the window),
     resetting the core between edges so that long edges cost only their setup time."""
-    dut = EdgeAntialiaser(config)
+    dut = LineCore(config)
     flush = Signal()
     top = Module()
     top.submodules.dut = ResetInserter(flush)(dut)

@@ -16,10 +16,12 @@ from core_bench import (
 from fixtures import CORE_CONFIGS
 
 from edgeaa.hdl import (
-    EdgeAntialiaser,
+    LineCore,
+    PolygonCore,
 )
 from edgeaa.model import Edge, setup
 from edgeaa.model import timing as timing_model
+from edgeaa.model.beat import DELTAS
 from edgeaa.sim.simulators.commands import edge_payload
 from edgeaa.sim.simulators.streams import stream_put
 
@@ -27,7 +29,7 @@ from edgeaa.sim.simulators.streams import stream_put
 @pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_setup_latency_is_the_timing_model(name):
     config = CORE_CONFIGS[name]
-    dut = EdgeAntialiaser(config)
+    dut = LineCore(config)
     depth = timing_model.pipeline_depth(config)
     assert dut.stepper.latency == depth == (2 if config.segments <= 1 else 3)
     assert dut.setup_latency == timing_model.setup_latency(config)
@@ -35,11 +37,11 @@ def test_setup_latency_is_the_timing_model(name):
     assert dut.run_cycles == timing_model.run_cycles(config) == config.intensity_bits + config.F + 1
     assert dut.setup_units == timing_model.DEFAULT_SETUP_UNITS
     assert timing_model.setup_interval(config) == dut.setup_interval
-    nine = EdgeAntialiaser(config, setup_units=9)
+    nine = LineCore(config, setup_units=9)
     assert nine.setup_interval == timing_model.setup_interval(config, 9)
     assert nine.setup_interval == -(-(dut.run_cycles + 5) // 9)
     assert timing_model.setup_interval(config, 1) == dut.run_cycles + 4
-    assert EdgeAntialiaser(config, setup_units=1).setup_interval == dut.run_cycles + 4
+    assert LineCore(config, setup_units=1).setup_interval == dut.run_cycles + 4
     assert dut.start_clip_cycles == timing_model.start_clip_cycles(config) == config.coord_bits + 1
     assert timing_model.run_cycles(config, True) == dut.run_cycles + dut.start_clip_cycles
 
@@ -52,20 +54,20 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     tests/test_core_deltas.py."""
     config = CORE_CONFIGS[name]
     s, R = config.subpixel_bits, timing_model.run_cycles(config)
-    dut = EdgeAntialiaser(config, output="deltas")
-    final = timing_model.final_cycles(config, "deltas")
+    dut = PolygonCore(config)
+    final = timing_model.final_cycles(config, DELTAS)
     assert dut.setup.final_cycles == final == s + 2
-    assert timing_model.final_cycles(config) == EdgeAntialiaser(config).setup.final_cycles == 1
-    depth = timing_model.pipeline_depth(config, "deltas")
-    assert dut.setup_latency == timing_model.setup_latency(config, "deltas")
+    assert timing_model.final_cycles(config) == LineCore(config).setup.final_cycles == 1
+    depth = timing_model.pipeline_depth(config, DELTAS)
+    assert dut.setup_latency == timing_model.setup_latency(config, DELTAS)
     assert dut.setup_latency == config.intensity_bits + config.F + 5 + final + depth
-    assert dut.setup_interval == timing_model.setup_interval(config, 1, "deltas") == R + 3 + final
-    nine = EdgeAntialiaser(config, output="deltas", setup_units=9)
-    assert nine.setup_interval == timing_model.setup_interval(config, 9, "deltas")
+    assert dut.setup_interval == timing_model.setup_interval(config, 1, DELTAS) == R + 3 + final
+    nine = PolygonCore(config, setup_units=9)
+    assert nine.setup_interval == timing_model.setup_interval(config, 9, DELTAS)
     assert nine.setup_interval == -(-(R + 4 + final) // 9)
-    assert timing_model.unit_cycles(config, 1, "deltas") == dut.setup_interval
-    rate = timing_model.sustained_rate(config, 10, output="deltas")
-    assert rate == timing_model.sustained_rate(config, 10, dut.setup_latency, "deltas")
+    assert timing_model.unit_cycles(config, 1, DELTAS) == dut.setup_interval
+    rate = timing_model.sustained_rate(config, 10, fmt=DELTAS)
+    assert rate == timing_model.sustained_rate(config, 10, dut.setup_latency, DELTAS)
     assert rate == 10 / (10 + dut.setup_interval)  # the setup and the stepping take turns
 
 
@@ -93,7 +95,7 @@ def test_bad_commands_are_dropped_and_counted():
 
 def test_errors_counter_saturates():
     config = CORE_CONFIGS["small"]
-    dut = EdgeAntialiaser(config, errors_bits=2)
+    dut = LineCore(config, errors_bits=2)
     bad = edge_payload(config, Edge(3, 3, 3, 3))
     seen = []
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import pytest
 from amaranth.sim import Simulator
 
-from edgeaa.hdl import EdgeAntialiaser, setup_layout
+from edgeaa.hdl import LineCore, PolygonCore, setup_layout
 from edgeaa.hdl import deltas as hdl_deltas
 from edgeaa.hdl.setup import STATES, accept_values
 from edgeaa.model import Edge, EdgeConfig, setup, timing
@@ -261,7 +261,7 @@ def test_observation_points():
     """What the harness reads: the setup's registers, state and next bank, the stepper's
     pipeline stages, all made in the components' constructors."""
     config = EdgeConfig()
-    core = EdgeAntialiaser(config, setup_units=1)  # the harness's core
+    core = LineCore(config, setup_units=1)  # the harness's core
     setup_unit, stepper = core.setup, core.stepper
     names = ("du", "dv", "counter", "row0", "i_d", "first", "last", "lo", "hi", "start_clip")
     for name in (*names, "columns", "kq", "kr"):
@@ -277,7 +277,7 @@ def test_observation_points():
 def test_deltas_observation_points():
     """What the deltas harness reads besides the writes core's: the deltas loop registers
     (constructor) and the pipeline's stages, piece end and cells (set as it elaborates)."""
-    harness = FormalHarness(checks=("dbeat",), output="deltas")
+    harness = FormalHarness(checks=("dbeat",), top=PolygonCore)
     harness_rtlil(harness)
     stepper = harness.core.stepper
     assert set(stepper.delta_regs) == {"hs", "adj", "first_col"}
@@ -289,10 +289,14 @@ def test_deltas_observation_points():
 def test_harness_rejects_unknown_options():
     with pytest.raises(ValueError, match="checks must be among"):
         FormalHarness(checks=("nonsense",))
-    with pytest.raises(ValueError, match="do not apply to the deltas core"):
-        FormalHarness(checks=("beat",), output="deltas")
-    with pytest.raises(ValueError, match="do not apply to the writes core"):
+    with pytest.raises(ValueError, match="do not apply to PolygonCore"):
+        FormalHarness(checks=("beat",), top=PolygonCore)
+    with pytest.raises(ValueError, match="do not apply to LineCore"):
         FormalHarness(checks=("dbeat",))
+    with pytest.raises(ValueError, match="do not apply to LineCore"):
+        FormalHarness(covers=("deltas",))
+    with pytest.raises(TypeError, match="top must be LineCore or PolygonCore"):
+        FormalHarness(top=object)
     with pytest.raises(ValueError, match="fault must be one of"):
         FormalHarness(fault="nonsense")
     with pytest.raises(ValueError, match="proof must be one of"):
@@ -313,7 +317,8 @@ def test_sby_script():
     with pytest.raises(ValueError, match="mode must be"):
         sby_script("nonsense", 1)
     assert {"stream", "count", "bounds", "minor", "cover"} <= set(PROOFS)
-    assert {proof.output for proof in DELTA_PROOFS} == {"deltas"}
+    assert {proof.top for proof in DELTA_PROOFS} == {PolygonCore}
+    assert {proof.top for proof in PROOFS.values()} == {LineCore, PolygonCore}
     assert {proof.name for proof in DELTA_PROOFS} <= set(PROOFS)
 
 
@@ -338,7 +343,7 @@ def test_capacity_is_reached_in_simulation():
         {"x0": e.x0, "y0": e.y0, "x1": e.x1, "y1": e.y1, "i_in": e.i_in, "i_out": e.i_out}
         for e in [long_edge] + [short_edge] * 10
     ]
-    dut = EdgeAntialiaser(config, setup_units=1)  # the harness's core
+    dut = LineCore(config, setup_units=1)  # the harness's core
     counts = {}
 
     async def bench(ctx):

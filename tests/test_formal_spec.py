@@ -22,7 +22,7 @@ from amaranth.sim import Simulator
 
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model.accumulate import FILL_RULES, fill, fill_coverage, intensity_offset
-from edgeaa.model.bank import bank_fields
+from edgeaa.model.beat import DELTAS, WRITES, BeatFormat
 from edgeaa.model.column import IntArith, advance, column_areas, output_value, piece_end
 from edgeaa.model.step import run_edge_deltas
 from edgeaa.model.tile import TileConfig
@@ -41,10 +41,10 @@ def _shape(width):
     return signed(width.bits) if width.signed else unsigned(width.bits)
 
 
-def _bank_signals(config: EdgeConfig, output: str = "writes") -> types.SimpleNamespace:
-    """A bank-like record of free signals, one per bank field (arrays as lists)."""
+def _bank_signals(config: EdgeConfig, fmt: BeatFormat = WRITES) -> types.SimpleNamespace:
+    """A bank-like record of free signals, one per bank field of `fmt` (arrays as lists)."""
     record = {}
-    for field in bank_fields(config, output):
+    for field in fmt.bank_fields(config):
         shape = _shape(field.width(config))
         if field.array:
             record[field.name] = [Signal(shape) for _ in range(field.length(config))]
@@ -123,8 +123,8 @@ def _model_column(config: EdgeConfig, st, state) -> dict[str, int]:
     return out
 
 
-def _drive_bank(ctx, config: EdgeConfig, bank, st, output: str = "writes") -> None:
-    for field in bank_fields(config, output):
+def _drive_bank(ctx, config: EdgeConfig, bank, st, fmt: BeatFormat = WRITES) -> None:
+    for field in fmt.bank_fields(config):
         value, target = field.value(st), getattr(bank, field.name)
         if field.array:
             for element, item in zip(target, value, strict=True):
@@ -228,7 +228,7 @@ def test_spec_deltas_column_is_the_model(name):
     seed = 20261125 + len(name)
     rng = random.Random(seed)
     widths = config.register_widths()
-    bank = _bank_signals(config, "deltas")
+    bank = _bank_signals(config, DELTAS)
     bank.hs = Signal(_shape(widths["height"]), name="hs")
     row, first_col = Signal(_shape(widths["y"]), name="row"), Signal(name="first_col")
     m = Module()
@@ -246,7 +246,7 @@ def test_spec_deltas_column_is_the_model(name):
     async def bench(ctx):
         for edge in _random_edges(config, rng, EDGES):
             st = setup(config, edge)
-            _drive_bank(ctx, config, bank, st, "deltas")
+            _drive_bank(ctx, config, bank, st, DELTAS)
             columns = _compared_columns(rng, st.columns)
             for state in (s for s in _deltas_states(config, edge) if s.column in columns):
                 for key in ("x", "y", "jq", "jr", "hs"):

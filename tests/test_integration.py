@@ -14,7 +14,7 @@ import pytest
 from fixtures import CORE_CONFIGS, random_span_edge
 
 from edgeaa.cli import main
-from edgeaa.hdl import verilog
+from edgeaa.hdl import PolygonCore, core_verilog, verilog
 from edgeaa.hdl.integration import WAIVERS, lint_waivers, sign_ports
 from edgeaa.model import Clip, Edge
 from edgeaa.sim.simulators.commands import COMMAND_FIELDS, edge_command
@@ -42,7 +42,7 @@ def test_the_beats_signed_rows_are_declared_signed_and_the_header_says_so():
     header = " ".join(line.removeprefix("//").strip() for line in comment)
     assert "Signed ports (two's complement, declared signed): writes__payload__lane0__x" in header
     assert "tie them to 0, 0, 2048, 2048 to clip nothing" in header
-    deltas = verilog(DEFAULT, output="deltas")
+    deltas = core_verilog(PolygonCore(DEFAULT))
     for name in ("x", "y", "delta"):
         assert re.search(rf"output signed \[\d+:0\] deltas__payload__cell3__{name};", deltas)
 

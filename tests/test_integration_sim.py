@@ -22,7 +22,7 @@ from amaranth.sim import Simulator
 from core_bench import observed_beat
 from fixtures import CORE_CONFIGS
 
-from edgeaa.hdl import EdgeAntialiaser
+from edgeaa.hdl import LineCore
 from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge
 from edgeaa.model.column import IntArith
@@ -78,7 +78,7 @@ class _Core:
 
 
 def test_core_reset_takes_nothing_drops_edges_in_flight_and_clears_errors():
-    dut = EdgeAntialiaser(CONFIG)
+    dut = LineCore(CONFIG)
     top, domain = _with_domain(dut)
     long_edge = Edge(0, 0, 15, 7, i_out=0)  # 16 columns
     bad = Edge(3, 3, 3, 3, i_in=5, i_out=0)  # zero length: dropped and counted
@@ -300,7 +300,7 @@ def test_the_core_steps_clip_from_port_for_bounds_past_2_to_the_w():
     seed = 7
     rng = random.Random(seed)
     cases = list(zip(_edges(rng, 40), _raw_windows(rng, 40), strict=True))
-    dut = EdgeAntialiaser(CLIP_CONFIG)
+    dut = LineCore(CLIP_CONFIG)
     top, domain = _with_domain(dut)
     got = []
 

@@ -20,6 +20,7 @@ from hypothesis import HealthCheck, given, settings
 from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout
 from edgeaa.model import EdgeConfig, pipeline_timing, timing
 from edgeaa.model import tile as tile_model
+from edgeaa.model.beat import DELTAS
 from edgeaa.model.pipeline import Command
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import RESOLVE_OPS, TileConfig
@@ -219,7 +220,7 @@ WRONG_WAITS = {
 
 # A constant one clock off, or the stall not modelled (beats before the accumulator is ready,
 # or taken a beat a clock, not a nonzero cell a clock).
-WRONG = ["SCAN_START", "EMPTY_END", "FLUSH_START", "DELTAS_PIPELINE_DEPTH", "BAD_COMMAND_CYCLES"]
+WRONG = ["SCAN_START", "EMPTY_END", "FLUSH_START", "pipeline_depth", "BAD_COMMAND_CYCLES"]
 WRONG += ["EMPTY_EDGE_CYCLES"]
 
 
@@ -233,6 +234,11 @@ def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
             monkeypatch.setattr(module, "beat_wait", WRONG_WAITS[wrong])
         elif wrong == "resolve_latency" and hasattr(module, wrong):
             monkeypatch.setattr(module, wrong, lambda config: latency)
+        elif wrong == "pipeline_depth" and hasattr(module, wrong):  # the deltas core's, + 1
+            depth = getattr(module, wrong)
+            monkeypatch.setattr(
+                module, wrong, lambda config, fmt, depth=depth: depth(config, fmt) + 1
+            )
         elif hasattr(module, wrong):
             monkeypatch.setattr(module, wrong, getattr(module, wrong) + 1)
     with pytest.raises(AssertionError):
@@ -266,11 +272,11 @@ def test_schedule_without_idles_or_a_stall_is_the_back_to_back_one():
             None if rng.random() < 0.1 else (rng.choice([0, 1, 3, 40]), rng.random() < 0.3)
             for _ in range(rng.randrange(1, 8))
         ]
-        plain = timing.schedule(SMALL, shapes, output="deltas")
-        zero = timing.schedule(SMALL, shapes, output="deltas", idle=[0] * len(shapes))
-        assert plain == zero == timing.schedule(SMALL, shapes, output="deltas", sink_ready=0)
+        plain = timing.schedule(SMALL, shapes, fmt=DELTAS)
+        zero = timing.schedule(SMALL, shapes, fmt=DELTAS, idle=[0] * len(shapes))
+        assert plain == zero == timing.schedule(SMALL, shapes, fmt=DELTAS, sink_ready=0)
         late = plain[-1].accepted + 1000  # after every beat would be valid
-        stalled = timing.schedule(SMALL, shapes, output="deltas", sink_ready=late)
+        stalled = timing.schedule(SMALL, shapes, fmt=DELTAS, sink_ready=late)
         beats = [b for t in stalled for b in t.beats]
         assert beats == sorted(set(beats)) and all(b >= late for b in beats), shapes
         # the setup runs on while the stepper waits until it holds an edge the stall keeps
@@ -278,7 +284,7 @@ def test_schedule_without_idles_or_a_stall_is_the_back_to_back_one():
         # the first good edge, or the next when the first has at most D columns (stepped
         # before the stall); the commands up to that one are accepted as with a ready sink
         good = [k for k, shape in enumerate(shapes) if shape and shape[0]]
-        short = good and shapes[good[0]][0] <= timing.pipeline_depth(SMALL, "deltas")
+        short = good and shapes[good[0]][0] <= timing.pipeline_depth(SMALL, DELTAS)
         held = (good[1:2] if short else good[:1]) or [len(shapes)]
         same = held[0] + 1
         assert [t.accepted for t in stalled[:same]] == [t.accepted for t in plain[:same]]

@@ -18,6 +18,7 @@ from fixtures import TINY_SCENE
 from edgeaa.analysis.compare import agg_scene
 from edgeaa.cli import main
 from edgeaa.model import Edge, EdgeConfig, exact_coverage, setup
+from edgeaa.model.beat import DELTAS
 from edgeaa.model.reference import error_bound
 from edgeaa.model.vector import run_edges_deltas
 from edgeaa.render import Polygon, Scene, SceneError, builtin, parse_path, parse_scene, render_scene
@@ -489,7 +490,7 @@ def test_a_whole_pixel_shift_of_the_scene_shifts_the_image():
 
 @pytest.mark.parametrize("engine", ["verilator", "amaranth"])
 def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, model_renders):
-    """The core built with output="deltas": the model's nonzero deltas in order, the same
+    """The polygon core (`PolygonCore`): the model's nonzero deltas in order, the same
     image, and its beats in the clocks the timing model predicts (Amaranth: a tiny scene)."""
     tiny = plan(parse_scene(TINY_SCENE), DEFAULT)
     cases = [(tiny, render_scene(tiny))]
@@ -503,7 +504,7 @@ def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, mod
             assert np.array_equal(getattr(fast.deltas, field), getattr(model.deltas, field))
         edges = [p.edge(int(e), clip=True) for e in fast.sent]
         clocks = fast.deltas.beat_clocks
-        assert np.array_equal(clocks, beat_clocks(DEFAULT, edges, "deltas")), name
+        assert np.array_equal(clocks, beat_clocks(DEFAULT, edges, DELTAS)), name
         assert fast.cycles == model.cycles == int(clocks[-1]) + 1, name
         assert fast.deltas.clocks >= fast.cycles, name  # the drain after the last beat
 

@@ -14,7 +14,7 @@ from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
-from edgeaa.hdl import EdgeAntialiaser
+from edgeaa.hdl import LineCore
 from edgeaa.hdl.dispatch import SetupArray
 from edgeaa.model import Clip, Edge, setup
 from edgeaa.model import timing as timing_model
@@ -119,11 +119,11 @@ def test_an_ungated_dispatch_is_caught(monkeypatch):
 
 def test_setup_units_is_checked():
     config = CORE_CONFIGS["default"]
-    assert isinstance(EdgeAntialiaser(config, setup_units=2).setup, SetupArray)
-    assert EdgeAntialiaser(config, setup_units=1).setup_units == 1
+    assert isinstance(LineCore(config, setup_units=2).setup, SetupArray)
+    assert LineCore(config, setup_units=1).setup_units == 1
     for bad in (0, MAX_SETUP_UNITS + 1, 2.0, True, "9"):
         with pytest.raises(TypeError, match="setup_units"):
-            EdgeAntialiaser(config, setup_units=bad)
+            LineCore(config, setup_units=bad)
 
 
 def test_timing_model_is_the_single_unit_schedule_for_one():

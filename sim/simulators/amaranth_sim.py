@@ -16,10 +16,10 @@ from functools import partial
 
 import numpy as np
 
-from ...hdl import EdgeAntialiaser
+from ...hdl import LineCore
 from ...hdl.pipeline import STATS, EdgePipeline, command_layout
 from ...model import Clip, Edge, EdgeConfig
-from ...model.beat import BEAT_FORMATS, edge_columns
+from ...model.beat import edge_columns
 from ...model.pipeline import Command
 from ...model.tile import TileConfig
 from .amaranth_runner import Probe, SimulationHang, Sink, Source, Trace, row_decoder, run_component
@@ -78,20 +78,20 @@ def run_core(
     )  # fmt: skip
 
 
-def run(config: EdgeConfig, edges: list[Edge], *, progress=None, output: str = "writes") -> FastRun:
-    """Simulate the core (with `output`: ``"writes"`` or ``"deltas"``) on `edges`;
+def run(config: EdgeConfig, edges: list[Edge], *, progress=None, top=LineCore) -> FastRun:
+    """Simulate the core `top` (`LineCore` or `PolygonCore`) on `edges`;
     `progress(done, total)` is called as commands go in."""
-    dut = EdgeAntialiaser(config, output=output)
-    beats = BEAT_FORMATS[output]
+    dut = top(config)
+    beats = top.format
     stream = getattr(dut, beats.stream)
     decode = row_decoder(stream.payload.shape(), [".".join(path) for path in beats.paths])
     trace = run_core(
-        dut, config, edges, beats.stream, decode=decode, drain=drain_clocks(config, output),
+        dut, config, edges, beats.stream, decode=decode, drain=drain_clocks(config, beats),
         final=(dut.errors,), progress=progress,
     )  # fmt: skip
     rows = [(clock, *row) for clock, row in trace.beats[0]]
     array = np.array(rows, dtype=np.int64).reshape(-1, len(beats.paths) + 1)
-    return FastRun(array, trace.clocks, trace.final[0], trace.seconds, output)
+    return FastRun(array, trace.clocks, trace.final[0], trace.seconds, beats)
 
 
 def run_pipeline(

@@ -1,8 +1,8 @@
 """The golden side of every hardware comparison: the model's writes as the core's beats.
 
 The core emits one beat per column with two lanes (the primary pixel, then the neighbour
-when the column has two writes; the format is `edgeaa.model.beat`), or with output
-``"deltas"`` the column's four accumulation deltas. `expected_beats` turns model results
+when the column has two writes; the format is `edgeaa.model.beat.WRITES`), or for the polygon
+core the column's four accumulation deltas (`DELTAS`). `expected_beats` turns model results
 into that form, and `Scoreboard` checks observed beats against it in order and,
 at the end, that nothing is missing (verilog-axis style: the run ends with "the scoreboard
 is empty").
@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from ...model import Edge, EdgeConfig, EdgeError, run_edge
-from ...model.beat import BEAT_FORMATS, Beat, beats_from_array, beats_to_array, column_beats
-from ...model.step import EdgeResult, run_edge_deltas
+from ...model import Edge, EdgeConfig, EdgeError
+from ...model.beat import WRITES, Beat, BeatFormat, beats_from_array, beats_to_array, column_beats
+from ...model.step import EdgeResult
 
 __all__ = [
     "Beat",
@@ -32,22 +32,18 @@ def edge_beats(result: EdgeResult) -> list[Beat]:
 
 
 def expected_beats(
-    config: EdgeConfig, edges: Iterable[Edge], output: str = "writes"
+    config: EdgeConfig, edges: Iterable[Edge], fmt: BeatFormat = WRITES
 ) -> tuple[list, int]:
     """All beats of a command stream, and how many commands the core must drop as bad.
 
-    `output`: the core's output, ``"writes"`` (`Beat`, from `run_edge`) or ``"deltas"``
+    `fmt`: the core's output, `WRITES` (`Beat`, from `run_edge`) or `DELTAS`
     (`edgeaa.model.beat.DeltaBeat`, from `run_edge_deltas`). An edge with no column in its
     clip window has no beat (not even a `last` one) and is not dropped: it is not counted."""
-    from_columns = BEAT_FORMATS[output].from_columns
     beats: list = []
     dropped = 0
     for edge in edges:
         try:
-            if output == "writes":
-                beats.extend(from_columns(run_edge(config, edge).columns))
-            else:
-                beats.extend(from_columns(run_edge_deltas(config, edge)))
+            beats.extend(fmt.edge_beats(config, edge))
         except EdgeError:
             dropped += 1
     return beats, dropped

@@ -28,11 +28,10 @@ import types
 
 from amaranth.hdl import Mux, Signal, Value, signed, unsigned
 
-from ....hdl.layouts import setup_layout
-from ....hdl.pieces import id_products, kq_products
+from ....hdl.pieces import EndPieces, id_products, kq_products
 from ....hdl.setup import accept_values
+from ....hdl.stepper import LineStepper
 from ....model import timing
-from ....model.bank import bank_fields
 from .spec import all_, axes, column, constants_ok, fields, fold, implies, major_ok, window
 
 
@@ -45,7 +44,7 @@ def check(ctx):
     s = _setup(ctx, add)
     ctx.setup_spec = s  # the latched command's fold and window, the next bank (deltas checks)
     lanes = _lanes(ctx, s, add)
-    if ctx.setup.pieces is not None:
+    if isinstance(ctx.setup.pieces, EndPieces):  # the part's products
         _products(ctx, s, lanes, add)
     _bank(ctx, s, add)
     _stepper(ctx, add)
@@ -69,7 +68,7 @@ def _setup(ctx, add) -> types.SimpleNamespace:
     busy = in_window | run | final
     cut = run | final  # the columns are cut to the window, lane A is loaded
     counter = r.counter
-    nb = fields(setup.next_bank, setup_layout(config, ctx.output))
+    nb = fields(setup.next_bank, setup.next_bank.shape())
     nb_axes = axes(nb)
     # The registers the setup loads when it accepts a command, besides the command: each
     # equals its value with the latched command in place of the incoming payload.
@@ -320,7 +319,7 @@ def _bank(ctx, s, add):
     m, config, setup = ctx.m, ctx.config, ctx.setup
     bank = setup.bank
     top = 1 << config.coord_bits
-    bk = fields(bank.payload, setup_layout(config, ctx.output))
+    bk = fields(bank.payload, bank.payload.shape())
     bk_axes = axes(bk)
     for name, condition in constants_ok(config, bk).items():
         add(implies(bank.valid, condition), f"bank {name}")
@@ -342,7 +341,7 @@ _LOOP_FITS = ("jsum", "next_acc", "next_major")  # `spec.column`'s fits of the l
 def _stepper_registers(config, stepper) -> types.SimpleNamespace:
     """The stepper's `bank_fields` registers as a bank-like record (arrays as lists; the
     deltas stepper's per-edge constants are wires of the bank payload)."""
-    fields = bank_fields(config, stepper.output)
+    fields = stepper.format.bank_fields(config)
     regs = {field.name: getattr(stepper, field.name) for field in fields}
     regs.update(seg_thresholds=stepper.seg_thresholds, seg_intercepts=stepper.seg_intercepts)
     return types.SimpleNamespace(**regs)
@@ -356,7 +355,7 @@ def _stepper(ctx, add):
     st = _stepper_registers(config, stepper)
     st_axes = axes(st)
     active = stepper.active
-    if ctx.output == "deltas":  # it reads the per-edge constants from the held bank
+    if ctx.format.live_bank:  # it reads the per-edge constants from the held bank
         add(implies(active, bank.valid), "stepper: its edge's bank is held")
     for name, condition in constants_ok(config, st).items():
         add(implies(active, condition), f"stepper {name}")
@@ -388,15 +387,15 @@ def _stepper(ctx, add):
     add(implies(active, all_(stepped)), "stepper rows stepped")
     for name, condition in col.fits.items():
         # The deltas core computes no writes: only the loop's registers matter there.
-        if ctx.output == "writes" or name in _LOOP_FITS:
+        if isinstance(stepper, LineStepper) or name in _LOOP_FITS:
             add(implies(active, condition), f"column {name} fits")
     if ctx.fault == "tight_jq":
         add(implies(active, st.jq < (st.ifix >> 1)), "false invariant jq < ifix / 2")
-    # The per-edge constants the stepper derives at load (`EdgeStepper.derive`).
+    # The per-edge constants the stepper derives at load (`ColumnLoop.derive`).
     for name, value in stepper.derive(st).items():
         add(implies(active, stepper.derived[name] == value), f"stepper derived {name}")
     # Observation wires of the column being stepped.
     add(implies(active, stepper.jsum == col.jsum), "stepper jsum wire")
-    if config.segments and ctx.output == "writes":
+    if isinstance(stepper, LineStepper) and config.segments:
         add(implies(active, stepper.dq == col.dq), "stepper dq wire")
     ctx.st, ctx.st_axes, ctx.column = st, st_axes, col

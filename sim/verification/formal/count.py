@@ -31,7 +31,7 @@ def capacity(core) -> int:
     (its last column there while the stepper already steps the next edge): ``2 +
     stepper.latency``. The deltas stepper steps the edge whose bank the setup holds: ``1 +
     stepper.latency``."""
-    return 1 + (core.output == "writes") + core.stepper.latency
+    return 1 + (not core.format.live_bank) + core.stepper.latency
 
 
 def check(ctx):
@@ -84,7 +84,7 @@ def check(ctx):
         (all_(tags.positions), "count: column or beat of a bad command"),
         (core.errors == saturated, "count: errors counts error pulses"),
     ]
-    if ctx.output == "deltas":  # the stepper takes the bank when the last column steps
+    if ctx.format.live_bank:  # the stepper takes the bank when the last column steps
         properties.append((implies(stepper.active, bank.valid), "count: bank held"))
     # The registers loaded with the command (white-box helpers for the induction).
     for name, value in accept_values(config, setup.cmd).items():
@@ -103,7 +103,7 @@ def _occupancy(ctx, positions, cmd_bad, error) -> types.SimpleNamespace:
     in_run, in_final = setup.in_run, setup.in_final
     last_waiting = sum(valid & is_last for valid, is_last in positions)
     # The deltas stepper steps the edge whose bank the setup still holds: counted once.
-    stepped = stepper.active if ctx.output == "writes" else 0
+    stepped = 0 if ctx.format.live_bank else stepper.active
     held_good = (
         (in_fold & ~cmd_bad) + in_window + in_run + in_final + bank.valid + stepped + last_waiting
     )

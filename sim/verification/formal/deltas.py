@@ -1,4 +1,4 @@
-"""``dbounds``, ``dloop``, ``dpipe``, ``dbeat``: the deltas core (``output="deltas"``).
+"""``dbounds``, ``dloop``, ``dpipe``, ``dbeat``: the polygon core (its `DeltaStepper`).
 
 The model side is `spec.deltas_column`: the model's `piece_end`, `column_deltas`,
 `delta_cells` and `advance` on a loop state. The stepper's loop state is its loop registers

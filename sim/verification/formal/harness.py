@@ -9,9 +9,7 @@ import types
 from amaranth.asserts import AnySeq
 from amaranth.hdl import Assert, Assume, ClockDomain, Elaboratable, Fragment, Module, Signal, Value
 
-from ....hdl.core import EdgeAntialiaser
-from ....hdl.layouts import output_layout
-from ....model.bank import check_output
+from ....hdl.core import LineCore, PolygonCore
 from ....model.config import EdgeConfig
 from .bounds import check as check_bounds
 from .count import capacity
@@ -28,6 +26,12 @@ __all__ = ["CHECKS", "COVERS", "DELTA_CHECKS", "FAULTS", "LINE_CHECKS", "FormalH
 LINE_CHECKS = ("pipe", "beat", "minor")  # the writes core's pipeline
 CHECKS = ("stream", "count", "bounds", *LINE_CHECKS, *DELTA_CHECKS)
 COVERS = ("drop", "stepper", "deltas")
+# Each core's stepper pipeline: its check groups, its cover and the family that checks it (the
+# proofs move with the parts: the harness builds the core it proves).
+_PIPELINES = {
+    LineCore: (LINE_CHECKS, "stepper", check_pipeline),
+    PolygonCore: (DELTA_CHECKS, "deltas", check_deltas),
+}
 FAULTS = ("stall_payload", "stall_bank", "silent_drop", "tight_jq", "tight_hs")
 
 
@@ -39,13 +43,15 @@ def _choose(name: str, value, allowed) -> tuple[str, ...]:
     return value
 
 
-def _check_output_groups(output: str, groups, covers) -> None:
-    """The pipeline groups and covers of the other output do not apply."""
-    other = set(DELTA_CHECKS if output == "writes" else LINE_CHECKS)
-    other |= {"deltas"} if output == "writes" else {"stepper"}
+def _check_pipeline_groups(top, groups, covers) -> None:
+    """The pipeline groups and covers of the other core do not apply."""
+    other = set()
+    for core, (checks, cover, _) in _PIPELINES.items():
+        if core is not top:
+            other |= {*checks, cover}
     wrong = sorted(other & (set(groups) | set(covers)))
     if wrong:
-        raise ValueError(f"{', '.join(wrong)} do not apply to the {output} core")
+        raise ValueError(f"{', '.join(wrong)} do not apply to {top.__name__}")
 
 
 class FormalHarness(Elaboratable):
@@ -54,10 +60,9 @@ class FormalHarness(Elaboratable):
 
     ``reset``: the reset is a free input (else the domain has no reset). ``covers``: add the
     Cover statements. ``assumes``: check groups proven elsewhere, assumed here. ``fault``: one
-    of `FAULTS`, a deliberate error the checks must catch. ``output``: the core's output,
-    ``"writes"`` (line writes) or ``"deltas"`` (accumulation deltas; its pipeline groups are
-    `DELTA_CHECKS`, the writes pipeline's `LINE_CHECKS` do not apply, its covers
-    ``deltas``).
+    of `FAULTS`, a deliberate error the checks must catch. ``top``: the core proven,
+    `LineCore` (its pipeline groups `LINE_CHECKS`, its cover ``stepper``) or `PolygonCore`
+    (`DELTA_CHECKS`, its cover ``deltas``); the other core's groups do not apply.
     """
 
     def __init__(
@@ -69,7 +74,7 @@ class FormalHarness(Elaboratable):
         assumes=(),
         reset: bool = True,
         fault: str | None = None,
-        output: str = "writes",
+        top=LineCore,
     ):
         self.config = EdgeConfig() if config is None else config
         if not isinstance(self.config, EdgeConfig):
@@ -82,11 +87,13 @@ class FormalHarness(Elaboratable):
         self.assumes = _choose("assumes", assumes, CHECKS)
         self.reset = reset
         self.fault = fault
-        self.output = check_output(output)
-        _check_output_groups(self.output, self.checks + self.assumes, self.covers)
+        if top not in _PIPELINES:
+            raise TypeError(f"top must be LineCore or PolygonCore, not {top!r}")
+        self.top = top
+        _check_pipeline_groups(top, self.checks + self.assumes, self.covers)
         # One setup unit: the properties observe its internals (`SetupArray` is checked in
         # simulation, tests/test_setup_array.py).
-        self.core = EdgeAntialiaser(self.config, output=self.output, setup_units=1)
+        self.core = top(self.config, setup_units=1)
         # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
         self.domain = ClockDomain("sync", reset_less=not reset)
 
@@ -111,6 +118,7 @@ class FormalHarness(Elaboratable):
             core.out.ready.eq(AnySeq(1)),
         ]
         ctx = self._context(m)
+        check_pipeline_of = _PIPELINES[self.top][2]
         stepper_covers = bool({"stepper", "deltas"} & set(self.covers))
         if "stream" in self.checks or stepper_covers:
             check_stream(ctx)
@@ -119,10 +127,7 @@ class FormalHarness(Elaboratable):
             check_count(ctx)
         if wanted & {"bounds", *LINE_CHECKS, *DELTA_CHECKS} or stepper_covers:
             check_bounds(ctx)
-            if self.output == "deltas":
-                check_deltas(ctx)
-            else:
-                check_pipeline(ctx)
+            check_pipeline_of(ctx)
         add_covers(ctx)
         return m
 
@@ -132,18 +137,17 @@ class FormalHarness(Elaboratable):
         core = self.core
         out = core.out
         stepper = core.stepper
-        deltas = self.output == "deltas"
         ctx = types.SimpleNamespace(
             m=m,
             config=self.config,
-            output=self.output,
+            format=core.format,  # the output's declaration (`edgeaa.model.beat`)
             core=core,
             setup=core.setup,
             stepper=stepper,
             out=out,  # the output stream: writes or deltas
-            layout=output_layout(self.config, self.output),
+            layout=out.payload.shape(),
             # The stages before the output register, each with valid and last.
-            stages=stepper.delta_stages if deltas else stepper.stages,
+            stages=stepper.stages,
             checks=self.checks,
             assumes=self.assumes,
             covers=self.covers,

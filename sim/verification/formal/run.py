@@ -16,6 +16,7 @@ from pathlib import Path
 
 from amaranth.back import rtlil
 
+from ....hdl.core import LineCore, PolygonCore
 from ....model import timing
 from ....model.config import EdgeConfig
 from .harness import FAULTS, FormalHarness
@@ -60,10 +61,10 @@ class Proof:
     assumes: tuple[str, ...] = ()  # check groups proven elsewhere, assumed here
     skip: int | str = 0  # clocks after reset whose assertions and covers are not checked
     description: str = ""
-    output: str = "writes"  # the core's output: line writes or accumulation deltas
+    top: type = LineCore  # the core proven: LineCore or PolygonCore
 
 
-# The deltas core (output "deltas"): the stream, count and bounds groups of the writes core,
+# The polygon core (`PolygonCore`): the stream, count and bounds groups of the line core,
 # the deltas groups (`deltas`) and its covers.
 DELTA_PROOFS = (
     Proof(
@@ -71,7 +72,7 @@ DELTA_PROOFS = (
         ("stream",),
         "prove",
         1,
-        output="deltas",
+        top=PolygonCore,
         description="deltas hold rule, any reachable state (k-induction)",
     ),
     Proof(
@@ -79,7 +80,7 @@ DELTA_PROOFS = (
         ("count",),
         "prove",
         1,
-        output="deltas",
+        top=PolygonCore,
         description="deltas core: no command lost, bad commands never beat (k-induction)",
     ),
     Proof(
@@ -87,7 +88,7 @@ DELTA_PROOFS = (
         ("bounds",),
         "prove",
         1,
-        output="deltas",
+        top=PolygonCore,
         description="deltas core: the setup, bank and loop invariants of `bounds` (k-induction)",
     ),
     Proof(
@@ -96,7 +97,7 @@ DELTA_PROOFS = (
         "prove",
         1,
         assumes=("bounds",),
-        output="deltas",
+        top=PolygonCore,
         description="end pieces equal the model's where they are selects of the fold, "
         "within range; the piece start; every register of a column fits (k-induction)",
     ),
@@ -106,7 +107,7 @@ DELTA_PROOFS = (
         "prove",
         1,
         assumes=("bounds", "dbounds"),
-        output="deltas",
+        top=PolygonCore,
         description="the loop registers follow the model's loop (k-induction)",
     ),
     Proof(
@@ -115,7 +116,7 @@ DELTA_PROOFS = (
         "prove",
         1,
         assumes=("bounds", "dbounds"),
-        output="deltas",
+        top=PolygonCore,
         description="the deltas pipeline's stages hold the model's values of the column "
         "snapshot they carry (k-induction)",
     ),
@@ -125,7 +126,7 @@ DELTA_PROOFS = (
         "prove",
         1,
         assumes=("bounds", "dbounds", "dpipe"),
-        output="deltas",
+        top=PolygonCore,
         description="the four cells the output register loads from p2 are the model's "
         "`delta_cells` of p2's column snapshot, in full width (k-induction)",
     ),
@@ -135,7 +136,7 @@ DELTA_PROOFS = (
         "prove",
         1,
         assumes=("bounds", "dbounds", "dpipe", "dcells"),
-        output="deltas",
+        top=PolygonCore,
         description="every delta beat is the model's `delta_cells` of the loop state its "
         "column was stepped with, last on the last column (k-induction)",
     ),
@@ -146,7 +147,7 @@ DELTA_PROOFS = (
         "latency+2",
         covers=("deltas",),
         skip="latency-4",
-        output="deltas",
+        top=PolygonCore,
         description="the deltas stepper is reachable: pieces above and below their row, a "
         "one-column edge, a y-major column, a negative delta, last and held beats, two edges",
     ),
@@ -407,7 +408,7 @@ def run_proof(
     mode = mode or proof.mode
     depth = proof.depth if depth is None else depth
     skip = proof.skip if skip is None else skip
-    latency = timing.setup_latency(config or EdgeConfig(), proof.output)
+    latency = timing.setup_latency(config or EdgeConfig(), proof.top.format)
     depth, skip = (
         latency + int(value[len("latency") :]) if isinstance(value, str) else value
         for value in (depth, skip)
@@ -420,7 +421,7 @@ def run_proof(
         assumes=proof.assumes,
         reset=reset,
         fault=fault,
-        output=proof.output,
+        top=proof.top,
     )
     script = sby_script(mode, depth, skip=skip, solver=solver)
     name = proof.name + (f"+{fault}" if fault else "")

@@ -282,7 +282,7 @@ class Sign:
 
 
 def deltas_setup(b) -> types.SimpleNamespace:
-    """A bank-like record of the deltas core (`bank_fields(config, "deltas")`) as the model's
+    """A bank-like record of the polygon core (`DELTAS.bank_fields(config)`) as the model's
     `EdgeSetup` the deltas functions read: its fields, ``x_major``, ``major_neg_x`` and
     ``pieces`` (the `EndPieces` fields, the winding sign as a `Sign`)."""
     x_major = b.col_dx != 0

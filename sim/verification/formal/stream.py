@@ -39,7 +39,7 @@ def check(ctx):
         hold_rule(ctx.m, ctx.out.valid, ctx.payload, ctx.held, emit, "beat")
         # The bank's hold is the setup's HOLD, the same for both outputs; the deltas bank's
         # extra fields (a product among them) make its induction take minutes, not seconds.
-        if ctx.output == "writes":
+        if not ctx.format.pieces:
             bank = ctx.setup.bank
             payload, was_held = Value.cast(bank.payload), held(ctx.m, bank, "bank_held")
             if ctx.fault == "stall_bank":
