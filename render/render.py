@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -604,7 +605,7 @@ class Render:
     projected: np.ndarray  # edges wholly left, sent as their projection
     horizontal: np.ndarray  # horizontal boundary edges not sent (they add nothing)
     deltas: DeltaRun  # every nonzero delta the engine produced, in image pixels
-    cycles: int  # timing model: first command to last beat
+    shapes: tuple[np.ndarray, np.ndarray]  # the sent edges' columns and clipped_start
     rows_scanned: int  # buffer rows prefix-summed
     cells_scanned: int  # buffer cells prefix-summed and resolved
     pixel_stores: int  # image pixels written
@@ -616,6 +617,12 @@ class Render:
     pipeline: object | None = None
     pipeline_tile: object | None = None  # its `edgeaa.model.tile.TileConfig`
     mismatches: int | None = None
+
+    @cached_property
+    def cycles(self) -> int:
+        """The timing model's clocks from the first command to the last beat: computed when
+        asked (--stats), not on every render."""
+        return cycles_of(self.plan.config, self.shapes, "deltas")
 
 
 def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:
@@ -695,7 +702,7 @@ def render_scene(
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
         deltas=deltas,
-        cycles=cycles_of(config, shapes, "deltas"),
+        shapes=shapes,
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],

@@ -8,12 +8,16 @@ tests/test_accumulation.py."""
 import json
 import math
 import random
+import subprocess
+import sys
 from dataclasses import replace
 from fractions import Fraction
 
 import numpy as np
 import pytest
 from fixtures import TINY_SCENE
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from edgeaa.analysis.compare import agg_scene
 from edgeaa.cli import main
@@ -456,6 +460,50 @@ def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, mod
         assert np.array_equal(clocks, beat_clocks(DEFAULT, edges, "deltas")), name
         assert fast.cycles == model.cycles == int(clocks[-1]) + 1, name
         assert fast.deltas.clocks >= fast.cycles, name  # the drain after the last beat
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.tuples(st.integers(0, 80), st.booleans(), st.integers(0, 9)), max_size=40),
+    st.sampled_from([DEFAULT, SEG4, EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4)]),
+    st.sampled_from(["writes", "deltas"]),
+)
+def test_the_vectorized_cycles_are_the_timing_models(commands, config, output):
+    """`load_clocks` and `stream_cycles` (numpy, the renderer's cycles) against the scalar
+    `schedule`, with bad commands (one in ten) and edges with no visible column among them."""
+    from edgeaa.model.timing import load_clocks, schedule, stream_cycles
+
+    columns = np.array([c for c, _, _ in commands], dtype=np.int64)
+    clipped = np.array([k for _, k, _ in commands], dtype=bool)
+    bad = np.array([b == 0 for _, _, b in commands], dtype=bool)
+    shapes = [(int(c), bool(k)) for c, k in zip(columns, clipped, strict=True)]
+    shapes = [None if b else shape for shape, b in zip(shapes, bad, strict=True)]
+    timings = schedule(config, shapes, output=output)
+    loads = [t.load for t in timings if not t.dropped]
+    last = max((t.beats[-1] for t in timings if t.beats), default=-1)
+    assert load_clocks(config, columns, clipped, bad, output).tolist() == loads
+    assert stream_cycles(config, columns, clipped, bad, output) == last + 1
+
+
+def test_a_model_render_imports_no_hardware(tmp_path):
+    """`edgeaa render` with the model (and --stats) loads nothing of the hardware, its
+    simulators or Amaranth: they cost half a second before any work."""
+    probe = (
+        "import sys\n"
+        "from edgeaa.cli import main\n"
+        "status = main(sys.argv[1:])\n"
+        "names = [m for m in sys.modules if m.split('.')[0] == 'amaranth' or "
+        "m.startswith(('edgeaa.hdl', 'edgeaa.sim'))]\n"
+        "print('loaded:', sorted(names))\n"
+        "sys.exit(status)\n"
+    )
+    for extra in ([], ["--stats"]):
+        argv = ["render", "--builtin", "text", "-o", str(tmp_path / "t.png"), *extra]
+        proc = subprocess.run(
+            [sys.executable, "-c", probe, *argv], capture_output=True, text=True, check=False
+        )
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.splitlines()[-1] == "loaded: []", (extra, proc.stdout)
 
 
 # -- skipping -----------------------------------------------------------------------------------
