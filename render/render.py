@@ -37,6 +37,7 @@ from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
     SAFE,
     NodingLimit,
+    contour_segments,
     hot_points,
     inside_sides,
     level_pairs,
@@ -255,19 +256,38 @@ def _check_scene(scene: Scene, config: EdgeConfig) -> list[int]:
 def _quantize(scene: Scene, S: int):
     """Round the vertices half up to the 2**-s grid, drop repeated vertices and collapsed
     contours. Returns the contours (sub-pixel units), their owners (polygon, contour, the
-    indices of the kept vertices) and how many contours were dropped."""
-    contours, owners, dropped = [], [], 0
-    for i, poly in enumerate(scene.polygons):
-        for j, contour in enumerate(poly.contours):
-            pts = np.floor(np.asarray(contour, dtype=np.float64) * S + 0.5)
-            keep = np.any(pts != np.roll(pts, 1, axis=0), axis=1)
-            pts = pts[keep] if keep.any() else pts[:1]
-            if len({tuple(p) for p in pts.tolist()}) < 3:
-                dropped += 1
-                continue
-            contours.append(pts)
-            owners.append((i, j, np.flatnonzero(keep) if keep.any() else np.arange(1)))
-    return contours, owners, dropped
+    indices of the kept vertices) and how many contours were dropped. Every contour in one
+    pass of numpy (per contour, the calls cost more than the work)."""
+    labels = [(i, j) for i, poly in enumerate(scene.polygons) for j in range(len(poly.contours))]
+    if not labels:
+        return [], [], 0
+    flat = [p for poly in scene.polygons for contour in poly.contours for p in contour]
+    sizes = np.array([len(c) for poly in scene.polygons for c in poly.contours], dtype=np.int64)
+    first = np.cumsum(sizes) - sizes
+    pts = np.floor(np.asarray(flat, dtype=np.float64).reshape(-1, 2) * S + 0.5)
+    local = np.arange(len(pts)) - np.repeat(first, sizes)  # index in its contour
+    prev = np.arange(len(pts)) - 1
+    prev[first] = first + sizes - 1  # a contour's first vertex follows its last
+    keep = np.any(pts != pts[prev], axis=1)
+    none = np.add.reduceat(keep, first) == 0  # one point repeated: keep its first
+    keep[first[none]] = True
+    owner = np.repeat(np.arange(len(sizes)), sizes)[keep]
+    kept = pts[keep]
+    order = np.lexsort((kept[:, 1], kept[:, 0], owner))  # distinct points per contour
+    same = np.zeros(len(order), dtype=bool)
+    same[1:] = (owner[order][1:] == owner[order][:-1]) & np.all(
+        kept[order][1:] == kept[order][:-1], axis=1
+    )
+    distinct = np.bincount(owner[order][~same], minlength=len(sizes))
+    counts = np.bincount(owner, minlength=len(sizes))
+    parts = np.split(kept, np.cumsum(counts)[:-1])
+    indices = np.split(local[keep], np.cumsum(counts)[:-1])
+    contours, owners = [], []
+    for (i, j), part, index, n in zip(labels, parts, indices, distinct.tolist(), strict=True):
+        if n >= 3:
+            contours.append(part)
+            owners.append((i, j, index))
+    return contours, owners, len(labels) - len(contours)
 
 
 def _offset(config: EdgeConfig, scene: Scene, contours, owners) -> tuple[int, int]:
@@ -320,29 +340,25 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     polygon (and the edge count last) and how many vertices were inserted at crossings.
     """
     shift = np.array(offset, dtype=np.int64) * S
-    coords, polygon, contour = [], [], []
-    starts = [0] * (len(scene.polygons) + 1)
-    count = crossings = 0
+    crossings = 0
     by_polygon: list[list[np.ndarray]] = [[] for _ in scene.polygons]
     for (k, _, _), pts in zip(owners, contours, strict=True):
         by_polygon[k].append(pts.astype(np.int64) + shift)
     crossing = _crossing(by_polygon)
+    final, owner = [], []  # the contours after splitting, in order, and their polygons
     for i, mine in enumerate(by_polygon):
-        if not crossing[i]:  # nothing to split: no need to look again, polygon by polygon
-            inserted = 0
-        else:
+        if crossing[i]:  # only these need a look again, polygon by polygon
             mine, inserted = _node_polygon(i, mine)
-        crossings += inserted
-        for q in mine:
-            n = len(q)
-            if n < 2:
-                continue
-            coords.append(np.concatenate([q, np.roll(q, -1, axis=0)], axis=1))
-            polygon.append(np.full(n, i))
-            contour.append(np.full(n, len(contour)))
-            count += n
-        starts[i + 1] = count
-    return _joined(coords, 4), _joined(polygon), _joined(contour), starts, crossings
+            crossings += inserted
+        final += [q for q in mine if len(q) >= 2]
+        owner += [i] * sum(len(q) >= 2 for q in mine)
+    sizes = np.array([len(q) for q in final], dtype=np.int64)
+    coords = contour_segments(final)
+    polygon = np.repeat(np.array(owner, dtype=np.int64), sizes)
+    contour = np.repeat(np.arange(len(final), dtype=np.int64), sizes)
+    counts = np.bincount(polygon, minlength=len(scene.polygons))
+    starts = [0, *np.cumsum(counts).tolist()]
+    return coords, polygon, contour, starts, crossings
 
 
 def _crossing(by_polygon: list[list[np.ndarray]]) -> np.ndarray:
@@ -439,12 +455,6 @@ def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
     """Whether each (x, y) row of `rows` is a row of `table`."""
     known = {tuple(r) for r in table.tolist()}
     return np.array([tuple(r) in known for r in rows.tolist()], dtype=bool)
-
-
-def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:
-    if parts:
-        return np.concatenate(parts).astype(np.int64)
-    return np.zeros((0, width) if width else 0, dtype=np.int64)
 
 
 def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):

@@ -973,6 +973,90 @@ def test_winding_numbers_match_every_point_against_every_edge(seed, monkeypatch)
     assert np.array_equal(geometry.winding_numbers(edges, points, first, second), want), seed
 
 
+def _quantize_reference(scene, S):
+    """The planner's quantization as it was: contour by contour."""
+    contours, owners, dropped = [], [], 0
+    for i, poly in enumerate(scene.polygons):
+        for j, contour in enumerate(poly.contours):
+            pts = np.floor(np.asarray(contour, dtype=np.float64) * S + 0.5)
+            keep = np.any(pts != np.roll(pts, 1, axis=0), axis=1)
+            pts = pts[keep] if keep.any() else pts[:1]
+            if len({tuple(p) for p in pts.tolist()}) < 3:
+                dropped += 1
+                continue
+            contours.append(pts)
+            owners.append((i, j, np.flatnonzero(keep) if keep.any() else np.arange(1)))
+    return contours, owners, dropped
+
+
+def _split_edges_reference(scene, contours, owners, offset, S):
+    """The planner's edges as they were built: polygon by polygon, contour by contour."""
+    from edgeaa.render.render import _crossing, _node_polygon
+
+    shift = np.array(offset, dtype=np.int64) * S
+    coords, polygon, contour, starts, count, crossings = [], [], [], [0], 0, 0
+    by_polygon = [[] for _ in scene.polygons]
+    for (k, _, _), pts in zip(owners, contours, strict=True):
+        by_polygon[k].append(pts.astype(np.int64) + shift)
+    crossing = _crossing(by_polygon)
+    for i, mine in enumerate(by_polygon):
+        if crossing[i]:
+            mine, inserted = _node_polygon(i, mine)
+            crossings += inserted
+        for q in mine:
+            if len(q) >= 2:
+                coords.append(np.concatenate([q, np.roll(q, -1, axis=0)], axis=1))
+                polygon.append(np.full(len(q), i))
+                contour.append(np.full(len(q), len(contour)))
+                count += len(q)
+        starts.append(count)
+    joined = [np.concatenate(x).astype(np.int64) if x else None for x in (coords, polygon, contour)]
+    return (*joined, starts, crossings)
+
+
+def _check_plan_against_reference(scene):
+    from edgeaa.render.render import _offset, _quantize, _split_edges
+
+    S = DEFAULT.subpixel_scale
+    got, want = _quantize(scene, S), _quantize_reference(scene, S)
+    assert got[2] == want[2] and len(got[0]) == len(want[0]), scene.name
+    for a, b, (i, j, k), (i2, j2, k2) in zip(got[0], want[0], got[1], want[1], strict=True):
+        assert np.array_equal(a, b) and (i, j) == (i2, j2) and np.array_equal(k, k2), scene.name
+    if not want[0]:
+        return
+    offset = _offset(DEFAULT, scene, *want[:2])
+    edges = _split_edges(scene, got[0], got[1], offset, S)
+    reference = _split_edges_reference(scene, want[0], want[1], offset, S)
+    for a, b in zip(edges, reference, strict=True):
+        assert np.array_equal(a, b), scene.name
+
+
+def test_the_plan_is_the_reference_plan_on_the_corpus():
+    """The planner's quantization and edges in numpy over whole arrays (issue 28) against the
+    contour-by-contour reference: the built-ins, the fonts and icons matplotlib ships, the
+    adversarial polygons."""
+    from edgeaa.render.corpus import ICONS, adversarial_scenes, font_scene, icon_scene
+
+    scenes = [builtin(name, DEFAULT) for name in ("starburst", "text", "hatch")]
+    scenes += [font_scene(font, 9)[0] for font in ("DejaVuSans", "STIXGeneral", "cmr10")]
+    scenes += [icon_scene(name, 24) for name in ICONS] + adversarial_scenes()
+    for scene in scenes:
+        _check_plan_against_reference(scene)
+
+
+_vertex = st.tuples(st.integers(-8, 40), st.integers(-8, 40)).map(lambda p: (p[0] / 3, p[1] / 3))
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.lists(st.lists(_vertex, min_size=1, max_size=9), min_size=1, max_size=3),
+                min_size=1, max_size=6))  # fmt: skip
+def test_the_plan_is_the_reference_plan_on_random_scenes(polygons):
+    """Repeated vertices, contours that collapse to a point or a segment, crossing contours:
+    the same quantized contours, owners, drops and edges as the reference."""
+    scene = Scene(16, 16, tuple(Polygon(tuple(map(tuple, c)), 128, "nonzero") for c in polygons), 0)
+    _check_plan_against_reference(scene)
+
+
 def test_a_polygon_whose_splitting_passes_the_limit_is_refused_before_the_work():
     from edgeaa.render.scene import MAX_NODED_EDGES
 
