@@ -315,8 +315,8 @@ def contour_segments(contours: list[np.ndarray]) -> np.ndarray:
     sizes = np.array([len(c) for c in contours], dtype=np.int64)
     points = np.concatenate(contours)
     nxt = np.arange(1, len(points) + 1)
-    ends = np.cumsum(sizes) - 1
-    nxt[ends] = ends - sizes + 1  # the last vertex closes to the first
+    ends = (np.cumsum(sizes) - 1)[sizes > 0]  # an empty contour has no edge
+    nxt[ends] = ends - sizes[sizes > 0] + 1  # the last vertex closes to the first
     return np.concatenate([points, points[nxt]], axis=1)
 
 
