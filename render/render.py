@@ -12,7 +12,9 @@
    and emits its signed-area deltas (`edgeaa.model.column.column_deltas`); per polygon, add
    them into an accumulation buffer over the polygon's window, prefix-sum the touched rows,
    apply the fill rule and composite the coverage over what is below
-   (`edgeaa.model.accumulate`).
+   (`edgeaa.model.accumulate`). Polygons whose windows share no pixel are accumulated
+   together in one buffer (`_disjoint_runs`), each after every earlier polygon whose window
+   meets its own: the same image, with numpy's per-call cost paid once per run.
 
 The boundary edges alone bound the filled region, each with its inside on one side, so the
 sums are the region's exact area (up to the estimate) even where subpaths overlap or cross.
@@ -32,7 +34,15 @@ from functools import cached_property
 import numpy as np
 
 from ..model import Clip, Edge, EdgeConfig
-from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
+from ..model.accumulate import (
+    Window,
+    composite,
+    evenodd_coverage,
+    intensity_offset,
+    nonzero_coverage,
+    resolve_rows,
+)
+from ..model.column import ArrayArith
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
     SAFE,
@@ -692,12 +702,16 @@ def render_scene(
     polygon_of = plan.polygon[deltas.edge]
     order = np.argsort(polygon_of, kind="stable")
     by_poly = np.searchsorted(polygon_of[order], np.arange(len(plan.polygons) + 1))
-    for i, poly in enumerate(plan.polygons):
+    drawn = [i for i in range(len(plan.polygons)) if by_poly[i + 1] > by_poly[i]]
+    batch = skip and deltas.delta.dtype != object
+    for run in _disjoint_runs(plan, drawn) if batch else [[i] for i in drawn]:
         if progress is not None:
-            progress(i, len(plan.polygons), "accumulate")
-        rows = order[by_poly[i] : by_poly[i + 1]]
-        if len(rows):
-            _draw_polygon(plan, poly, deltas.take(rows), image, skip, counts)
+            progress(run[0], len(plan.polygons), "accumulate")
+        picks = [order[by_poly[i] : by_poly[i + 1]] for i in run]
+        if len(run) == 1:
+            _draw_polygon(plan, plan.polygons[run[0]], deltas.take(picks[0]), image, skip, counts)
+        else:
+            _draw_disjoint(plan, run, deltas.take(np.concatenate(picks)), picks, image, counts)
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t
@@ -733,6 +747,106 @@ def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
             f"edge's major axis, within the image's rows and left of its right side), more "
             f"than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
         )
+
+
+RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_disjoint_runs`)
+RUN_CELLS = 1 << 18  # and its cells (2 MiB of int64)
+RUN_PAIRS = 1 << 22  # candidate window pairs past which runs are not looked for
+
+
+def _disjoint_runs(plan: Plan, drawn: list[int]) -> list[list[int]]:
+    """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_disjoint`): no
+    two windows of a run share a pixel, and a polygon comes after every earlier polygon whose
+    window meets its own (its wave is one more than theirs: the compositing order is kept
+    wherever it matters). A run holds at most RUN_POLYGONS polygons and RUN_CELLS cells of
+    buffer (rows times the widest window); a polygon with an empty window draws nothing and
+    is a run of its own. Past RUN_PAIRS candidate pairs (windows heaped on each other),
+    every polygon is a run of its own, in order."""
+    boxes = np.array([plan.polygons[i].window for i in drawn], dtype=np.int64).reshape(-1, 4)
+    live = (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
+    ids = np.flatnonzero(live)
+    pairs = _meeting_windows(boxes[ids])
+    if pairs is None:
+        return [[i] for i in drawn]
+    earlier: list[list[int]] = [[] for _ in ids]  # positions in ids, drawn order
+    for a, b in zip(*(np.sort(np.stack(pairs), axis=0).tolist()), strict=True):
+        earlier[b].append(a)
+    wave = [0] * len(ids)
+    for k, before in enumerate(earlier):
+        wave[k] = 1 + max((wave[j] for j in before), default=-1)
+    runs = [[drawn[i]] for i in np.flatnonzero(~live)]
+    run: list[int] = []
+    last = rows = widest = 0
+    for k in np.argsort(wave, kind="stable").tolist():  # by wave, in order within one
+        x0, y0, x1, y1 = boxes[ids[k]].tolist()
+        height, width = y1 - y0, max(widest, x1 - x0)
+        if run and (
+            wave[k] != last or len(run) >= RUN_POLYGONS or (rows + height) * width > RUN_CELLS
+        ):
+            runs.append(run)
+            run, rows, width = [], 0, x1 - x0
+        run.append(drawn[ids[k]])
+        last, rows, widest = wave[k], rows + height, width
+    return runs + [run] if run else runs
+
+
+def _meeting_windows(boxes: np.ndarray):
+    """The pairs (a, b) of windows (x0, y0, x1, y1, none empty) that share a pixel: a sweep
+    along x (sorted by x0, each window's partners are those starting before its x1), then y.
+    None past RUN_PAIRS candidates."""
+    order = np.argsort(boxes[:, 0], kind="stable")
+    start = boxes[order, 0]
+    counts = np.searchsorted(start, boxes[order, 2], side="left") - np.arange(1, len(order) + 1)
+    counts = np.maximum(counts, 0)
+    if counts.sum() > RUN_PAIRS:
+        return None
+    a = np.repeat(np.arange(len(order)), counts)
+    b = a + 1 + np.arange(len(a)) - np.repeat(np.cumsum(counts) - counts, counts)
+    a, b = order[a], order[b]
+    meet = (boxes[a, 1] < boxes[b, 3]) & (boxes[b, 1] < boxes[a, 3])
+    return a[meet], b[meet]
+
+
+def _draw_disjoint(plan: Plan, run: list[int], deltas: DeltaRun, picks, image, counts):
+    """`_draw_polygon` on every polygon of a run at once (their windows share no pixel): each
+    polygon's touched rows become rows of one buffer as wide as the widest window, the cells
+    past a polygon's own window masked, so every pixel gets exactly what `_draw_polygon`
+    gives it, with the numpy calls paid once per run instead of once per polygon."""
+    config = plan.config
+    polys = [plan.polygons[i] for i in run]
+    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).T
+    d = np.array([abs(p.intensity - p.i_out) for p in polys], dtype=np.int64)
+    value = np.array([p.intensity for p in polys], dtype=np.int64)
+    odd = np.array([p.rule == "evenodd" for p in polys], dtype=bool)
+    k = np.repeat(np.arange(len(run)), [len(pick) for pick in picks])  # each delta's polygon
+    x, y, delta = deltas.x, deltas.y, deltas.delta
+    keep = (y >= y0[k]) & (y < y1[k]) & (x < x1[k])
+    k, y, delta = k[keep], y[keep], delta[keep]
+    x = np.maximum(x[keep], x0[k]) - x0[k]
+    rows, row_of = np.unique(k * plan.scene.height + y, return_inverse=True)
+    owner, image_row = np.divmod(rows, plan.scene.height)
+    width = (x1 - x0)[owner]
+    buffer = np.zeros((len(rows), int(width.max(initial=0))), dtype=np.int64)
+    np.add.at(buffer, (row_of, x), delta)
+    sums = np.cumsum(buffer, axis=1)
+    ifix = (d[owner] << config.F)[:, None]
+    coverage = nonzero_coverage(ArrayArith, sums, ifix)
+    if odd.any():
+        coverage = np.where(odd[owner][:, None], evenodd_coverage(ArrayArith, sums, ifix), coverage)
+    q = intensity_offset(coverage, config.F)
+    q[np.arange(buffer.shape[1])[None, :] >= width[:, None]] = 0  # past the polygon's window
+    counts["rows"] += len(rows)
+    counts["cells"] += int(width.sum())
+    r, c = np.nonzero(q)
+    mine = owner[r]
+    pixel_rows, pixel_cols = image_row[r], c + x0[mine]
+    below = image[pixel_rows, pixel_cols].astype(np.int64)
+    qq = q[r, c].astype(np.int64)
+    full = qq == d[mine]  # whole pixels take the intensity, no division
+    new = np.where(full, value[mine], composite(below, qq, value[mine], d[mine]))
+    changed = new != below
+    counts["stores"] += int(np.count_nonzero(changed))
+    image[pixel_rows[changed], pixel_cols[changed]] = new[changed]
 
 
 def _draw_polygon(plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts):

@@ -1057,6 +1057,45 @@ def test_the_plan_is_the_reference_plan_on_random_scenes(polygons):
     _check_plan_against_reference(scene)
 
 
+def _many_polygons(seed: int) -> Scene:
+    """Small triangles and quads strewn over 96 x 64 px (some overlapping, some apart, a few
+    past the image's sides), both fill rules, several intensities."""
+    rng = np.random.default_rng(seed)
+    polygons = []
+    for _ in range(int(rng.integers(2, 120))):
+        cx, cy = rng.uniform(-6, 100), rng.uniform(-6, 70)
+        pts = [
+            (cx + rng.uniform(-9, 9), cy + rng.uniform(-9, 9)) for _ in range(rng.integers(3, 5))
+        ]
+        rule = "evenodd" if rng.random() < 0.3 else "nonzero"
+        polygons.append(Polygon((tuple(pts),), int(rng.integers(0, 256)), rule))
+    return Scene(96, 64, tuple(polygons), int(rng.integers(0, 256)), name=f"many {seed}")
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_polygons_accumulated_in_runs_give_the_polygon_by_polygon_image(seed, monkeypatch):
+    """Polygons whose windows share no pixel are accumulated in one buffer (`_disjoint_runs`,
+    `_draw_disjoint`): the same image and the same counts as one polygon at a time, in order."""
+    from edgeaa.render import render as renderer
+
+    scene = _many_polygons(seed)
+    runs = renderer._disjoint_runs(plan(scene, DEFAULT), list(range(len(scene.polygons))))
+    assert len(runs) < len(scene.polygons) or len(scene.polygons) < 5, seed  # runs of several
+    scenes = [scene]
+    if seed == 0:
+        scenes += [builtin(name, DEFAULT) for name in ("starburst", "text", "hatch")]
+    for scene in scenes:
+        p = plan(scene, DEFAULT)
+        together = render_scene(p)
+        with monkeypatch.context() as m:
+            m.setattr(renderer, "_disjoint_runs", lambda plan, drawn: [[i] for i in drawn])
+            alone = render_scene(p)
+        note = f"{scene.name}, seed {seed}"
+        assert np.array_equal(together.image, alone.image), note
+        for name in ("rows_scanned", "cells_scanned", "pixel_stores"):
+            assert getattr(together, name) == getattr(alone, name), (note, name)
+
+
 def test_a_polygon_whose_splitting_passes_the_limit_is_refused_before_the_work():
     from edgeaa.render.scene import MAX_NODED_EDGES
 
