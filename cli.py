@@ -36,7 +36,10 @@ from .render import cli as render_cli
 COMMAND_MODULES = (edge_cli, verify_cli, analysis_cli, render_cli)
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The whole parser; with `only` (a command's name) the other commands are listed but get
+    no arguments: adding them imports what their options name (`edgeaa verify`'s shard
+    sizes come from the simulators), work a model render does not need."""
     parser = OneLineErrorParser(
         prog=PROG,
         description="Fixed-point antialiased edge rasterizer: bit-accurate model, Amaranth "
@@ -50,7 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
         command_parser = sub.add_parser(
             command.name, help=command.help, description=command.description
         )
-        command.add_arguments(command_parser)
+        if only in (None, command.name):
+            command.add_arguments(command_parser)
         command_parser.set_defaults(run=command.run)
     return parser
 
@@ -77,8 +81,8 @@ FULL_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO)  # stdout cou
 
 def main(argv: list[str] | None = None) -> int:
     _escape_unencodable()
-    parser = build_parser()
     argv = sys.argv[1:] if argv is None else argv
+    parser = build_parser(argv[0] if argv and argv[0] in COMMANDS else None)
     try:
         if not argv:
             raise usage_error(PROG, f"give a command ({', '.join(COMMANDS)}); see {PROG} --help")

@@ -98,6 +98,8 @@ from __future__ import annotations
 import bisect
 from dataclasses import dataclass
 
+import numpy as np
+
 from .beat import WRITES, BeatFormat
 from .config import EdgeConfig
 from .edge import Edge, EdgeError, setup
@@ -116,6 +118,8 @@ __all__ = [
     "setup_latency",
     "start_clip_cycles",
     "beat_wait",
+    "load_clocks",
+    "stream_cycles",
     "stream_rate",
     "sustained_rate",
     "unit_cycles",
@@ -269,6 +273,49 @@ def schedule(
     if idle is not None or sink_ready or holds is not None:
         raise ValueError("idle, sink_ready and holds are modelled for one setup unit only")
     return _schedule_units(config, shapes, edges, latency, depth, live, setup_units)
+
+
+def load_clocks(config: EdgeConfig, columns, clipped_start, bad=None, fmt: BeatFormat = WRITES):
+    """`schedule`'s load clocks of the stepped edges (good, with a visible column), as an
+    int64 array, from arrays of every command's columns and clipped_start (`bad`: the
+    commands the core drops), one setup unit, back-to-back source, ready sink: numpy, no
+    loop over the edges (the renderer's cycles, `stream_cycles`).
+
+    The recurrence of `_schedule_one` without waits: edge n's load is
+    ``max(accept + L - D - 1 (+ W + 1 if clipped at its start), last + live)``, its accept
+    the previous stepped edge's load (line writes) or its last column's clock ``last =
+    load + C`` (deltas, `live`), plus the clocks of the commands dropped since (2 bad, 5
+    with no column). So each load is the previous one plus a term of the two edges alone:
+    a cumulative sum."""
+    columns = np.asarray(columns, dtype=np.int64).reshape(-1)
+    clipped = np.asarray(clipped_start, dtype=bool).reshape(-1)
+    bad = np.zeros(len(columns), bool) if bad is None else np.asarray(bad, dtype=bool)
+    live = int(fmt.live_bank)
+    dropped = np.where(bad, BAD_COMMAND_CYCLES, np.where(columns > 0, 0, EMPTY_EDGE_CYCLES))
+    before = np.cumsum(dropped) - dropped  # clocks of the drops before each command
+    idx = np.flatnonzero(~bad & (columns > 0))
+    drops = np.diff(before[idx], prepend=0)  # since the previous stepped edge
+    c = columns[idx]
+    setup = setup_latency(config, fmt) - pipeline_depth(config, fmt) - 1
+    setup = setup + np.where(clipped[idx], start_clip_cycles(config), 0) + drops
+    prev = np.concatenate([[0], c[:-1]])
+    step = np.maximum(live * prev + setup, prev + live)
+    if len(step):
+        step[0] = setup[0]  # the first edge waits for its setup only
+    return np.cumsum(step)
+
+
+def stream_cycles(
+    config: EdgeConfig, columns, clipped_start, bad=None, fmt: BeatFormat = WRITES
+) -> int:
+    """Clocks from the first command to the last beat, inclusive (`load_clocks`'s last edge:
+    its load, one clock, its columns, then the pipeline's depth); 0 for no beat."""
+    columns = np.asarray(columns, dtype=np.int64).reshape(-1)
+    loads = load_clocks(config, columns, clipped_start, bad, fmt)
+    if not len(loads):
+        return 0
+    stepped = columns[columns > 0] if bad is None else columns[(columns > 0) & ~np.asarray(bad)]
+    return int(loads[-1] + stepped[-1] + pipeline_depth(config, fmt) + 1)
 
 
 def beat_wait(valid: int, sink_ready: int, hold: int) -> int:

@@ -394,10 +394,13 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
     return render_pipeline(plan, args.engine, tile, progress=bar), baseline
 
 
-def _engine_line(result) -> str:
+def _engine_line(result, stats: bool) -> str:
+    """What the engine did; the stepper's cycles (the timing model, work of its own) only
+    with --stats."""
     run = result.deltas
+    cycles = f"{result.cycles:,} stepper cycles (timing model), " if stats else ""
     line = (
-        f"engine: {len(result.sent)} edges, {result.cycles:,} stepper cycles (timing model), "
+        f"engine: {len(result.sent)} edges, {cycles}"
         f"{len(run):,} nonzero deltas; accumulation: {result.rows_scanned:,} rows, "
         f"{result.cells_scanned:,} cells scanned; {result.seconds:.3f} s"
     )
@@ -451,7 +454,7 @@ def _render(args: argparse.Namespace, scene, plan, bar: ProgressBar) -> int:
         )
         return 1
     if not args.json:
-        print(_engine_line(result))
+        print(_engine_line(result, args.stats))
     say = print if not args.json else (lambda *a, **k: None)
     figures = _figures(result) if args.json else {}
     report = _stats(plan, result, baseline, figures) if baseline is not None else []

@@ -38,7 +38,7 @@ from ..model.beat import (
     BeatFormat,
     edge_columns,
 )
-from ..model.timing import schedule, write_cycles
+from ..model.timing import stream_cycles, write_cycles
 
 ENGINES = ("model", "amaranth", "verilator")
 MODEL_CHUNK = 512  # edges per run_edges call
@@ -143,7 +143,7 @@ class DeltaRun:
 def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
     """The accumulation deltas of the edges `arrays` (a `render.render.EdgeArrays`, all
     valid) through an engine, in order: four cells per stepped column. Returns the run and
-    each edge's (columns, clipped_start) from its setup, for the timing model.
+    the edges' (columns, clipped_start) arrays from their setup, for the timing model.
     progress(done, total) is called as edges complete."""
     from ..hdl.core import PolygonCore
     from ..model.edge import setup_batch
@@ -153,7 +153,7 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
     if engine == "model":
         return _model_deltas(config, arrays, progress)
     batch = setup_batch(config, *arrays.args(), arrays.clip)
-    shapes = list(zip(batch.columns.tolist(), batch.clipped_start.tolist(), strict=True))
+    shapes = (batch.columns, batch.clipped_start)
     if not len(arrays):
         empty = np.zeros(0, dtype=np.int64)
         return DeltaRun(engine, empty, empty, empty, empty, 0.0, 0, empty), shapes
@@ -174,12 +174,9 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
 
 
 def cycles_of(config: EdgeConfig, shapes, fmt: BeatFormat = WRITES) -> int:
-    """`cycles` from each edge's (columns, clipped_start) (`edgeaa.model.timing.schedule`)."""
-    last = -1
-    for timing in schedule(config, shapes, fmt=fmt):
-        if timing.beats:
-            last = max(last, timing.beats[-1])
-    return last + 1
+    """`cycles` from the edges' (columns, clipped_start) arrays, all good commands
+    (`edgeaa.model.timing.stream_cycles`: `schedule`'s clocks in numpy)."""
+    return stream_cycles(config, *shapes, fmt=fmt)
 
 
 def _model_deltas(config: EdgeConfig, arrays, progress):
@@ -194,8 +191,7 @@ def _model_deltas(config: EdgeConfig, arrays, progress):
     run = DeltaRun(
         "model", batch.edge_index, batch.x, batch.y, batch.delta, time.perf_counter() - start
     )
-    setups = batch.setups
-    return run, list(zip(setups.columns.tolist(), setups.clipped_start.tolist(), strict=True))
+    return run, (batch.setups.columns, batch.setups.clipped_start)
 
 
 def _simulate(config: EdgeConfig, edges: list[Edge], engine: str, progress, top):

@@ -307,6 +307,19 @@ def _count_pairs(pairs, limit: int | None):
         yield pair
 
 
+def contour_segments(contours: list[np.ndarray]) -> np.ndarray:
+    """Every edge of closed contours ((n, 2) arrays) as rows x0 y0 x1 y1 (E, 4), in order:
+    each vertex to the next, the last to the first. One pass over all of them."""
+    if not contours:
+        return np.zeros((0, 4), dtype=np.int64)
+    sizes = np.array([len(c) for c in contours], dtype=np.int64)
+    points = np.concatenate(contours)
+    nxt = np.arange(1, len(points) + 1)
+    ends = (np.cumsum(sizes) - 1)[sizes > 0]  # an empty contour has no edge
+    nxt[ends] = ends - sizes[sizes > 0] + 1  # the last vertex closes to the first
+    return np.concatenate([points, points[nxt]], axis=1)
+
+
 def split_crossings(
     contours: list[np.ndarray], limit: int | None = None
 ) -> tuple[list[np.ndarray], int]:
@@ -325,7 +338,7 @@ def split_crossings(
     """
     if not contours:
         return contours, 0
-    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    seg = contour_segments(contours)
     rows = seg.tolist()
     splits: dict[int, list] = {}
     for i, j in _count_pairs(_candidate_pairs(seg), limit):
@@ -473,7 +486,7 @@ def hot_points(contours: list[np.ndarray], limit: int | None = None) -> np.ndarr
     """The centres of the hot pixels of snap rounding: every vertex and every crossing point
     of the contours' edges rounded half up to the grid (`split_crossings`' rounding), (H, 2)
     int64, unique. NodingLimit past `limit` pairs of edges that meet."""
-    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    seg = contour_segments(contours)
     rows = seg.tolist()
     splits: dict[int, list] = {}
     for i, j in _count_pairs(_candidate_pairs(seg), limit):
@@ -491,7 +504,7 @@ def snap_round(
     square [c - 1/2, c + 1/2) x [c' - 1/2, c' + 1/2) around its centre (c, c'), the cell that
     rounding half up sends to it; `hot` holds the centres (every vertex among them).
     NodingLimit if the chains would have more than `limit` vertices."""
-    seg = np.concatenate([np.concatenate([p, np.roll(p, -1, axis=0)], axis=1) for p in contours])
+    seg = contour_segments(contours)
     chains: dict[int, list] = {}
     met = 0
     for e, h in _meeting_pairs(seg, hot):

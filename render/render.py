@@ -12,7 +12,9 @@
    and emits its signed-area deltas (`edgeaa.model.column.column_deltas`); per polygon, add
    them into an accumulation buffer over the polygon's window, prefix-sum the touched rows,
    apply the fill rule and composite the coverage over what is below
-   (`edgeaa.model.accumulate`).
+   (`edgeaa.model.accumulate`). Polygons whose windows share no pixel are accumulated
+   together in one buffer (`_disjoint_runs`), each after every earlier polygon whose window
+   meets its own: the same image, with numpy's per-call cost paid once per run.
 
 The boundary edges alone bound the filled region, each with its inside on one side, so the
 sums are the region's exact area (up to the estimate) even where subpaths overlap or cross.
@@ -27,16 +29,26 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
 from ..model import Clip, Edge, EdgeConfig
-from ..model.accumulate import Window, composite, intensity_offset, resolve_rows
+from ..model.accumulate import (
+    Window,
+    composite,
+    evenodd_coverage,
+    intensity_offset,
+    nonzero_coverage,
+    resolve_rows,
+)
 from ..model.beat import DELTAS
+from ..model.column import ArrayArith
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
     SAFE,
     NodingLimit,
+    contour_segments,
     hot_points,
     inside_sides,
     level_pairs,
@@ -255,19 +267,38 @@ def _check_scene(scene: Scene, config: EdgeConfig) -> list[int]:
 def _quantize(scene: Scene, S: int):
     """Round the vertices half up to the 2**-s grid, drop repeated vertices and collapsed
     contours. Returns the contours (sub-pixel units), their owners (polygon, contour, the
-    indices of the kept vertices) and how many contours were dropped."""
-    contours, owners, dropped = [], [], 0
-    for i, poly in enumerate(scene.polygons):
-        for j, contour in enumerate(poly.contours):
-            pts = np.floor(np.asarray(contour, dtype=np.float64) * S + 0.5)
-            keep = np.any(pts != np.roll(pts, 1, axis=0), axis=1)
-            pts = pts[keep] if keep.any() else pts[:1]
-            if len({tuple(p) for p in pts.tolist()}) < 3:
-                dropped += 1
-                continue
-            contours.append(pts)
-            owners.append((i, j, np.flatnonzero(keep) if keep.any() else np.arange(1)))
-    return contours, owners, dropped
+    indices of the kept vertices) and how many contours were dropped. Every contour in one
+    pass of numpy (per contour, the calls cost more than the work)."""
+    labels = [(i, j) for i, poly in enumerate(scene.polygons) for j in range(len(poly.contours))]
+    if not labels:
+        return [], [], 0
+    flat = [p for poly in scene.polygons for contour in poly.contours for p in contour]
+    sizes = np.array([len(c) for poly in scene.polygons for c in poly.contours], dtype=np.int64)
+    first = np.cumsum(sizes) - sizes
+    pts = np.floor(np.asarray(flat, dtype=np.float64).reshape(-1, 2) * S + 0.5)
+    local = np.arange(len(pts)) - np.repeat(first, sizes)  # index in its contour
+    prev = np.arange(len(pts)) - 1
+    prev[first] = first + sizes - 1  # a contour's first vertex follows its last
+    keep = np.any(pts != pts[prev], axis=1)
+    none = np.add.reduceat(keep, first) == 0  # one point repeated: keep its first
+    keep[first[none]] = True
+    owner = np.repeat(np.arange(len(sizes)), sizes)[keep]
+    kept = pts[keep]
+    order = np.lexsort((kept[:, 1], kept[:, 0], owner))  # distinct points per contour
+    same = np.zeros(len(order), dtype=bool)
+    same[1:] = (owner[order][1:] == owner[order][:-1]) & np.all(
+        kept[order][1:] == kept[order][:-1], axis=1
+    )
+    distinct = np.bincount(owner[order][~same], minlength=len(sizes))
+    counts = np.bincount(owner, minlength=len(sizes))
+    parts = np.split(kept, np.cumsum(counts)[:-1])
+    indices = np.split(local[keep], np.cumsum(counts)[:-1])
+    contours, owners = [], []
+    for (i, j), part, index, n in zip(labels, parts, indices, distinct.tolist(), strict=True):
+        if n >= 3:
+            contours.append(part)
+            owners.append((i, j, index))
+    return contours, owners, len(labels) - len(contours)
 
 
 def _offset(config: EdgeConfig, scene: Scene, contours, owners) -> tuple[int, int]:
@@ -320,29 +351,25 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     polygon (and the edge count last) and how many vertices were inserted at crossings.
     """
     shift = np.array(offset, dtype=np.int64) * S
-    coords, polygon, contour = [], [], []
-    starts = [0] * (len(scene.polygons) + 1)
-    count = crossings = 0
+    crossings = 0
     by_polygon: list[list[np.ndarray]] = [[] for _ in scene.polygons]
     for (k, _, _), pts in zip(owners, contours, strict=True):
         by_polygon[k].append(pts.astype(np.int64) + shift)
     crossing = _crossing(by_polygon)
+    final, owner = [], []  # the contours after splitting, in order, and their polygons
     for i, mine in enumerate(by_polygon):
-        if not crossing[i]:  # nothing to split: no need to look again, polygon by polygon
-            inserted = 0
-        else:
+        if crossing[i]:  # only these need a look again, polygon by polygon
             mine, inserted = _node_polygon(i, mine)
-        crossings += inserted
-        for q in mine:
-            n = len(q)
-            if n < 2:
-                continue
-            coords.append(np.concatenate([q, np.roll(q, -1, axis=0)], axis=1))
-            polygon.append(np.full(n, i))
-            contour.append(np.full(n, len(contour)))
-            count += n
-        starts[i + 1] = count
-    return _joined(coords, 4), _joined(polygon), _joined(contour), starts, crossings
+            crossings += inserted
+        final += [q for q in mine if len(q) >= 2]
+        owner += [i] * sum(len(q) >= 2 for q in mine)
+    sizes = np.array([len(q) for q in final], dtype=np.int64)
+    coords = contour_segments(final)
+    polygon = np.repeat(np.array(owner, dtype=np.int64), sizes)
+    contour = np.repeat(np.arange(len(final), dtype=np.int64), sizes)
+    counts = np.bincount(polygon, minlength=len(scene.polygons))
+    starts = [0, *np.cumsum(counts).tolist()]
+    return coords, polygon, contour, starts, crossings
 
 
 def _crossing(by_polygon: list[list[np.ndarray]]) -> np.ndarray:
@@ -439,12 +466,6 @@ def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
     """Whether each (x, y) row of `rows` is a row of `table`."""
     known = {tuple(r) for r in table.tolist()}
     return np.array([tuple(r) in known for r in rows.tolist()], dtype=bool)
-
-
-def _joined(parts: list[np.ndarray], width: int | None = None) -> np.ndarray:
-    if parts:
-        return np.concatenate(parts).astype(np.int64)
-    return np.zeros((0, width) if width else 0, dtype=np.int64)
 
 
 def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
@@ -605,7 +626,7 @@ class Render:
     projected: np.ndarray  # edges wholly left, sent as their projection
     horizontal: np.ndarray  # horizontal boundary edges not sent (they add nothing)
     deltas: DeltaRun  # every nonzero delta the engine produced, in image pixels
-    cycles: int  # timing model: first command to last beat
+    shapes: tuple[np.ndarray, np.ndarray]  # the sent edges' columns and clipped_start
     rows_scanned: int  # buffer rows prefix-summed
     cells_scanned: int  # buffer cells prefix-summed and resolved
     pixel_stores: int  # image pixels written
@@ -617,6 +638,12 @@ class Render:
     pipeline: object | None = None
     pipeline_tile: object | None = None  # its `edgeaa.model.tile.TileConfig`
     mismatches: int | None = None
+
+    @cached_property
+    def cycles(self) -> int:
+        """The timing model's clocks from the first command to the last beat: computed when
+        asked (--stats), not on every render."""
+        return cycles_of(self.plan.config, self.shapes, DELTAS)
 
 
 def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:
@@ -680,12 +707,18 @@ def render_scene(
     polygon_of = plan.polygon[deltas.edge]
     order = np.argsort(polygon_of, kind="stable")
     by_poly = np.searchsorted(polygon_of[order], np.arange(len(plan.polygons) + 1))
-    for i, poly in enumerate(plan.polygons):
+    drawn = [i for i in range(len(plan.polygons)) if by_poly[i + 1] > by_poly[i]]
+    batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
+    for run in _disjoint_runs(plan, drawn) if batch else [[i] for i in drawn]:
         if progress is not None:
-            progress(i, len(plan.polygons), "accumulate")
-        rows = order[by_poly[i] : by_poly[i + 1]]
-        if len(rows):
-            _draw_polygon(plan, poly, deltas.take(rows), image, skip, counts, canvas)
+            progress(run[0], len(plan.polygons), "accumulate")
+        picks = [order[by_poly[i] : by_poly[i + 1]] for i in run]
+        if len(run) == 1:
+            _draw_polygon(
+                plan, plan.polygons[run[0]], deltas.take(picks[0]), image, skip, counts, canvas
+            )
+        else:
+            _draw_disjoint(plan, run, deltas.take(np.concatenate(picks)), picks, image, counts)
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t
@@ -700,7 +733,7 @@ def render_scene(
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
         deltas=deltas,
-        cycles=cycles_of(config, shapes, DELTAS),
+        shapes=shapes,
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],
@@ -723,11 +756,112 @@ def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
         )
 
 
+RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_disjoint_runs`)
+RUN_CELLS = 1 << 18  # and its cells (2 MiB of int64)
+RUN_PAIRS = 1 << 22  # candidate window pairs past which runs are not looked for
+
+
+def _disjoint_runs(plan: Plan, drawn: list[int]) -> list[list[int]]:
+    """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_disjoint`): no
+    two windows of a run share a pixel, and a polygon comes after every earlier polygon whose
+    window meets its own (its wave is one more than theirs: the compositing order is kept
+    wherever it matters). A run holds at most RUN_POLYGONS polygons and RUN_CELLS cells of
+    buffer (rows times the widest window); a polygon with an empty window draws nothing and
+    is a run of its own. Past RUN_PAIRS candidate pairs (windows heaped on each other),
+    every polygon is a run of its own, in order."""
+    boxes = np.array([plan.polygons[i].window for i in drawn], dtype=np.int64).reshape(-1, 4)
+    live = (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
+    ids = np.flatnonzero(live)
+    pairs = _meeting_windows(boxes[ids])
+    if pairs is None:
+        return [[i] for i in drawn]
+    earlier: list[list[int]] = [[] for _ in ids]  # positions in ids, drawn order
+    for a, b in zip(*(np.sort(np.stack(pairs), axis=0).tolist()), strict=True):
+        earlier[b].append(a)
+    wave = [0] * len(ids)
+    for k, before in enumerate(earlier):
+        wave[k] = 1 + max((wave[j] for j in before), default=-1)
+    runs = [[drawn[i]] for i in np.flatnonzero(~live)]
+    run: list[int] = []
+    last = rows = widest = 0
+    for k in np.argsort(wave, kind="stable").tolist():  # by wave, in order within one
+        x0, y0, x1, y1 = boxes[ids[k]].tolist()
+        height, width = y1 - y0, max(widest, x1 - x0)
+        if run and (
+            wave[k] != last or len(run) >= RUN_POLYGONS or (rows + height) * width > RUN_CELLS
+        ):
+            runs.append(run)
+            run, rows, width = [], 0, x1 - x0
+        run.append(drawn[ids[k]])
+        last, rows, widest = wave[k], rows + height, width
+    return runs + [run] if run else runs
+
+
+def _meeting_windows(boxes: np.ndarray):
+    """The pairs (a, b) of windows (x0, y0, x1, y1, none empty) that share a pixel: a sweep
+    along x (sorted by x0, each window's partners are those starting before its x1), then y.
+    None past RUN_PAIRS candidates."""
+    order = np.argsort(boxes[:, 0], kind="stable")
+    start = boxes[order, 0]
+    counts = np.searchsorted(start, boxes[order, 2], side="left") - np.arange(1, len(order) + 1)
+    counts = np.maximum(counts, 0)
+    if counts.sum() > RUN_PAIRS:
+        return None
+    a = np.repeat(np.arange(len(order)), counts)
+    b = a + 1 + np.arange(len(a)) - np.repeat(np.cumsum(counts) - counts, counts)
+    a, b = order[a], order[b]
+    meet = (boxes[a, 1] < boxes[b, 3]) & (boxes[b, 1] < boxes[a, 3])
+    return a[meet], b[meet]
+
+
+def _draw_disjoint(plan: Plan, run: list[int], deltas: DeltaRun, picks, image, counts):
+    """`_draw_polygon` on every polygon of a run at once (their windows share no pixel): each
+    polygon's touched rows become rows of one buffer as wide as the widest window, the cells
+    past a polygon's own window masked, so every pixel gets exactly what `_draw_polygon`
+    gives it, with the numpy calls paid once per run instead of once per polygon."""
+    config = plan.config
+    polys = [plan.polygons[i] for i in run]
+    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).T
+    d = np.array([abs(p.intensity - p.i_out) for p in polys], dtype=np.int64)
+    value = np.array([p.intensity for p in polys], dtype=np.int64)
+    odd = np.array([p.rule == "evenodd" for p in polys], dtype=bool)
+    k = np.repeat(np.arange(len(run)), [len(pick) for pick in picks])  # each delta's polygon
+    x, y, delta = deltas.x, deltas.y, deltas.delta
+    keep = (y >= y0[k]) & (y < y1[k]) & (x < x1[k])
+    k, y, delta = k[keep], y[keep], delta[keep]
+    x = np.maximum(x[keep], x0[k]) - x0[k]
+    rows, row_of = np.unique(k * plan.scene.height + y, return_inverse=True)
+    owner, image_row = np.divmod(rows, plan.scene.height)
+    width = (x1 - x0)[owner]
+    buffer = np.zeros((len(rows), int(width.max(initial=0))), dtype=np.int64)
+    np.add.at(buffer, (row_of, x), delta)
+    sums = np.cumsum(buffer, axis=1)
+    ifix = (d[owner] << config.F)[:, None]
+    coverage = nonzero_coverage(ArrayArith, sums, ifix)
+    if odd.any():
+        coverage = np.where(odd[owner][:, None], evenodd_coverage(ArrayArith, sums, ifix), coverage)
+    q = intensity_offset(coverage, config.F)
+    q[np.arange(buffer.shape[1])[None, :] >= width[:, None]] = 0  # past the polygon's window
+    counts["rows"] += len(rows)
+    counts["cells"] += int(width.sum())
+    r, c = np.nonzero(q)
+    mine = owner[r]
+    pixel_rows, pixel_cols = image_row[r], c + x0[mine]
+    below = image[pixel_rows, pixel_cols].astype(np.int64)
+    qq = q[r, c].astype(np.int64)
+    full = qq == d[mine]  # whole pixels take the intensity, no division
+    new = np.where(full, value[mine], composite(below, qq, value[mine], d[mine]))
+    changed = new != below
+    counts["stores"] += int(np.count_nonzero(changed))
+    image[pixel_rows[changed], pixel_cols[changed]] = new[changed]
+
+
 def _draw_polygon(
     plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts, canvas=None
 ):
     """Accumulate one polygon's deltas over its window, resolve, composite over the image
     (or over the canvas's channels)."""
+
     config, scene = plan.config, plan.scene
     d = abs(poly.intensity - poly.i_out)
     x0, y0, x1, y1 = poly.window if skip else (0, 0, scene.width, scene.height)

@@ -374,7 +374,7 @@ def test_a_missing_optional_package_names_its_extra(capsys, monkeypatch):
         raise ModuleNotFoundError("No module named 'skia'", name="skia")
 
     parser = cli.build_parser()
-    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    monkeypatch.setattr(cli, "build_parser", lambda only=None: parser)
     parser._subparsers._group_actions[0].choices["bench"].set_defaults(run=missing)
     assert cli.main(["bench"]) == cli.EXIT_MISSING
     err = capsys.readouterr().err.strip()

@@ -223,6 +223,31 @@ def test_verilator_drops_bad_commands_as_the_model_does(seed):
     assert np.flatnonzero(last).tolist() == [tile.pixels - 1, 2 * tile.pixels - 1]
 
 
+def test_a_cached_pipeline_build_is_found_without_generating_the_verilog(monkeypatch, tmp_path):
+    """`edgeaa render --engine verilator` looks its build up by the sources' key: once built,
+    no Verilog is generated again (it takes seconds); a changed source is a new key."""
+    from edgeaa.sim.simulators import harness, pipeline_harness
+
+    tile = TileConfig(EdgeConfig())
+    exe = pipeline_harness.build(tile)
+    monkeypatch.setattr(harness, "_BUILT", {})  # as a new process
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the Verilog was generated again for a cached build")
+
+    monkeypatch.setattr(pipeline_harness, "pipeline_verilog", refuse)
+    assert pipeline_harness.build(tile) == exe
+    key = harness.sources_key(("pipeline", tile), "-O2")
+    assert harness.sources_key(("pipeline", tile), "-O3") != key
+    assert harness.sources_key(("pipeline", TileConfig(EdgeConfig(), 32, 32)), "-O2") != key
+    source = tmp_path / "source.py"  # one more source folder, then a change in it
+    source.write_text("A = 1\n")
+    monkeypatch.setattr(harness, "SOURCE_DIRS", (*harness.SOURCE_DIRS, tmp_path))
+    before = harness.sources_key(("pipeline", tile), "-O2")
+    source.write_text("A = 2\n")
+    assert harness.sources_key(("pipeline", tile), "-O2") != before
+
+
 def test_a_pipeline_that_stops_moving_is_reported_not_waited_for():
     from edgeaa.sim.simulators import pipeline_harness
 

@@ -8,12 +8,16 @@ tests/test_accumulation.py."""
 import json
 import math
 import random
+import subprocess
+import sys
 from dataclasses import replace
 from fractions import Fraction
 
 import numpy as np
 import pytest
 from fixtures import TINY_SCENE
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from edgeaa.analysis.compare import agg_scene
 from edgeaa.cli import main
@@ -509,6 +513,50 @@ def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, mod
         assert fast.deltas.clocks >= fast.cycles, name  # the drain after the last beat
 
 
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(st.tuples(st.integers(0, 80), st.booleans(), st.integers(0, 9)), max_size=40),
+    st.sampled_from([DEFAULT, SEG4, EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4)]),
+    st.sampled_from(["writes", "deltas"]),
+)
+def test_the_vectorized_cycles_are_the_timing_models(commands, config, output):
+    """`load_clocks` and `stream_cycles` (numpy, the renderer's cycles) against the scalar
+    `schedule`, with bad commands (one in ten) and edges with no visible column among them."""
+    from edgeaa.model.timing import load_clocks, schedule, stream_cycles
+
+    columns = np.array([c for c, _, _ in commands], dtype=np.int64)
+    clipped = np.array([k for _, k, _ in commands], dtype=bool)
+    bad = np.array([b == 0 for _, _, b in commands], dtype=bool)
+    shapes = [(int(c), bool(k)) for c, k in zip(columns, clipped, strict=True)]
+    shapes = [None if b else shape for shape, b in zip(shapes, bad, strict=True)]
+    timings = schedule(config, shapes, output=output)
+    loads = [t.load for t in timings if not t.dropped]
+    last = max((t.beats[-1] for t in timings if t.beats), default=-1)
+    assert load_clocks(config, columns, clipped, bad, output).tolist() == loads
+    assert stream_cycles(config, columns, clipped, bad, output) == last + 1
+
+
+def test_a_model_render_imports_no_hardware(tmp_path):
+    """`edgeaa render` with the model (and --stats) loads nothing of the hardware, its
+    simulators or Amaranth: they cost half a second before any work."""
+    probe = (
+        "import sys\n"
+        "from edgeaa.cli import main\n"
+        "status = main(sys.argv[1:])\n"
+        "names = [m for m in sys.modules if m.split('.')[0] == 'amaranth' or "
+        "m.startswith(('edgeaa.hdl', 'edgeaa.sim'))]\n"
+        "print('loaded:', sorted(names))\n"
+        "sys.exit(status)\n"
+    )
+    for extra in ([], ["--stats"]):
+        argv = ["render", "--builtin", "text", "-o", str(tmp_path / "t.png"), *extra]
+        proc = subprocess.run(
+            [sys.executable, "-c", probe, *argv], capture_output=True, text=True, check=False
+        )
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stdout.splitlines()[-1] == "loaded: []", (extra, proc.stdout)
+
+
 # -- skipping -----------------------------------------------------------------------------------
 
 
@@ -974,6 +1022,129 @@ def test_winding_numbers_match_every_point_against_every_edge(seed, monkeypatch)
     assert np.array_equal(geometry.winding_numbers(edges, points, first, second), want), seed
     monkeypatch.setattr(geometry, "CHUNK", 7)  # many passes, bands cut anywhere
     assert np.array_equal(geometry.winding_numbers(edges, points, first, second), want), seed
+
+
+def _quantize_reference(scene, S):
+    """The planner's quantization as it was: contour by contour."""
+    contours, owners, dropped = [], [], 0
+    for i, poly in enumerate(scene.polygons):
+        for j, contour in enumerate(poly.contours):
+            pts = np.floor(np.asarray(contour, dtype=np.float64) * S + 0.5)
+            keep = np.any(pts != np.roll(pts, 1, axis=0), axis=1)
+            pts = pts[keep] if keep.any() else pts[:1]
+            if len({tuple(p) for p in pts.tolist()}) < 3:
+                dropped += 1
+                continue
+            contours.append(pts)
+            owners.append((i, j, np.flatnonzero(keep) if keep.any() else np.arange(1)))
+    return contours, owners, dropped
+
+
+def _split_edges_reference(scene, contours, owners, offset, S):
+    """The planner's edges as they were built: polygon by polygon, contour by contour."""
+    from edgeaa.render.render import _crossing, _node_polygon
+
+    shift = np.array(offset, dtype=np.int64) * S
+    coords, polygon, contour, starts, count, crossings = [], [], [], [0], 0, 0
+    by_polygon = [[] for _ in scene.polygons]
+    for (k, _, _), pts in zip(owners, contours, strict=True):
+        by_polygon[k].append(pts.astype(np.int64) + shift)
+    crossing = _crossing(by_polygon)
+    for i, mine in enumerate(by_polygon):
+        if crossing[i]:
+            mine, inserted = _node_polygon(i, mine)
+            crossings += inserted
+        for q in mine:
+            if len(q) >= 2:
+                coords.append(np.concatenate([q, np.roll(q, -1, axis=0)], axis=1))
+                polygon.append(np.full(len(q), i))
+                contour.append(np.full(len(q), len(contour)))
+                count += len(q)
+        starts.append(count)
+    joined = [np.concatenate(x).astype(np.int64) if x else None for x in (coords, polygon, contour)]
+    return (*joined, starts, crossings)
+
+
+def _check_plan_against_reference(scene):
+    from edgeaa.render.render import _offset, _quantize, _split_edges
+
+    S = DEFAULT.subpixel_scale
+    got, want = _quantize(scene, S), _quantize_reference(scene, S)
+    assert got[2] == want[2] and len(got[0]) == len(want[0]), scene.name
+    for a, b, (i, j, k), (i2, j2, k2) in zip(got[0], want[0], got[1], want[1], strict=True):
+        assert np.array_equal(a, b) and (i, j) == (i2, j2) and np.array_equal(k, k2), scene.name
+    if not want[0]:
+        return
+    offset = _offset(DEFAULT, scene, *want[:2])
+    edges = _split_edges(scene, got[0], got[1], offset, S)
+    reference = _split_edges_reference(scene, want[0], want[1], offset, S)
+    for a, b in zip(edges, reference, strict=True):
+        assert np.array_equal(a, b), scene.name
+
+
+def test_the_plan_is_the_reference_plan_on_the_corpus():
+    """The planner's quantization and edges in numpy over whole arrays (issue 28) against the
+    contour-by-contour reference: the built-ins, the fonts and icons matplotlib ships, the
+    adversarial polygons."""
+    from edgeaa.render.corpus import ICONS, adversarial_scenes, font_scene, icon_scene
+
+    scenes = [builtin(name, DEFAULT) for name in ("starburst", "text", "hatch")]
+    scenes += [font_scene(font, 9)[0] for font in ("DejaVuSans", "STIXGeneral", "cmr10")]
+    scenes += [icon_scene(name, 24) for name in ICONS] + adversarial_scenes()
+    for scene in scenes:
+        _check_plan_against_reference(scene)
+
+
+_vertex = st.tuples(st.integers(-8, 40), st.integers(-8, 40)).map(lambda p: (p[0] / 3, p[1] / 3))
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.lists(st.lists(_vertex, min_size=1, max_size=9), min_size=1, max_size=3),
+                min_size=1, max_size=6))  # fmt: skip
+def test_the_plan_is_the_reference_plan_on_random_scenes(polygons):
+    """Repeated vertices, contours that collapse to a point or a segment, crossing contours:
+    the same quantized contours, owners, drops and edges as the reference."""
+    scene = Scene(16, 16, tuple(Polygon(tuple(map(tuple, c)), 128, "nonzero") for c in polygons), 0)
+    _check_plan_against_reference(scene)
+
+
+def _many_polygons(seed: int) -> Scene:
+    """Small triangles and quads strewn over 96 x 64 px (some overlapping, some apart, a few
+    past the image's sides), both fill rules, several intensities."""
+    rng = np.random.default_rng(seed)
+    polygons = []
+    for _ in range(int(rng.integers(2, 120))):
+        cx, cy = rng.uniform(-6, 100), rng.uniform(-6, 70)
+        pts = [
+            (cx + rng.uniform(-9, 9), cy + rng.uniform(-9, 9)) for _ in range(rng.integers(3, 5))
+        ]
+        rule = "evenodd" if rng.random() < 0.3 else "nonzero"
+        polygons.append(Polygon((tuple(pts),), int(rng.integers(0, 256)), rule))
+    return Scene(96, 64, tuple(polygons), int(rng.integers(0, 256)), name=f"many {seed}")
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_polygons_accumulated_in_runs_give_the_polygon_by_polygon_image(seed, monkeypatch):
+    """Polygons whose windows share no pixel are accumulated in one buffer (`_disjoint_runs`,
+    `_draw_disjoint`): the same image and the same counts as one polygon at a time, in order."""
+    from edgeaa.render import render as renderer
+
+    scene = _many_polygons(seed)
+    runs = renderer._disjoint_runs(plan(scene, DEFAULT), list(range(len(scene.polygons))))
+    assert len(runs) < len(scene.polygons) or len(scene.polygons) < 5, seed  # runs of several
+    scenes = [scene]
+    if seed == 0:
+        scenes += [builtin(name, DEFAULT) for name in ("starburst", "text", "hatch")]
+    for scene in scenes:
+        p = plan(scene, DEFAULT)
+        together = render_scene(p)
+        with monkeypatch.context() as m:
+            m.setattr(renderer, "_disjoint_runs", lambda plan, drawn: [[i] for i in drawn])
+            alone = render_scene(p)
+        note = f"{scene.name}, seed {seed}"
+        assert np.array_equal(together.image, alone.image), note
+        for name in ("rows_scanned", "cells_scanned", "pixel_stores"):
+            assert getattr(together, name) == getattr(alone, name), (note, name)
 
 
 def test_a_polygon_whose_splitting_passes_the_limit_is_refused_before_the_work():

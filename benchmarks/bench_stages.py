@@ -1,0 +1,280 @@
+"""The model renderer stage by stage against AGG and Skia, on content the project did not write
+(issue 28; `benchmarks/bench_render.py` measures the simulators' clocks, this the renderer).
+
+Scenes: the built-ins; DejaVu Sans, STIX and cmr10 (the fonts matplotlib ships) at 9 to 96 px
+(`render.corpus.font_scene`); an icon sheet (matplotlib's eight toolbar icons at 48 px, side by
+side); a page of 10 px text (DejaVu Sans, 500 to 4,000 glyphs); a map of Voronoi cells (1,250
+to 5,000 polygons, one intensity each). For each, in one process, per stage, the CPU seconds
+(`time.process_time`, the minimum over `--repeats`: the cores are shared) and, in a run of
+its own, the peak memory the stage allocates as tracemalloc sees it (Python objects and numpy
+arrays; the render's engine and accumulation together; AGG's and Skia's C++ buffers are not
+seen, only what their drivers allocate in Python and numpy):
+
+- flatten: the scene from its source (font outlines and SVG paths flattened; the map's
+  cells from shapely; the built-ins as `edgeaa render --builtin` makes them);
+- parse: the scene as a JSON scene file (its polygons' contours): `json.loads`, `parse_scene`;
+- plan: `plan_scene`; engine and accumulate: `render_scene`'s stages on that plan (the
+  deltas; then buffers, prefix sums, fill rule and compositing, the resolve included);
+- write: the PNG (`render.cli.write_png`);
+- AGG (`analysis.compare.agg_scene`) and Skia (`skia_scene`) on the same plan: their paths
+  built from the quantized vertices, rasterized, their 8-bit image read back.
+
+edgeaa's end to end is plan + engine + accumulate + write (what `edgeaa render` does after
+loading the scene), its rasterizing engine + accumulate; both against AGG's time, as
+geometric means over the scenes. The slopes are least-squares fits of log CPU time against
+log edges (the page) and log polygons (the map).
+
+    python benchmarks/bench_stages.py [--repeats 3] [--quick] [--json FILE] [--write-docs]
+
+--write-docs replaces the section between the markers in docs/results.md with the tables.
+"""
+
+from __future__ import annotations
+
+import argparse
+import gc
+import io
+import json
+import logging
+import math
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+
+from edgeaa.analysis.compare import agg_scene, skia_scene
+from edgeaa.analysis.report import machine_line, table
+from edgeaa.model import EdgeConfig
+from edgeaa.render import builtin, parse_scene, plan_scene, render_scene
+from edgeaa.render.builtin import glyph_polygons
+from edgeaa.render.cli import write_png
+from edgeaa.render.corpus import ICONS, font_file, font_scene, icon_scene
+from edgeaa.render.scene import Polygon, Scene
+
+STAGES = ("flatten", "parse", "plan", "engine", "accumulate", "write", "agg", "skia")
+FONTS = ("DejaVuSans", "STIXGeneral", "cmr10")
+SIZES = (9, 16, 32, 96)
+PAGE_GLYPHS = (500, 1000, 2000, 4000)
+MAP_CELLS = (1250, 2500, 5000)
+PAGE_TEXT = "The quick brown fox jumps over the lazy dog; SPHINX OF BLACK QUARTZ, 0123456789. "
+BEGIN, END = "<!-- bench_stages: begin -->", "<!-- bench_stages: end -->"
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "results.md"
+
+
+def icon_sheet(size: int = 48) -> Scene:
+    """Every toolbar icon at `size` px, side by side."""
+    polygons, x = [], 0
+    for name in ICONS:
+        icon = icon_scene(name, size)
+        for poly in icon.polygons:
+            moved = tuple(tuple((px + x, py) for px, py in c) for c in poly.contours)
+            polygons.append(Polygon(moved, poly.intensity, poly.fill_rule, poly.name))
+        x += icon.width
+    return Scene(x, size + 2, tuple(polygons), background=255, name=f"icon sheet {size}px")
+
+
+def page(glyphs: int, size: float = 10.0, width: int = 1000) -> Scene:
+    """`glyphs` glyphs of DejaVu Sans at `size` px in lines across a `width` px page."""
+    path, polygons, pos, y = font_file("DejaVuSans"), [], 0, 1.2 * size
+    cache: dict[str, tuple] = {}
+    while len(polygons) < glyphs:
+        x = 2.3
+        while x < width - 2 * size and len(polygons) < glyphs:
+            ch = PAGE_TEXT[pos % len(PAGE_TEXT)]
+            pos += 1
+            if ch not in cache:  # the glyph at the origin, moved below
+                shapes, end, _ = glyph_polygons(path, ch, size, 0.0, 0.0, 0)
+                cache[ch] = (shapes, end)
+            shapes, end = cache[ch]
+            for poly in shapes:
+                moved = tuple(tuple((px + x, py + y) for px, py in c) for c in poly.contours)
+                polygons.append(Polygon(moved, 0, "nonzero", poly.name))
+            x += end
+        y += 1.3 * size
+    height = math.ceil(y)
+    return Scene(width, height, tuple(polygons), background=255, name=f"page {glyphs} glyphs")
+
+
+def map_scene(cells: int, seed: int = 3) -> Scene:
+    """Voronoi cells of `cells` seeded random points in a square of 1,000 cells per 512^2 px."""
+    from shapely.geometry import MultiPoint, box
+    from shapely.ops import voronoi_diagram
+
+    side = int(512 * math.sqrt(cells / 1000))
+    rng = np.random.default_rng(seed)
+    diagram = voronoi_diagram(
+        MultiPoint(rng.uniform(0, side, (cells, 2)).tolist()), envelope=box(0, 0, side, side)
+    )
+    frame = box(0.3, 0.2, side - 0.7, side - 0.8)
+    polygons = []
+    for k, cell in enumerate(diagram.geoms):
+        cell = cell.intersection(frame)
+        if cell.geom_type == "Polygon" and not cell.is_empty:
+            ring = tuple(cell.exterior.coords[:-1])
+            polygons.append(Polygon((ring,), 40 + (37 * k) % 200, "nonzero", f"cell {k}"))
+    return Scene(side, side, tuple(polygons), background=255, name=f"map {cells} cells")
+
+
+def scene_json(scene: Scene) -> str:
+    polygons = [
+        {"contours": [list(map(list, c)) for c in p.contours], "intensity": p.intensity}
+        for p in scene.polygons
+    ]
+    return json.dumps(
+        {"width": scene.width, "height": scene.height, "background": scene.background,
+         "polygons": polygons}
+    )  # fmt: skip
+
+
+def measure(fn, memory: bool):
+    """(CPU seconds, result) of one call; with `memory`, (peak bytes traced, result) instead
+    (tracemalloc slows the call down, so the two are separate runs)."""
+    gc.collect()
+    if memory:
+        tracemalloc.start()
+        result = fn()
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        return peak, result
+    c = time.process_time()
+    result = fn()
+    return time.process_time() - c, result
+
+
+def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
+    """Every stage of one scene: CPU seconds, the minimum over `repeats`, then one run for
+    the peak memory each stage allocates."""
+    cpu = {s: math.inf for s in STAGES}
+    for memory in [False] * repeats + [True]:
+        got = {}
+        got["flatten"], scene = measure(make, memory)
+        text = scene_json(scene)
+        got["parse"], _ = measure(lambda: parse_scene(json.loads(text)), memory)  # noqa: B023
+        got["plan"], plan = measure(lambda: plan_scene(scene, config), memory)  # noqa: B023
+        value, result = measure(lambda: render_scene(plan), memory)  # noqa: B023
+        share = 1.0 if memory else result.timings["engine"] / sum(result.timings.values())
+        got["engine"] = value * share  # render_scene's CPU split by its stages' wall times
+        got["accumulate"] = value * (1 - share) if not memory else value
+        full, bits, sink = config.full_scale, config.intensity_bits, io.BytesIO()
+        got["write"], _ = measure(lambda: write_png(result.image, full, bits, sink), memory)  # noqa: B023
+        got["agg"], _ = measure(lambda: agg_scene(plan), memory)  # noqa: B023
+        got["skia"], _ = measure(lambda: skia_scene(plan), memory)  # noqa: B023
+        if memory:
+            mem = got
+        else:
+            cpu = {stage: min(cpu[stage], got[stage]) for stage in STAGES}
+    return {
+        "scene": scene.name, "edges": plan.edge_count, "polygons": len(scene.polygons),
+        "pixels": scene.width * scene.height, "cpu": cpu, "mem": mem,
+    }  # fmt: skip
+
+
+def edgeaa_total(row: dict) -> float:
+    return sum(row["cpu"][s] for s in ("plan", "engine", "accumulate", "write"))
+
+
+def raster(row: dict) -> float:
+    return row["cpu"]["engine"] + row["cpu"]["accumulate"]
+
+
+def geomean(values) -> float:
+    return float(np.exp(np.mean(np.log(values))))
+
+
+def slope(xs, ys) -> float:
+    return float(np.polyfit(np.log(xs), np.log(np.maximum(ys, 1e-6)), 1)[0])
+
+
+def stage_table(rows: list[dict]) -> str:
+    headers = ["scene", "edges", *STAGES, "end to end / AGG", "raster / AGG"]
+    body = [
+        [r["scene"], f"{r['edges']:,}"]
+        + [f"{1000 * r['cpu'][s]:.1f}" for s in STAGES]
+        + [f"{edgeaa_total(r) / r['cpu']['agg']:.1f}", f"{raster(r) / r['cpu']['agg']:.1f}"]
+        for r in rows
+    ]
+    return table(headers, body)
+
+
+def memory_table(rows: list[dict]) -> str:
+    stages = [s for s in STAGES if s != "accumulate"]  # the render is one figure
+    headers = ["scene", *(("render" if s == "engine" else s) for s in stages)]
+    body = [[r["scene"]] + [f"{r['mem'][s] / 2**20:.1f}" for s in stages] for r in rows]
+    return table(headers, body)
+
+
+def slope_table(series: dict[str, tuple[str, list[dict]]]) -> str:
+    headers = ["series", "against", *STAGES]
+    body = []
+    for name, (key, rows) in series.items():
+        xs = [r[key] for r in rows]
+        body.append([name, key] + [f"{slope(xs, [r['cpu'][s] for r in rows]):.2f}" for s in STAGES])
+    return table(headers, body)
+
+
+def report(rows: list[dict], series: dict) -> str:
+    ends = [edgeaa_total(r) / r["cpu"]["agg"] for r in rows]
+    rasters = [raster(r) / r["cpu"]["agg"] for r in rows]
+    return "\n\n".join(
+        [
+            machine_line(),
+            "CPU milliseconds per stage (minimum over the repeats):\n\n" + stage_table(rows),
+            "Peak memory each stage allocates (tracemalloc), MiB:\n\n" + memory_table(rows),
+            "Log-log slopes of CPU time:\n\n" + slope_table(series),
+            f"Geometric means over the {len(rows)} scenes: end to end {geomean(ends):.1f} x "
+            f"AGG (target 3), rasterizing {geomean(rasters):.1f} x AGG (target 1.5).",
+        ]
+    )
+
+
+def write_docs(text: str) -> None:
+    docs = DOCS.read_text()
+    command = "python benchmarks/bench_stages.py --write-docs"
+    section = f"{BEGIN}\n\n`{command}`:\n\n```text\n{text}\n```\n\n{END}"
+    if BEGIN in docs:
+        head, rest = docs.split(BEGIN, 1)
+        docs = head + section + rest.split(END, 1)[1]
+    else:
+        docs += f"\n## The renderer stage by stage against AGG and Skia (issue 28)\n\n{section}\n"
+    DOCS.write_text(docs)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--quick", action="store_true", help="fewer and smaller scenes")
+    parser.add_argument("--json", help="write the figures to this file")
+    parser.add_argument("--write-docs", action="store_true")
+    args = parser.parse_args()
+    logging.getLogger("fontTools").setLevel(logging.ERROR)  # cmr10's old timestamps
+    config = EdgeConfig()
+    sizes, glyphs, cells = (
+        (SIZES[:2], PAGE_GLYPHS[:2], MAP_CELLS[:2])
+        if args.quick
+        else (SIZES, PAGE_GLYPHS, MAP_CELLS)
+    )
+    makers = [lambda n=n: builtin(n, config) for n in ("text", "starburst")]
+    makers += [lambda f=f, s=s: font_scene(f, s)[0] for f in FONTS for s in sizes]
+    makers.append(icon_sheet)
+    pages = [lambda g=g: page(g) for g in glyphs]
+    maps = [lambda c=c: map_scene(c) for c in cells]
+    rows = []
+    for make in makers + pages + maps:
+        rows.append(run_scene(make, config, args.repeats))
+        print(rows[-1]["scene"], f"{edgeaa_total(rows[-1]):.3f} s", flush=True)
+    series = {
+        "page": ("edges", rows[len(makers) : len(makers) + len(pages)]),
+        "map": ("polygons", rows[len(makers) + len(pages) :]),
+    }
+    text = report(rows, series)
+    print(text)
+    if args.json:
+        Path(args.json).write_text(json.dumps(rows, indent=1))
+    if args.write_docs:
+        write_docs(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
