@@ -145,13 +145,13 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
     valid) through an engine, in order: four cells per stepped column. Returns the run and
     the edges' (columns, clipped_start) arrays from their setup, for the timing model.
     progress(done, total) is called as edges complete."""
-    from ..hdl.core import PolygonCore
     from ..model.edge import setup_batch
 
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
     if engine == "model":
         return _model_deltas(config, arrays, progress)
+    from ..hdl.core import PolygonCore  # a simulator's render only: a model render loads no hdl
     batch = setup_batch(config, *arrays.args(), arrays.clip)
     shapes = (batch.columns, batch.clipped_start)
     if not len(arrays):

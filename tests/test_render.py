@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from edgeaa.analysis.compare import agg_scene
 from edgeaa.cli import main
 from edgeaa.model import Edge, EdgeConfig, exact_coverage, setup
-from edgeaa.model.beat import DELTAS
+from edgeaa.model.beat import DELTAS, WRITES
 from edgeaa.model.reference import error_bound
 from edgeaa.model.vector import run_edges_deltas
 from edgeaa.render import Polygon, Scene, SceneError, builtin, parse_path, parse_scene, render_scene
@@ -517,9 +517,9 @@ def test_the_simulated_cores_give_the_models_deltas_and_image(engine, plans, mod
 @given(
     st.lists(st.tuples(st.integers(0, 80), st.booleans(), st.integers(0, 9)), max_size=40),
     st.sampled_from([DEFAULT, SEG4, EdgeConfig(coord_bits=4, subpixel_bits=0, intensity_bits=4)]),
-    st.sampled_from(["writes", "deltas"]),
+    st.sampled_from([WRITES, DELTAS]),
 )
-def test_the_vectorized_cycles_are_the_timing_models(commands, config, output):
+def test_the_vectorized_cycles_are_the_timing_models(commands, config, fmt):
     """`load_clocks` and `stream_cycles` (numpy, the renderer's cycles) against the scalar
     `schedule`, with bad commands (one in ten) and edges with no visible column among them."""
     from edgeaa.model.timing import load_clocks, schedule, stream_cycles
@@ -529,11 +529,11 @@ def test_the_vectorized_cycles_are_the_timing_models(commands, config, output):
     bad = np.array([b == 0 for _, _, b in commands], dtype=bool)
     shapes = [(int(c), bool(k)) for c, k in zip(columns, clipped, strict=True)]
     shapes = [None if b else shape for shape, b in zip(shapes, bad, strict=True)]
-    timings = schedule(config, shapes, output=output)
+    timings = schedule(config, shapes, fmt=fmt)
     loads = [t.load for t in timings if not t.dropped]
     last = max((t.beats[-1] for t in timings if t.beats), default=-1)
-    assert load_clocks(config, columns, clipped, bad, output).tolist() == loads
-    assert stream_cycles(config, columns, clipped, bad, output) == last + 1
+    assert load_clocks(config, columns, clipped, bad, fmt).tolist() == loads
+    assert stream_cycles(config, columns, clipped, bad, fmt) == last + 1
 
 
 def test_a_model_render_imports_no_hardware(tmp_path):
