@@ -20,10 +20,10 @@ __all__ = ["read_modify_write", "route_cell"]
 
 
 def _select(sel, values):
-    """The value whose bit of the one-hot 4-bit `sel` is set, zero when none. Each bit as two
-    LUT4s, where an AND-OR of the selects takes three: three selects (``hi``: value 2 or 3;
-    ``a``: 0 or 3; ``b``: 1 or 3) and ``low``, value 0's or 1's bit or zero, or (when ``hi``)
-    the choice of value 3 over 2."""
+    """The value of `values` (four, of one shape) whose bit of the one-hot 4-bit `sel` is set,
+    zero when none: three selects (``hi``: value 2 or 3; ``a``: 0 or 3; ``b``: 1 or 3) and
+    ``low``, value 0's or 1's bit or zero, or (when ``hi``) the choice of value 3 over 2 (why
+    this form: docs/hardware.md, "Accumulation memory")."""
     hi, a, b = sel[2] | sel[3], sel[0] | sel[3], sel[1] | sel[3]
     v0, v1, v2, v3 = values
     low = Mux(a, Mux(b, Const(-1, v0.shape()), v0), Mux(b, v1, 0))

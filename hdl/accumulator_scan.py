@@ -18,9 +18,9 @@ __all__ = ["lowest_set", "scan_states"]
 
 
 def lowest_set(bits: Signal, width: int):
-    """Index of the lowest set bit of `bits` (0 when none) and that bit alone (one-hot, 0
-    when none): ``bits & ~(bits - 1)`` (equal to ``bits & -bits``, and 30 LUT4 fewer for the
-    32 rows) and an OR per index bit."""
+    """Index of the lowest set bit of the `width`-bit `bits` (0 when none) and that bit alone
+    (one-hot, 0 when none): ``bits & ~(bits - 1)`` and an OR per index bit (why not ``bits &
+    -bits``: docs/hardware.md, "Accumulation memory")."""
     one_hot = (bits & ~(bits - 1))[:width]
     index = Cat(
         *(Cat(*(one_hot[k] for k in range(width) if k >> j & 1)).any() for j in range(log2(width)))
