@@ -254,7 +254,7 @@ def test_a_wrong_model_is_caught(monkeypatch):
         return [(cx, cy + 1, v) if k == 3 else (cx, cy, v) for k, (cx, cy, v) in enumerate(cells)]
 
     monkeypatch.setattr(step, "delta_cells", shifted)
-    with pytest.raises(AssertionError, match="deltas differ from run_edge_deltas"):
+    with pytest.raises(AssertionError, match="beats differ from the model"):
         check_run(run, exact_timing=True)
 
 
