@@ -353,13 +353,7 @@ def _scene_lines(summary: dict) -> list[str]:
         f"{summary['scenes_per_second']:,.1f} scenes/s",
     ]
     for mismatch in summary["mismatches"]:
-        lines.append(
-            f"MISMATCH in shard {mismatch['shard']} (first scene seed {mismatch['seed']}): "
-            f"{mismatch['message']}"
-        )
-        if mismatch["reproduce"]:
-            lines.append(f"  the scene: {mismatch['reproduce']}")
-        lines.append(f"  the shard: {mismatch['reproduce_shard']}")
+        lines += _mismatch_lines(mismatch, "first scene seed", "the scene:")
     return lines
 
 
@@ -376,11 +370,18 @@ def _edge_lines(summary: dict) -> list[str]:
     ]
     for mismatch in summary["mismatches"]:
         stream = f", {mismatch['stream']} stream" if mismatch["stream"] else ""
-        lines.append(
-            f"MISMATCH in shard {mismatch['shard']} (shard seed {mismatch['seed']}{stream}): "
-            f"{mismatch['message']}"
-        )
-        if mismatch["reproduce"]:
-            lines.append(f"  the edge:  {mismatch['reproduce']}")
-        lines.append(f"  the shard: {mismatch['reproduce_shard']}")
+        lines += _mismatch_lines(mismatch, "shard seed", "the edge: ", stream)
+    return lines
+
+
+def _mismatch_lines(mismatch: dict, seed_is: str, item: str, stream: str = "") -> list[str]:
+    """A mismatch of either kind of run: where, what, and the commands that rerun it (the
+    scene or edge alone, when known, and its shard)."""
+    lines = [
+        f"MISMATCH in shard {mismatch['shard']} ({seed_is} {mismatch['seed']}{stream}): "
+        f"{mismatch['message']}"
+    ]
+    if mismatch["reproduce"]:
+        lines.append(f"  {item} {mismatch['reproduce']}")
+    lines.append(f"  the shard: {mismatch['reproduce_shard']}")
     return lines

@@ -53,6 +53,30 @@ def polygon_points(plan: Plan, index: int) -> list[np.ndarray]:
     return contours
 
 
+def trace_polygon(plan: Plan, index: int, move_to, line_to, close) -> None:
+    """The polygon's contours through a peer's path calls (`move_to(x, y)`, `line_to(x, y)`,
+    `close()`), in the peers' pixel frame (a pixel's centre at half a pixel)."""
+    for pts in polygon_points(plan, index):
+        move_to(*(pts[0] + 0.5))
+        for p in pts[1:]:
+            line_to(*(p + 0.5))
+        close()
+
+
+def agg_path(plan: Plan, index: int):
+    """The polygon as an AGG (aggdraw) path."""
+    import aggdraw
+
+    path = aggdraw.Path()
+    trace_polygon(plan, index, path.moveto, path.lineto, path.close)
+    return path
+
+
+def to8(value: int, full: int) -> int:
+    """An intensity of the configured scale `full` as an 8-bit one (the peers' scale)."""
+    return round(value * 255 / full)
+
+
 def centre_sampled(plan: Plan) -> np.ndarray:
     """No antialiasing: each polygon covers the pixels whose centre it holds."""
     scene, S = plan.scene, plan.config.subpixel_scale
@@ -96,21 +120,16 @@ def skia_scene(plan: Plan) -> np.ndarray:
 
     scene = plan.scene
     full = plan.config.full_scale
-    to8 = [round(v * 255 / full) for v in range(full + 1)] if full != 255 else list(range(256))
     surface = skia.Surface(scene.width, scene.height)
     canvas = surface.getCanvas()
-    b = to8[scene.background]
+    b = to8(scene.background, full)
     canvas.clear(skia.ColorSetRGB(b, b, b))
     for i, poly in enumerate(plan.polygons):
         path = skia.Path()
-        for pts in polygon_points(plan, i):
-            path.moveTo(*(pts[0] + 0.5))
-            for p in pts[1:]:
-                path.lineTo(*(p + 0.5))
-            path.close()
+        trace_polygon(plan, i, path.moveTo, path.lineTo, path.close)
         rule = skia.PathFillType.kEvenOdd if poly.rule == "evenodd" else skia.PathFillType.kWinding
         path.setFillType(rule)
-        v = to8[poly.intensity]
+        v = to8(poly.intensity, full)
         canvas.drawPath(path, skia.Paint(AntiAlias=True, Color=skia.ColorSetRGB(v, v, v)))
     pixels = np.asarray(surface.makeImageSnapshot().toarray())[:, :, 0].astype(np.int64)
     return _from8(pixels, full)
@@ -122,16 +141,10 @@ def agg_scene(plan: Plan) -> np.ndarray:
 
     scene = plan.scene
     full = plan.config.full_scale
-    image = Image.new("L", (scene.width, scene.height), round(scene.background * 255 / full))
+    image = Image.new("L", (scene.width, scene.height), to8(scene.background, full))
     draw = aggdraw.Draw(image)
     for i, poly in enumerate(plan.polygons):
-        path = aggdraw.Path()
-        for pts in polygon_points(plan, i):
-            path.moveto(*(pts[0] + 0.5))
-            for p in pts[1:]:
-                path.lineto(*(p + 0.5))
-            path.close()
-        draw.path(path, aggdraw.Pen(0, 0, 0), aggdraw.Brush(round(poly.intensity * 255 / full)))
+        draw.path(agg_path(plan, i), aggdraw.Pen(0, 0, 0), aggdraw.Brush(to8(poly.intensity, full)))
     draw.flush()
     return _from8(np.asarray(image).astype(np.int64), full)
 

@@ -40,6 +40,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from doc_tables import write_section  # this folder: the script's own
 
 from edgeaa.hdl.core import PolygonCore
 from edgeaa.hdl.pipeline import STATS
@@ -129,23 +130,18 @@ def agg_seconds(plan, repeats: int) -> float:
     import aggdraw
     from PIL import Image
 
-    from edgeaa.analysis.compare import polygon_points
+    from edgeaa.analysis.compare import agg_path, to8
 
     scene, full = plan.scene, plan.config.full_scale
-    jobs = []
-    for i, poly in enumerate(plan.polygons):
-        path = aggdraw.Path()
-        for pts in polygon_points(plan, i):
-            path.moveto(*(pts[0] + 0.5))
-            for p in pts[1:]:
-                path.lineto(*(p + 0.5))
-            path.close()
-        jobs.append((path, aggdraw.Brush(round(poly.intensity * 255 / full))))
+    jobs = [
+        (agg_path(plan, i), aggdraw.Brush(to8(poly.intensity, full)))
+        for i, poly in enumerate(plan.polygons)
+    ]
     pen = aggdraw.Pen(0, 0, 0)  # width 0: no 1/4 px widening (edgeaa.analysis.peers)
     best = math.inf
     for _ in range(repeats):
         start = time.perf_counter()
-        image = Image.new("L", (scene.width, scene.height), round(scene.background * 255 / full))
+        image = Image.new("L", (scene.width, scene.height), to8(scene.background, full))
         draw = aggdraw.Draw(image)
         for path, brush in jobs:
             draw.path(path, pen, brush)
@@ -225,15 +221,6 @@ def stage_table(rows: list[dict]) -> list[str]:
     return lines
 
 
-def write_doc(section: str, lines: list[str]) -> None:
-    """Replace the text between this section's markers in docs/hardware.md."""
-    begin, end = f"<!-- begin {section} -->", f"<!-- end {section} -->"
-    text = DOC.read_text()
-    head, rest = text.split(begin + "\n")
-    _, tail = rest.split(end)
-    DOC.write_text(head + begin + "\n" + "\n".join(lines) + "\n" + end + tail)
-
-
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tile", default="64x32", help="tile WIDTHxHEIGHT")
@@ -260,8 +247,8 @@ def main() -> int:
     rate, stages = [*title, "", *rate_table(rows)], [*title, "", *stage_table(rows)]
     print(json.dumps(rows, indent=1) if args.json else "\n".join([*rate, "", *stages[2:]]))
     if args.write:
-        write_doc("pipeline rate", rate)
-        write_doc("pipeline stages", stages)
+        write_section(DOC, "pipeline rate", rate)
+        write_section(DOC, "pipeline stages", stages)
         print(f"wrote {DOC.relative_to(ROOT)}", file=sys.stderr)
     return 0 if all(exact(r) and r["image_equal"] for r in rows) else 1
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import shapely
+from doc_tables import write_section  # this folder: the script's own
 
 from edgeaa.render import geometry
 from edgeaa.render.geometry import split_crossings
@@ -260,15 +261,6 @@ def rounding_table(rows, S: int, worst: tuple) -> list[str]:
     return lines
 
 
-def write_doc(section: str, lines: list[str]) -> None:
-    """Replace the text between this section's markers in docs/noding.md."""
-    begin, end = f"<!-- begin {section} -->", f"<!-- end {section} -->"
-    text = DOC.read_text()
-    head, rest = text.split(begin + "\n")
-    _, tail = rest.split(end)
-    DOC.write_text(head + begin + "\n" + "\n".join(lines) + "\n" + end + tail)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default=",".join(map(str, SIZES)))
@@ -292,8 +284,8 @@ def main() -> None:
         return
     command = "python benchmarks/noding.py " + " ".join(sys.argv[1:])
     machine = f"{platform.processor() or platform.machine()}, Python {platform.python_version()}"
-    write_doc("speed", [f"`{command.strip()}` ({machine}):", "", *table])
-    write_doc("rounding", [f"`{command.strip()}`:", "", *rounding])
+    write_section(DOC, "speed", [f"`{command.strip()}` ({machine}):", "", *table])
+    write_section(DOC, "rounding", [f"`{command.strip()}`:", "", *rounding])
     print(f"wrote {DOC.relative_to(ROOT)}")
 
 

@@ -21,6 +21,8 @@ from ..model.config import EdgeConfig, RegisterWidth
 from ..model.tile import OPS, RESOLVE_OPS, TileConfig
 
 __all__ = [
+    "CELL_OP",
+    "TILE_OP",
     "check_config",
     "clip_layout",
     "const_mul",
@@ -151,6 +153,11 @@ def _polygon_fields(config: EdgeConfig) -> dict:
         "evenodd": unsigned(1),
         "background": intensity,
     }
+
+
+# The op codes of the tile stages' streams by name: `tile_op_layout`'s and `tile_cell_layout`'s.
+TILE_OP = {name: code for code, name in enumerate(OPS)}
+CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
 
 
 def tile_op_layout(tile: TileConfig) -> data.StructLayout:

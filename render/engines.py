@@ -38,7 +38,7 @@ from ..model.beat import (
     BeatFormat,
     edge_columns,
 )
-from ..model.timing import stream_cycles, write_cycles
+from ..model.timing import beat_cycles, stream_cycles
 
 ENGINES = ("model", "amaranth", "verilator")
 MODEL_CHUNK = 512  # edges per run_edges call
@@ -67,18 +67,12 @@ def cycles(config: EdgeConfig, edges: list[Edge], fmt: BeatFormat = WRITES) -> i
     """Clocks from the first command to the last beat, inclusive, by the timing model
     (back-to-back source, always-ready sink) of the core whose output is `fmt`: the last
     beat's clock + 1; 0 for no edges."""
-    last = -1
-    for timing in write_cycles(config, edges, fmt=fmt):
-        if timing.beats:
-            last = max(last, timing.beats[-1])
-    return last + 1
+    return max(beat_cycles(config, edges, fmt=fmt), default=-1) + 1
 
 
 def beat_clocks(config: EdgeConfig, edges: list[Edge], fmt: BeatFormat = WRITES) -> np.ndarray:
-    return np.array(
-        [clock for timing in write_cycles(config, edges, fmt=fmt) for clock in timing.beats],
-        dtype=np.int64,
-    )
+    """The timing model's clock of every beat (`edgeaa.model.timing.beat_cycles`), as int64."""
+    return np.array(beat_cycles(config, edges, fmt=fmt), dtype=np.int64)
 
 
 def beats_to_writes(beats: np.ndarray, columns) -> tuple[np.ndarray, ...]:
@@ -152,6 +146,7 @@ def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
     if engine == "model":
         return _model_deltas(config, arrays, progress)
     from ..hdl.core import PolygonCore  # a simulator's render only: a model render loads no hdl
+
     batch = setup_batch(config, *arrays.args(), arrays.clip)
     shapes = (batch.columns, batch.clipped_start)
     if not len(arrays):

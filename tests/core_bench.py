@@ -158,11 +158,11 @@ def observed_beat(beat: dict) -> Beat:
     return Beat((beat["lane0.x"], beat["lane0.y"], beat["lane0.value"]), lane1, bool(beat["last"]))
 
 
-def expected_bank(config: EdgeConfig, edge: Edge) -> dict[str, int]:
-    """The bank `setup()` gives the edge, keyed like `decoder` keys the core's bank (array
-    elements as ``name.j``)."""
+def expected_bank(config: EdgeConfig, edge: Edge, pieces: bool = False) -> dict[str, int]:
+    """The bank `setup()` gives the edge (with the end pieces: the polygon core's), keyed like
+    `decoder` keys the core's bank (array elements as ``name.j``)."""
     bank = {}
-    for name, value in bank_values(config, setup(config, edge)).items():
+    for name, value in bank_values(config, setup(config, edge), pieces).items():
         if isinstance(value, tuple):
             bank.update({f"{name}.{j}": item for j, item in enumerate(value)})
         else:
@@ -177,43 +177,60 @@ def first_difference(got: list, want: list) -> int | None:
     return None if len(got) == len(want) else min(len(got), len(want))
 
 
-def check_run(run: Run, *, exact_timing: bool) -> None:
-    """All checks of one run; `exact_timing` for an always-ready sink and eager source."""
+def check_outputs(run: Run, got: list, want: list[list], *, pieces: bool = False) -> None:
+    """What both cores owe the model, timing aside: `got` (the run's beats, decoded) is the
+    concatenation of `want` (the model's beats of each good edge, in order); the bank handed
+    to the stepper is `setup()`'s for each edge with a visible column (`pieces`: the polygon
+    core's bank); bad commands are dropped and counted, one error pulse each (an edge with
+    no column in its window is not an error); every command is accepted and the core ends
+    idle."""
     config, tag = run.config, run.label
     good = [edge for edge in run.edges if is_good(config, edge)]
-    visible = [edge for edge in good if setup(config, edge).columns]  # the others: no bank
-    bad = len(run.edges) - len(good)
-
-    # Beats: the model's writes, in order, lane by lane, with the last flags.
-    got = [observed_beat(beat) for _, beat in run.beats]
-    want = [beat for edge in good for beat in expected_beats(config, edge)]
     position = 0
-    for n, edge in enumerate(good):
-        edge_want = expected_beats(config, edge)
+    for n, (edge, edge_want) in enumerate(zip(good, want, strict=True)):
         edge_got = got[position : position + len(edge_want)]
         assert edge_got == edge_want, (
-            f"{tag} good edge {n} {edge}: beats differ from run_edge "
+            f"{tag} good edge {n} {edge}: beats differ from the model "
             f"(first difference at column {first_difference(edge_got, edge_want)})"
         )
         position += len(edge_want)
-    assert len(got) == len(want), f"{tag} {len(got)} beats, model has {len(want)}"
-
-    # The bank handed to the stepper: the model's setup() of each edge with a visible column.
+    assert len(got) == position, f"{tag} {len(got)} beats, the model has {position}"
+    visible = [edge for edge in good if setup(config, edge).columns]  # the others: no bank
     assert len(run.banks) == len(visible), f"{tag} {len(run.banks)} banks, {len(visible)} edges"
     for n, (edge, (_, bank)) in enumerate(zip(visible, run.banks, strict=True)):
-        want_bank = expected_bank(config, edge)
+        want_bank = expected_bank(config, edge, pieces)
         assert bank == want_bank, (
-            f"{tag} visible edge {n} {edge}: bank differs from setup(): "
+            f"{tag} visible edge {n} {edge}: bank differs from setup() (core, model): "
             f"{ {k: (bank[k], want_bank[k]) for k in bank if bank[k] != want_bank[k]} }"
         )
-
-    # Bad commands: dropped and counted, one error pulse each (an edge with no column in its
-    # window is not an error).
+    bad = len(run.edges) - len(good)
     assert run.errors == min(bad, (1 << ERRORS_BITS) - 1), f"{tag} errors={run.errors}"
     assert len(run.error_pulses) == bad, f"{tag} error pulses {run.error_pulses}"
     assert len(run.accepts) == len(run.edges), f"{tag} accepted {len(run.accepts)} commands"
-    # The sink is empty at the end and the core idle.
     assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
+
+
+def check_clocks(run: Run, timings: list) -> list[int]:
+    """The accept and beat clocks equal the timing model's `timings` (`write_cycles` of the
+    run's edges, always-ready sink and eager source); returns the beat clocks."""
+    tag = run.label
+    assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
+    want_clocks = [clock for t in timings for clock in t.beats]
+    got_clocks = [clock for clock, _ in run.beats]
+    assert got_clocks == want_clocks, (
+        f"{tag} beat clocks differ from the timing model; first at beat "
+        f"{first_difference(got_clocks, want_clocks)}"
+    )
+    return want_clocks
+
+
+def check_run(run: Run, *, exact_timing: bool) -> None:
+    """All checks of one line core run; `exact_timing` for an always-ready sink and eager
+    source."""
+    config, tag = run.config, run.label
+    good = [edge for edge in run.edges if is_good(config, edge)]
+    got = [observed_beat(beat) for _, beat in run.beats]
+    check_outputs(run, got, [expected_beats(config, edge) for edge in good])
 
     # Per-column trace of the stepper registers, and the scaled areas of the column's writes
     # (observed in the pipeline's last stage, in the same order).
@@ -241,13 +258,7 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     timings = timing_model.write_cycles(
         config, run.edges, run.setup_latency, setup_units=run.setup_units
     )
-    assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
-    want_clocks = [clock for t in timings for clock in t.beats]
-    got_clocks = [clock for clock, _ in run.beats]
-    assert got_clocks == want_clocks, (
-        f"{tag} beat clocks differ from the timing model; first at beat "
-        f"{first_difference(got_clocks, want_clocks)}"
-    )
+    want_clocks = check_clocks(run, timings)
     depth = timing_model.pipeline_depth(config)  # clocks from a column's step to its beat
     assert [clock for clock, *_ in run.steps] == [c - depth for c in want_clocks], f"{tag} steps"
     assert [clock for clock, *_ in run.areas] == [c - 1 for c in want_clocks], f"{tag} areas"

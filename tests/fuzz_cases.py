@@ -293,16 +293,22 @@ def tile_option(d: Draft, name="--tile") -> str | None:
     return tile
 
 
-def verilog_case(d: Draft, quick: bool) -> None:
-    top = d.choice("--top", ["core", "pipeline"]) if d.chance(0.5) else "core"
-    if d.chance(0.4) and top:
+def top_options(d: Draft, p_top: float, p_tile: float, p_core: float) -> None:
+    """``--top``, ``--tile`` and ``--core`` as verilog and synth take them (each drawn with
+    its probability): a tile only with the pipeline, the deltas core only as the top."""
+    top = d.choice("--top", ["core", "pipeline"]) if d.chance(p_top) else "core"
+    if d.chance(p_tile):
         tile_option(d)
         if top == "core":
             d.bad("--tile with --top core")
-    if d.chance(0.3):
+    if d.chance(p_core):
         core = d.choice("--core", ["writes", "deltas"])
         if top == "pipeline" and core == "deltas":
             d.bad("--core deltas with --top pipeline")
+
+
+def verilog_case(d: Draft, quick: bool) -> None:
+    top_options(d, 0.5, 0.4, 0.3)
     if d.chance(0.4):
         form, name, why = d.rng.choice(NAMES + [("keyword", k, "a keyword") for k in KEYWORDS])
         d.add("--name", name)
@@ -338,15 +344,7 @@ def synth_case(d: Draft, quick: bool) -> None:
             d.bad("--target xc7")
     if d.chance(0.3):
         d.integer("--seed", 0, 2**31 - 1, [0, 1, 7])
-    top = d.choice("--top", ["core", "pipeline"]) if d.chance(0.4) else "core"
-    if d.chance(0.3):
-        tile_option(d)
-        if top == "core":
-            d.bad("--tile with --top core")
-    if d.chance(0.2):
-        core = d.choice("--core", ["writes", "deltas"])
-        if top == "pipeline" and core == "deltas":
-            d.bad("--core deltas with --top pipeline")
+    top_options(d, 0.4, 0.3, 0.2)
     if d.chance(0.2):
         d.integer("--setup-units", 1, 16, [1, 2, 16])
     d.config(0.05)

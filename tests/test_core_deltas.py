@@ -12,7 +12,17 @@ from __future__ import annotations
 import random
 
 import pytest
-from core_bench import Run, corpus, drive, first_difference, is_good, run_of, sim_settings
+from core_bench import (
+    Run,
+    check_clocks,
+    check_outputs,
+    corpus,
+    drive,
+    first_difference,
+    is_good,
+    run_of,
+    sim_settings,
+)
 from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
@@ -24,10 +34,8 @@ from edgeaa.hdl import (
     core_verilog,
     delta_layout,
 )
-from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Edge, EdgeConfig, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.model.bank import bank_values
 from edgeaa.model.beat import CELLS, DELTAS, WRITES, DeltaBeat, delta_column_beats
 from edgeaa.model.step import run_edge_deltas
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
@@ -42,17 +50,6 @@ def expected_deltas(config: EdgeConfig, edges) -> list[list[DeltaBeat]]:
     return [
         delta_column_beats(run_edge_deltas(config, edge)) for edge in edges if is_good(config, edge)
     ]
-
-
-def expected_bank(config: EdgeConfig, edge: Edge) -> dict[str, int]:
-    """The deltas bank of `setup()`, keyed like `decoder` keys the core's (``name.j``)."""
-    bank = {}
-    for name, value in bank_values(config, setup(config, edge), DELTAS.pieces).items():
-        if isinstance(value, tuple):
-            bank.update({f"{name}.{j}": item for j, item in enumerate(value)})
-        else:
-            bank[name] = value
-    return bank
 
 
 # -- the Amaranth runner ---------------------------------------------------------------------
@@ -79,37 +76,12 @@ def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_u
 
 def check_run(run: Run, *, exact_timing: bool) -> None:
     config, tag = run.config, run.label
-    good = [edge for edge in run.edges if is_good(config, edge)]
     got = [beat for _, beat in run.beats]
-    position = 0
-    for n, (edge, want) in enumerate(zip(good, expected_deltas(config, run.edges), strict=True)):
-        edge_got = got[position : position + len(want)]
-        assert edge_got == want, (
-            f"{tag} good edge {n} {edge}: deltas differ from run_edge_deltas at column "
-            f"{first_difference(edge_got, want)}"
-        )
-        position += len(want)
-    assert len(got) == position, f"{tag} {len(got)} beats, the model has {position}"
-    visible = [edge for edge in good if setup(config, edge).columns]
-    assert len(run.banks) == len(visible), f"{tag} {len(run.banks)} banks for {len(visible)}"
-    for edge, (_, bank) in zip(visible, run.banks, strict=True):
-        want_bank = expected_bank(config, edge)
-        diff = {k: (bank[k], want_bank[k]) for k in bank if bank[k] != want_bank[k]}
-        assert not diff, f"{tag} {edge}: bank differs from setup() (core, model): {diff}"
-    bad = len(run.edges) - len(good)
-    assert run.errors == min(bad, (1 << ERRORS_BITS) - 1), f"{tag} errors={run.errors}"
-    assert len(run.error_pulses) == bad and len(run.accepts) == len(run.edges), tag
-    assert run.final_idle == (0, 0, 0, 1), f"{tag} not idle at the end: {run.final_idle}"
+    check_outputs(run, got, expected_deltas(config, run.edges), pieces=True)
     if not exact_timing:
         return
     timings = timing_model.write_cycles(config, run.edges, fmt=DELTAS, setup_units=run.setup_units)
-    assert run.accepts == [t.accepted for t in timings], f"{tag} accept clocks"
-    want_clocks = [clock for t in timings for clock in t.beats]
-    got_clocks = [clock for clock, _ in run.beats]
-    assert got_clocks == want_clocks, (
-        f"{tag} beat clocks differ from the timing model at beat "
-        f"{first_difference(got_clocks, want_clocks)}"
-    )
+    check_clocks(run, timings)
     # The stepper takes the bank (edge done) in the clock it steps the edge's last column.
     depth = timing_model.pipeline_depth(config, DELTAS)
     taken = [t.beats[-1] - depth for t in timings if not t.dropped]
@@ -282,7 +254,7 @@ def test_a_wrong_model_is_caught(monkeypatch):
         return [(cx, cy + 1, v) if k == 3 else (cx, cy, v) for k, (cx, cy, v) in enumerate(cells)]
 
     monkeypatch.setattr(step, "delta_cells", shifted)
-    with pytest.raises(AssertionError, match="deltas differ from run_edge_deltas"):
+    with pytest.raises(AssertionError, match="beats differ from the model"):
         check_run(run, exact_timing=True)
 
 

@@ -59,10 +59,12 @@ import types
 from amaranth.asserts import AnyConst
 from amaranth.hdl import Assert, Cat, Mux, Signal
 
+from ....hdl.layouts import CELL_OP
+from ....hdl.layouts import TILE_OP as OP
 from ....model.beat import CELLS
 from ....model.tile import RESOLVE_OPS
 from .spec import all_, implies
-from .tile_common import CELL_OP, OP, When, any_, bit, follows, state_checks, track_rows
+from .tile_common import When, any_, bit, follows, state_checks, track_rows
 
 __all__ = ["check_cells"]
 

@@ -273,10 +273,8 @@ def _products(ctx, spec, lanes, add):
     FINAL's product (``y_area0``, `edgeaa.hdl.pieces.total0_steps`: the y-major ``total0``
     by ``w0``'s bits) has no invariant: no check reads a y-major ``total0`` (`spec.pieces_ok`
     bounds the x-major totals only; the y-major deltas clamp their areas to the bands), so the
-    proofs hold whatever it is, and the core tests compare it in every bank with the model.
-    An exact one (``y_area0`` equal to ``m_area0`` times ``w0``'s top ``counter`` bits, or
-    to Horner's partial sums) kept this proof's induction step from finishing (stopped
-    after 21 and 50 minutes under load; 17 minutes without, 2026-11-25)."""
+    proofs hold whatever it is, and the core tests compare it in every bank with the model
+    (why not an exact one: docs/hardware.md, "Formal proofs of the deltas core")."""
     config, setup, win, f = ctx.config, ctx.setup, spec.win, spec.fold
     r, run, final = setup.regs, setup.in_run, setup.in_final
     cut_end = setup.pieces.cut_end == (win.last != f.c1)

@@ -21,7 +21,16 @@ from .pipeline import check as check_pipeline
 from .stream import check as check_stream
 from .stream import held as hold_flag
 
-__all__ = ["CHECKS", "COVERS", "DELTA_CHECKS", "FAULTS", "LINE_CHECKS", "FormalHarness", "capacity"]
+__all__ = [
+    "ClockedHarness",
+    "CHECKS",
+    "COVERS",
+    "DELTA_CHECKS",
+    "FAULTS",
+    "LINE_CHECKS",
+    "FormalHarness",
+    "capacity",
+]
 
 LINE_CHECKS = ("pipe", "beat", "minor")  # the writes core's pipeline
 CHECKS = ("stream", "count", "bounds", *LINE_CHECKS, *DELTA_CHECKS)
@@ -54,7 +63,21 @@ def _check_pipeline_groups(top, groups, covers) -> None:
         raise ValueError(f"{', '.join(wrong)} do not apply to {top.__name__}")
 
 
-class FormalHarness(Elaboratable):
+class ClockedHarness(Elaboratable):
+    """A formal harness's clock domain ``sync``, its clock a port (``clk``, what
+    `harness_rtlil` lists): Amaranth ties an undriven clock to 0 (a frozen design).
+    ``reset``: the domain's reset is the harness's to drive (else it has none)."""
+
+    def __init__(self, reset: bool):
+        self.reset = reset
+        self.domain = ClockDomain("sync", reset_less=not reset)
+
+    @property
+    def clk(self) -> Signal:
+        return self.domain.clk
+
+
+class FormalHarness(ClockedHarness):
     """The core with free inputs and the properties of `checks` (docs/hardware.md, "The
     harness, its check groups and faults").
 
@@ -85,7 +108,7 @@ class FormalHarness(Elaboratable):
         covers = COVERS if covers is True else () if covers is False else covers
         self.covers = _choose("covers", covers, COVERS)
         self.assumes = _choose("assumes", assumes, CHECKS)
-        self.reset = reset
+        super().__init__(reset)
         self.fault = fault
         if top not in _PIPELINES:
             raise TypeError(f"top must be LineCore or PolygonCore, not {top!r}")
@@ -94,12 +117,6 @@ class FormalHarness(Elaboratable):
         # One setup unit: the properties observe its internals (`SetupArray` is checked in
         # simulation, tests/test_setup_array.py).
         self.core = top(self.config, setup_units=1)
-        # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
-        self.domain = ClockDomain("sync", reset_less=not reset)
-
-    @property
-    def clk(self) -> Signal:
-        return self.domain.clk
 
     def elaborate(self, platform):
         m = Module()

@@ -42,10 +42,11 @@ import types
 from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Assert, Assume, Cat, Const, Mux, Signal, signed
 
+from ....hdl.layouts import CELL_OP
 from ....model.accumulate import composite, fill_coverage, intensity_offset
 from ....model.tile import RESOLVE_OPS
 from .spec import HdlArith, all_, implies
-from .tile_common import CELL_OP, When, any_, follows, memory_reader, state_checks, track_rows
+from .tile_common import When, any_, follows, memory_reader, state_checks, track_rows
 
 __all__ = ["check_pixels"]
 

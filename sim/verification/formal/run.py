@@ -424,35 +424,29 @@ def run_proof(
         top=proof.top,
     )
     script = sby_script(mode, depth, skip=skip, solver=solver)
-    name = proof.name + (f"+{fault}" if fault else "")
     return run_harness(
-        name,
-        harness_rtlil(harness),
-        script,
-        tools,
-        mode=mode,
-        depth=depth,
-        workdir=workdir,
-        timeout=timeout,
-        tail=tail,
+        proof.name, fault, harness, script, tools, mode, depth, workdir, timeout, tail
     )
 
 
 def run_harness(
-    name: str,
-    rtlil: str,
+    proof: str,
+    fault: str | None,
+    harness,
     script: str,
     tools: dict[str, str],
-    *,
     mode: str,
     depth: int,
     workdir: str | os.PathLike | None = None,
     timeout: float | None = None,
     tail: int = 40,
 ) -> FormalResult:
-    """Run sby with `script` on a harness's RTLIL (`harness_rtlil`) and read the result: the
-    common end of `run_proof` and the tile stages' `run_tile_proof`. `workdir` keeps the run
-    (else a temporary directory is removed afterwards)."""
+    """Run sby with `script` (of `mode` and `depth`) on `harness` (as RTLIL: `harness_rtlil`)
+    and read the result, named `proof` (``+fault`` with a fault): the common end of
+    `run_proof` and the tile stages' `run_tile_proof`. `workdir` keeps the run (else a
+    temporary directory is removed afterwards)."""
+    name = proof + (f"+{fault}" if fault else "")
+    rtlil = harness_rtlil(harness)
     keep = workdir is not None
     base = Path(workdir) if keep else Path(tempfile.mkdtemp(prefix="edgeaa-formal-"))
     try:

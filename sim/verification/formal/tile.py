@@ -36,14 +36,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, ClockDomain, Elaboratable, Module, Mux, Signal, Value
+from amaranth.hdl import Assert, Module, Mux, Value
 
 from ....hdl.accumulator import TileAccumulator
 from ....hdl.resolve import TileResolve
 from ....model.tile import TileConfig, resolve_latency
 from .accumulator import check_cells
+from .harness import ClockedHarness
 from .resolve import check_pixels
-from .run import FormalResult, find_tools, harness_rtlil, report, run_harness, sby_script
+from .run import FormalResult, find_tools, report, run_harness, sby_script
 from .stream import held, hold_rule
 from .tile_common import (
     SMALL_CONFIG,
@@ -66,7 +67,7 @@ __all__ = [
 ]
 
 
-class TileHarness(Elaboratable):
+class TileHarness(ClockedHarness):
     """One tile stage (``"accumulator"`` or ``"resolve"``) with a free input stream and the
     check groups of `TILE_CHECKS` (the module docstring). ``reset``: the reset is a free
     input (else the registers and memories start at their initial values and never reset).
@@ -99,15 +100,10 @@ class TileHarness(Elaboratable):
             faults = [f for f, s in TILE_FAULTS.items() if s == stage]
             raise ValueError(f"fault must be one of {', '.join(faults)} or None, not {fault!r}")
         self.tile, self.stage, self.checks = tile, stage, checks
-        self.reset, self.fault, self.invariants = reset, fault, invariants
+        super().__init__(reset)
+        self.fault, self.invariants = fault, invariants
         self.covers = covers and invariants
         self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile)
-        # The clock must be a port: Amaranth ties an undriven clock to 0 (a frozen design).
-        self.domain = ClockDomain("sync", reset_less=not reset)
-
-    @property
-    def clk(self) -> Signal:
-        return self.domain.clk
 
     def elaborate(self, platform):
         m = Module()
@@ -301,17 +297,8 @@ def run_tile_proof(
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
         script = script.replace("prep -top formal_top", "prep -top formal_top\nmemory_map")
-    name = proof.name + (f"+{fault}" if fault else "")
     return run_harness(
-        name,
-        harness_rtlil(harness),
-        script,
-        tools,
-        mode=mode,
-        depth=depth,
-        workdir=workdir,
-        timeout=timeout,
-        tail=tail,
+        proof.name, fault, harness, script, tools, mode, depth, workdir, timeout, tail
     )
 
 

@@ -1,5 +1,5 @@
 """What the tile stages' proofs share (`accumulator`, `resolve`, `tile`): the check groups and
-faults, the op codes, the small tile, the source that keeps the hold rule, the invariant
+faults, the small tile, the source that keeps the hold rule, the invariant
 record `When` and its assertion, the harness's memory read ports, and the ghost's record of
 the rows of cells sent (what the accumulator is proved to send and the resolve assumes)."""
 
@@ -11,7 +11,7 @@ from amaranth.asserts import AnySeq
 from amaranth.hdl import Assert, Assume, Const, Cover, Mux, Signal, Value
 
 from ....model.config import EdgeConfig
-from ....model.tile import OPS, RESOLVE_OPS, TileConfig
+from ....model.tile import TileConfig
 from .spec import implies
 from .stream import held, hold_rule
 
@@ -24,8 +24,6 @@ TILE_FAULTS = {
     "wide_range": "resolve",
     "lost_first": "resolve",
 }
-OP = {name: code for code, name in enumerate(OPS)}
-CELL_OP = {name: code for code, name in enumerate(RESOLVE_OPS)}
 
 # The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels, 18-bit
 # cells.

@@ -1,0 +1,102 @@
+"""The accumulator's scan (`edgeaa.hdl.accumulator.TileAccumulator`): the states WAIT, SCAN
+and CLEAR of its state machine.
+
+`scan_states` reads, after a polygon's end, the rows it touched in ascending order, each cell
+cleared as it is read, and after a reset mid-polygon clears the whole memory. It takes the
+accumulator (its ports, tile and ``observe`` registers) and adds the states inside the
+caller's ``m.FSM()``; docs/hardware.md, "Polygon pipeline", Accumulation memory, tells it
+clock by clock.
+"""
+
+from __future__ import annotations
+
+from amaranth.hdl import Cat, Mux, Signal
+
+from .layouts import CELL_OP, log2
+
+__all__ = ["lowest_set", "scan_states"]
+
+
+def lowest_set(bits: Signal, width: int):
+    """Index of the lowest set bit of the `width`-bit `bits` (0 when none) and that bit alone
+    (one-hot, 0 when none): ``bits & ~(bits - 1)`` and an OR per index bit (why not ``bits &
+    -bits``: docs/hardware.md, "Accumulation memory")."""
+    one_hot = (bits & ~(bits - 1))[:width]
+    index = Cat(
+        *(Cat(*(one_hot[k] for k in range(width) if k >> j & 1)).any() for j in range(log2(width)))
+    )
+    return index, one_hot
+
+
+def scan_states(m, unit, o, o_valid, advance, first):
+    """WAIT and SCAN: the touched rows in ascending order, a row seen since the tile
+    started from ``lo`` to ``hi`` and on to the last column when its sum through ``hi``
+    is nonzero (`edgeaa.model.tile`, "Scan span"), a row not seen yet whole."""
+    tile, obs = unit.tile, unit.observe
+    lo, hi, touched, seen = obs.lo, obs.hi, obs.touched, obs.seen
+    last = tile.width - 1
+    scan_x, scan_y = Signal(tile.x_bits), Signal(tile.y_bits)
+    scan_addr = Cat(scan_x, scan_y)
+    partial = Signal()  # the row is read from lo (it was seen)
+    row_start = Signal()  # the next read is the row's first
+    decide = Signal()  # the cell waiting is the row's hi: the row may stop there
+    total = obs.total
+    # the next row to scan and its bit, taken out of `touched` when it is chosen
+    next_y, next_bit = lowest_set(touched, tile.height)
+    next_seen = (seen & next_bit).any()
+    next_x = Mux(next_seen, lo, 0)
+
+    def choose():
+        m.d.sync += [
+            scan_x.eq(next_x),
+            scan_y.eq(next_y),
+            partial.eq(next_seen),
+            row_start.eq(1),
+            touched.eq(touched & ~next_bit),
+            seen.eq(seen | next_bit),
+        ]
+
+    def done():
+        m.d.sync += [lo.eq(last), hi.eq(0), obs.dirty.eq(0)]
+        m.next = "ACC"
+
+    with m.State("WAIT"):  # the last beat's write landed in the clock before
+        choose()
+        m.next = "ACC"
+        with m.If(touched != 0):
+            m.next = "SCAN"
+    with m.State("SCAN"):
+        m.d.comb += [unit.scanning.eq(1), unit._scan_addr.eq(scan_addr)]
+        with m.If(advance):
+            # the cell waiting is the row's hi and the sum through it is 0: the row stops,
+            # and this clock's read (hi + 1, a zero cell: its clear changes nothing) is
+            # not sent
+            stop = decide & (total == 0)
+            m.d.comb += unit._clear.eq(1)
+            m.d.sync += [
+                o_valid.eq(~stop),
+                o["op"].eq(CELL_OP["cell"]),
+                o["x"].eq(scan_x),
+                o["y"].eq(scan_y),
+                o["first"].eq(first),
+                o["start"].eq(row_start),
+                first.eq(0),
+                row_start.eq(0),
+                scan_x.eq(scan_x + 1),
+                decide.eq(partial & (scan_x == hi) & (hi != last)),
+            ]
+            with m.If(stop | (scan_x == last)):
+                choose()
+                with m.If(touched == 0):
+                    done()
+    with m.State("CLEAR"):  # after a reset: zero to every cell, one a clock, no output
+        m.d.comb += [unit._clear.eq(1), unit._scan_addr.eq(scan_addr)]
+        m.d.sync += scan_x.eq(scan_x + 1)
+        with m.If(scan_x == last):
+            m.d.sync += scan_y.eq(scan_y + 1)
+            with m.If(scan_y == tile.height - 1):
+                m.d.sync += [scan_x.eq(0), scan_y.eq(0), obs.dirty.eq(0)]
+                m.next = "ACC"
+    obs.__dict__.update(
+        scan_x=scan_x, scan_y=scan_y, partial=partial, row_start=row_start, decide=decide
+    )
