@@ -17,11 +17,12 @@ from hypothesis import strategies as st
 
 from edgeaa.hdl.pipeline import EdgePipeline, command_layout, pipeline_verilog
 from edgeaa.model import EdgeConfig
-from edgeaa.model.pipeline import COMMAND_VERSION, Command, command_ops
+from edgeaa.model.pipeline import COMMAND_VERSION, Command, command_fields, command_ops
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import TileConfig, TileModel
-from edgeaa.render import builtin, parse_scene, plan_scene, render_scene
+from edgeaa.render import SceneError, builtin, parse_scene, plan_scene, render_scene
 from edgeaa.render.builtin import BUILTINS
+from edgeaa.render.paint import Canvas, coverage_scene
 from edgeaa.render.pipeline import (
     image_from_frames,
     pipeline_savings,
@@ -50,7 +51,10 @@ def test_the_command_format_and_interface():
     dut = EdgePipeline(tile)
     members = {"commands", "pixels", "errors", "edge_errors", "stats"}
     assert set(dut.signature.members) == members
-    assert set(command_layout(tile).members) == set(Command._fields)
+    assert set(command_layout(tile).members) == set(command_fields(tile))
+    assert set(Command._fields) - set(command_fields(tile)) == {"paint"}
+    colour = replace(tile, channels=3)
+    assert set(command_layout(colour).members) == set(Command._fields)
 
 
 def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
@@ -66,6 +70,40 @@ def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
     assert np.array_equal(image, render_tiles(plan, tile))
     assert run.stats["core_busy"] > 0 and run.stats["resolve_busy"] >= 4 * tile.pixels
     assert run.stats["resolve_stall"] == 0
+
+
+def colour_scene(data, scene, opaque: bool = True):
+    """`scene` with a random paint per polygon and background (alpha full when `opaque`)."""
+    unit = st.floats(0, 1)
+
+    def paint():
+        return tuple(data.draw(unit) for _ in range(3)) + (1.0 if opaque else data.draw(unit),)
+
+    polygons = tuple(replace(p, paint=paint()) for p in scene.polygons)
+    return replace(scene, polygons=polygons, background_paint=paint())
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.data(), st.sampled_from([(4, 2), (16, 8)]))
+def test_a_colour_scene_through_three_channel_tiles_is_the_canvas(data, size):
+    """Each polygon's paint composited per channel in the tiles (`TileModel`, 3 channels):
+    the canvas's image (`edgeaa.render.paint`), bit for bit."""
+    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
+    full = DEFAULT.full_scale
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    want = render_scene(plan, canvas=Canvas(scene, full)).image
+    assert (want[..., 3] == full).all()
+    tile = TileConfig(DEFAULT, *size, channels=3)
+    assert np.array_equal(render_tiles(plan, tile, canvas=Canvas(scene, full)), want[..., :3])
+
+
+def test_the_hardware_refuses_a_translucent_paint():
+    scene = parse_scene({**TINY_SCENE, "background_color": [1, 1, 1]})
+    scene = replace(scene, polygons=(replace(scene.polygons[0], paint=(1, 0, 0, 0.5)),))
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    with pytest.raises(SceneError, match="opaque colours only"):
+        scene_commands(plan, tile, Canvas(scene, DEFAULT.full_scale))
 
 
 @settings(max_examples=60, deadline=None)

@@ -51,7 +51,8 @@ class PipelineRun:
         return self.clocks / self.seconds if self.seconds else 0.0
 
     def frames(self, tile: TileConfig) -> list[np.ndarray]:
-        """The flushed tiles' values, (height, width) each, in order. Raises RuntimeError
+        """The flushed tiles' values, (height, width) each ((height, width, channels) for a
+        tile of 3 channels), in order. Raises RuntimeError
         unless the pixels came as the pipeline sends them: whole tiles, row by row, each
         pixel at its place and ``last`` on a tile's final pixel only."""
         x, y, values, last = (self.pixels[:, PIXEL_COLUMNS.index(n)] for n in PIXEL_COLUMNS[1:])
@@ -69,7 +70,12 @@ class PipelineRun:
                 f"pixel {i} is at ({x[i]}, {y[i]}) with last {last[i]}; a tile sent row by row "
                 f"has ({want_x[i]}, {want_y[i]}) with last {int(want_last[i])} there"
             )
-        return list(values.reshape(-1, tile.height, tile.width))
+        values = values.reshape(-1, tile.height, tile.width)
+        if tile.channels > 1:  # red in the low bits (`pack_paint`)
+            bits = tile.config.intensity_bits
+            shifts = np.arange(tile.channels) * bits
+            values = (values[..., None] >> shifts) & ((1 << bits) - 1)
+        return list(values)
 
 
 def expected_pixels(tile: TileConfig, commands: list[Command]) -> int:
