@@ -24,14 +24,14 @@ from amaranth.hdl import Cat, Module, Mux, ResetSignal, Signal, unsigned
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..model.pipeline import CODE, OP_BITS
+from ..model.pipeline import CODE, OP_BITS, command_fields
 from ..model.tile import OPS, TileConfig
 from .accumulator import TileAccumulator
 from .core import ERRORS_BITS, PolygonCore, flat_verilog
 from .layouts import tile_pixel_layout
 from .resolve import TileResolve
 
-__all__ = ["STATS", "EdgePipeline", "command_layout", "pipeline_verilog"]
+__all__ = ["STATS", "EdgePipeline", "command_const", "command_layout", "pipeline_verilog"]
 
 STATS = ("core_busy", "core_stall", "acc_busy", "acc_stall", "resolve_busy", "resolve_stall")
 STATS_BITS = 32
@@ -47,6 +47,13 @@ def command_layout(tile: TileConfig) -> data.StructLayout:
     if tile.channels > 1:  # the begin's colour, the tile's background (`Command.paint`)
         fields["paint"] = unsigned(config.intensity_bits * tile.channels)
     return data.StructLayout(fields)
+
+
+def command_const(tile: TileConfig, command):
+    """`command` (`edgeaa.model.pipeline.Command`) as a constant of `command_layout` (a
+    grey pipeline's has no paint)."""
+    fields = command_fields(tile)
+    return command_layout(tile).const({name: getattr(command, name) for name in fields})
 
 
 class EdgePipeline(wiring.Component):

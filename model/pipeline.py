@@ -12,11 +12,11 @@ fields ``op, x0, y0, x1, y1, i_in, i_out, flag``:
 * ``end`` (3): resolve the polygon into the tile's pixels.
 * ``flush`` (4): send the tile's pixels (row by row); the tile is the background again.
 
-A pipeline of 3 channels (`TileConfig.channels`) has one more field, ``paint``: red, green
-and blue, ``intensity_bits`` each, red in the low bits (`pack_paint`). A begin's paint is
-the polygon's colour (its coverage, in steps of ``|i_in - i_out|``, composites each channel
-towards it), a tile's paint its background (``i_in`` unused); grey pipelines have no paint
-field and ignore it.
+A pipeline of 3 or 4 channels (`TileConfig.channels`) has one more field, ``paint``: red,
+green, blue (and alpha), ``intensity_bits`` each, red in the low bits (`pack_paint`). A
+begin's paint is the polygon's colour (its coverage, in steps of ``|i_in - i_out|``,
+composites each channel towards it), a tile's paint its background (``i_in`` unused); grey
+pipelines have no paint field and ignore it.
 
 Codes 5 to 7 are unknown. Bad commands are dropped and counted in ``errors``, never hang the
 pipeline and never touch another polygon's pixels: an unknown code; an edge or an end outside
@@ -124,7 +124,9 @@ def decode_commands(tile: TileConfig, commands):
     clip = tile_clip(config, tile, 0, 0)
     colour = tile.channels > 1
     for command in commands:
-        paint = unpack_paint(command.paint, config.intensity_bits) if colour else None
+        paint = (
+            unpack_paint(command.paint, config.intensity_bits, tile.channels) if colour else None
+        )
         name, ended = command.name, None
         if polygon is not None and name in ("begin", "tile", "flush"):
             ended, polygon = polygon, None  # a polygon with no end: ended here

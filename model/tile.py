@@ -18,9 +18,10 @@ order, a stream of *ops* (the accumulator's input):
 * `Flush`: the tile's pixels go out row by row, and the tile is the background again.
 
 Channels (`TileConfig.channels`). A tile of 3 channels holds red, green and blue per
-pixel: a `PolygonEnd`'s one coverage q (in steps of D) composites each channel towards its
-paint, three `composite` side by side with the same divisor 2 D, and a `TileStart`'s
-background is a value per channel. One channel is grey: the paint is the intensity.
+pixel, one of 4 alpha too (premultiplied: a transparent background): a `PolygonEnd`'s one
+coverage q (in steps of D) composites each channel towards its paint, a `composite` per
+channel side by side with the same divisor 2 D, and a `TileStart`'s background is a value
+per channel. One channel is grey: the paint is the intensity.
 
 Widths. A cell holds its sum modulo ``2**cell_bits`` (``cell_bits`` = the delta register +
 ``headroom_bits``): the prefix sum of a row is then exact while it lies within
@@ -81,7 +82,7 @@ OPS = ("beat", "end", "tile", "flush")
 RESOLVE_OPS = ("cell", "tile", "flush")
 
 
-CHANNELS = (1, 3)  # a pixel's channels: grey, or red, green and blue
+CHANNELS = (1, 3, 4)  # a pixel's channels: grey; red, green and blue; and alpha
 
 
 def pack_paint(values, bits: int) -> int:
@@ -106,7 +107,7 @@ class TileConfig:
     width: int = 64
     height: int = 32
     headroom_bits: int = 2
-    channels: int = 1  # 1: grey pixels; 3: red, green and blue (`CHANNELS`)
+    channels: int = 1  # 1: grey; 3: red, green, blue; 4: and alpha (`CHANNELS`)
 
     def __post_init__(self):
         if not isinstance(self.config, EdgeConfig):
@@ -118,7 +119,9 @@ class TileConfig:
         if not isinstance(self.headroom_bits, int) or not 0 <= self.headroom_bits <= 8:
             raise ValueError(f"headroom_bits must be in [0, 8], not {self.headroom_bits!r}")
         if self.channels not in CHANNELS:
-            raise ValueError(f"channels must be 1 (grey) or 3 (colour), not {self.channels!r}")
+            raise ValueError(
+                f"channels must be 1 (grey), 3 (RGB) or 4 (RGBA), not {self.channels!r}"
+            )
 
     @property
     def x_bits(self) -> int:

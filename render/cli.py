@@ -385,10 +385,10 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
     if args.engine == "model":
         return render_scene(plan, skip=not args.no_skip, progress=bar, canvas=canvas()), baseline
     tile = tile_from_args(args.tile, plan.config)
-    if scene.colour:  # red, green and blue pixels (opaque paints: `tile_paints`)
-        tile = replace(tile, channels=3)
-    check_clocks(plan, tile, args.engine)  # before the build
     paint = canvas()
+    if paint is not None:  # red, green, blue (opaque paints: `tile_paints`), alpha if needed
+        tile = replace(tile, channels=3 if paint.background[3] == paint.full else 4)
+    check_clocks(plan, tile, args.engine)  # before the build
     tile_paints(plan, tile, paint)  # a translucent paint is refused before the build
     _build_engine(args.engine, tile, bar)
     return render_pipeline(plan, args.engine, tile, progress=bar, canvas=paint), baseline

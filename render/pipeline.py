@@ -15,9 +15,9 @@ every tile to its right. Edges wholly above, below or right of the tile, and the
 the renderer's, bit for bit (tested).
 
 A colour scene (planned as its coverage, `edgeaa.render.paint`) goes through a pipeline of
-3 channels (`TileConfig.channels`): each polygon's begin carries its paint, each tile its
-background, from the `Canvas`; the hardware draws opaque colours only (`tile_paints`). Its
-image is the canvas's red, green and blue, bit for bit.
+3 channels (`TileConfig.channels`; 4, alpha too, for a translucent background): each
+polygon's begin carries its paint, each tile its background, from the `Canvas`; the
+hardware draws opaque colours only (`tile_paints`). Its image is the canvas's, bit for bit.
 """
 
 from __future__ import annotations
@@ -192,16 +192,18 @@ class TilePaints:
 
 def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
     """The paints of `plan` from `canvas` (`edgeaa.render.paint.Canvas`, a colour scene's,
-    for a tile of 3 channels), or grey (no canvas, 1 channel). The hardware composites opaque
-    paint only: a colour with alpha below full scale is refused (SceneError, one line)."""
+    for a tile of 3 channels, or 4 with alpha: a translucent background), or grey (no canvas,
+    1 channel). The hardware composites opaque paint only: a polygon's colour with alpha
+    below full scale is refused (SceneError, one line), and with 3 channels the background's."""
     if (canvas is not None) != (tile.channels > 1):
         raise ValueError(
             f"a {'colour' if canvas else 'grey'} scene in a {tile.channels}-channel tile"
         )
     if canvas is None:
         return TilePaints(None, (None,) * len(plan.polygons))
-    full = canvas.full
-    for what, alpha in [("the background", canvas.background[3])] + [
+    full, channels = canvas.full, tile.channels
+    background = [("the background", canvas.background[3])] if channels == 3 else []
+    for what, alpha in background + [
         (f"polygon {p.index}", canvas.paints[p.index, 3]) for p in plan.polygons
     ]:
         if alpha != full:
@@ -209,8 +211,8 @@ def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
                 f"{what} has alpha {int(alpha)} of {full}: the hardware pipeline draws opaque "
                 "colours only; use --engine model"
             )
-    paints = tuple(tuple(int(v) for v in canvas.paints[p.index, :3]) for p in plan.polygons)
-    return TilePaints(tuple(int(v) for v in canvas.background[:3]), paints)
+    paints = tuple(tuple(int(v) for v in canvas.paints[p.index, :channels]) for p in plan.polygons)
+    return TilePaints(tuple(int(v) for v in canvas.background[:channels]), paints)
 
 
 def tile_ops(
@@ -326,7 +328,7 @@ def render_pipeline(
             f"the pipeline dropped {run.errors} commands and {run.edge_errors} edges as bad"
         )
     image = image_from_frames(plan, tile, run.frames(tile))
-    if canvas is not None:  # opaque paints only: alpha is full scale everywhere
+    if canvas is not None and tile.channels == 3:  # an opaque background: alpha is full
         image = np.concatenate([image, np.full_like(image[..., :1], canvas.full)], axis=-1)
     image = image.astype(model.image.dtype)
     differ = (image != model.image).reshape(*image.shape[:2], -1)

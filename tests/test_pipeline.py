@@ -200,14 +200,34 @@ def test_random_back_pressure_gives_the_same_image():
     assert run.stats["resolve_stall"] > 0
 
 
-def test_the_pipeline_verilog_is_lint_clean():
+@pytest.mark.parametrize("channels", [1, 3, 4])
+def test_the_pipeline_verilog_is_lint_clean(channels):
     from edgeaa.sim.simulators.verilator import lint
 
-    source = pipeline_verilog(TileConfig(SMALL, 8, 4))
+    source = pipeline_verilog(TileConfig(SMALL, 8, 4, channels=channels))
     for port in ("commands__payload__op", "pixels__payload__value", "stats__acc_stall"):
         assert port in source
+    assert ("commands__payload__paint" in source) == (channels > 1)
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_a_colour_scene_in_amaranths_simulator_is_the_canvas():
+    polygons = [
+        {**{k: v for k, v in p.items() if k != "intensity"}, "color": c}
+        for p, c in zip(TINY_SCENE["polygons"], COLOURS, strict=False)
+    ]
+    size = {k: TINY_SCENE[k] for k in ("width", "height")}
+    scene = parse_scene({**size, "background_color": "#203040", "polygons": polygons})
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    result = render_pipeline(plan, "amaranth", tile, canvas=Canvas(scene, DEFAULT.full_scale))
+    want = render_scene(plan, canvas=Canvas(scene, DEFAULT.full_scale)).image
+    assert result.mismatches == 0 and np.array_equal(result.image, want)
+    assert len(set(map(tuple, want.reshape(-1, 4).tolist()))) > 10  # colour, not one grey
+
+
+COLOURS = ["#ff8000", [0.1, 0.9, 0.5], "#0000ff", "#c0c0c0"]
 
 
 def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
@@ -244,6 +264,20 @@ def test_verilator_under_back_pressure_gives_the_renderers_image_on_random_scene
     plan = plan_scene(scene, DEFAULT)
     result = render_pipeline(plan, "verilator", tile, seed=seed, idle=0.3, stall=0.4)
     assert result.mismatches == 0, f"seed {seed}"
+
+
+@settings(max_examples=15, deadline=None, database=None)
+@given(data=st.data(), seed=st.integers(0, 2**31))
+def test_verilator_renders_random_colour_scenes_as_the_canvas_under_back_pressure(data, seed):
+    """Three channels: each polygon's paint composited per channel in the hardware, the
+    canvas's image (`edgeaa.render.paint`) bit for bit."""
+    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    canvas = Canvas(scene, DEFAULT.full_scale)
+    result = render_pipeline(plan, "verilator", tile, seed=seed, idle=0.3, stall=0.4, canvas=canvas)
+    want = render_scene(plan, canvas=Canvas(scene, DEFAULT.full_scale)).image
+    assert result.mismatches == 0 and np.array_equal(result.image, want), f"seed {seed}"
 
 
 @pytest.mark.parametrize("seed", [1, 2])

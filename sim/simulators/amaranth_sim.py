@@ -17,10 +17,10 @@ from functools import partial
 import numpy as np
 
 from ...hdl import LineCore
-from ...hdl.pipeline import STATS, EdgePipeline, command_layout
+from ...hdl.pipeline import STATS, EdgePipeline, command_const
 from ...model import Clip, Edge, EdgeConfig
 from ...model.beat import edge_columns
-from ...model.pipeline import Command, command_fields
+from ...model.pipeline import Command
 from ...model.tile import TileConfig
 from .amaranth_runner import Probe, SimulationHang, Sink, Source, Trace, row_decoder, run_component
 from .commands import edge_command
@@ -108,11 +108,7 @@ def run_pipeline(
     the source and back-pressure on the sink when `seed` is given; stops after the expected
     pixels and a drain, or raises `PipelineHang`. `progress(done, total)` as commands go in."""
     dut = EdgePipeline(tile)
-    layout = command_layout(tile)
-    fields = command_fields(tile)  # a grey pipeline takes no paint
-    source = Source(
-        "commands", [layout.const({k: getattr(c, k) for k in fields}) for c in commands]
-    )
+    source = Source("commands", [command_const(tile, c) for c in commands])
     pixels = row_decoder(dut.pixels.payload.shape(), PIXEL_COLUMNS[1:])
     sink = Sink("pixels", expected_pixels(tile, commands), pixels)
     counters = (dut.errors, dut.edge_errors, *(dut.stats[name] for name in STATS))
