@@ -295,6 +295,26 @@ def test_verilator_drops_bad_commands_as_the_model_does(seed):
     assert np.flatnonzero(last).tolist() == [tile.pixels - 1, 2 * tile.pixels - 1]
 
 
+@pytest.mark.parametrize("channels", [3, 4])
+def test_verilator_drops_bad_colour_commands_as_the_model_does(channels):
+    """Bad commands in colour, each begin and tile with a random paint (any alpha: the
+    hardware composites each channel the same way): the model's frames, per channel."""
+    import random
+
+    from edgeaa.sim.simulators import pipeline_harness
+
+    rng = random.Random(channels)
+    tile = TileConfig(SMALL, 8, 8, channels=channels)
+    top = 1 << (channels * SMALL.intensity_bits)
+    commands = [c._replace(paint=rng.randrange(top)) for c in bad_commands(SMALL.subpixel_scale)]
+    want, result = model_frames(tile, commands)
+    run = pipeline_harness.run(tile, commands, seed=channels, idle=0.3, stall=0.3)
+    assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors)
+    for frame, model in zip(run.frames(tile), want, strict=True):
+        assert frame.shape == (8, 8, channels) and np.array_equal(frame, model)
+    assert len({tuple(p) for f in want for p in f.reshape(-1, channels).tolist()}) > 2
+
+
 def test_a_pipeline_that_stops_moving_is_reported_not_waited_for():
     from edgeaa.sim.simulators import pipeline_harness
 
