@@ -794,9 +794,12 @@ def test_bad_scene_files_are_one_line_errors(tmp_path, capsys, content, message)
         ({"path": "M 0 0 L 8 0 L 8 8 L"}, "command 'L' at position 18 needs 2 numbers"),
         ({"path": "M 0 0 L 8 0 L M 8 8 Z"}, "command 'L' at position 12 needs 2 numbers"),
         ({"path": "M 0 0 C 1e300 0 0 1e300 9 9 Z"}, "'1e300' at position 8 is beyond the limit"),
-        ({"path": "M 0 0 C 1e6 1e6 -1e6 -1e6 9 9 S 1e6 1e6 0 0"}, "limit of 10,000 edges"),
-        ({"path": "M 0 0 " + "l 1 0 " * 10001 + "z"}, "more than the limit of 10,000 edges"),
-        ({"points": [[i % 7, i // 7] for i in range(10001)]}, "limit of 10,000 edges"),
+        (
+            {"path": "M 0 0" + " C 1e6 1e6 -1e6 -1e6 9 9 C 1e6 1e6 -1e6 -1e6 0 0" * 2},
+            "limit of 20,000 edges",
+        ),
+        ({"path": "M 0 0 " + "l 1 0 " * 20001 + "z"}, "more than the limit of 20,000 edges"),
+        ({"points": [[i % 7, i // 7] for i in range(20001)]}, "limit of 20,000 edges"),
     ],
 )
 def test_bad_polygons_are_refused_with_the_limit(polygon, message):
