@@ -143,15 +143,18 @@ def _code_bits(names) -> int:
     return max(1, (len(names) - 1).bit_length())
 
 
-def _polygon_fields(config: EdgeConfig) -> dict:
+def _polygon_fields(tile: TileConfig) -> dict:
     """What a polygon's end carries: its intensity, I_out and fill rule (1: even-odd); and a
-    tile's background."""
-    intensity = unsigned(config.intensity_bits)
+    tile's background. With 3 channels (`TileConfig.channels`) the ``intensity`` field is the
+    intensity and then the paint, red, green and blue (I bits each: the accumulator passes
+    it on whole), and the background is a value per channel, red in the low bits."""
+    bits = tile.config.intensity_bits
+    colour = tile.channels > 1
     return {
-        "intensity": intensity,
-        "i_out": intensity,
+        "intensity": unsigned(bits * (1 + tile.channels) if colour else bits),
+        "i_out": unsigned(bits),
         "evenodd": unsigned(1),
-        "background": intensity,
+        "background": unsigned(bits * tile.channels),
     }
 
 
@@ -169,7 +172,7 @@ def tile_op_layout(tile: TileConfig) -> data.StructLayout:
         {
             "op": unsigned(_code_bits(OPS)),
             "beat": delta_layout(tile.config),
-            **_polygon_fields(tile.config),
+            **_polygon_fields(tile),
             "x0": origin,
             "y0": origin,
         }
@@ -188,18 +191,19 @@ def tile_cell_layout(tile: TileConfig) -> data.StructLayout:
             "sum": signed(tile.cell_bits),
             "first": unsigned(1),
             "start": unsigned(1),
-            **_polygon_fields(tile.config),
+            **_polygon_fields(tile),
         }
     )
 
 
 def tile_pixel_layout(tile: TileConfig) -> data.StructLayout:
-    """One pixel of a flushed tile: its tile pixel, value, and ``last`` on the tile's last."""
+    """One pixel of a flushed tile: its tile pixel, value (a value per channel, red in the low
+    bits), and ``last`` on the tile's last."""
     return data.StructLayout(
         {
             "x": unsigned(tile.x_bits),
             "y": unsigned(tile.y_bits),
-            "value": unsigned(tile.config.intensity_bits),
+            "value": unsigned(tile.config.intensity_bits * tile.channels),
             "last": unsigned(1),
         }
     )

@@ -1,6 +1,8 @@
 # amaranth: UnusedElaboratable=no
 """The polygon pipeline (`EdgePipeline`): polygon commands in (`edgeaa.model.pipeline`,
-version 1), a tile's pixels out. Setup and stepper (`PolygonCore`),
+version 1), a tile's pixels out. A tile of 3 channels (`TileConfig.channels`) takes each
+begin's paint and each tile's background from the command's ``paint`` field and sends a
+value per channel. Setup and stepper (`PolygonCore`),
 accumulation memory (`TileAccumulator`) and resolve (`TileResolve`), joined by streams.
 
 The command stage passes each edge of a polygon to the core with the polygon's intensities
@@ -18,18 +20,18 @@ waiting).
 
 from __future__ import annotations
 
-from amaranth.hdl import Module, Mux, ResetSignal, Signal, unsigned
+from amaranth.hdl import Cat, Module, Mux, ResetSignal, Signal, unsigned
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..model.pipeline import CODE, OP_BITS
+from ..model.pipeline import CODE, OP_BITS, command_fields
 from ..model.tile import OPS, TileConfig
 from .accumulator import TileAccumulator
 from .core import ERRORS_BITS, PolygonCore, flat_verilog
 from .layouts import tile_pixel_layout
 from .resolve import TileResolve
 
-__all__ = ["STATS", "EdgePipeline", "command_layout", "pipeline_verilog"]
+__all__ = ["STATS", "EdgePipeline", "command_const", "command_layout", "pipeline_verilog"]
 
 STATS = ("core_busy", "core_stall", "acc_busy", "acc_stall", "resolve_busy", "resolve_stall")
 STATS_BITS = 32
@@ -41,7 +43,17 @@ def command_layout(tile: TileConfig) -> data.StructLayout:
     coord = unsigned(config.coord_bits + config.subpixel_bits)
     intensity = unsigned(config.intensity_bits)
     fields = {"op": unsigned(OP_BITS), "x0": coord, "y0": coord, "x1": coord, "y1": coord}
-    return data.StructLayout({**fields, "i_in": intensity, "i_out": intensity, "flag": unsigned(1)})
+    fields.update({"i_in": intensity, "i_out": intensity, "flag": unsigned(1)})
+    if tile.channels > 1:  # the begin's colour, the tile's background (`Command.paint`)
+        fields["paint"] = unsigned(config.intensity_bits * tile.channels)
+    return data.StructLayout(fields)
+
+
+def command_const(tile: TileConfig, command):
+    """`command` (`edgeaa.model.pipeline.Command`) as a constant of `command_layout` (a
+    grey pipeline's has no paint)."""
+    fields = command_fields(tile)
+    return command_layout(tile).const({name: getattr(command, name) for name in fields})
 
 
 class EdgePipeline(wiring.Component):
@@ -98,6 +110,10 @@ class EdgePipeline(wiring.Component):
         op_valid, code = Signal(), Signal(len(op.op))
         params = {name: Signal(config.intensity_bits, name=name) for name in ("intensity", "i_out")}
         evenodd = Signal()
+        paint, intensity, background = None, params["intensity"], c.i_in
+        if tile.channels > 1:  # the end carries the paint after the intensity
+            paint = Signal(len(c.paint), name="paint")
+            intensity, background = Cat(params["intensity"], paint), c.paint
         origin = [Signal(config.coord_bits + 1, name=n) for n in ("tile_x0", "tile_y0")]
         top = 1 << config.coord_bits
         is_ = {key: c.op == code for key, code in CODE.items()}
@@ -123,12 +139,12 @@ class EdgePipeline(wiring.Component):
             core.clip.y_max.eq(
                 Mux(origin[1] + tile.height - 1 > top, top, origin[1] + tile.height - 1)
             ),
-            op.intensity.eq(params["intensity"]),
+            op.intensity.eq(intensity),
             op.i_out.eq(params["i_out"]),
             op.evenodd.eq(evenodd),
             op.x0.eq(c.x0),
             op.y0.eq(c.y0),
-            op.background.eq(c.i_in),
+            op.background.eq(background),
         ]
         good_tile = (c.x0 <= top) & (c.y0 <= top)
         with m.FSM(name="commands"):
@@ -143,6 +159,8 @@ class EdgePipeline(wiring.Component):
                     with m.If(is_["begin"]):
                         m.d.sync += [params["intensity"].eq(c.i_in), params["i_out"].eq(c.i_out)]
                         m.d.sync += evenodd.eq(c.flag)
+                        if paint is not None:
+                            m.d.sync += paint.eq(c.paint)
                         m.next = "IN"
                     with m.Elif(is_["tile"] & good_tile):
                         m.d.sync += [origin[0].eq(c.x0), origin[1].eq(c.y0)]

@@ -100,16 +100,14 @@ class TileResolve(wiring.Component):
         m = Module()
         tile = self._tile
         # two pixel memories: the resolve writes one (``bank``) while a flush reads the other
-        mems = [
-            memory.Memory(shape=unsigned(tile.config.intensity_bits), depth=tile.pixels, init=[])
-            for _ in range(2)
-        ]
+        value = unsigned(tile.config.intensity_bits * tile.channels)  # a value per channel
+        mems = [memory.Memory(shape=value, depth=tile.pixels, init=[]) for _ in range(2)]
         m.submodules.pixels0, m.submodules.pixels1 = mems
         reads, writes = [mem.read_port() for mem in mems], [mem.write_port() for mem in mems]
         bank = Signal()
         self.observe = types.SimpleNamespace(memories=mems, reads=reads, bank=bank)
         written = Signal(tile.height)  # rows written since the tile started
-        background = Signal(tile.config.intensity_bits)
+        background = Signal(value)
         p_valid = Signal()
         advance = ~p_valid | self.pixels.ready
         # the resolve's side: the read port of ``bank``, always enabled (it never stalls),
@@ -120,9 +118,7 @@ class TileResolve(wiring.Component):
         frd = types.SimpleNamespace(
             addr=Signal(range(tile.pixels)), data=Mux(bank, reads[0].data, reads[1].data)
         )
-        wr = types.SimpleNamespace(
-            addr=Signal(range(tile.pixels)), data=Signal(tile.config.intensity_bits), en=Signal()
-        )
+        wr = types.SimpleNamespace(addr=Signal(range(tile.pixels)), data=Signal(value), en=Signal())
         for k in range(2):
             mine = bank == k
             m.d.comb += [
@@ -168,9 +164,8 @@ class TileResolve(wiring.Component):
             m.d.sync += acc.eq(total)
         self.observe.acc = acc
         d = Signal(bits, name="d")
-        m.d.comb += d.eq(
-            Mux(s1.intensity >= s1.i_out, s1.intensity - s1.i_out, s1.i_out - s1.intensity)
-        )
+        scale = s1.intensity if tile.channels == 1 else s1.intensity[:bits]
+        m.d.comb += d.eq(Mux(scale >= s1.i_out, scale - s1.i_out, s1.i_out - scale))
         ifix = d << F
         s2 = _stage(
             m,
@@ -182,9 +177,19 @@ class TileResolve(wiring.Component):
             d=d,
         )
         q = Mux(s2.d == 0, 0, (s2.cov + (1 << (F - 1))) >> F)[: bits + 1]
-        neg = s2.intensity < s2.below
-        diff = Mux(neg, s2.below - s2.intensity, s2.intensity - s2.below)[:bits]
-        num = ((_product(m, q, diff) << 1) + s2.d - neg)[: 2 * bits + 2]  # >= 0 unless q = 0
+        # each channel: its paint (the intensity, grey) against the pixel below, one numerator
+        if tile.channels == 1:
+            paints, belows = [s2.intensity], [s2.below]
+        else:
+            paints = [s2.intensity[bits * (k + 1) :][:bits] for k in range(tile.channels)]
+            belows = [s2.below[bits * k :][:bits] for k in range(tile.channels)]
+        negs, nums = [], []
+        for k, (paint, below) in enumerate(zip(paints, belows, strict=True)):
+            neg = paint < below
+            diff = Mux(neg, below - paint, paint - below)[:bits]
+            product = _product(m, q, diff, "" if k == 0 else f"_c{k}")
+            negs.append(neg)
+            nums.append(((product << 1) + s2.d - neg)[: 2 * bits + 2])  # >= 0 unless q = 0
         # 2 D: one register, as every cell in flight is one polygon's (its first cell waits
         # for the pipeline to empty)
         d2 = Signal(bits + 1, name="d2")
@@ -193,36 +198,43 @@ class TileResolve(wiring.Component):
         self.observe.d2 = d2
         # the pixel below, q = 0 and the sign from s3 to the last stage
         carry = _delay_line(
-            m, self.observe, "carry", ptr, bits, below=s2.below, zero=q == 0, neg=neg
+            m, self.observe, "carry", ptr, bits, below=s2.below, zero=q == 0, neg=Cat(*negs)
         )
         # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
-        # bits) and the dividend's low bits, which the quotient's bits replace one a stage
-        s3 = _stage(m, "s3", valid=s2.valid, rem=num[bits:][: bits + 1], low=num[:bits])
+        # bits) and the dividend's low bits, which the quotient's bits replace one a stage;
+        # a pair per channel (channel 0's named rem and low), one divisor 2 D
+        names = ["" if k == 0 else f"_c{k}" for k in range(tile.channels)]
+        s3 = _stage(
+            m,
+            "s3",
+            valid=s2.valid,
+            **{f"rem{n}": num[bits:][: bits + 1] for n, num in zip(names, nums, strict=True)},
+            **{f"low{n}": num[:bits] for n, num in zip(names, nums, strict=True)},
+        )
         stages = [s1, s2, s3]
         for j in reversed(range(bits)):  # quotient bit j
-            prev = stages[-1]
-            trial = Cat(prev.low[-1], prev.rem)  # rem << 1 | the dividend's next bit
-            fits = trial >= d2
-            stages.append(
-                _stage(
-                    m,
-                    f"q{j}",
-                    valid=prev.valid,
-                    rem=Mux(fits, trial - d2, trial)[: bits + 1],
-                    low=Cat(fits, prev.low[:-1]),
-                )
-            )
+            prev, fields = stages[-1], {}
+            for n in names:
+                rem, low = getattr(prev, f"rem{n}"), getattr(prev, f"low{n}")
+                trial = Cat(low[-1], rem)  # rem << 1 | the dividend's next bit
+                fits = trial >= d2
+                fields[f"rem{n}"] = Mux(fits, trial - d2, trial)[: bits + 1]
+                fields[f"low{n}"] = Cat(fits, low[:-1])
+            stages.append(_stage(m, f"q{j}", valid=prev.valid, **fields))
         for k, st in enumerate(stages[:-1], start=1):  # where stage k's values are now
             st.delayed = {"xy": ptr - k} | ({"carry": ptr - (k - 2)} if k >= 3 else {})
         last = stages[-1]
         last.__dict__.update(x=xy.x, y=xy.y, below=carry.below, zero=carry.zero, neg=carry.neg)
-        quot = last.low
-        # below - quot as below + ~quot + 1: one adder
-        signed_quot = quot ^ last.neg.replicate(bits)
-        new = Mux(last.zero, last.below, last.below + signed_quot + last.neg)
+        news = []
+        for k, n in enumerate(names):
+            quot, neg = getattr(last, f"low{n}"), last.neg[k] if names[1:] else last.neg
+            below = last.below[bits * k :][:bits] if names[1:] else last.below
+            # below - quot as below + ~quot + 1: one adder
+            signed_quot = quot ^ neg.replicate(bits)
+            news.append(Mux(last.zero, below, below + signed_quot + neg)[:bits])
         m.d.comb += [
             wr.addr.eq(Cat(last.x, last.y)),
-            wr.data.eq(new[:bits]),
+            wr.data.eq(news[0] if len(news) == 1 else Cat(*news)),
             wr.en.eq(last.valid),
         ]
         self._row_done = last.valid & (last.x == tile.width - 1)
@@ -303,13 +315,13 @@ class TileResolve(wiring.Component):
         ]
 
 
-def _product(m, a, b):
+def _product(m, a, b, suffix: str = ""):
     """``a * b`` (unsigned) as shift-and-add rows, each row's sum a kept signal: so Yosys maps
     each row to a carry chain rather than the whole product to a full-adder tree in LUT4s
     (for the resolve's I x I product: 41 LUT4 fewer, 51 carries more)."""
     total = Mux(b[0], a, 0)
     for j in range(1, len(b)):
-        row = Signal(len(a) + j + 1, name=f"product_row{j}", attrs={"keep": 1})
+        row = Signal(len(a) + j + 1, name=f"product_row{j}{suffix}", attrs={"keep": 1})
         m.d.comb += row.eq(total + (Mux(b[j], a, 0) << j))
         total = row
     return total

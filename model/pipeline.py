@@ -12,6 +12,12 @@ fields ``op, x0, y0, x1, y1, i_in, i_out, flag``:
 * ``end`` (3): resolve the polygon into the tile's pixels.
 * ``flush`` (4): send the tile's pixels (row by row); the tile is the background again.
 
+A pipeline of 3 or 4 channels (`TileConfig.channels`) has one more field, ``paint``: red,
+green, blue (and alpha), ``intensity_bits`` each, red in the low bits (`pack_paint`). A
+begin's paint is the polygon's colour (its coverage, in steps of ``|i_in - i_out|``,
+composites each channel towards it), a tile's paint its background (``i_in`` unused); grey
+pipelines have no paint field and ignore it.
+
 Codes 5 to 7 are unknown. Bad commands are dropped and counted in ``errors``, never hang the
 pipeline and never touch another polygon's pixels: an unknown code; an edge or an end outside
 a polygon; a tile whose origin is past 2**W. A begin, tile or flush inside a polygon (a
@@ -27,13 +33,14 @@ from .beat import delta_column_beats
 from .config import EdgeConfig
 from .edge import Clip, Edge, EdgeError
 from .step import run_edge_deltas
-from .tile import Beats, Flush, PolygonEnd, TileConfig, TileStart
+from .tile import Beats, Flush, PolygonEnd, TileConfig, TileStart, unpack_paint
 
 __all__ = [
     "COMMANDS",
     "COMMAND_VERSION",
     "Command",
     "Decoded",
+    "command_fields",
     "command_ops",
     "decode_commands",
     "tile_clip",
@@ -54,14 +61,16 @@ class Command(NamedTuple):
     i_in: int = 0
     i_out: int = 0
     flag: int = 0
+    paint: int = 0  # 3 channels only: the polygon's colour or the tile's background, packed
 
     @classmethod
-    def tile(cls, x0: int, y0: int, background: int) -> Command:
-        return cls(CODE["tile"], x0, y0, i_in=background)
+    def tile(cls, x0: int, y0: int, background: int, paint: int = 0) -> Command:
+        return cls(CODE["tile"], x0, y0, i_in=background, paint=paint)
 
     @classmethod
-    def begin(cls, intensity: int, i_out: int, rule: str = "nonzero") -> Command:
-        return cls(CODE["begin"], i_in=intensity, i_out=i_out, flag=int(rule == "evenodd"))
+    def begin(cls, intensity: int, i_out: int, rule: str = "nonzero", paint: int = 0) -> Command:
+        flag = int(rule == "evenodd")
+        return cls(CODE["begin"], i_in=intensity, i_out=i_out, flag=flag, paint=paint)
 
     @classmethod
     def edge(cls, x0: int, y0: int, x1: int, y1: int, inside: str = "left") -> Command:
@@ -78,6 +87,11 @@ class Command(NamedTuple):
     @property
     def name(self) -> str:
         return COMMANDS[self.op] if 0 <= self.op < len(COMMANDS) else "unknown"
+
+
+def command_fields(tile: TileConfig) -> tuple[str, ...]:
+    """The fields of `Command` a pipeline of `tile` takes (a grey one has no paint)."""
+    return Command._fields if tile.channels > 1 else Command._fields[:-1]
 
 
 def tile_clip(config: EdgeConfig, tile: TileConfig, x0: int, y0: int) -> Clip:
@@ -108,17 +122,21 @@ def decode_commands(tile: TileConfig, commands):
     config = tile.config
     polygon = None  # the open polygon's end, or None outside one
     clip = tile_clip(config, tile, 0, 0)
+    colour = tile.channels > 1
     for command in commands:
+        paint = (
+            unpack_paint(command.paint, config.intensity_bits, tile.channels) if colour else None
+        )
         name, ended = command.name, None
         if polygon is not None and name in ("begin", "tile", "flush"):
             ended, polygon = polygon, None  # a polygon with no end: ended here
         op = edge = error = None
         if name == "tile" and max(command.x0, command.y0) <= 1 << config.coord_bits:
-            op = TileStart(command.x0, command.y0, command.i_in)
+            op = TileStart(command.x0, command.y0, paint if colour else command.i_in)
             clip = tile_clip(config, tile, command.x0, command.y0)
         elif name == "begin":
             rule = "evenodd" if command.flag else "nonzero"
-            polygon = PolygonEnd(command.i_in, command.i_out, rule)
+            polygon = PolygonEnd(command.i_in, command.i_out, rule, paint)
         elif name == "edge" and polygon is not None:
             inside = "right" if command.flag else "left"
             c = command

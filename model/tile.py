@@ -17,6 +17,12 @@ order, a stream of *ops* (the accumulator's input):
   (`composite`, the renderer's operator). Untouched rows are not read.
 * `Flush`: the tile's pixels go out row by row, and the tile is the background again.
 
+Channels (`TileConfig.channels`). A tile of 3 channels holds red, green and blue per
+pixel, one of 4 alpha too (premultiplied: a transparent background): a `PolygonEnd`'s one
+coverage q (in steps of D) composites each channel towards its paint, a `composite` per
+channel side by side with the same divisor 2 D, and a `TileStart`'s background is a value
+per channel. One channel is grey: the paint is the intensity.
+
 Widths. A cell holds its sum modulo ``2**cell_bits`` (``cell_bits`` = the delta register +
 ``headroom_bits``): the prefix sum of a row is then exact while it lies within
 ``[-L, L)``, ``L = 2**(headroom_bits + 1) * ifix``, i.e. a winding-weighted coverage of
@@ -53,6 +59,7 @@ from .beat import CELL_FIELDS, CELLS, DeltaBeat
 from .config import EdgeConfig
 
 __all__ = [
+    "CHANNELS",
     "OPS",
     "Beats",
     "Flush",
@@ -64,13 +71,28 @@ __all__ = [
     "TileStart",
     "beat_clocks",
     "composite_steps",
+    "pack_paint",
     "tile_cells",
+    "unpack_paint",
 ]
 
 # The accumulator's input ops, by code (the hardware's ``op`` field); the resolve's input
 # has ``cell`` in place of ``beat`` and ``end``.
 OPS = ("beat", "end", "tile", "flush")
 RESOLVE_OPS = ("cell", "tile", "flush")
+
+
+CHANNELS = (1, 3, 4)  # a pixel's channels: grey; red, green and blue; and alpha
+
+
+def pack_paint(values, bits: int) -> int:
+    """Channel values (red first) as one integer, `bits` each, red in the low bits: the
+    command's and the pixel's colour field."""
+    return sum(int(v) << (k * bits) for k, v in enumerate(values))
+
+
+def unpack_paint(packed: int, bits: int, channels: int = 3) -> tuple[int, ...]:
+    return tuple((int(packed) >> (k * bits)) & ((1 << bits) - 1) for k in range(channels))
 
 
 class TileOverflow(ValueError):
@@ -85,6 +107,7 @@ class TileConfig:
     width: int = 64
     height: int = 32
     headroom_bits: int = 2
+    channels: int = 1  # 1: grey; 3: red, green, blue; 4: and alpha (`CHANNELS`)
 
     def __post_init__(self):
         if not isinstance(self.config, EdgeConfig):
@@ -95,6 +118,10 @@ class TileConfig:
                 raise ValueError(f"tile {name} must be a power of two >= {low}, not {value!r}")
         if not isinstance(self.headroom_bits, int) or not 0 <= self.headroom_bits <= 8:
             raise ValueError(f"headroom_bits must be in [0, 8], not {self.headroom_bits!r}")
+        if self.channels not in CHANNELS:
+            raise ValueError(
+                f"channels must be 1 (grey), 3 (RGB) or 4 (RGBA), not {self.channels!r}"
+            )
 
     @property
     def x_bits(self) -> int:
@@ -122,7 +149,7 @@ class TileConfig:
 class TileStart(NamedTuple):
     x0: int  # engine pixels of the tile's first column and row
     y0: int
-    background: int
+    background: int | tuple  # an intensity, or a value per channel (3 channels)
 
 
 class Beats(NamedTuple):
@@ -139,9 +166,13 @@ class Beats(NamedTuple):
 
 
 class PolygonEnd(NamedTuple):
+    """A polygon's resolve: its coverage in steps of D = |intensity - I_out| composites
+    towards `paint` in each channel (None: towards the intensity, grey)."""
+
     intensity: int
     i_out: int
     rule: str = "nonzero"
+    paint: tuple | None = None
 
 
 class Flush(NamedTuple):
@@ -209,7 +240,9 @@ class TileModel:
         self.lo, self.hi = tile.width - 1, 0  # the polygon's kept columns (lo > hi: none)
         self.origin = (0, 0)
         self.background = 0
-        self.pixels = np.zeros((tile.height, tile.width), dtype=np.int64)
+        shape = (tile.height, tile.width) + ((tile.channels,) if tile.channels > 1 else ())
+        self.pixels = np.zeros(shape, dtype=np.int64)
+        self._planes = self.pixels.reshape(tile.height, tile.width, tile.channels)  # a view
 
     def feed(self, op):
         """Apply one op; a `Flush` returns the frame, a `PolygonEnd` the rows it scanned."""
@@ -264,6 +297,7 @@ class TileModel:
         limit = self.tile.winding_limit * ifix
         rows = np.flatnonzero(self.touched)
         runs = []
+        paint = (end.intensity,) * self.tile.channels if end.paint is None else end.paint
         for row in rows:
             first, last, stop = self.span(row)
             runs.append((last - first + 1, stop))
@@ -279,7 +313,9 @@ class TileModel:
                 )
             read = slice(first, last + 1)  # outside it the sum is 0: the pixel stays
             q = intensity_offset(fill(sums[read], end.rule, ifix), F).astype(np.int64)
-            self.pixels[row, read] = composite(self.pixels[row, read], q, end.intensity, d)
+            for k, value in enumerate(paint):  # each channel, the same coverage
+                below = self._planes[row, read, k]
+                self._planes[row, read, k] = composite(below, q, value, d)
         self.seen |= self.touched
         self.touched[:] = False
         self.lo, self.hi = self.tile.width - 1, 0

@@ -11,6 +11,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -254,11 +255,6 @@ class RenderCommand(Command):
                 check_pixels("--compare", scene.width, scene.height, MAX_COMPARE_PIXELS)
             if args.error:
                 check_pixels("--error", scene.width, scene.height, MAX_ERROR_PIXELS)
-            if scene.colour and args.engine != "model":
-                raise SceneError(
-                    f"the scene has colour, which the {args.engine} pipeline does not draw yet: "
-                    "colour is model-only for now (--engine model)"
-                )
             bar = ProgressBar("render", enabled=not args.quiet)
             with bar.ticking("plan"):
                 plan = plan_scene(_outlines(scene), config)
@@ -377,7 +373,7 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
     """The render (the model's, or the hardware pipeline's) and with --stats the model's
     render without skipping; a colour scene composited on a canvas (`paint`)."""
     from .paint import Canvas
-    from .pipeline import check_clocks, render_pipeline
+    from .pipeline import check_clocks, render_pipeline, tile_paints
     from .render import render_scene
 
     def canvas():
@@ -389,9 +385,13 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
     if args.engine == "model":
         return render_scene(plan, skip=not args.no_skip, progress=bar, canvas=canvas()), baseline
     tile = tile_from_args(args.tile, plan.config)
+    paint = canvas()
+    if paint is not None:  # red, green, blue (opaque paints: `tile_paints`), alpha if needed
+        tile = replace(tile, channels=3 if paint.background[3] == paint.full else 4)
     check_clocks(plan, tile, args.engine)  # before the build
+    tile_paints(plan, tile, paint)  # a translucent paint is refused before the build
     _build_engine(args.engine, tile, bar)
-    return render_pipeline(plan, args.engine, tile, progress=bar), baseline
+    return render_pipeline(plan, args.engine, tile, progress=bar, canvas=paint), baseline
 
 
 def _engine_line(result, stats: bool) -> str:

@@ -5,6 +5,7 @@ matplotlib ships, matplotlib's toolbar icons (real SVG path data), and adversari
     font_scene("DejaVuSerif", 9)       one line of `FONT_TEXT`, black on white
     icon_scene("home", 24)             one icon drawn 24 px wide
     adversarial_scenes()               eight 48 x 48 scenes
+    page_scene()                       a 1000 x 800 page of 9-12 px text (the edge limit's case)
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ __all__ = [
     "font_file",
     "font_scene",
     "icon_scene",
+    "page_scene",
 ]
 
 FONT_TEXT = "Hamburgefonstiv AVWxyz 0123 &@Qg"
@@ -83,6 +85,33 @@ def icon_scene(name: str, size: int, full: int = 255) -> Scene:
         polygons.append(Polygon(moved, 0, "nonzero", f"{name} path {len(polygons)}"))
     side = math.ceil(size * box[3] / box[2]) + 1
     return Scene(size + 1, side, tuple(polygons), background=full, name=f"icon {name} {size}px")
+
+
+PAGE_TEXT = (
+    "The quick brown fox jumps over the lazy dog; pack my box with five dozen liquor jugs. "
+    "Sphinx of black quartz, judge my vow: 0123456789 (x + y) * z = 42 & @ # % ? "
+)
+
+
+def page_scene(width: int = 1000, height: int = 800, full: int = 255) -> Scene:
+    """A page of DejaVu Serif text, black on white: lines at 9, 10, 11 and 12 px in turn, each
+    1.15 of its size below the last, `PAGE_TEXT` repeated from a margin of 4 px, the glyphs
+    that fit before the right edge. About 310,000 edges at
+    1000 x 800: the size of page the scene limits must let through (docs/scenes.md)."""
+    polygons, baseline, line = [], 4.0, 0
+    while True:
+        size = 9 + line % 4
+        baseline += 1.15 * size
+        if baseline + 0.3 * size > height:
+            break
+        text = PAGE_TEXT[(7 * line) % len(PAGE_TEXT) :] + PAGE_TEXT * (2 * width // len(PAGE_TEXT))
+        count = int(width / (0.5 * size))  # DejaVu Serif averages about 0.6 em a character
+        glyphs, _, _ = glyph_polygons(
+            font_file("DejaVuSerif"), text[:count], size, 4.3, baseline, 0
+        )
+        polygons.extend(g for g in glyphs if max(x for c in g.contours for x, _ in c) < width - 1)
+        line += 1
+    return Scene(width, height, tuple(polygons), background=full, name=f"page {width}x{height}")
 
 
 # -- adversarial scenes ------------------------------------------------------------------------

@@ -48,6 +48,7 @@ class Canvas:
         else:  # a grey background, opaque
             background = np.array([scene.background] * 3 + [full], dtype=np.int64)
         background[:3] = (2 * background[:3] * background[3] + full) // (2 * full)
+        self.background = background  # premultiplied, as the image holds it
         self.image = np.empty((scene.height, scene.width, CHANNELS), dtype=np.int64)
         self.image[:] = background
         paints = []

@@ -13,6 +13,11 @@ the tile (a glyph wholly left of it gives none), so no edge is set up and steppe
 every tile to its right. Edges wholly above, below or right of the tile, and the edges
 `edges_to_send` skips, are not sent. With the model's tile stages (`TileModel`) the image is
 the renderer's, bit for bit (tested).
+
+A colour scene (planned as its coverage, `edgeaa.render.paint`) goes through a pipeline of
+3 channels (`TileConfig.channels`; 4, alpha too, for a translucent background): each
+polygon's begin carries its paint, each tile its background, from the `Canvas`; the
+hardware draws opaque colours only (`tile_paints`). Its image is the canvas's, bit for bit.
 """
 
 from __future__ import annotations
@@ -25,7 +30,16 @@ import numpy as np
 from ..model import Clip, Edge
 from ..model.beat import DELTAS
 from ..model.pipeline import Command
-from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
+from ..model.tile import (
+    EMPTY_END,
+    Beats,
+    Flush,
+    PolygonEnd,
+    TileConfig,
+    TileModel,
+    TileStart,
+    pack_paint,
+)
 from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
 from .engines import EngineUnavailable, run_deltas
 from .render import (
@@ -167,10 +181,52 @@ def _clipped(edge, clip: Clip):
     return replace(edge, clip=_both(edge.clip, clip))
 
 
-def tile_ops(plan: Plan, tile: TileConfig, job: TileJob, engine: str = "model") -> list:
+@dataclass(frozen=True)
+class TilePaints:
+    """What the tiles composite: the background and each plan polygon's paint, a value per
+    channel (None for both: grey, the scene's background and the polygons' intensities)."""
+
+    background: tuple | None
+    polygons: tuple
+
+
+def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
+    """The paints of `plan` from `canvas` (`edgeaa.render.paint.Canvas`, a colour scene's,
+    for a tile of 3 channels, or 4 with alpha: a translucent background), or grey (no canvas,
+    1 channel). The hardware composites opaque paint only: a polygon's colour with alpha
+    below full scale is refused (SceneError, one line), and with 3 channels the background's."""
+    if (canvas is not None) != (tile.channels > 1):
+        raise ValueError(
+            f"a {'colour' if canvas else 'grey'} scene in a {tile.channels}-channel tile"
+        )
+    if canvas is None:
+        return TilePaints(None, (None,) * len(plan.polygons))
+    full, channels = canvas.full, tile.channels
+    background = [("the background", canvas.background[3])] if channels == 3 else []
+    for what, alpha in background + [
+        (f"polygon {p.index}", canvas.paints[p.index, 3]) for p in plan.polygons
+    ]:
+        if alpha != full:
+            raise SceneError(
+                f"{what} has alpha {int(alpha)} of {full}: the hardware pipeline draws opaque "
+                "colours only; use --engine model"
+            )
+    paints = tuple(tuple(int(v) for v in canvas.paints[p.index, :channels]) for p in plan.polygons)
+    return TilePaints(tuple(int(v) for v in canvas.background[:channels]), paints)
+
+
+def tile_ops(
+    plan: Plan,
+    tile: TileConfig,
+    job: TileJob,
+    engine: str = "model",
+    paints: TilePaints | None = None,
+) -> list:
     """The ops of one tile: start, each polygon's beats and end, flush."""
     ox, oy = plan.offset
-    ops: list = [TileStart(ox + job.x, oy + job.y, plan.scene.background)]
+    paints = paints or tile_paints(plan, tile)
+    background = plan.scene.background if paints.background is None else paints.background
+    ops: list = [TileStart(ox + job.x, oy + job.y, background)]
     run, _ = run_deltas(plan.config, EdgeArrays.from_edges(plan.config, job.edges), engine)
     cells = np.stack([run.x, run.y, run.delta], axis=1).reshape(-1, 4, 3)
     beat_edge = run.edge[::4]
@@ -178,32 +234,39 @@ def tile_ops(plan: Plan, tile: TileConfig, job: TileJob, engine: str = "model") 
     for i in job.polygons:
         poly = plan.polygons[i]
         ops.append(Beats(cells[beat_polygon == i]))
-        ops.append(PolygonEnd(poly.intensity, poly.i_out, poly.rule))
+        ops.append(PolygonEnd(poly.intensity, poly.i_out, poly.rule, paints.polygons[i]))
     ops.append(Flush())
     return ops
 
 
-def render_tiles(plan: Plan, tile: TileConfig, engine: str = "model") -> np.ndarray:
-    """The image, tile by tile, through the tile model (deltas from `engine`)."""
-    model = TileModel(tile)
-    frames = [model.run(tile_ops(plan, tile, job, engine))[0] for job in tile_jobs(plan, tile)]
+def render_tiles(plan: Plan, tile: TileConfig, engine: str = "model", canvas=None) -> np.ndarray:
+    """The image, tile by tile, through the tile model (deltas from `engine`); a colour
+    scene's (`canvas`, 3 channels) as (height, width, 3)."""
+    model, paints = TileModel(tile), tile_paints(plan, tile, canvas)
+    frames = [
+        model.run(tile_ops(plan, tile, job, engine, paints))[0] for job in tile_jobs(plan, tile)
+    ]
     return image_from_frames(plan, tile, frames)
 
 
-def scene_commands(plan: Plan, tile: TileConfig) -> list[Command]:
+def scene_commands(plan: Plan, tile: TileConfig, canvas=None) -> list[Command]:
     """The scene as pipeline commands (format `COMMAND_VERSION`): per tile, its start, each
     polygon meeting it (begin, edges, end) and a flush. The top clips each edge to the tile
-    (`tile_clip`); an edge wholly left of the image is sent as its projection."""
+    (`tile_clip`); an edge wholly left of the image is sent as its projection. A colour
+    scene (`canvas`, 3 channels): each begin and tile with its paint."""
     ox, oy = plan.offset
+    paints, bits = tile_paints(plan, tile, canvas), plan.config.intensity_bits
+    background = pack_paint(paints.background or (), bits)
     commands = []
     for job in tile_jobs(plan, tile):
-        commands.append(Command.tile(ox + job.x, oy + job.y, plan.scene.background))
+        commands.append(Command.tile(ox + job.x, oy + job.y, plan.scene.background, background))
         mine: dict[int, list] = {}
         for edge, owner in zip(job.edges, job.polygon_of_edge.tolist(), strict=True):
             mine.setdefault(owner, []).append(edge)
         for i in job.polygons:
             poly = plan.polygons[i]
-            commands.append(Command.begin(poly.intensity, poly.i_out, poly.rule))
+            paint = pack_paint(paints.polygons[i] or (), bits)
+            commands.append(Command.begin(poly.intensity, poly.i_out, poly.rule, paint))
             for edge in mine[i]:
                 commands.append(Command.edge(edge.x0, edge.y0, edge.x1, edge.y1, edge.inside))
             commands.append(Command.end())
@@ -212,8 +275,10 @@ def scene_commands(plan: Plan, tile: TileConfig) -> list[Command]:
 
 
 def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
-    """The image from the frames of the tiles of `tile_jobs`, in order."""
-    image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, np.int64)
+    """The image from the frames of the tiles of `tile_jobs`, in order ((height, width, 3)
+    for a tile of 3 channels; every pixel is some tile's)."""
+    channels = (tile.channels,) if tile.channels > 1 else ()
+    image = np.zeros((plan.scene.height, plan.scene.width, *channels), np.int64)
     for job, frame in zip(tile_jobs(plan, tile), frames, strict=True):
         h = min(tile.height, plan.scene.height - job.y)
         w = min(tile.width, plan.scene.width - job.x)
@@ -230,19 +295,21 @@ def render_pipeline(
     idle: float = 0.0,
     stall: float = 0.0,
     progress=None,
+    canvas=None,
 ) -> Render:
     """Render `plan` through the hardware pipeline in a simulator: the image is the pixels
     the hardware sent. The model's render is made beside it (its figures are the model's
     stepper and accumulation counts) and `Render.mismatches` counts the pixels where the
-    two differ (0, or it is a bug). `seed`: random idle clocks and back-pressure."""
+    two differ (0, or it is a bug). `seed`: random idle clocks and back-pressure. A colour
+    scene's `canvas` (a fresh `Canvas`; 3 channels): the image is the canvas's (opaque)."""
     if engine not in PIPELINE_ENGINES:
         raise EngineUnavailable(f"the pipeline runs in {' or '.join(PIPELINE_ENGINES)}")
     tile = tile or TileConfig(plan.config)
     if tile.config != plan.config:
         raise ValueError("the tile's stepper configuration is not the plan's")
     check_clocks(plan, tile, engine)
-    commands = scene_commands(plan, tile)
-    model = render_scene(plan, skip=True)
+    commands = scene_commands(plan, tile, canvas)
+    model = render_scene(plan, skip=True, canvas=canvas)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
     if engine == "verilator":
         from ..sim.simulators import pipeline_harness
@@ -260,8 +327,12 @@ def render_pipeline(
         raise RuntimeError(
             f"the pipeline dropped {run.errors} commands and {run.edge_errors} edges as bad"
         )
-    image = image_from_frames(plan, tile, run.frames(tile)).astype(model.image.dtype)
-    mismatches = int(np.count_nonzero(image != model.image))
+    image = image_from_frames(plan, tile, run.frames(tile))
+    if canvas is not None and tile.channels == 3:  # an opaque background: alpha is full
+        image = np.concatenate([image, np.full_like(image[..., :1], canvas.full)], axis=-1)
+    image = image.astype(model.image.dtype)
+    differ = (image != model.image).reshape(*image.shape[:2], -1)
+    mismatches = int(np.count_nonzero(differ.any(axis=-1)))
     return replace(
         model, image=image, engine=engine, pipeline=run, pipeline_tile=tile, mismatches=mismatches
     )

@@ -23,7 +23,7 @@ from core_bench import observed_beat
 from fixtures import CORE_CONFIGS
 
 from edgeaa.hdl import LineCore
-from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout
+from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_const
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge
 from edgeaa.model.column import IntArith
 from edgeaa.model.edge import fold, window
@@ -118,14 +118,13 @@ def test_core_reset_takes_nothing_drops_edges_in_flight_and_clears_errors():
 
 
 def _pipeline_bench(dut, domain, tile, result):
-    layout = command_layout(tile)
 
     async def clock(ctx, command, rst=0):
         ctx.set(domain.rst, rst)
         ctx.set(dut.commands.valid, command is not None)
         ctx.set(dut.pixels.ready, 1)
         if command is not None:
-            ctx.set(dut.commands.payload, layout.const(command._asdict()))
+            ctx.set(dut.commands.payload, command_const(tile, command))
         taken = command is not None and bool(ctx.get(dut.commands.ready))
         pixel = ctx.get(dut.pixels.payload) if ctx.get(dut.pixels.valid) else None
         counters = (ctx.get(dut.errors), *(ctx.get(dut.stats[name]) for name in STATS))
@@ -176,12 +175,11 @@ def test_pipeline_reset_takes_nothing_and_clears_the_counters():
 def _reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result):
     """Offer `first`, wait `wait` clocks, reset for RESET_CLOCKS, then offer `second`;
     collect the pixels after the reset."""
-    layout = command_layout(tile)
 
     async def offer(ctx, commands):
         for command in commands:
             ctx.set(dut.commands.valid, 1)
-            ctx.set(dut.commands.payload, layout.const(command._asdict()))
+            ctx.set(dut.commands.payload, command_const(tile, command))
             while True:
                 *_, taken, valid, pixel = await ctx.tick().sample(
                     dut.commands.ready, dut.pixels.valid, dut.pixels.payload

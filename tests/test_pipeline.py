@@ -17,11 +17,12 @@ from hypothesis import strategies as st
 
 from edgeaa.hdl.pipeline import EdgePipeline, command_layout, pipeline_verilog
 from edgeaa.model import EdgeConfig
-from edgeaa.model.pipeline import COMMAND_VERSION, Command, command_ops
+from edgeaa.model.pipeline import COMMAND_VERSION, Command, command_fields, command_ops
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import TileConfig, TileModel
-from edgeaa.render import builtin, parse_scene, plan_scene, render_scene
+from edgeaa.render import SceneError, builtin, parse_scene, plan_scene, render_scene
 from edgeaa.render.builtin import BUILTINS
+from edgeaa.render.paint import Canvas, coverage_scene
 from edgeaa.render.pipeline import (
     image_from_frames,
     pipeline_savings,
@@ -50,7 +51,10 @@ def test_the_command_format_and_interface():
     dut = EdgePipeline(tile)
     members = {"commands", "pixels", "errors", "edge_errors", "stats"}
     assert set(dut.signature.members) == members
-    assert set(command_layout(tile).members) == set(Command._fields)
+    assert set(command_layout(tile).members) == set(command_fields(tile))
+    assert set(Command._fields) - set(command_fields(tile)) == {"paint"}
+    colour = replace(tile, channels=3)
+    assert set(command_layout(colour).members) == set(Command._fields)
 
 
 def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
@@ -66,6 +70,40 @@ def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
     assert np.array_equal(image, render_tiles(plan, tile))
     assert run.stats["core_busy"] > 0 and run.stats["resolve_busy"] >= 4 * tile.pixels
     assert run.stats["resolve_stall"] == 0
+
+
+def colour_scene(data, scene, opaque: bool = True):
+    """`scene` with a random paint per polygon and background (alpha full when `opaque`)."""
+    unit = st.floats(0, 1)
+
+    def paint():
+        return tuple(data.draw(unit) for _ in range(3)) + (1.0 if opaque else data.draw(unit),)
+
+    polygons = tuple(replace(p, paint=paint()) for p in scene.polygons)
+    return replace(scene, polygons=polygons, background_paint=paint())
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.data(), st.sampled_from([(4, 2), (16, 8)]))
+def test_a_colour_scene_through_three_channel_tiles_is_the_canvas(data, size):
+    """Each polygon's paint composited per channel in the tiles (`TileModel`, 3 channels):
+    the canvas's image (`edgeaa.render.paint`), bit for bit."""
+    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
+    full = DEFAULT.full_scale
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    want = render_scene(plan, canvas=Canvas(scene, full)).image
+    assert (want[..., 3] == full).all()
+    tile = TileConfig(DEFAULT, *size, channels=3)
+    assert np.array_equal(render_tiles(plan, tile, canvas=Canvas(scene, full)), want[..., :3])
+
+
+def test_the_hardware_refuses_a_translucent_paint():
+    scene = parse_scene({**TINY_SCENE, "background_color": [1, 1, 1]})
+    scene = replace(scene, polygons=(replace(scene.polygons[0], paint=(1, 0, 0, 0.5)),))
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    with pytest.raises(SceneError, match="opaque colours only"):
+        scene_commands(plan, tile, Canvas(scene, DEFAULT.full_scale))
 
 
 @settings(max_examples=60, deadline=None)
@@ -162,14 +200,34 @@ def test_random_back_pressure_gives_the_same_image():
     assert run.stats["resolve_stall"] > 0
 
 
-def test_the_pipeline_verilog_is_lint_clean():
+@pytest.mark.parametrize("channels", [1, 3, 4])
+def test_the_pipeline_verilog_is_lint_clean(channels):
     from edgeaa.sim.simulators.verilator import lint
 
-    source = pipeline_verilog(TileConfig(SMALL, 8, 4))
+    source = pipeline_verilog(TileConfig(SMALL, 8, 4, channels=channels))
     for port in ("commands__payload__op", "pixels__payload__value", "stats__acc_stall"):
         assert port in source
+    assert ("commands__payload__paint" in source) == (channels > 1)
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_a_colour_scene_in_amaranths_simulator_is_the_canvas():
+    polygons = [
+        {**{k: v for k, v in p.items() if k != "intensity"}, "color": c}
+        for p, c in zip(TINY_SCENE["polygons"], COLOURS, strict=False)
+    ]
+    size = {k: TINY_SCENE[k] for k in ("width", "height")}
+    scene = parse_scene({**size, "background_color": "#203040", "polygons": polygons})
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    result = render_pipeline(plan, "amaranth", tile, canvas=Canvas(scene, DEFAULT.full_scale))
+    want = render_scene(plan, canvas=Canvas(scene, DEFAULT.full_scale)).image
+    assert result.mismatches == 0 and np.array_equal(result.image, want)
+    assert len(set(map(tuple, want.reshape(-1, 4).tolist()))) > 10  # colour, not one grey
+
+
+COLOURS = ["#ff8000", [0.1, 0.9, 0.5], "#0000ff", "#c0c0c0"]
 
 
 def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
@@ -206,6 +264,20 @@ def test_verilator_under_back_pressure_gives_the_renderers_image_on_random_scene
     plan = plan_scene(scene, DEFAULT)
     result = render_pipeline(plan, "verilator", tile, seed=seed, idle=0.3, stall=0.4)
     assert result.mismatches == 0, f"seed {seed}"
+
+
+@settings(max_examples=15, deadline=None, database=None)
+@given(data=st.data(), seed=st.integers(0, 2**31))
+def test_verilator_renders_random_colour_scenes_as_the_canvas_under_back_pressure(data, seed):
+    """Three channels: each polygon's paint composited per channel in the hardware, the
+    canvas's image (`edgeaa.render.paint`) bit for bit."""
+    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    canvas = Canvas(scene, DEFAULT.full_scale)
+    result = render_pipeline(plan, "verilator", tile, seed=seed, idle=0.3, stall=0.4, canvas=canvas)
+    want = render_scene(plan, canvas=Canvas(scene, DEFAULT.full_scale)).image
+    assert result.mismatches == 0 and np.array_equal(result.image, want), f"seed {seed}"
 
 
 @pytest.mark.parametrize("seed", [1, 2])
@@ -246,6 +318,26 @@ def test_a_cached_pipeline_build_is_found_without_generating_the_verilog(monkeyp
     before = harness.sources_key(("pipeline", tile), "-O2")
     source.write_text("A = 2\n")
     assert harness.sources_key(("pipeline", tile), "-O2") != before
+
+
+@pytest.mark.parametrize("channels", [3, 4])
+def test_verilator_drops_bad_colour_commands_as_the_model_does(channels):
+    """Bad commands in colour, each begin and tile with a random paint (any alpha: the
+    hardware composites each channel the same way): the model's frames, per channel."""
+    import random
+
+    from edgeaa.sim.simulators import pipeline_harness
+
+    rng = random.Random(channels)
+    tile = TileConfig(SMALL, 8, 8, channels=channels)
+    top = 1 << (channels * SMALL.intensity_bits)
+    commands = [c._replace(paint=rng.randrange(top)) for c in bad_commands(SMALL.subpixel_scale)]
+    want, result = model_frames(tile, commands)
+    run = pipeline_harness.run(tile, commands, seed=channels, idle=0.3, stall=0.3)
+    assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors)
+    for frame, model in zip(run.frames(tile), want, strict=True):
+        assert frame.shape == (8, 8, channels) and np.array_equal(frame, model)
+    assert len({tuple(p) for f in want for p in f.reshape(-1, channels).tolist()}) > 2
 
 
 def test_a_pipeline_that_stops_moving_is_reported_not_waited_for():

@@ -10,14 +10,15 @@ clock, the total clocks and the counters. A model one clock off is caught."""
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import pytest
 from amaranth.sim import Simulator
 from fixtures import TINY_SCENE, small_scenes
 from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_layout
+from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_const
 from edgeaa.model import EdgeConfig, pipeline_timing, timing
 from edgeaa.model import tile as tile_model
 from edgeaa.model.beat import DELTAS
@@ -25,6 +26,7 @@ from edgeaa.model.pipeline import Command
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import RESOLVE_OPS, TileConfig
 from edgeaa.render import parse_scene, plan_scene
+from edgeaa.render.paint import Canvas, coverage_scene
 from edgeaa.render.pipeline import scene_commands
 from edgeaa.sim.simulators.pipeline_harness import expected_pixels, pixel_drain_clocks
 
@@ -47,8 +49,7 @@ def run_transfers(tile: TileConfig, commands: list[Command]) -> Transfers:
     the clock of every command taken, delta beat into the accumulator, cell into the resolve
     and pixel out; after the last, the harness's drain (nothing more may move)."""
     dut = EdgePipeline(tile)
-    layout = command_layout(tile)
-    payloads = [layout.const(c._asdict()) for c in commands]
+    payloads = [command_const(tile, c) for c in commands]
     expected = expected_pixels(tile, commands)
     out = Transfers([], [], [], [], {}, 0)
     beats, cells = dut.core.deltas, dut.acc.cells
@@ -185,6 +186,34 @@ def test_random_command_streams_with_bad_commands_in_the_models_clocks(seed):
     commands = random_commands(random.Random(seed), SMALL_TILE)
     hw = run_transfers(SMALL_TILE, commands)
     check_clock_for_clock(SMALL_TILE, commands, hw, f"seed {seed}")
+
+
+COLOUR_TILE = TileConfig(SMALL, 16, 8, channels=3)
+
+
+@settings(max_examples=2, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_random_colour_scenes_go_through_the_hardware_as_the_model_says(data):
+    """Three channels add no clock: the resolve's channels run side by side."""
+    unit = st.floats(0, 1)
+    scene = data.draw(small_scenes(SMALL))
+    polygons = tuple(
+        replace(p, paint=(data.draw(unit), data.draw(unit), data.draw(unit), 1.0))
+        for p in scene.polygons
+    )
+    scene = replace(scene, polygons=polygons, background_paint=(0.2, 0.4, 0.6, 1.0))
+    plan = plan_scene(coverage_scene(scene), SMALL)
+    commands = scene_commands(plan, COLOUR_TILE, Canvas(scene, SMALL.full_scale))
+    hw = run_transfers(COLOUR_TILE, commands)
+    check_clock_for_clock(COLOUR_TILE, commands, hw, f"colour scene {scene}")
+
+
+def test_a_random_colour_command_stream_with_bad_commands_in_the_models_clocks():
+    rng = random.Random(4)
+    colours = 1 << (3 * SMALL.intensity_bits)
+    commands = [c._replace(paint=rng.randrange(colours)) for c in random_commands(rng, COLOUR_TILE)]
+    hw = run_transfers(COLOUR_TILE, commands)
+    check_clock_for_clock(COLOUR_TILE, commands, hw, "colour seed 4")
 
 
 @pytest.mark.slow

@@ -17,7 +17,7 @@ from functools import partial
 import numpy as np
 
 from ...hdl import LineCore
-from ...hdl.pipeline import STATS, EdgePipeline, command_layout
+from ...hdl.pipeline import STATS, EdgePipeline, command_const
 from ...model import Clip, Edge, EdgeConfig
 from ...model.beat import edge_columns
 from ...model.pipeline import Command
@@ -108,8 +108,7 @@ def run_pipeline(
     the source and back-pressure on the sink when `seed` is given; stops after the expected
     pixels and a drain, or raises `PipelineHang`. `progress(done, total)` as commands go in."""
     dut = EdgePipeline(tile)
-    layout = command_layout(tile)
-    source = Source("commands", [layout.const(c._asdict()) for c in commands])
+    source = Source("commands", [command_const(tile, c) for c in commands])
     pixels = row_decoder(dut.pixels.payload.shape(), PIXEL_COLUMNS[1:])
     sink = Sink("pixels", expected_pixels(tile, commands), pixels)
     counters = (dut.errors, dut.edge_errors, *(dut.stats[name] for name in STATS))

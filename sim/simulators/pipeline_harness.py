@@ -3,7 +3,8 @@
 generated harness (`edgeaa.sim.simulators.harness`): pipeline commands in, every pixel out,
 with the clock it came in.
 
-A command row is `edgeaa.model.pipeline.Command`'s fields; a pixel row is `PIXEL_COLUMNS`; the
+A command row is `edgeaa.model.pipeline.Command`'s fields (a grey pipeline's without
+``paint``, `command_fields`); a pixel row is `PIXEL_COLUMNS`; the
 clock each command was taken is kept too (`edgeaa.model.pipeline_timing` predicts both). A run
 stops when it has every pixel the flushes ask for and then `pixel_drain_clocks` quiet clocks
 have passed (an extra pixel in them is kept, so a duplicate shows), or when neither a command
@@ -21,13 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from ...hdl.pipeline import STATS, EdgePipeline, pipeline_verilog
-from ...model.pipeline import CODE, Command
+from ...model.pipeline import CODE, Command, command_fields
 from ...model.tile import TileConfig
 from . import harness
 
 TOP = "edgeaa_pipeline"
 PIXEL_COLUMNS = ("clock", "x", "y", "value", "last")
-COMMAND_FORMAT = harness.StreamFormat("commands", tuple((name,) for name in Command._fields))
 PIXEL_FORMAT = harness.StreamFormat("pixels", tuple((name,) for name in PIXEL_COLUMNS[1:]))
 PipelineHang = harness.HarnessHang  # the name the pipeline's callers catch
 
@@ -51,7 +51,8 @@ class PipelineRun:
         return self.clocks / self.seconds if self.seconds else 0.0
 
     def frames(self, tile: TileConfig) -> list[np.ndarray]:
-        """The flushed tiles' values, (height, width) each, in order. Raises RuntimeError
+        """The flushed tiles' values, (height, width) each ((height, width, channels) for a
+        tile of 3 channels), in order. Raises RuntimeError
         unless the pixels came as the pipeline sends them: whole tiles, row by row, each
         pixel at its place and ``last`` on a tile's final pixel only."""
         x, y, values, last = (self.pixels[:, PIXEL_COLUMNS.index(n)] for n in PIXEL_COLUMNS[1:])
@@ -69,7 +70,12 @@ class PipelineRun:
                 f"pixel {i} is at ({x[i]}, {y[i]}) with last {last[i]}; a tile sent row by row "
                 f"has ({want_x[i]}, {want_y[i]}) with last {int(want_last[i])} there"
             )
-        return list(values.reshape(-1, tile.height, tile.width))
+        values = values.reshape(-1, tile.height, tile.width)
+        if tile.channels > 1:  # red in the low bits (`pack_paint`)
+            bits = tile.config.intensity_bits
+            shifts = np.arange(tile.channels) * bits
+            values = (values[..., None] >> shifts) & ((1 << bits) - 1)
+        return list(values)
 
 
 def expected_pixels(tile: TileConfig, commands: list[Command]) -> int:
@@ -92,10 +98,15 @@ def stuck_limit(tile: TileConfig, idle: float = 0.0, stall: float = 0.0) -> int:
     return int(4 * longest / ((1 - idle) * (1 - stall)))
 
 
+def command_format(tile: TileConfig) -> harness.StreamFormat:
+    """A command row: the `Command` fields the tile's pipeline takes (`command_fields`)."""
+    return harness.StreamFormat("commands", tuple((name,) for name in command_fields(tile)))
+
+
 @functools.cache
 def pipeline_top(tile: TileConfig) -> harness.HarnessTop:
-    """The pipeline as the harness drives it: `COMMAND_FORMAT` in, `PIXEL_FORMAT` out."""
-    return harness.harness_top(EdgePipeline(tile), TOP, COMMAND_FORMAT, PIXEL_FORMAT)
+    """The pipeline as the harness drives it: `command_format` in, `PIXEL_FORMAT` out."""
+    return harness.harness_top(EdgePipeline(tile), TOP, command_format(tile), PIXEL_FORMAT)
 
 
 def build(tile: TileConfig, *, optimize: str = "-O2") -> Path:
@@ -108,6 +119,11 @@ def use_executable(tile: TileConfig, exe: Path, *, optimize: str = "-O2") -> Non
     """Run `tile`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
     workers are handed the driver's), instead of generating and hashing the Verilog again."""
     harness.use_executable(("pipeline", tile, optimize), exe)
+
+
+def _command_rows(tile: TileConfig, commands: list[Command]) -> np.ndarray:
+    rows = np.array(commands, dtype=np.int64).reshape(-1, len(Command._fields))
+    return rows[:, : len(command_fields(tile))]  # `paint` is last: a grey pipeline has none
 
 
 def run(
@@ -124,7 +140,7 @@ def run(
     done = harness.run_harness(
         build(tile),
         pipeline_top(tile),
-        np.array(commands, dtype=np.int64).reshape(-1, len(Command._fields)),
+        _command_rows(tile, commands),
         seed=seed,
         idle=idle,
         stall=stall,
