@@ -40,6 +40,7 @@ WORD_BITS = 32
 SLAVE_ADDR_BITS = 6  # 64 words of register window
 MASTER_ADDR_BITS = 30  # word address: a 4 GiB byte space
 FB_BITS = 16  # stride, size and origin fields
+FB_PIXEL_BITS = 8  # grey
 INFO_MAGIC = 0xEA
 MAX_OUTSTANDING = 7  # framebuffer writes in flight (acks not yet in)
 ORIGIN_DEPTH = 4  # flushed tiles between the command stage and the writer
@@ -124,8 +125,11 @@ class FramebufferWriter(wiring.Component):
     ``bus_error`` pulses on an ``err`` (the write counts as answered)."""
 
     def __init__(self, tile: TileConfig):
-        if tile.config.intensity_bits > 8:
-            raise ValueError("the framebuffer is 8-bit grey: intensity_bits must be at most 8")
+        if tile.config.intensity_bits > FB_PIXEL_BITS:
+            raise ValueError(
+                f"the framebuffer is {FB_PIXEL_BITS}-bit grey: intensity_bits must be at most "
+                f"{FB_PIXEL_BITS}, not {tile.config.intensity_bits}"
+            )
         self._tile = tile
         origin = data.StructLayout({"x": unsigned(FB_BITS), "y": unsigned(FB_BITS)})
         super().__init__(
@@ -153,7 +157,8 @@ class FramebufferWriter(wiring.Component):
         ]
         # stage 1: the pixel's framebuffer position; stage 2: the bus request
         s1 = {n: Signal(w, name=f"s1_{n}") for n, w in (("x", FB_BITS), ("y", FB_BITS))}
-        s1_value, s1_valid, s1_inside, s1_last = Signal(8), Signal(), Signal(), Signal()
+        s1_value, s1_valid = Signal(FB_PIXEL_BITS), Signal()
+        s1_inside, s1_last = Signal(), Signal()
         s2_valid, draining = Signal(), Signal()
         outstanding = Signal(range(MAX_OUTSTANDING + 1))
         issued = Signal()
@@ -185,7 +190,7 @@ class FramebufferWriter(wiring.Component):
             self.pixels.ready.eq(self.origins.valid & ~blocked & (~s1_valid | s1_move)),
             take.eq(self.pixels.valid & self.pixels.ready),
         ]
-        inside = (X >= 0) & (X < self.fb_size.x) & (Y >= 0) & (Y < self.fb_size.y)
+        inside = (X >= 0) & (self.fb_size.x > X) & (Y >= 0) & (self.fb_size.y > Y)
         with m.If(take):
             m.d.sync += [s1["x"].eq(X), s1["y"].eq(Y), s1_inside.eq(inside)]
             m.d.sync += [s1_value.eq(px.value), s1_last.eq(px.last), s1_valid.eq(1)]
@@ -290,6 +295,8 @@ class EdgePeripheral(wiring.Component):
     `REGISTERS`), writing its tiles into a framebuffer through ``fb`` (an initiator);
     ``irq`` is high while an enabled interrupt is pending."""
 
+    top_kind = "peripheral"  # `edgeaa verilog`'s header (`edgeaa.hdl.integration`)
+
     def __init__(self, tile: TileConfig, fifo_depth: int = 16):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
@@ -335,29 +342,27 @@ class EdgePeripheral(wiring.Component):
         # One ack a clock after each taken request; reads answer from the clock they are taken.
         m.d.sync += bus.ack.eq(taken)
         reads = self._read_values(tile, dp, fb, irq_enable, irq_status, bus_error)
-        with m.If(taken & ~bus.we):
-            with m.Switch(bus.adr):
-                for address, value in reads.items():
-                    with m.Case(address):
-                        m.d.sync += bus.dat_r.eq(value)
-                with m.Default():
-                    m.d.sync += bus.dat_r.eq(0)
+        with m.If(taken & ~bus.we), m.Switch(bus.adr):
+            for address, value in reads.items():
+                with m.Case(address):
+                    m.d.sync += bus.dat_r.eq(value)
+            with m.Default():
+                m.d.sync += bus.dat_r.eq(0)
         events = Cat(dp.done, dp.bus_error)
         cleared = Signal(2)
-        with m.If(taken & bus.we):
-            with m.Switch(bus.adr):
-                for k, stage in enumerate(staged):
-                    with m.Case(REGISTERS["cmd"] + k):
-                        m.d.sync += stage.eq(bus.dat_w)
-                for name in _FB_REGS:
-                    with m.Case(REGISTERS[name]):
-                        m.d.sync += fb[name].eq(bus.dat_w)
-                with m.Case(REGISTERS["irq_enable"]):
-                    m.d.sync += irq_enable.eq(bus.dat_w)
-                with m.Case(REGISTERS["irq_status"]):
-                    m.d.comb += cleared.eq(bus.dat_w)
-                with m.Case(REGISTERS["ctrl"]):
-                    m.d.comb += soft_reset.eq(bus.dat_w[0])
+        with m.If(taken & bus.we), m.Switch(bus.adr):
+            for k, stage in enumerate(staged):
+                with m.Case(REGISTERS["cmd"] + k):
+                    m.d.sync += stage.eq(bus.dat_w)
+            for name in _FB_REGS:
+                with m.Case(REGISTERS[name]):
+                    m.d.sync += fb[name].eq(bus.dat_w)
+            with m.Case(REGISTERS["irq_enable"]):
+                m.d.sync += irq_enable.eq(bus.dat_w)
+            with m.Case(REGISTERS["irq_status"]):
+                m.d.comb += cleared.eq(bus.dat_w)
+            with m.Case(REGISTERS["ctrl"]):
+                m.d.comb += soft_reset.eq(bus.dat_w[0])
         m.d.sync += irq_status.eq((irq_status & ~cleared) | events)
         with m.If(soft_reset):
             m.d.sync += bus_error.eq(0)

@@ -75,6 +75,22 @@ def test_a_scene_written_as_a_cpu_would_lands_in_the_framebuffer_bit_for_bit(
     assert regs["stats.core_busy"] > 0 and regs["stats.resolve_busy"] >= tiles * TILE.pixels
     if stall:
         assert regs["stats.resolve_stall"] > 0, f"{tag}: the memory never held the pipeline"
+    assert run.cpu_stalls > 0, f"{tag}: the command FIFO was never full"
+    assert run.aborted == 0, f"{tag}: cyc dropped with writes unanswered"
+
+
+def test_the_reset_bit_drops_what_was_running_and_the_next_scene_is_whole():
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
+    commands = scene_commands(plan, TILE)
+    fb = Framebuffer(base=64, stride=20, width=20, height=14)
+    first = commands[: len(commands) // 2]  # a tile's flush in flight when the reset comes
+    run = run_peripheral(TILE, commands, fb, seed=3, stall=0.5, latency=4, before_reset=first)
+    assert run.aborted > 0, "no framebuffer write was in flight at the reset"
+    image = np.array(fb.image(run.memory))
+    assert np.array_equal(image, render_scene(plan, engine="model").image), "seed 3"
+    clean = run_peripheral(TILE, commands, fb, seed=3, stall=0.5, latency=4)
+    for name in ("tiles", "errors", "stats.core_busy", "stats.acc_busy"):
+        assert run.registers[name] == clean.registers[name], f"the reset left {name}"
 
 
 def test_bad_commands_are_counted_in_the_errors_register():
@@ -97,3 +113,18 @@ def test_the_peripheral_verilog_is_lint_clean():
         assert port in source
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_edgeaa_verilog_top_peripheral(tmp_path, capsys):
+    from edgeaa.cli import main
+
+    out = tmp_path / "p.v"
+    small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
+    assert main(["verilog", "--top", "peripheral", "--tile", "8x4", *small, "-o", str(out)]) == 0
+    assert "module edgeaa_peripheral" in out.read_text() and out.with_suffix(".vlt").exists()
+    capsys.readouterr()
+    assert main(["verilog", "--top", "peripheral", "--intensity-bits", "10"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "8-bit grey" in err and "Traceback" not in err
+    assert main(["verilog", "--top", "peripheral", "--core", "deltas"]) == 2
+    assert "--top peripheral has its own" in capsys.readouterr().err
