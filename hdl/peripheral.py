@@ -43,8 +43,9 @@ FB_BITS = 16  # stride, size and origin fields
 FB_PIXEL_BITS = 8  # grey
 INFO_MAGIC = 0xEA
 MAX_OUTSTANDING = 7  # framebuffer writes in flight (acks not yet in)
-ORIGIN_DEPTH = 4  # flushed tiles between the command stage and the writer
-IRQ_DONE, IRQ_BUS_ERROR = 0, 1
+# Flushed tiles between the command stage and the writer; a flush waits for room (at 2, the
+# back-to-back flush test makes one wait; 4 never filled).
+ORIGIN_DEPTH = 2
 
 # The register window, word offsets (the byte offset is 4 times). "cmd" is the first of
 # `command_words` words; writing the last pushes the command.
@@ -241,7 +242,7 @@ class _Datapath(wiring.Component):
         q, pipe, writer = self.fifo, self.pipeline, self.writer
         m.submodules.fifo, m.submodules.pipeline, m.submodules.writer = q, pipe, writer
         tile = self._tile
-        origins = fifo.SyncFIFOBuffered(width=2 * FB_BITS, depth=ORIGIN_DEPTH)
+        origins = fifo.SyncFIFO(width=2 * FB_BITS, depth=ORIGIN_DEPTH)
         m.submodules.origins = origins
         m.d.comb += [
             q.w_data.eq(self.push.payload),

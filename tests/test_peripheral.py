@@ -115,6 +115,38 @@ def test_the_peripheral_verilog_is_lint_clean():
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
+SMALL = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4)
+
+
+def _empty_tiles(tile: TileConfig, across: int, down: int) -> tuple[list[Command], np.ndarray]:
+    """A tile start and a flush per tile (its background its number), and the image."""
+    commands, image = [], np.zeros((down * tile.height, across * tile.width), np.int64)
+    for k in range(across * down):
+        x, y = k % across * tile.width, k // across * tile.height
+        commands += [Command.tile(x, y, k % 15 + 1), Command.flush()]
+        image[y : y + tile.height, x : x + tile.width] = k % 15 + 1
+    return commands, image
+
+
+def test_flushes_back_to_back_against_a_slow_memory_keep_their_origins():
+    tile = TileConfig(SMALL, 8, 4)
+    commands, want = _empty_tiles(tile, 4, 4)
+    fb = Framebuffer(base=0, stride=32, width=32, height=16)
+    run = run_peripheral(tile, commands, fb, seed=9, stall=0.9, latency=8, fifo_depth=16)
+    assert np.array_equal(np.array(fb.image(run.memory)), want), "seed 9"
+    assert set(run.writes.values()) == {1} and run.registers["tiles"] == 16
+
+
+def test_a_bus_error_is_reported_in_status_and_interrupt():
+    tile = TileConfig(SMALL, 8, 4)
+    commands, want = _empty_tiles(tile, 2, 1)
+    fb = Framebuffer(base=0, stride=16, width=16, height=4)
+    run = run_peripheral(tile, commands, fb, seed=4, stall=0.3, latency=2, errors={5})
+    regs = run.registers
+    assert regs["status"] & 0b10 and regs["irq_status"] == 0b11 and regs["tiles"] == 2
+    assert 5 not in run.memory and len(run.writes) == 16 * 4 - 1
+
+
 def test_edgeaa_verilog_top_peripheral(tmp_path, capsys):
     from edgeaa.cli import main
 

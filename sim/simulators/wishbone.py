@@ -66,10 +66,13 @@ class _Memory:
     """The framebuffer's target: stalls with probability `stall`, acks each taken write
     after 0 to `latency` clocks (in order, at most one a clock)."""
 
-    def __init__(self, dut, rng: random.Random, stall: float, latency: int, tag: str):
+    def __init__(
+        self, dut, rng: random.Random, stall: float, latency: int, tag: str, errors=frozenset()
+    ):
         self.bus, self.irq, self.rng, self.tag = dut.fb, dut.irq, rng, tag
         self.done = dut.datapath.writer.done  # a probe: no tile is done before its acks
         self.stall, self.latency = stall, latency
+        self.errors = errors  # byte addresses answered with err (the write is not done)
         self.queue: deque = deque()  # (clock due, byte address, byte)
         self.writes: Counter = Counter()
         self.memory: dict = {}
@@ -82,19 +85,23 @@ class _Memory:
             irq = ctx.get(self.irq)
             head = self.queue[0] if self.queue else None
             ack = head is not None and head[0] <= self.clock
-            ctx.set(bus.ack, ack)
+            err = ack and head[1] in self.errors
+            ctx.set(bus.ack, ack and not err)
+            ctx.set(bus.err, err)
             ctx.set(bus.stall, self.rng.random() < self.stall)
             cyc, stb = ctx.get(bus.cyc), ctx.get(bus.stb)
             if self.queue and not cyc:  # the initiator aborts the cycle: no ack comes
                 self.aborted += len(self.queue)
                 self.queue.clear()
                 ctx.set(bus.ack, ack := False)
+                ctx.set(bus.err, False)
             if ctx.get(self.done) and self.queue:
                 self._fail("a tile done with its writes unanswered")
             if ack:
                 _, address, byte = self.queue.popleft()
-                self.memory[address] = byte
-                self.writes[address] += 1
+                if address not in self.errors:
+                    self.memory[address] = byte
+                    self.writes[address] += 1
             if cyc and stb and not ctx.get(bus.stall):
                 self._take(ctx)
             await ctx.tick()
@@ -195,17 +202,18 @@ def run_peripheral(
     fifo_depth: int = 4,
     max_clocks: int = 100_000,
     before_reset=(),
+    errors=frozenset(),
 ) -> PeripheralRun:
     """`commands` written as a CPU would (set-up registers, the interrupt enabled, each
     command's words), then the status polled until not busy; the framebuffer writes
     collected. `idle`: the CPU's chance of an idle clock before each request; `stall`,
     `latency`: the memory's; a run past `max_clocks` is a hang. `before_reset`: commands
     written first, then the control register's reset bit (whatever they were doing is
-    dropped)."""
+    dropped). `errors`: byte addresses the memory answers with err."""
     dut = EdgePeripheral(tile, fifo_depth=fifo_depth)
     tag = f"seed {seed}"
     rng = random.Random(seed)
-    memory = _Memory(dut, random.Random(rng.random()), stall, latency, tag)
+    memory = _Memory(dut, random.Random(rng.random()), stall, latency, tag, errors)
     cpu = _Cpu(dut.bus, random.Random(rng.random()), idle, tag, max_clocks)
     result: dict = {}
 
