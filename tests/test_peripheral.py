@@ -7,6 +7,8 @@ errors and interrupt as the model says; the Verilog lint-clean."""
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 from fixtures import TINY_SCENE
@@ -109,8 +111,10 @@ def test_the_peripheral_verilog_is_lint_clean():
     from edgeaa.sim.simulators.verilator import lint
 
     source = peripheral_verilog(TileConfig(EdgeConfig(7, 2, 4), 8, 4))
-    for port in ("bus__adr", "bus__stall", "fb__dat_w", "fb__sel", "irq"):
-        assert port in source
+    header = re.search(r"module edgeaa_peripheral\((.*?)\);", source, re.S).group(1)
+    names = ("cyc", "stb", "we", "adr", "dat_w", "sel", "dat_r", "ack", "stall", "err")
+    want = {"clk", "rst", "irq"} | {f"{bus}__{n}" for bus in ("bus", "fb") for n in names}
+    assert {port.strip() for port in header.split(",")} == want
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
