@@ -162,8 +162,11 @@ class FramebufferWriter(wiring.Component):
         s1_inside, s1_last = Signal(), Signal()
         s2_valid, draining = Signal(), Signal()
         outstanding = Signal(range(MAX_OUTSTANDING + 1))
+        self.outstanding = outstanding  # observed by the formal harness
         issued = Signal()
+        lane = Signal(4, init=1)  # one-hot from reset on (the formal proof's invariant)
         m.d.comb += [
+            bus.sel.eq(lane),
             bus.cyc.eq(s2_valid | (outstanding != 0)),
             bus.stb.eq(s2_valid & (outstanding != MAX_OUTSTANDING)),
             bus.we.eq(1),
@@ -180,7 +183,7 @@ class FramebufferWriter(wiring.Component):
             m.d.sync += [
                 s2_valid.eq(1),
                 bus.adr.eq(byte[2:]),
-                bus.sel.eq(Const(1, 4) << byte[:2]),
+                lane.eq(Const(1, 4) << byte[:2]),
                 bus.dat_w.eq(Cat(s1_value, s1_value, s1_value, s1_value)),
             ]
         with m.Elif(issued):
