@@ -273,8 +273,8 @@ def _add_tile_option(parser: argparse.ArgumentParser) -> None:
         type=tile_size,
         default=None,
         metavar="WxH",
-        help="with --top pipeline: the tile WIDTHxHEIGHT, powers of two (default 64x32; "
-        "limits: docs/hardware.md)",
+        help="with --top pipeline or peripheral: the tile WIDTHxHEIGHT, powers of two "
+        "(default 64x32; limits: docs/hardware.md)",
     )
 
 
@@ -282,14 +282,26 @@ def _check_top(prog: str, args: argparse.Namespace) -> None:
     """Refuse the options that do nothing for --top, then fill in the core's default."""
     if args.top == "core" and args.tile is not None:
         raise usage_error(prog, "--tile sizes the polygon pipeline: add --top pipeline")
-    if args.top == "pipeline" and args.core is not None:
+    if args.top != "core" and args.core is not None:
         raise usage_error(
-            prog, "--core chooses the core's output: --top pipeline has its own deltas core"
+            prog, f"--core chooses the core's output: --top {args.top} has its own deltas core"
         )
-    if args.top == "pipeline" and getattr(args, "setup_units", None) is not None:
-        raise usage_error(prog, "--setup-units sizes the core: --top pipeline has its own")
+    if args.top != "core" and getattr(args, "setup_units", None) is not None:
+        raise usage_error(prog, f"--setup-units sizes the core: --top {args.top} has its own")
     args.core = args.core or "writes"
     args.core_top = _core_top(args.core) if args.top == "core" else None
+
+
+def _check_peripheral(prog: str, args: argparse.Namespace, config) -> None:
+    """The peripheral's framebuffer is 8-bit grey: refuse wider intensities."""
+    from .hdl.peripheral import FB_PIXEL_BITS
+
+    if args.top == "peripheral" and config.intensity_bits > FB_PIXEL_BITS:
+        raise usage_error(
+            prog,
+            f"--top peripheral writes {FB_PIXEL_BITS}-bit grey pixels: --intensity-bits "
+            f"{config.intensity_bits} is too wide (at most {FB_PIXEL_BITS})",
+        )
 
 
 class VerilogCommand(Command):
@@ -302,7 +314,9 @@ class VerilogCommand(Command):
         "(sampled with each edge), the pixel write stream "
         "writes__valid/ready/payload__lane0__*, lane1__*, lane1_valid, last, and errors/error. "
         "--top pipeline writes the whole polygon pipeline instead (commands in, a tile's "
-        "pixels out; docs/hardware.md, 'Polygon pipeline')."
+        "pixels out; docs/hardware.md, 'Polygon pipeline'); --top peripheral writes it "
+        "behind a Wishbone register window with a framebuffer writer (docs/hardware.md, "
+        "'Integrating edgeaa')."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
@@ -310,10 +324,14 @@ class VerilogCommand(Command):
             "-o", "--output", help="output file, .v or .sv (default: standard output)"
         )
         parser.add_argument(
-            "--name", help="top module name (default: edgeaa_core, or edgeaa_pipeline)"
+            "--name",
+            help="top module name (default: edgeaa_core, edgeaa_pipeline or edgeaa_peripheral)",
         )
         parser.add_argument(
-            "--top", choices=("core", "pipeline"), default="core", help="what to write"
+            "--top",
+            choices=("core", "pipeline", "peripheral"),
+            default="core",
+            help="what to write",
         )
         _add_tile_option(parser)
         _add_core_option(parser)
@@ -324,15 +342,21 @@ class VerilogCommand(Command):
 
         if args.top == "core":
             return core_verilog(args.core_top(config), name=args.name)
+        tile = tile_from_args(args.tile, config)
+        if args.top == "peripheral":
+            from .hdl.peripheral import peripheral_verilog
+
+            return peripheral_verilog(tile, name=args.name)
         from .hdl.pipeline import pipeline_verilog
 
-        return pipeline_verilog(tile_from_args(args.tile, config), name=args.name)
+        return pipeline_verilog(tile, name=args.name)
 
     def run(self, args: argparse.Namespace) -> int:
         from .hdl.integration import name_error
 
         _check_top(self.prog, args)
         config = config_from_args(args)
+        _check_peripheral(self.prog, args, config)
         if args.name is None:
             args.name = f"edgeaa_{args.top}"
         problem = name_error(args.name)
@@ -359,7 +383,7 @@ class VerilogCommand(Command):
             ):
                 Path(temporary).write_text(source)
                 Path(temporary_waivers).write_text(waivers)
-            what = "pipeline" if args.top == "pipeline" else args.core + " core"
+            what = args.core + " core" if args.top == "core" else args.top
             print(
                 f"wrote {args.output}: module {args.name} ({what}), {config}; lint waivers "
                 f"{waivers_path}",
@@ -453,10 +477,11 @@ class SynthCommand(Command):
         )
         parser.add_argument(
             "--top",
-            choices=("core", "pipeline"),
+            choices=("core", "pipeline", "peripheral"),
             default="core",
-            help="what to synthesise beside the baseline: the core (default) or the polygon "
-            "pipeline (deltas core, accumulator and resolve)",
+            help="what to synthesise beside the baseline: the core (default), the polygon "
+            "pipeline (deltas core, accumulator and resolve) or the peripheral (the pipeline "
+            "behind a Wishbone register window, with its framebuffer writer)",
         )
         _add_tile_option(parser)
         _add_core_option(parser)
@@ -478,6 +503,12 @@ class SynthCommand(Command):
             tile = tile_from_args(args.tile, config)
             heading = f"pipeline, tile {tile.width}x{tile.height}, {config}"
             return heading, {"pipeline": lambda: EdgePipeline(tile), **baseline}
+        if args.top == "peripheral":
+            from .hdl.peripheral import EdgePeripheral
+
+            tile = tile_from_args(args.tile, config)
+            heading = f"peripheral, tile {tile.width}x{tile.height}, {config}"
+            return heading, {"peripheral": lambda: EdgePeripheral(tile), **baseline}
         heading = f"{args.core} core, {args.setup_units} setup units, {config}"
 
         def core():
@@ -497,8 +528,9 @@ class SynthCommand(Command):
         """Synthesise, place and route the core (or pipeline) and the baseline side by side."""
         self._check(args)
         config = config_from_args(args)
+        _check_peripheral(self.prog, args, config)
         heading, designs = self._designs(args, config)
-        rams = args.top == "pipeline"  # a block-RAM column
+        rams = args.top != "core"  # a block-RAM column
         print(f"edgeaa synth: {heading}")
         print("both inside the same I/O harness; figures are the design's (harness subtracted)")
         print(

@@ -313,7 +313,8 @@ def _assigns(line: str, name: str) -> bool:
 
 
 def must_drive(top_kind: str, config, stream: str = "") -> list[str]:
-    """The inputs that must be driven, one line each (`top_kind`: "core" or "pipeline";
+    """The inputs that must be driven, one line each (`top_kind`: "core", "pipeline" or
+    "peripheral";
     `stream`: the core's output stream, `edgeaa.model.beat.BeatFormat.stream`)."""
     if top_kind == "core":
         full = 1 << config.coord_bits
@@ -323,6 +324,11 @@ def must_drive(top_kind: str, config, stream: str = "") -> list[str]:
             f"0, 0, {full}, {full} to clip nothing (undriven, Verilator reads 0: the window "
             "(0, 0, 0, 0) steps only column 0 or row 0, most edges give no beat; a 4-state "
             "simulator reads X and the core's state goes X)",
+        ]
+    if top_kind == "peripheral":
+        return [
+            "clk, rst (synchronous, active high); bus__cyc, bus__stb (0 when idle) and the "
+            "other bus__* inputs; fb__ack, fb__stall, fb__err (0 when unused)"
         ]
     return ["clk, rst (synchronous, active high), commands__valid and pixels__ready"]
 
@@ -344,10 +350,21 @@ def header(
         lines.append("Every port is unsigned.")
     lines.append("Must be driven (a Verilog input has no default):")
     lines += [f"  {item}" for item in must_drive(top_kind, config, stream)]
+    if top_kind == "peripheral":
+        lines += [
+            "bus__* (the register window, a target) and fb__* (the framebuffer writes, an",
+            "  initiator) are Wishbone B4 pipelined, 32-bit data, word addresses, byte lanes;",
+            "  docs/hardware.md, 'Integrating edgeaa', has the register map.",
+            "Reset: one clock of rst clears every register, the FIFO, the pipeline and the",
+            "  counters; the pipeline then clears its tile (one clock a pixel) before pixels.",
+        ]
+    else:
+        lines += [
+            "Payload inputs are sampled only in the clock a command is accepted (valid & ready).",
+            "Reset: while rst is high the input stream's ready is low (nothing is accepted);",
+            "  one clock of rst clears every edge in flight, the counters and the output's valid.",
+        ]
     lines += [
-        "Payload inputs are sampled only in the clock a command is accepted (valid & ready).",
-        "Reset: while rst is high the input stream's ready is low (nothing is accepted);",
-        "  one clock of rst clears every edge in flight, the counters and the output's valid.",
         "Lint: verilator --lint-only -Wall FILE.vlt FILE.v, with the waiver file written",
         "  beside this one (for this exact text).",
     ]
@@ -364,8 +381,8 @@ def annotate(source: str, component, name: str, signed: list[tuple[str, int]]) -
     declared signed and the `header` on top. `component` is the core or the pipeline."""
     tile = getattr(component, "tile", None)
     if tile is not None:
-        kind, config, stream = "pipeline", tile.config, ""
-        what = f"the edgeaa polygon pipeline, tile {tile.width}x{tile.height}"
+        kind, config, stream = getattr(component, "top_kind", "pipeline"), tile.config, ""
+        what = f"the edgeaa polygon {kind}, tile {tile.width}x{tile.height}"
     else:
         kind, config, stream = "core", component.config, component.format.stream
         what = f"the edgeaa {stream} core"

@@ -1,0 +1,398 @@
+# amaranth: UnusedElaboratable=no
+"""The pipeline as a bus peripheral (`EdgePeripheral`): a Wishbone B4 pipelined slave with a
+register window (commands in through a FIFO, status, counters, interrupt) and a Wishbone B4
+pipelined master that writes each flushed tile's pixels into a linear 8-bit grey framebuffer
+(`FramebufferWriter`). docs/hardware.md, "Integrating edgeaa", has the register map.
+
+Amaranth 0.5 has no Wishbone library, so the bus is declared here (`bus_signature`): 32-bit
+data, byte granularity, word addresses, the B4 pipelined handshake (a request is taken on a
+clock with ``cyc & stb & ~stall``; each taken request gets one ``ack`` or ``err``, in order).
+
+A command is written as `command_words` 32-bit words (`pack_command`): the bits of
+`edgeaa.hdl.pipeline.command_layout`, word 0 the lowest; writing the last word pushes the
+command into the FIFO (the write stalls while the FIFO is full).
+"""
+
+from __future__ import annotations
+
+from amaranth.hdl import Cat, Const, Module, ResetInserter, Signal, unsigned
+from amaranth.lib import data, fifo, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from ..model.pipeline import CODE, COMMAND_VERSION, Command
+from ..model.tile import TileConfig
+from .core import ERRORS_BITS, flat_verilog
+from .layouts import tile_pixel_layout
+from .pipeline import STATS, EdgePipeline, command_layout
+
+__all__ = [
+    "REGISTERS",
+    "EdgePeripheral",
+    "FramebufferWriter",
+    "bus_signature",
+    "command_words",
+    "pack_command",
+    "peripheral_verilog",
+    "register_map",
+]
+
+WORD_BITS = 32
+SLAVE_ADDR_BITS = 6  # 64 words of register window
+MASTER_ADDR_BITS = 30  # word address: a 4 GiB byte space
+FB_BITS = 16  # stride, size and origin fields
+FB_PIXEL_BITS = 8  # grey
+INFO_MAGIC = 0xEA
+MAX_OUTSTANDING = 7  # framebuffer writes in flight (acks not yet in)
+# Flushed tiles between the command stage and the writer; a flush waits for room (at 2, the
+# back-to-back flush test makes one wait; 4 never filled).
+ORIGIN_DEPTH = 2
+
+# The register window, word offsets (the byte offset is 4 times). "cmd" is the first of
+# `command_words` words; writing the last pushes the command.
+REGISTERS = {
+    "info": 0,  # RO: magic, command version, words per command, tile size
+    "ctrl": 1,  # WO: bit 0 resets the datapath (FIFO, pipeline, writer, counters)
+    "status": 2,  # RO: bit 0 busy, bit 1 bus error (sticky), bit 2 FIFO full; level 31:16
+    "irq_enable": 3,  # RW: bit 0 tile written, bit 1 framebuffer bus error
+    "irq_status": 4,  # R, write 1 to clear: the same bits, set on the event
+    "fb_base": 5,  # RW: byte address of framebuffer pixel (0, 0)
+    "fb_stride": 6,  # RW: bytes per framebuffer row (15:0)
+    "fb_size": 7,  # RW: width 15:0, height 31:16 (pixels outside are not written)
+    "fb_origin": 8,  # RW: the engine pixel at framebuffer (0, 0): x 15:0, y 31:16
+    "errors": 9,  # RO: bad commands 15:0, bad edges 31:16 (saturating)
+    "tiles": 10,  # RO: tiles written to the framebuffer (wrapping)
+    "stats": 16,  # RO: the pipeline's counters, in `STATS` order
+    "cmd": 32,  # WO: command words
+}
+
+
+def bus_signature(addr_width: int) -> wiring.Signature:
+    """A Wishbone B4 pipelined bus, from the initiator's side: 32-bit data, byte lanes
+    (``sel``), ``adr`` a word address, ``stall`` and ``err`` from the target."""
+    return wiring.Signature(
+        {
+            "cyc": Out(1),
+            "stb": Out(1),
+            "we": Out(1),
+            "adr": Out(addr_width),
+            "dat_w": Out(WORD_BITS),
+            "sel": Out(WORD_BITS // 8),
+            "dat_r": In(WORD_BITS),
+            "ack": In(1),
+            "stall": In(1),
+            "err": In(1),
+        }
+    )
+
+
+def command_words(tile: TileConfig) -> int:
+    return -(-command_layout(tile).size // WORD_BITS)
+
+
+def pack_command(tile: TileConfig, command: Command) -> list[int]:
+    """The words a CPU writes for `command` (each field at its `command_layout` offset)."""
+    value = 0
+    for name, field in command_layout(tile):
+        v = getattr(command, name)
+        if not 0 <= v < 1 << field.width:
+            raise ValueError(f"command field {name}={v} does not fit in {field.width} bits")
+        value |= v << field.offset
+    mask = (1 << WORD_BITS) - 1
+    return [(value >> (WORD_BITS * k)) & mask for k in range(command_words(tile))]
+
+
+def register_map(tile: TileConfig) -> dict[str, int]:
+    """Every register's word offset (the stats and command words each their own)."""
+    regs = {k: v for k, v in REGISTERS.items() if k not in ("stats", "cmd")}
+    regs |= {f"stats.{name}": REGISTERS["stats"] + i for i, name in enumerate(STATS)}
+    regs |= {f"cmd{k}": REGISTERS["cmd"] + k for k in range(command_words(tile))}
+    return regs
+
+
+def info_word(tile: TileConfig) -> int:
+    """The ``info`` register: magic 31:24, command version 23:16, command words 15:12,
+    log2 tile width 11:8, log2 tile height 7:4, intensity bits 3:0."""
+    fields = (INFO_MAGIC, 24), (COMMAND_VERSION, 16), (command_words(tile), 12)
+    fields += (tile.x_bits, 8), (tile.y_bits, 4), (tile.config.intensity_bits, 0)
+    return sum(value << shift for value, shift in fields)
+
+
+class FramebufferWriter(wiring.Component):
+    """Each tile's pixels (``pixels``, raster order of one flush, ``last`` on the last) to
+    ``base + Y * stride + X``, one byte write each, where (X, Y) is the pixel's engine
+    position (the tile's origin from ``origins``, one per tile, plus its x, y) less
+    ``fb_origin``; pixels outside ``fb_size`` are not written. ``done`` pulses when every
+    write of a tile is acknowledged (the next tile's writes start after it);
+    ``bus_error`` pulses on an ``err`` (the write counts as answered)."""
+
+    def __init__(self, tile: TileConfig):
+        if tile.config.intensity_bits > FB_PIXEL_BITS or tile.channels != 1:
+            raise ValueError(
+                f"the framebuffer is {FB_PIXEL_BITS}-bit grey: one channel of at most "
+                f"{FB_PIXEL_BITS} intensity bits, not {tile.channels} of "
+                f"{tile.config.intensity_bits}"
+            )
+        self._tile = tile
+        origin = data.StructLayout({"x": unsigned(FB_BITS), "y": unsigned(FB_BITS)})
+        super().__init__(
+            {
+                "pixels": In(stream.Signature(tile_pixel_layout(tile))),
+                "origins": In(stream.Signature(origin)),
+                "fb_base": In(WORD_BITS),
+                "fb_stride": In(FB_BITS),
+                "fb_size": In(origin),
+                "fb_origin": In(origin),
+                "bus": Out(bus_signature(MASTER_ADDR_BITS)),
+                "done": Out(1),
+                "bus_error": Out(1),
+            }
+        )
+
+    def elaborate(self, platform):
+        m = Module()
+        px, origin, bus = self.pixels.payload, self.origins.payload, self.bus
+        wide = FB_BITS + 2  # signed X, Y before the window check
+        X, Y = Signal(range(-(1 << wide), 1 << wide)), Signal(range(-(1 << wide), 1 << wide))
+        m.d.comb += [
+            X.eq(origin.x + px.x - self.fb_origin.x),
+            Y.eq(origin.y + px.y - self.fb_origin.y),
+        ]
+        # stage 1: the pixel's framebuffer position; stage 2: the bus request
+        s1 = {n: Signal(w, name=f"s1_{n}") for n, w in (("x", FB_BITS), ("y", FB_BITS))}
+        s1_value, s1_valid = Signal(FB_PIXEL_BITS), Signal()
+        s1_inside, s1_last = Signal(), Signal()
+        s2_valid, draining = Signal(), Signal()
+        outstanding = Signal(range(MAX_OUTSTANDING + 1))
+        self.outstanding = outstanding  # observed by the formal harness
+        issued = Signal()
+        lane = Signal(4, init=1)  # one-hot from reset on (the formal proof's invariant)
+        m.d.comb += [
+            bus.sel.eq(lane),
+            bus.cyc.eq(s2_valid | (outstanding != 0)),
+            bus.stb.eq(s2_valid & (outstanding != MAX_OUTSTANDING)),
+            bus.we.eq(1),
+            issued.eq(bus.stb & ~bus.stall),
+        ]
+        answered = bus.cyc & (bus.ack | bus.err)
+        m.d.sync += outstanding.eq(outstanding + issued - answered)
+        m.d.comb += self.bus_error.eq(bus.cyc & bus.err)
+        s2_free = ~s2_valid | issued
+        s1_move = s1_valid & (~s1_inside | s2_free)
+        with m.If(s1_move & s1_inside):
+            byte = Signal(WORD_BITS)
+            m.d.comb += byte.eq(self.fb_base + s1["y"] * self.fb_stride + s1["x"])
+            m.d.sync += [
+                s2_valid.eq(1),
+                bus.adr.eq(byte[2:]),
+                lane.eq(Const(1, 4) << byte[:2]),
+                bus.dat_w.eq(Cat(s1_value, s1_value, s1_value, s1_value)),
+            ]
+        with m.Elif(issued):
+            m.d.sync += s2_valid.eq(0)
+        take = Signal()
+        blocked = draining | (s1_valid & s1_last)
+        m.d.comb += [
+            self.pixels.ready.eq(self.origins.valid & ~blocked & (~s1_valid | s1_move)),
+            take.eq(self.pixels.valid & self.pixels.ready),
+        ]
+        inside = (X >= 0) & (self.fb_size.x > X) & (Y >= 0) & (self.fb_size.y > Y)
+        with m.If(take):
+            m.d.sync += [s1["x"].eq(X), s1["y"].eq(Y), s1_inside.eq(inside)]
+            m.d.sync += [s1_value.eq(px.value), s1_last.eq(px.last), s1_valid.eq(1)]
+        with m.Elif(s1_move):
+            m.d.sync += s1_valid.eq(0)
+        with m.If(s1_move & s1_last):
+            m.d.sync += draining.eq(1)
+        # Done once the tile's last write is answered: nothing in either stage or in flight.
+        finished = draining & ~s2_valid & (outstanding == 0)
+        m.d.comb += [self.done.eq(finished), self.origins.ready.eq(finished)]
+        with m.If(finished):
+            m.d.sync += draining.eq(0)
+        return m
+
+
+class _Datapath(wiring.Component):
+    """Command FIFO, pipeline, tile origins and framebuffer writer: what the control
+    register's reset bit resets."""
+
+    def __init__(self, tile: TileConfig, fifo_depth: int):
+        self._tile = tile
+        self.fifo = fifo.SyncFIFOBuffered(width=command_layout(tile).size, depth=fifo_depth)
+        self.pipeline = EdgePipeline(tile)
+        self.writer = FramebufferWriter(tile)
+        stats = data.StructLayout({name: unsigned(32) for name in STATS})
+        super().__init__(
+            {
+                "push": In(stream.Signature(command_layout(tile).size)),
+                "level": Out(range(fifo_depth + 1)),
+                "busy": Out(1),
+                "tiles": Out(32),
+                "errors": Out(ERRORS_BITS),
+                "edge_errors": Out(ERRORS_BITS),
+                "stats": Out(stats),
+                "fb": Out(self.writer.signature.members["bus"].signature),
+                "fb_regs": In(
+                    wiring.Signature(
+                        {n: Out(self.writer.signature.members[n].shape) for n in _FB_REGS}
+                    )
+                ),
+                "done": Out(1),
+                "bus_error": Out(1),
+            }
+        )
+
+    def elaborate(self, platform):
+        m = Module()
+        q, pipe, writer = self.fifo, self.pipeline, self.writer
+        m.submodules.fifo, m.submodules.pipeline, m.submodules.writer = q, pipe, writer
+        tile = self._tile
+        origins = fifo.SyncFIFO(width=2 * FB_BITS, depth=ORIGIN_DEPTH)
+        m.submodules.origins = origins
+        m.d.comb += [
+            q.w_data.eq(self.push.payload),
+            q.w_en.eq(self.push.valid),
+            self.push.ready.eq(q.w_rdy),
+            self.level.eq(q.level),
+        ]
+        cmd = pipe.commands.payload
+        m.d.comb += cmd.eq(q.r_data)
+        is_flush = cmd.op == CODE["flush"]
+        # A flush waits for room for its tile's origin.
+        m.d.comb += pipe.commands.valid.eq(q.r_rdy & (~is_flush | origins.w_rdy))
+        taken = pipe.commands.valid & pipe.commands.ready
+        m.d.comb += q.r_en.eq(taken)
+        # The tile origin the pipeline keeps (its rule: an origin past 2**W is dropped).
+        top = 1 << tile.config.coord_bits
+        current = Signal(self.writer.origins.payload.shape())
+        good_tile = (cmd.op == CODE["tile"]) & (cmd.x0 <= top) & (cmd.y0 <= top)
+        with m.If(taken & good_tile):
+            m.d.sync += [current.x.eq(cmd.x0), current.y.eq(cmd.y0)]
+        m.d.comb += [origins.w_data.eq(current), origins.w_en.eq(taken & is_flush)]
+        wiring.connect(m, pipe.pixels, writer.pixels)
+        m.d.comb += [
+            writer.origins.payload.eq(origins.r_data),
+            writer.origins.valid.eq(origins.r_rdy),
+            origins.r_en.eq(writer.origins.ready),
+        ]
+        for name in _FB_REGS:
+            m.d.comb += getattr(writer, name).eq(getattr(self.fb_regs, name))
+        wiring.connect(m, wiring.flipped(self.fb), writer.bus)
+        pending = Signal(range(ORIGIN_DEPTH + 2))  # flushes taken, tiles not yet written
+        m.d.sync += pending.eq(pending + (taken & is_flush) - writer.done)
+        with m.If(writer.done):
+            m.d.sync += self.tiles.eq(self.tiles + 1)
+        m.d.comb += [
+            self.busy.eq(q.r_rdy | (pending != 0)),
+            self.errors.eq(pipe.errors),
+            self.edge_errors.eq(pipe.edge_errors),
+            self.stats.eq(pipe.stats),
+            self.done.eq(writer.done),
+            self.bus_error.eq(writer.bus_error),
+        ]
+        return m
+
+
+_FB_REGS = ("fb_base", "fb_stride", "fb_size", "fb_origin")
+
+
+class EdgePeripheral(wiring.Component):
+    """The pipeline behind a register window (``bus``, a Wishbone B4 pipelined target,
+    `REGISTERS`), writing its tiles into a framebuffer through ``fb`` (an initiator);
+    ``irq`` is high while an enabled interrupt is pending."""
+
+    top_kind = "peripheral"  # `edgeaa verilog`'s header (`edgeaa.hdl.integration`)
+
+    def __init__(self, tile: TileConfig, fifo_depth: int = 16):
+        if not isinstance(tile, TileConfig):
+            raise TypeError(f"tile must be a TileConfig, not {tile!r}")
+        self._tile = tile
+        self.datapath = _Datapath(tile, fifo_depth)
+        super().__init__(
+            {
+                "bus": In(bus_signature(SLAVE_ADDR_BITS)),
+                "fb": Out(bus_signature(MASTER_ADDR_BITS)),
+                "irq": Out(1),
+            }
+        )
+
+    @property
+    def tile(self) -> TileConfig:
+        return self._tile
+
+    def elaborate(self, platform):
+        m = Module()
+        tile, bus = self._tile, self.bus
+        soft_reset = Signal()
+        dp = self.datapath
+        m.submodules.datapath = ResetInserter(soft_reset)(dp)
+        wiring.connect(m, wiring.flipped(self.fb), dp.fb)
+        words = command_words(tile)
+        staged = [Signal(WORD_BITS, name=f"cmd{k}") for k in range(words - 1)]
+        fb = {
+            name: Signal(dp.fb_regs.signature.members[name].shape, name=name) for name in _FB_REGS
+        }
+        for name in _FB_REGS:
+            m.d.comb += getattr(dp.fb_regs, name).eq(fb[name])
+        irq_enable, irq_status, bus_error = Signal(2), Signal(2), Signal()
+        request = bus.cyc & bus.stb
+        writing = request & bus.we
+        push = writing & (bus.adr == REGISTERS["cmd"] + words - 1)
+        m.d.comb += [
+            dp.push.payload.eq(Cat(*staged, bus.dat_w)),
+            dp.push.valid.eq(push),
+            bus.stall.eq(push & ~dp.push.ready),
+            bus.err.eq(0),
+        ]
+        taken = request & ~bus.stall
+        # One ack a clock after each taken request; reads answer from the clock they are taken.
+        m.d.sync += bus.ack.eq(taken)
+        reads = self._read_values(tile, dp, fb, irq_enable, irq_status, bus_error)
+        with m.If(taken & ~bus.we), m.Switch(bus.adr):
+            for address, value in reads.items():
+                with m.Case(address):
+                    m.d.sync += bus.dat_r.eq(value)
+            with m.Default():
+                m.d.sync += bus.dat_r.eq(0)
+        events = Cat(dp.done, dp.bus_error)
+        cleared = Signal(2)
+        with m.If(taken & bus.we), m.Switch(bus.adr):
+            for k, stage in enumerate(staged):
+                with m.Case(REGISTERS["cmd"] + k):
+                    m.d.sync += stage.eq(bus.dat_w)
+            for name in _FB_REGS:
+                with m.Case(REGISTERS[name]):
+                    m.d.sync += fb[name].eq(bus.dat_w)
+            with m.Case(REGISTERS["irq_enable"]):
+                m.d.sync += irq_enable.eq(bus.dat_w)
+            with m.Case(REGISTERS["irq_status"]):
+                m.d.comb += cleared.eq(bus.dat_w)
+            with m.Case(REGISTERS["ctrl"]):
+                m.d.comb += soft_reset.eq(bus.dat_w[0])
+        m.d.sync += irq_status.eq((irq_status & ~cleared) | events)
+        with m.If(soft_reset):
+            m.d.sync += bus_error.eq(0)
+        with m.Elif(dp.bus_error):
+            m.d.sync += bus_error.eq(1)
+        m.d.comb += self.irq.eq((irq_status & irq_enable) != 0)
+        return m
+
+    def _read_values(self, tile, dp, fb, irq_enable, irq_status, bus_error) -> dict:
+        full = dp.level == dp.fifo.depth
+        values = {
+            REGISTERS["info"]: info_word(tile),
+            REGISTERS["status"]: Cat(dp.busy, bus_error, full, Const(0, 13), dp.level),
+            REGISTERS["irq_enable"]: irq_enable,
+            REGISTERS["irq_status"]: irq_status,
+            REGISTERS["errors"]: Cat(dp.errors, dp.edge_errors),
+            REGISTERS["tiles"]: dp.tiles,
+        }
+        values |= {REGISTERS[name]: fb[name] for name in _FB_REGS}
+        for i, name in enumerate(STATS):
+            values[REGISTERS["stats"] + i] = dp.stats[name]
+        return values
+
+
+def peripheral_verilog(tile: TileConfig, *, name: str = "edgeaa_peripheral") -> str:
+    """The peripheral as Verilog: ports clk, rst, ``bus__*`` (the register window, a
+    Wishbone target), ``fb__*`` (the framebuffer initiator) and ``irq``."""
+    return flat_verilog(EdgePeripheral(tile), name)

@@ -1,0 +1,104 @@
+# amaranth: UnusedElaboratable=no
+"""The Wishbone B4 pipelined initiator rules of the framebuffer writer
+(`edgeaa.hdl.peripheral.FramebufferWriter`), proven by k-induction for any pixels, tile
+origins, framebuffer registers, reset, and any target that stalls at will and answers (ack
+or err, not both) only requests it has taken:
+
+* ``stb`` only within ``cyc``; ``cyc`` stays high while a taken request is unanswered;
+* a request not taken (``stb & stall``) is offered again in the next clock with the same
+  ``adr``, ``sel``, ``dat_w`` and ``we`` (unless the reset comes between);
+* at most `MAX_OUTSTANDING` requests unanswered; ``sel`` one byte lane, ``we`` high.
+
+Fault ``drop_stb`` (the harness sees ``stb`` low in the clock after a stall) shows the hold
+check can fail. `run_writer_proof` runs it (`tests/test_peripheral.py`, marked formal; about 1 s).
+"""
+
+from __future__ import annotations
+
+from amaranth.asserts import AnySeq
+from amaranth.hdl import Assert, Assume, Cat, ClockDomain, Elaboratable, Module, Signal, Value
+
+from ....hdl.peripheral import MAX_OUTSTANDING, FramebufferWriter
+from ....model.config import EdgeConfig
+from ....model.tile import TileConfig
+from .run import FormalResult, find_tools, harness_rtlil, run_harness, sby_script
+from .stream import held, hold_rule
+
+__all__ = ["WRITER_FAULTS", "WriterHarness", "run_writer_proof"]
+
+WRITER_FAULTS = ("drop_stb",)
+SMALL = TileConfig(EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4), 8, 4)
+
+
+class WriterHarness(Elaboratable):
+    def __init__(self, tile: TileConfig = SMALL, fault: str | None = None):
+        if fault is not None and fault not in WRITER_FAULTS:
+            raise ValueError(f"fault must be one of {', '.join(WRITER_FAULTS)} or None")
+        self.dut, self.fault = FramebufferWriter(tile), fault
+        self.domain = ClockDomain("sync")
+
+    @property
+    def clk(self) -> Signal:
+        return self.domain.clk
+
+    def elaborate(self, platform):
+        m = Module()
+        dut = self.dut
+        m.submodules.dut = dut.elaborate(platform)  # here: the harness reads `outstanding`
+        m.domains.sync = self.domain
+        m.d.comb += self.domain.rst.eq(AnySeq(1))
+        bus = dut.bus
+        free = [dut.pixels.valid, dut.pixels.payload, dut.origins.valid, dut.origins.payload]
+        free += [dut.fb_base, dut.fb_stride, dut.fb_size, dut.fb_origin]
+        free += [bus.stall, bus.ack, bus.err, bus.dat_r]
+        for port in map(Value.cast, free):
+            m.d.comb += port.eq(AnySeq(len(port)))
+        # The target: answers only requests it took, ack or err, not both.
+        unanswered = Signal(range(MAX_OUTSTANDING + 2))
+        taken = bus.cyc & bus.stb & ~bus.stall
+        answer = bus.ack | bus.err
+        m.d.comb += Assume(~(bus.ack & bus.err))
+        m.d.comb += Assume(~answer | (unanswered != 0))
+        m.d.sync += unanswered.eq(unanswered + taken - answer)
+        stb = bus.stb
+        was_held = held(m, _Request(bus), "request_held")
+        if self.fault == "drop_stb":
+            stb = bus.stb & ~was_held
+
+        def check(condition, message):
+            m.d.comb += Assert(condition, message)
+
+        check(~bus.stb | bus.cyc, "wishbone: stb only within cyc")
+        check((unanswered == 0) | bus.cyc, "wishbone: cyc held while a request is unanswered")
+        check(unanswered <= MAX_OUTSTANDING, "wishbone: at most MAX_OUTSTANDING in flight")
+        check(unanswered == dut.outstanding, "writer: its count of writes in flight")
+        check(~bus.stb | bus.we, "wishbone: the writer only writes")
+        one_hot = Cat(*(bus.sel == 1 << k for k in range(4))).any()
+        check(one_hot, "wishbone: one byte lane a pixel")
+        hold_rule(m, stb, Cat(bus.adr, bus.sel, bus.dat_w, bus.we), was_held, check, "request")
+        return m
+
+
+class _Request:
+    """The request as a stream for `held`: valid ``stb``, ready ``~stall``."""
+
+    def __init__(self, bus):
+        self.valid, self.ready = bus.stb, ~bus.stall
+
+
+def run_writer_proof(
+    *, fault: str | None = None, depth: int = 4, timeout: float | None = None
+) -> FormalResult:
+    """k-induction of `WriterHarness` (``depth`` clocks) with SymbiYosys."""
+    harness = WriterHarness(fault=fault)
+    name = "writer_wishbone" + (f"+{fault}" if fault else "")
+    script = sby_script("prove", depth)
+    return run_harness(
+        name,
+        harness_rtlil(harness),
+        script,
+        find_tools(),
+        mode="prove",
+        depth=depth,
+        timeout=timeout,
+    )
