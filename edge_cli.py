@@ -15,14 +15,15 @@ from .command import (
     Command,
     MissingExtra,
     add_config_options,
+    add_pipeline_option,
     atomic_output,
     check_distinct,
     check_output,
     config_from_args,
     integer_type,
+    pipeline_from_args,
     require_synth,
     shown,
-    tile_from_args,
     tile_size,
     usage_error,
 )
@@ -282,12 +283,16 @@ def _check_top(prog: str, args: argparse.Namespace) -> None:
     """Refuse the options that do nothing for --top, then fill in the core's default."""
     if args.top == "core" and args.tile is not None:
         raise usage_error(prog, "--tile sizes the polygon pipeline: add --top pipeline")
+    if args.top == "core" and args.pipeline is not None:
+        raise usage_error(prog, "--pipeline configures the polygon pipeline: add --top pipeline")
     if args.top == "pipeline" and args.core is not None:
         raise usage_error(
             prog, "--core chooses the core's output: --top pipeline has its own deltas core"
         )
     if args.top == "pipeline" and getattr(args, "setup_units", None) is not None:
-        raise usage_error(prog, "--setup-units sizes the core: --top pipeline has its own")
+        raise usage_error(
+            prog, "--setup-units sizes the core: --top pipeline takes --pipeline compact or fast"
+        )
     args.core = args.core or "writes"
     args.core_top = _core_top(args.core) if args.top == "core" else None
 
@@ -316,6 +321,7 @@ class VerilogCommand(Command):
             "--top", choices=("core", "pipeline"), default="core", help="what to write"
         )
         _add_tile_option(parser)
+        add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         add_config_options(parser)
 
@@ -326,7 +332,8 @@ class VerilogCommand(Command):
             return core_verilog(args.core_top(config), name=args.name)
         from .hdl.pipeline import pipeline_verilog
 
-        return pipeline_verilog(tile_from_args(args.tile, config), name=args.name)
+        pipeline = pipeline_from_args(args.pipeline, args.tile, config)
+        return pipeline_verilog(pipeline, name=args.name)
 
     def run(self, args: argparse.Namespace) -> int:
         from .hdl.integration import name_error
@@ -459,6 +466,7 @@ class SynthCommand(Command):
             "pipeline (deltas core, accumulator and resolve)",
         )
         _add_tile_option(parser)
+        add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         parser.add_argument(
             "--setup-units",
@@ -475,9 +483,11 @@ class SynthCommand(Command):
 
         baseline = {"bresenham": lambda: BresenhamLine(config=config)}
         if args.top == "pipeline":
-            tile = tile_from_args(args.tile, config)
-            heading = f"pipeline, tile {tile.width}x{tile.height}, {config}"
-            return heading, {"pipeline": lambda: EdgePipeline(tile), **baseline}
+            pipeline = pipeline_from_args(args.pipeline, args.tile, config)
+            tile, name = pipeline.tile, args.pipeline or "compact"
+            heading = f"pipeline {name} ({pipeline.setup_units} setup units), tile "
+            heading += f"{tile.width}x{tile.height}, {config}"
+            return heading, {"pipeline": lambda: EdgePipeline(pipeline), **baseline}
         heading = f"{args.core} core, {args.setup_units} setup units, {config}"
 
         def core():

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from ...hdl.pipeline import STATS, EdgePipeline, pipeline_verilog
-from ...model.pipeline import CODE, Command
+from ...model.pipeline import CODE, Command, PipelineConfig, pipeline_config
 from ...model.tile import TileConfig
 from . import harness
 
@@ -92,26 +92,33 @@ def stuck_limit(tile: TileConfig, idle: float = 0.0, stall: float = 0.0) -> int:
     return int(4 * longest / ((1 - idle) * (1 - stall)))
 
 
-@functools.cache
-def pipeline_top(tile: TileConfig) -> harness.HarnessTop:
+def pipeline_top(pipeline: PipelineConfig | TileConfig) -> harness.HarnessTop:
     """The pipeline as the harness drives it: `COMMAND_FORMAT` in, `PIXEL_FORMAT` out."""
-    return harness.harness_top(EdgePipeline(tile), TOP, COMMAND_FORMAT, PIXEL_FORMAT)
+    return _top(pipeline_config(pipeline))
 
 
-def build(tile: TileConfig, *, optimize: str = "-O2") -> Path:
-    """Compile the pipeline and the harness (cached by their text); returns the executable."""
-    verilog = functools.partial(pipeline_verilog, tile, name=TOP)
-    return harness.build(("pipeline", tile, optimize), pipeline_top(tile), verilog, optimize)
+@functools.cache
+def _top(pipeline: PipelineConfig) -> harness.HarnessTop:
+    return harness.harness_top(EdgePipeline(pipeline), TOP, COMMAND_FORMAT, PIXEL_FORMAT)
 
 
-def use_executable(tile: TileConfig, exe: Path, *, optimize: str = "-O2") -> None:
-    """Run `tile`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
+def build(pipeline: PipelineConfig | TileConfig, *, optimize: str = "-O2") -> Path:
+    """Compile the pipeline (a `PipelineConfig`, or a `TileConfig`: the compact one) and the
+    harness (cached by their text); returns the executable."""
+    pipeline = pipeline_config(pipeline)
+    verilog = functools.partial(pipeline_verilog, pipeline, name=TOP)
+    key = ("pipeline", pipeline, optimize)
+    return harness.build(key, pipeline_top(pipeline), verilog, optimize)
+
+
+def use_executable(pipeline: PipelineConfig | TileConfig, exe: Path, *, optimize="-O2") -> None:
+    """Run `pipeline`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
     workers are handed the driver's), instead of generating and hashing the Verilog again."""
-    harness.use_executable(("pipeline", tile, optimize), exe)
+    harness.use_executable(("pipeline", pipeline_config(pipeline), optimize), exe)
 
 
 def run(
-    tile: TileConfig,
+    pipeline: PipelineConfig | TileConfig,
     commands: list[Command],
     *,
     seed: int = 0,
@@ -119,11 +126,14 @@ def run(
     stall: float = 0.0,
     max_quiet: int | None = None,
 ) -> PipelineRun:
-    """Simulate the pipeline on `commands`; `idle`/`stall` are probabilities per clock."""
+    """Simulate the pipeline (a `PipelineConfig`, or a `TileConfig`: the compact one) on
+    `commands`; `idle`/`stall` are probabilities per clock."""
     harness.check_probabilities(idle, stall)
+    pipeline = pipeline_config(pipeline)
+    tile = pipeline.tile
     done = harness.run_harness(
-        build(tile),
-        pipeline_top(tile),
+        build(pipeline),
+        pipeline_top(pipeline),
         np.array(commands, dtype=np.int64).reshape(-1, len(Command._fields)),
         seed=seed,
         idle=idle,
