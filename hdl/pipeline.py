@@ -192,9 +192,7 @@ class EdgePipeline(wiring.Component):
                 m.d.sync += counter.eq(counter + 1)
 
 
-def pipeline_verilog(
-    tile: PipelineConfig | TileConfig, *, name: str = "edgeaa_pipeline"
-) -> str:
+def pipeline_verilog(tile: PipelineConfig | TileConfig, *, name: str = "edgeaa_pipeline") -> str:
     """The pipeline as Verilog, every payload and stats field its own port
     (``commands__payload__op``, ``pixels__payload__value``, ``stats__core_busy``, ...)."""
     return flat_verilog(EdgePipeline(tile), name)

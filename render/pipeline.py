@@ -24,7 +24,7 @@ import numpy as np
 
 from ..model import Clip, Edge
 from ..model.beat import DELTAS
-from ..model.pipeline import Command
+from ..model.pipeline import Command, PipelineConfig, pipeline_config
 from ..model.tile import EMPTY_END, Beats, Flush, PolygonEnd, TileConfig, TileModel, TileStart
 from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
 from .engines import EngineUnavailable, run_deltas
@@ -224,7 +224,7 @@ def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
 def render_pipeline(
     plan: Plan,
     engine: str = "verilator",
-    tile: TileConfig | None = None,
+    pipeline: PipelineConfig | TileConfig | None = None,
     *,
     seed: int | None = None,
     idle: float = 0.0,
@@ -234,13 +234,15 @@ def render_pipeline(
     """Render `plan` through the hardware pipeline in a simulator: the image is the pixels
     the hardware sent. The model's render is made beside it (its figures are the model's
     stepper and accumulation counts) and `Render.mismatches` counts the pixels where the
-    two differ (0, or it is a bug). `seed`: random idle clocks and back-pressure."""
+    two differ (0, or it is a bug). `pipeline`: a `PipelineConfig`, or a `TileConfig` (the
+    compact pipeline; None: its default tile). `seed`: random idle clocks and back-pressure."""
     if engine not in PIPELINE_ENGINES:
         raise EngineUnavailable(f"the pipeline runs in {' or '.join(PIPELINE_ENGINES)}")
-    tile = tile or TileConfig(plan.config)
+    pipeline = pipeline_config(pipeline or TileConfig(plan.config))
+    tile = pipeline.tile
     if tile.config != plan.config:
         raise ValueError("the tile's stepper configuration is not the plan's")
-    check_clocks(plan, tile, engine)
+    check_clocks(plan, pipeline, engine)
     commands = scene_commands(plan, tile)
     model = render_scene(plan, skip=True)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
@@ -249,13 +251,13 @@ def render_pipeline(
 
         if report is not None:
             report(0, len(commands))
-        run = pipeline_harness.run(tile, commands, seed=seed or 0, idle=idle, stall=stall)
+        run = pipeline_harness.run(pipeline, commands, seed=seed or 0, idle=idle, stall=stall)
         if report is not None:
             report(len(commands), len(commands))
     else:
         from ..sim.simulators.amaranth_sim import run_pipeline
 
-        run = run_pipeline(tile, commands, seed=seed, idle=idle, stall=stall, progress=report)
+        run = run_pipeline(pipeline, commands, seed=seed, idle=idle, stall=stall, progress=report)
     if run.errors or run.edge_errors:
         raise RuntimeError(
             f"the pipeline dropped {run.errors} commands and {run.edge_errors} edges as bad"
