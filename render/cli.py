@@ -412,7 +412,7 @@ def _engine_line(result, units: int) -> str:
         return line
     counters = ", ".join(f"{name} {value:,}" for name, value in hw.stats.items())
     return (
-        f"{line}\npipeline ({result.engine}, {units} setup units): "
+        f"{line}\npipeline ({result.engine}): {units} setup unit{'s' * (units > 1)}, "
         f"{hw.clocks:,} clocks simulated in "
         f"{hw.seconds:.2f} s ({hw.clocks_per_second / 1e6:.2f} M clocks/s); {counters}"
     )
