@@ -321,20 +321,10 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
         run_b = np.maximum(run[band], 1)  # 1 for a y-major edge (not used)
         in_band = np.where(x_major[band], np.ceil((rows + 1) * run_b) + 1, 0)
         starts_above = ~b_major & (lo_y[band] < ty)  # y-major, its start cut by the tile
-        polygons, mine = np.unique(owner[band], return_inverse=True)
-        # left[i, t]: polygon i's edges in the band wholly left of tile t
-        left_of = np.minimum(b_hi_x // tile.width + 1, len(tiles_x))
-        left = np.zeros((len(polygons), len(tiles_x) + 1), dtype=np.int64)
-        np.add.at(left, (mine, left_of), 1)
-        left = np.cumsum(left, axis=1)[:, : len(tiles_x)]
-        total = np.bincount(mine, minlength=len(polygons))[:, None]
-        merged = np.minimum(left, total - left)
-        # each polygon's rows in the band (a merged edge's rows at most)
-        top = np.full(len(polygons), ty + tile.height, dtype=np.int64)
-        np.minimum.at(top, mine, np.maximum(lo_y[band], ty))
-        bottom = np.full(len(polygons), ty - 1, dtype=np.int64)
-        np.maximum.at(bottom, mine, np.minimum(hi_y[band], ty + tile.height - 1))
-        extent = bottom - top + 1
+        mine, total, merged, extent = _band_polygons(
+            owner[band], b_hi_x, lo_y[band], hi_y[band], tile, ty, len(tiles_x)
+        )
+        n = len(total)  # polygons in the band
         for t, tx in enumerate(tiles_x):
             right = tx + tile.width - 1
             crossing = (b_lo_x <= right) & (b_hi_x >= tx)
@@ -349,15 +339,15 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             # cell, on to the tile's last column if it goes on outside the tile (a sum);
             # a row not seen since the flush is read whole (the tile's rows at most)
             k = mine[crossing]
-            scan_rows = np.zeros(len(polygons), dtype=np.int64)
+            scan_rows = np.zeros(n, dtype=np.int64)
             # (the write box's margin less one: the deltas of a row lie well within it)
             np.maximum.at(scan_rows, k, np.maximum(reach[crossing].astype(np.int64) - 2, 1))
-            first = np.full(len(polygons), right + 1, dtype=np.int64)
+            first = np.full(n, right + 1, dtype=np.int64)
             np.minimum.at(first, k, np.maximum(b_lo_x[crossing] + 1, tx))
-            last = np.full(len(polygons), tx - 1, dtype=np.int64)
+            last = np.full(n, tx - 1, dtype=np.int64)
             np.maximum.at(last, k, np.minimum(b_hi_x[crossing] - 1, right))
-            inside = np.bincount(k, minlength=len(polygons))
-            last[inside < total[:, 0]] = right  # edges outside the tile's columns
+            inside = np.bincount(k, minlength=n)
+            last[inside < total] = right  # edges outside the tile's columns
             projected = n_merged > 0
             scan_rows[projected] = extent[projected]
             first[projected], last[projected] = tx, right
@@ -369,6 +359,25 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             clocks += max(work, tile.pixels + 8)  # the flush runs beside the next tile's work
             commands += sent_edges + 2 * int(present) + 2
     return int(clocks), commands
+
+
+def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: int):
+    """Per edge of a band of tiles its polygon's index among the band's (`mine`), and per
+    polygon: its edges in the band (`total`), for each tile at most how many merged edges
+    it gets there (`merged`, polygons x tiles: as many as its edges wholly left of the tile
+    or as the others, whichever is fewer) and its rows in the band (`extent`)."""
+    polygons, mine = np.unique(owner, return_inverse=True)
+    left_of = np.minimum(hi_x // tile.width + 1, tiles)  # the first tile it is wholly left of
+    left = np.zeros((len(polygons), tiles + 1), dtype=np.int64)
+    np.add.at(left, (mine, left_of), 1)
+    left = np.cumsum(left, axis=1)[:, :tiles]
+    total = np.bincount(mine, minlength=len(polygons))
+    merged = np.minimum(left, total[:, None] - left)
+    top = np.full(len(polygons), ty + tile.height, dtype=np.int64)
+    np.minimum.at(top, mine, np.maximum(lo_y, ty))
+    bottom = np.full(len(polygons), ty - 1, dtype=np.int64)
+    np.maximum.at(bottom, mine, np.minimum(hi_y, ty + tile.height - 1))
+    return mine, total, merged, bottom - top + 1
 
 
 def check_clocks(plan: Plan, tile: PipelineConfig | TileConfig, engine: str) -> None:
