@@ -442,3 +442,25 @@ def tile_from_args(size: tuple[int, int] | None, config: EdgeConfig):
     from .model.tile import TileConfig
 
     return TileConfig(config, *(size or DEFAULT_TILE))
+
+
+def add_pipeline_option(parser: argparse.ArgumentParser, applies: str) -> None:
+    """`--pipeline NAME`: a named configuration of the polygon pipeline
+    (`edgeaa.model.pipeline.PIPELINES`); `applies` says when it applies."""
+    from .model.pipeline import PIPELINES
+
+    units = ", ".join(f"{name} {n} setup unit{'s' * (n > 1)}" for name, n in PIPELINES.items())
+    parser.add_argument(
+        "--pipeline",
+        choices=tuple(PIPELINES),
+        default=None,
+        help=f"{applies}: the pipeline's configuration ({units}; default compact; "
+        "docs/hardware.md, 'Display rate')",
+    )
+
+
+def pipeline_from_args(name: str | None, size: tuple[int, int] | None, config: EdgeConfig):
+    """The `PipelineConfig` for `--pipeline` (None: compact) and `--tile`."""
+    from .model.pipeline import PipelineConfig
+
+    return PipelineConfig.named(name or "compact", tile_from_args(size, config))

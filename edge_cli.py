@@ -15,14 +15,15 @@ from .command import (
     Command,
     MissingExtra,
     add_config_options,
+    add_pipeline_option,
     atomic_output,
     check_distinct,
     check_output,
     config_from_args,
     integer_type,
+    pipeline_from_args,
     require_synth,
     shown,
-    tile_from_args,
     tile_size,
     usage_error,
 )
@@ -282,12 +283,15 @@ def _check_top(prog: str, args: argparse.Namespace) -> None:
     """Refuse the options that do nothing for --top, then fill in the core's default."""
     if args.top == "core" and args.tile is not None:
         raise usage_error(prog, "--tile sizes the polygon pipeline: add --top pipeline")
+    if args.top != "pipeline" and args.pipeline is not None:
+        raise usage_error(prog, "--pipeline configures the polygon pipeline: add --top pipeline")
     if args.top != "core" and args.core is not None:
         raise usage_error(
             prog, f"--core chooses the core's output: --top {args.top} has its own deltas core"
         )
     if args.top != "core" and getattr(args, "setup_units", None) is not None:
-        raise usage_error(prog, f"--setup-units sizes the core: --top {args.top} has its own")
+        own = "--pipeline compact or fast" if args.top == "pipeline" else "its own"
+        raise usage_error(prog, f"--setup-units sizes the core: --top {args.top} takes {own}")
     args.core = args.core or "writes"
     args.core_top = _core_top(args.core) if args.top == "core" else None
 
@@ -334,6 +338,7 @@ class VerilogCommand(Command):
             help="what to write",
         )
         _add_tile_option(parser)
+        add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         add_config_options(parser)
 
@@ -342,14 +347,14 @@ class VerilogCommand(Command):
 
         if args.top == "core":
             return core_verilog(args.core_top(config), name=args.name)
-        tile = tile_from_args(args.tile, config)
-        if args.top == "peripheral":
+        pipeline = pipeline_from_args(args.pipeline, args.tile, config)
+        if args.top == "peripheral":  # around the compact pipeline (`--pipeline` refused)
             from .hdl.peripheral import peripheral_verilog
 
-            return peripheral_verilog(tile, name=args.name)
+            return peripheral_verilog(pipeline.tile, name=args.name)
         from .hdl.pipeline import pipeline_verilog
 
-        return pipeline_verilog(tile, name=args.name)
+        return pipeline_verilog(pipeline, name=args.name)
 
     def run(self, args: argparse.Namespace) -> int:
         from .hdl.integration import name_error
@@ -484,6 +489,7 @@ class SynthCommand(Command):
             "behind a Wishbone register window, with its framebuffer writer)",
         )
         _add_tile_option(parser)
+        add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         parser.add_argument(
             "--setup-units",
@@ -500,13 +506,15 @@ class SynthCommand(Command):
 
         baseline = {"bresenham": lambda: BresenhamLine(config=config)}
         if args.top == "pipeline":
-            tile = tile_from_args(args.tile, config)
-            heading = f"pipeline, tile {tile.width}x{tile.height}, {config}"
-            return heading, {"pipeline": lambda: EdgePipeline(tile), **baseline}
+            pipeline = pipeline_from_args(args.pipeline, args.tile, config)
+            tile, name = pipeline.tile, args.pipeline or "compact"
+            heading = f"pipeline {name} ({pipeline.setup_units} setup units), tile "
+            heading += f"{tile.width}x{tile.height}, {config}"
+            return heading, {"pipeline": lambda: EdgePipeline(pipeline), **baseline}
         if args.top == "peripheral":
             from .hdl.peripheral import EdgePeripheral
 
-            tile = tile_from_args(args.tile, config)
+            tile = pipeline_from_args(None, args.tile, config).tile
             heading = f"peripheral, tile {tile.width}x{tile.height}, {config}"
             return heading, {"peripheral": lambda: EdgePeripheral(tile), **baseline}
         heading = f"{args.core} core, {args.setup_units} setup units, {config}"

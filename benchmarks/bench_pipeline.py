@@ -1,7 +1,9 @@
 """The polygon pipeline in hardware: display rate per scene, where the clocks go, and
 simulation speed (issue 26).
 
-Scenes (default configuration, tile 64 x 32 unless --tile): the built-ins; a 640 x 480 HUD
+Scenes (default configuration, tile 64 x 32 unless --tile), each through every named pipeline
+configuration (`edgeaa.model.pipeline.PIPELINES`: compact, one setup unit; fast, four; or
+--pipelines): the built-ins; a 640 x 480 HUD
 page (`hud_scene`: 20 lines of 12 px DejaVu Sans Mono, a frame, a ring and a pitch ladder);
 one line of serif text (`edgeaa.render.corpus.font_scene`) in STIX, DejaVu Serif and cmr10
 (fonts matplotlib ships) at 9 to 32 px; and 1920 x 1080 with 40 large polygons
@@ -15,16 +17,19 @@ clocks with the model's plus the harness's drain (equal, or the model is wrong).
 The rate table: clocks (the cycle model's), pixels per clock, the floor (the pixels flushed
 or the cells the resolve scans, `TileTiming.cells_scanned`, whichever is more: each takes a
 clock, and with the resolve's second pixel memory a flush runs beside the next tile's scan)
-and the clocks' ratio to it, frames per second at the iCE40 HX8K's 33.3 MHz (docs/hardware.md,
-"Fits an iCE40 HX8K"), and AGG's time on one CPU core for the same polygons in the same run
-(aggdraw: the scene drawn into an 8-bit image, paths built beforehand, the fastest of
---repeats draws) and the FPGA's time over it. The stage table: each stage's busy and stall
+and the clocks' ratio to it, frames per second at the configuration's measured Fmax on its
+device (`FMAX`: compact on the iCE40 HX8K, fast on the ECP5 25F; docs/hardware.md), and AGG's
+and Skia's time on one CPU core for the same polygons in the same run (aggdraw, and
+skia-python's raster surface with analytic antialiasing: the scene drawn into an 8-bit image,
+paths and paints built beforehand, the fastest of --repeats draws) and the FPGA's time over
+AGG's. The stage table: each stage's busy and stall
 counters as shares of the clocks, the stepper alone's clocks on the edges the renderer sends
 once (`edgeaa.model.timing`), and simulated clocks per second beside the stepper-only
 harness's on the same edges (the ratio is the steadier figure on a shared machine).
 --write puts both tables into docs/hardware.md between its markers.
 
-    python benchmarks/bench_pipeline.py [--tile 64x32] [--repeats 3] [--json] [--write]
+    python benchmarks/bench_pipeline.py [--tile 64x32] [--pipelines compact,fast]
+        [--repeats 3] [--json] [--write]
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ from doc_tables import write_section  # this folder: the script's own
 from edgeaa.hdl.core import PolygonCore
 from edgeaa.hdl.pipeline import STATS
 from edgeaa.model import EdgeConfig
+from edgeaa.model.pipeline import PIPELINES, PipelineConfig
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import TileConfig
 from edgeaa.render import builtin, plan_scene, render_scene
@@ -56,7 +62,9 @@ from edgeaa.sim.simulators import pipeline_harness, verilator_harness
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "hardware.md"
-ICE40_MHZ = 33.3  # the pipeline's Fmax on the iCE40 HX8K (docs/hardware.md)
+# Each configuration's device and measured Fmax (MHz, nextpnr seed 1; docs/hardware.md,
+# "Display rate"): compact on the iCE40 HX8K, fast on the ECP5 25F.
+FMAX = {"compact": ("iCE40 HX8K", 32.6), "fast": ("ECP5 25F", 43.6)}
 SERIF_FONTS = ("STIXGeneral", "DejaVuSerif", "cmr10")
 FONT_SIZES = (9, 12, 16, 24, 32)
 
@@ -150,41 +158,93 @@ def agg_seconds(plan, repeats: int) -> float:
     return best
 
 
-def measure(scene: Scene, tile: TileConfig, repeats: int) -> dict:
+def skia_seconds(plan, repeats: int) -> float:
+    """Skia (skia-python, raster surface, analytic antialiasing) drawing the plan's polygons
+    as `edgeaa.analysis.compare.skia_scene` does, into an 8-bit grey surface, on one core:
+    the fastest of `repeats` draws, the paths and paints built beforehand."""
+    import skia
+
+    from edgeaa.analysis.compare import polygon_points
+
+    scene, full = plan.scene, plan.config.full_scale
+    jobs = []
+    for i, poly in enumerate(plan.polygons):
+        path = skia.Path()
+        for pts in polygon_points(plan, i):
+            path.moveTo(*(pts[0] + 0.5))
+            for p in pts[1:]:
+                path.lineTo(*(p + 0.5))
+            path.close()
+        even = poly.rule == "evenodd"
+        path.setFillType(skia.PathFillType.kEvenOdd if even else skia.PathFillType.kWinding)
+        v = round(poly.intensity * 255 / full)
+        jobs.append((path, skia.Paint(AntiAlias=True, Color=skia.ColorSetRGB(v, v, v))))
+    info = skia.ImageInfo.Make(
+        scene.width,
+        scene.height,
+        skia.ColorType.kGray_8_ColorType,
+        skia.AlphaType.kOpaque_AlphaType,
+    )
+    surface = skia.Surface.MakeRaster(info)
+    b = round(scene.background * 255 / full)
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        canvas = surface.getCanvas()
+        canvas.clear(skia.ColorSetRGB(b, b, b))
+        for path, paint in jobs:
+            canvas.drawPath(path, paint)
+        surface.flushAndSubmit()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def measure(scene: Scene, tile: TileConfig, pipelines: list[str], repeats: int) -> list[dict]:
+    """One row per configuration in `pipelines` (the CPU peers measured once for all)."""
     config = tile.config
     plan = plan_scene(scene, config)
     model = render_scene(plan)
     commands = scene_commands(plan, tile)
-    timing = pipeline_cycles(tile, commands)
-    run = min(
-        (pipeline_harness.run(tile, commands) for _ in range(repeats)), key=lambda r: r.seconds
-    )
-    image = image_from_frames(plan, tile, run.frames(tile))
     edges = [plan.edge(int(e), clip=True) for e in model.sent]
     core = min(
         (verilator_harness.run(config, edges, top=PolygonCore) for _ in range(repeats)),
         key=lambda r: r.seconds,
     )
-    flushed = len(timing.pixels)
-    return {
-        "scene": scene.name,
-        "size": f"{scene.width}x{scene.height}",
-        "pixels": scene.width * scene.height,
-        "commands": len(commands),
-        "clocks": timing.clocks,
-        "flushed": flushed,
-        "scanned": timing.tile.cells_scanned,
-        "floor": max(flushed, timing.tile.cells_scanned),
-        "verilator_clocks": run.clocks,
-        "drain": pipeline_harness.pixel_drain_clocks(tile),
-        "stepper_cycles": model.cycles,
-        "pixels_out": len(run.pixels),
-        "image_equal": bool(np.array_equal(image, model.image)),
-        "stats": dict(run.stats),
-        "agg_seconds": agg_seconds(plan, repeats),
-        "mclocks_per_s": run.clocks_per_second / 1e6,
-        "core_mclocks_per_s": core.clocks_per_second / 1e6,
-    }
+    peers = {"agg_seconds": agg_seconds(plan, repeats), "skia_seconds": skia_seconds(plan, repeats)}
+    rows = []
+    for name in pipelines:
+        pipeline = PipelineConfig.named(name, tile)
+        timing = pipeline_cycles(pipeline, commands)
+        run = min(
+            (pipeline_harness.run(pipeline, commands) for _ in range(repeats)),
+            key=lambda r: r.seconds,
+        )
+        image = image_from_frames(plan, tile, run.frames(tile))
+        flushed = len(timing.pixels)
+        rows.append(
+            {
+                "scene": scene.name,
+                "pipeline": name,
+                "setup_units": pipeline.setup_units,
+                "size": f"{scene.width}x{scene.height}",
+                "pixels": scene.width * scene.height,
+                "commands": len(commands),
+                "clocks": timing.clocks,
+                "flushed": flushed,
+                "scanned": timing.tile.cells_scanned,
+                "floor": max(flushed, timing.tile.cells_scanned),
+                "verilator_clocks": run.clocks,
+                "drain": pipeline_harness.pixel_drain_clocks(tile),
+                "stepper_cycles": model.cycles,
+                "pixels_out": len(run.pixels),
+                "image_equal": bool(np.array_equal(image, model.image)),
+                "stats": dict(run.stats),
+                **peers,
+                "mclocks_per_s": run.clocks_per_second / 1e6,
+                "core_mclocks_per_s": core.clocks_per_second / 1e6,
+            }
+        )
+    return rows
 
 
 def exact(r: dict) -> bool:
@@ -192,30 +252,34 @@ def exact(r: dict) -> bool:
 
 
 def rate_table(rows: list[dict]) -> list[str]:
-    head = ["scene", "size", "clocks", "px/clock", "floor (flushed; scanned)", "clocks/floor"]
-    head += [f"fps at {ICE40_MHZ} MHz", "AGG (ms)", "FPGA/AGG", "Verilator: image, clocks"]
-    lines = ["| " + " | ".join(head) + " |", "|---|---|" + "---:|" * (len(head) - 3) + "---|"]
+    head = ["scene", "size", "pipeline", "clocks", "px/clock", "floor (flushed; scanned)"]
+    head += ["clocks/floor", "fps at Fmax", "AGG (ms)", "Skia (ms)", "FPGA/AGG"]
+    head += ["Verilator: image, clocks"]
+    lines = ["| " + " | ".join(head) + " |", "|---|---|---|" + "---:|" * (len(head) - 4) + "---|"]
     for r in rows:
-        seconds = r["clocks"] / (ICE40_MHZ * 1e6)
+        seconds = r["clocks"] / (FMAX[r["pipeline"]][1] * 1e6)
         check = ("same" if r["image_equal"] else "DIFFERENT") + ", "
         check += "exact" if exact(r) else f"{r['verilator_clocks']:,} (MODEL WRONG)"
-        cells = [r["scene"], r["size"], f"{r['clocks']:,}", f"{r['pixels'] / r['clocks']:.3f}"]
+        cells = [r["scene"], r["size"], r["pipeline"], f"{r['clocks']:,}"]
+        cells.append(f"{r['pixels'] / r['clocks']:.3f}")
         floor = f"{r['floor']:,} ({r['flushed']:,}; {r['scanned']:,})"
         cells += [floor, f"{r['clocks'] / r['floor']:.2f}", f"{1 / seconds:.1f}"]
-        cells += [f"{1e3 * r['agg_seconds']:.2f}", f"{seconds / r['agg_seconds']:.1f}", check]
+        cells += [f"{1e3 * r['agg_seconds']:.2f}", f"{1e3 * r['skia_seconds']:.2f}"]
+        cells += [f"{seconds / r['agg_seconds']:.1f}", check]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
 
 
 def stage_table(rows: list[dict]) -> list[str]:
-    head = ["scene", "commands", "stepper alone"] + [f"{name} %" for name in STATS]
+    head = ["scene", "pipeline", "commands", "stepper alone"] + [f"{name} %" for name in STATS]
     head += ["M clocks/s", "vs stepper harness"]
-    lines = ["| " + " | ".join(head) + " |", "|---|" + "---:|" * (len(head) - 1)]
+    lines = ["| " + " | ".join(head) + " |", "|---|---|" + "---:|" * (len(head) - 2)]
     for r in rows:
         clocks = r["verilator_clocks"]
         shares = [f"{100 * r['stats'][name] / clocks:.1f}" for name in STATS]
         ratio = r["mclocks_per_s"] / r["core_mclocks_per_s"]
-        cells = [r["scene"], f"{r['commands']:,}", f"{r['stepper_cycles']:,}", *shares]
+        cells = [r["scene"], r["pipeline"], f"{r['commands']:,}", f"{r['stepper_cycles']:,}"]
+        cells += shares
         cells += [f"{r['mclocks_per_s']:.2f}", f"{ratio:.2f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
@@ -224,6 +288,11 @@ def stage_table(rows: list[dict]) -> list[str]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tile", default="64x32", help="tile WIDTHxHEIGHT")
+    parser.add_argument(
+        "--pipelines",
+        default=",".join(PIPELINES),
+        help=f"named configurations, comma-separated (default {','.join(PIPELINES)})",
+    )
     parser.add_argument("--repeats", type=int, default=3, help="runs per scene (fastest kept)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--write", action="store_true", help="write the tables into the docs")
@@ -233,17 +302,22 @@ def main() -> int:
         parser.error(f"--tile: expected WIDTHxHEIGHT, not {args.tile!r}")
     if args.repeats < 1:
         parser.error(f"--repeats: at least 1, not {args.repeats}")
+    pipelines = args.pipelines.split(",")
+    if not pipelines or any(name not in PIPELINES for name in pipelines):
+        parser.error(f"--pipelines: names of {', '.join(PIPELINES)}, not {args.pipelines!r}")
     tile = TileConfig(EdgeConfig(), int(match[1]), int(match[2]))
-    pipeline_harness.build(tile)
+    for name in pipelines:
+        pipeline_harness.build(PipelineConfig.named(name, tile))
     verilator_harness.build(tile.config, top=PolygonCore)
     rows = []
     for scene in scenes(tile.config):
         print(f"{scene.name} ...", file=sys.stderr, flush=True)
-        rows.append(measure(scene, tile, args.repeats))
+        rows += measure(scene, tile, pipelines, args.repeats)
     machine = f"{platform.processor() or platform.machine()}, Python {platform.python_version()}"
     command = " ".join(["python benchmarks/bench_pipeline.py", *sys.argv[1:]])
     title = [f"`{command}` ({time.strftime('%Y-%m-%d')}, {machine}; tile {args.tile}, "]
-    title[0] += f"{tile.config}):"
+    fmax = "; ".join(f"{n} {FMAX[n][1]} MHz on the {FMAX[n][0]}" for n in pipelines)
+    title[0] += f"{tile.config}; Fmax {fmax}):"
     rate, stages = [*title, "", *rate_table(rows)], [*title, "", *stage_table(rows)]
     print(json.dumps(rows, indent=1) if args.json else "\n".join([*rate, "", *stages[2:]]))
     if args.write:

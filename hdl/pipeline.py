@@ -24,7 +24,7 @@ from amaranth.hdl import Cat, Module, Mux, ResetSignal, Signal, unsigned
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..model.pipeline import CODE, OP_BITS, command_fields
+from ..model.pipeline import CODE, OP_BITS, PipelineConfig, command_fields, pipeline_config
 from ..model.tile import OPS, TileConfig
 from .accumulator import TileAccumulator
 from .core import ERRORS_BITS, PolygonCore, flat_verilog
@@ -58,13 +58,14 @@ def command_const(tile: TileConfig, command):
 
 class EdgePipeline(wiring.Component):
     """Commands in (``commands``), pixels out (``pixels``); ``errors`` counts bad commands
-    (saturating), ``edge_errors`` the core's, ``stats`` the stage counters."""
+    (saturating), ``edge_errors`` the core's, ``stats`` the stage counters. `pipeline`: a
+    `PipelineConfig` (its tile, and the core's setup units), or a `TileConfig` alone (one
+    setup unit, the compact pipeline)."""
 
-    def __init__(self, tile: TileConfig):
-        if not isinstance(tile, TileConfig):
-            raise TypeError(f"tile must be a TileConfig, not {tile!r}")
-        self._tile = tile
-        self.core = PolygonCore(tile.config)
+    def __init__(self, pipeline: PipelineConfig | TileConfig):
+        self._pipeline = pipeline_config(pipeline)
+        self._tile = tile = self._pipeline.tile
+        self.core = PolygonCore(tile.config, setup_units=self._pipeline.setup_units)
         self.acc, self.res = TileAccumulator(tile), TileResolve(tile)
         stats = data.StructLayout({name: unsigned(STATS_BITS) for name in STATS})
         super().__init__(
@@ -80,6 +81,10 @@ class EdgePipeline(wiring.Component):
     @property
     def tile(self) -> TileConfig:
         return self._tile
+
+    @property
+    def pipeline(self) -> PipelineConfig:
+        return self._pipeline
 
     def elaborate(self, platform):
         m = Module()
@@ -205,7 +210,7 @@ class EdgePipeline(wiring.Component):
                 m.d.sync += counter.eq(counter + 1)
 
 
-def pipeline_verilog(tile: TileConfig, *, name: str = "edgeaa_pipeline") -> str:
+def pipeline_verilog(tile: PipelineConfig | TileConfig, *, name: str = "edgeaa_pipeline") -> str:
     """The pipeline as Verilog, every payload and stats field its own port
     (``commands__payload__op``, ``pixels__payload__value``, ``stats__core_busy``, ...)."""
     return flat_verilog(EdgePipeline(tile), name)

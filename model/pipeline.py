@@ -27,6 +27,7 @@ I_out) are the core's bad commands, counted in its own ``errors`` (``edge_errors
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 from .beat import delta_column_beats
@@ -34,15 +35,19 @@ from .config import EdgeConfig
 from .edge import Clip, Edge, EdgeError
 from .step import run_edge_deltas
 from .tile import Beats, Flush, PolygonEnd, TileConfig, TileStart, unpack_paint
+from .timing import MAX_SETUP_UNITS
 
 __all__ = [
     "COMMANDS",
     "COMMAND_VERSION",
+    "PIPELINES",
     "Command",
+    "PipelineConfig",
     "Decoded",
     "command_fields",
     "command_ops",
     "decode_commands",
+    "pipeline_config",
     "tile_clip",
 ]
 
@@ -50,6 +55,49 @@ COMMAND_VERSION = 1
 COMMANDS = ("tile", "begin", "edge", "end", "flush")  # codes 0 .. 4
 OP_BITS = 3
 CODE = {name: code for code, name in enumerate(COMMANDS)}
+
+
+@dataclass(frozen=True)
+class PipelineConfig:
+    """What a polygon pipeline is built with: its tile (`TileConfig`, with the stepper's
+    `EdgeConfig`) and the setup units feeding its deltas stepper (`edgeaa.hdl.dispatch.
+    SetupArray` when more than one). The commands, the frames and the images do not depend
+    on `setup_units`; only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
+
+    tile: TileConfig = field(default_factory=TileConfig)
+    setup_units: int = 1
+
+    def __post_init__(self):
+        if not isinstance(self.tile, TileConfig):
+            raise TypeError(f"tile must be a TileConfig, not {self.tile!r}")
+        units = self.setup_units
+        if isinstance(units, bool) or not isinstance(units, int):
+            raise TypeError(f"setup_units must be an integer, not {units!r}")
+        if not 1 <= units <= MAX_SETUP_UNITS:
+            raise ValueError(f"setup_units must be in [1, {MAX_SETUP_UNITS}], not {units}")
+
+    @classmethod
+    def named(cls, name: str, tile: TileConfig | None = None) -> PipelineConfig:
+        """The named configuration `name` (a key of `PIPELINES`) with `tile` (the default
+        tile if None)."""
+        if name not in PIPELINES:
+            raise ValueError(f"no pipeline named {name!r}: {', '.join(PIPELINES)}")
+        return cls(TileConfig() if tile is None else tile, PIPELINES[name])
+
+
+# The named configurations, built from the same components (docs/hardware.md, "Display
+# rate"): their setup units. compact: the smallest, fits an iCE40 HX8K; fast: for the ECP5,
+# four units (of 2, 3, 4 and 6 measured on the HUD and on text, the knee of clocks over area).
+PIPELINES = {"compact": 1, "fast": 4}
+
+
+def pipeline_config(pipeline) -> PipelineConfig:
+    """`pipeline` as a `PipelineConfig` (a `TileConfig` alone is the compact pipeline)."""
+    if isinstance(pipeline, PipelineConfig):
+        return pipeline
+    if isinstance(pipeline, TileConfig):
+        return PipelineConfig(pipeline)
+    raise TypeError(f"expected a PipelineConfig or TileConfig, not {pipeline!r}")
 
 
 class Command(NamedTuple):

@@ -9,7 +9,8 @@ It composes the stages' own cycle models, command by command (`decode_commands`)
   is offered; a tile or a flush when the accumulator is ready; an edge when the core's setup
   accepts it; an end (or the end a begin, tile or flush makes of a polygon with no end, one
   clock before it is taken in OUT) when the core is idle and the accumulator ready;
-* the core (`edgeaa.model.timing.schedule`), one run per polygon: the core is idle when a
+* the core (`edgeaa.model.timing.schedule`, with the pipeline's setup units), one run per
+  polygon: the core is idle when a
   polygon begins (its end waited for that), so each polygon starts it afresh, its edges
   offered as the commands come (an unknown code between two edges delays the next one a
   clock);
@@ -32,9 +33,9 @@ from dataclasses import dataclass, field
 
 from .beat import DELTAS
 from .edge import EdgeError, setup
-from .pipeline import Decoded, decode_commands
+from .pipeline import Decoded, PipelineConfig, decode_commands, pipeline_config
 from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming, beat_clocks
-from .timing import BAD_COMMAND_CYCLES, EMPTY_EDGE_CYCLES, pipeline_depth, schedule
+from .timing import pipeline_depth, schedule
 
 __all__ = ["PipelineTiming", "pipeline_cycles"]
 
@@ -65,8 +66,10 @@ class PipelineTiming:
 class _Top:
     """The walk of `pipeline_cycles`: the command stage's state and the stages' clocks."""
 
-    def __init__(self, tile: TileConfig, count: int):
-        self.tile, self.model, self.clock = tile, TileModel(tile), TileClock(tile)
+    def __init__(self, pipeline: PipelineConfig, count: int):
+        self.tile = tile = pipeline.tile
+        self.units = pipeline.setup_units
+        self.model, self.clock = TileModel(tile), TileClock(tile)
         self.taken = [0] * count
         self.offer = 0  # clock the next command is offered
         self.polygon: list | None = None  # the open polygon's (index, shape or OTHER)
@@ -125,7 +128,13 @@ class _Top:
         config = self.tile.config
         timings = iter(
             schedule(
-                config, shapes, fmt=DELTAS, idle=idle, sink_ready=self.clock.ready, holds=holds
+                config,
+                shapes,
+                fmt=DELTAS,
+                setup_units=self.units,
+                idle=idle,
+                sink_ready=self.clock.ready,
+                holds=holds,
             )
         )
         last, free, stalled, first_beat = self.first - 1, 0, 0, True
@@ -147,8 +156,8 @@ class _Top:
                         t.beats[0] - hold[0] + 1 - (t.load + 1 + pipeline_depth(config, DELTAS))
                     )
                     first_beat = False
-            else:
-                stop = t.accepted + (BAD_COMMAND_CYCLES if shape is None else EMPTY_EDGE_CYCLES)
+            else:  # dropped: the core is idle once its unit is free
+                stop = t.released
             self.busy += max(0, stop - max(t.accepted + 1, free))  # the union of busy spans
             free = max(free, stop)
         self.stall += stalled
@@ -170,10 +179,12 @@ class _Top:
         return PipelineTiming(self.taken, self.beats, tile, stats)
 
 
-def pipeline_cycles(tile: TileConfig, commands) -> PipelineTiming:
-    """The pipeline's clocks for `commands` (`edgeaa.model.pipeline.Command`) offered back to
-    back from clock 0, the pixel sink always ready (see the module docstring)."""
-    top = _Top(tile, len(commands))
-    for k, decoded in enumerate(decode_commands(tile, commands)):
+def pipeline_cycles(pipeline: PipelineConfig | TileConfig, commands) -> PipelineTiming:
+    """The pipeline's clocks (a `PipelineConfig`, or a `TileConfig`: the compact one) for
+    `commands` (`edgeaa.model.pipeline.Command`) offered back to back from clock 0, the pixel
+    sink always ready (see the module docstring)."""
+    pipeline = pipeline_config(pipeline)
+    top = _Top(pipeline, len(commands))
+    for k, decoded in enumerate(decode_commands(pipeline.tile, commands)):
         top.command(k, decoded)
     return top.result()

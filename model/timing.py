@@ -208,6 +208,9 @@ class EdgeTiming:
     bank: int | None  # clock of FINAL (the bank is valid from the next clock)
     load: int | None  # clock the stepper loaded the bank (deltas: started the edge)
     beats: tuple[int, ...]  # clock of each column's beat (valid and ready)
+    # the first clock its setup unit is free again (may accept; an array's unit: the clock
+    # after it retired the command, when the array may be idle)
+    released: int = 0
 
     @property
     def dropped(self) -> bool:
@@ -259,20 +262,30 @@ def schedule(
     a command the core drops as bad), for callers that hold the setups already
     (`edgeaa.model.edge.setup_batch`). `edges` only labels the timings.
 
-    `idle` (one unit only): clocks the source idles before offering each command: command k
-    is offered ``idle[k]`` clocks after the clock following command k - 1's accept, the first
-    in clock ``idle[0]`` (default: back to back from clock 0). `sink_ready` (one unit only):
-    the sink is not ready before this clock and ready from it (`beat_wait`). `holds` (one unit
-    only): per command, the clocks the sink takes each of its beats (`beat_wait`; default one).
+    `idle`: clocks the source idles before offering each command: command k is offered
+    ``idle[k]`` clocks after the clock following command k - 1's accept, the first in clock
+    ``idle[0]`` (default: back to back from clock 0). `sink_ready`: the sink is not ready
+    before this clock and ready from it (`beat_wait`). `holds`: per command, the clocks the
+    sink takes each of its beats (`beat_wait`; default one).
     """
     latency = setup_latency(config, fmt) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, fmt)
     live = fmt.live_bank  # the stepper takes the bank at the edge's end
     if setup_units == 1:
         return _schedule_one(config, shapes, edges, latency, depth, live, idle, sink_ready, holds)
-    if idle is not None or sink_ready or holds is not None:
-        raise ValueError("idle, sink_ready and holds are modelled for one setup unit only")
-    return _schedule_units(config, shapes, edges, latency, depth, live, setup_units)
+    timing = _Units(config, latency, depth, live, setup_units, sink_ready)
+    return [
+        timing.command(shape, None if edges is None else edges[k], _idle(idle, k), _hold(holds, k))
+        for k, shape in enumerate(shapes)
+    ]
+
+
+def _idle(idle, k: int) -> int:
+    return 0 if idle is None else int(idle[k])
+
+
+def _hold(holds, k: int):
+    return None if holds is None else holds[k]
 
 
 def load_clocks(config: EdgeConfig, columns, clipped_start, bad=None, fmt: BeatFormat = WRITES):
@@ -380,15 +393,13 @@ def _schedule_one(
         edge = None if edges is None else edges[k]
         if idle is not None:
             accept = max(accept, (out[-1].accepted + 1 if out else 0) + idle[k])
-        if shape is None:
-            out.append(EdgeTiming(edge, accept, None, None, ()))
-            accept += BAD_COMMAND_CYCLES
-            continue
-        columns, clipped_start = int(shape[0]), bool(shape[1])
+        columns = 0 if shape is None else int(shape[0])
         if not columns:
-            out.append(EdgeTiming(edge, accept, None, None, ()))
-            accept += EMPTY_EDGE_CYCLES
+            done = accept + (BAD_COMMAND_CYCLES if shape is None else EMPTY_EDGE_CYCLES)
+            out.append(EdgeTiming(edge, accept, None, None, (), done))
+            accept = done
             continue
+        clipped_start = bool(shape[1])
         bank = accept + latency - depth - 2 + (extra if clipped_start else 0)
         load = bank + 1 if prev_last is None else max(bank + 1, prev_last + live)
         first = enabled.index(load + 1)  # column c stepped at enabled index first + c
@@ -399,16 +410,16 @@ def _schedule_one(
             enabled.wait(j, beat_wait(enabled.clock(j), ready, hold))
             beats.append(enabled.clock(j))
             ready = 0
-        out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
         prev_last = enabled.clock(first + columns - 1)
-        accept = prev_last if live else load
+        released = prev_last if live else load
+        out.append(EdgeTiming(edge, accept, bank, load, tuple(beats), released))
+        accept = released
     return out
 
 
-def _schedule_units(
-    config: EdgeConfig, shapes, edges, latency: int, depth: int, live: bool, units: int
-):
-    """`schedule` of the core with `units` setup units (`edgeaa.hdl.dispatch.SetupArray`).
+class _Units:
+    """`schedule` of the core with `units` setup units (`edgeaa.hdl.dispatch.SetupArray`),
+    command by command (`command`).
 
     Command k goes to unit k mod N when that unit has retired its previous command; a good
     edge's unit ends FINAL ``R + 2 + Phi`` clocks after accepting it (never waiting: a unit
@@ -416,32 +427,45 @@ def _schedule_units(
     is free; a dropped command retires once its unit is back in IDLE and the collector points
     at it. The collector points at the next unit the clock after a retirement. A good edge
     retires when the stepper takes its bank: at the load (line writes), or with `live`
-    (deltas) in the clock its last column is stepped, the next edge starting after it."""
-    extra = start_clip_cycles(config)
-    out: list[EdgeTiming] = []
-    free = [0] * units  # first clock each unit may accept in
-    accept = -1
-    collector = 0  # first clock the collector points at the next command's unit
-    stepper_free = 0  # first clock the stepper may load in (idle, or its last column)
-    for k, shape in enumerate(shapes):
-        edge = None if edges is None else edges[k]
-        unit = k % units
-        accept = max(accept + 1, free[unit])
+    (deltas) in the clock its last column is stepped, the next edge starting after it. A
+    stalled sink freezes the stepper as with one unit (`_Enabled`); the units run on."""
+
+    def __init__(self, config, latency, depth, live, units, sink_ready):
+        self.extra = start_clip_cycles(config)
+        self.latency, self.depth, self.live = latency, depth, live
+        self.free = [0] * units  # first clock each unit may accept in
+        self.k, self.accept = 0, -1
+        self.collector = 0  # first clock the collector points at the next command's unit
+        self.stepper_free = 0  # first clock the stepper may load in (idle, or its last column)
+        self.enabled, self.ready = _Enabled(), sink_ready
+
+    def command(self, shape, edge, idle: int, hold) -> EdgeTiming:
+        unit = self.k % len(self.free)
+        self.k += 1
+        accept = self.accept = max(self.accept + 1 + idle, self.free[unit])
         columns = 0 if shape is None else int(shape[0])
         if not columns:
-            idle = accept + (BAD_COMMAND_CYCLES if shape is None else EMPTY_EDGE_CYCLES)
-            retire = max(idle, collector)
-            out.append(EdgeTiming(edge, accept, None, None, ()))
+            done = accept + (BAD_COMMAND_CYCLES if shape is None else EMPTY_EDGE_CYCLES)
+            retire = max(done, self.collector)
+            timing = EdgeTiming(edge, accept, None, None, (), retire + 1)
         else:
-            bank = accept + latency - depth - 2 + (extra if shape[1] else 0)
-            load = max(bank + 1, collector, stepper_free)
-            beats = range(load + 1 + depth, load + 1 + depth + columns)
-            out.append(EdgeTiming(edge, accept, bank, load, tuple(beats)))
-            retire = load + columns if live else load
-            stepper_free = load + columns + live
-        collector = retire + 1
-        free[unit] = retire + 1
-    return out
+            bank = accept + self.latency - self.depth - 2 + (self.extra if shape[1] else 0)
+            load = max(bank + 1, self.collector, self.stepper_free)
+            enabled = self.enabled
+            first = enabled.index(load + 1)  # column c stepped at enabled index first + c
+            beats = []
+            for c in range(columns):  # the beat of column c: valid depth enabled clocks later
+                j = first + c + self.depth
+                wait = beat_wait(enabled.clock(j), self.ready, 1 if hold is None else int(hold[c]))
+                enabled.wait(j, wait)
+                beats.append(enabled.clock(j))
+                self.ready = 0
+            last = enabled.clock(first + columns - 1)
+            retire = last if self.live else load
+            self.stepper_free = last + self.live
+            timing = EdgeTiming(edge, accept, bank, load, tuple(beats), retire + 1)
+        self.collector = self.free[unit] = retire + 1
+        return timing
 
 
 def beat_cycles(

@@ -19,14 +19,15 @@ from ..command import (
     PEER_MODULES,
     Command,
     add_config_options,
+    add_pipeline_option,
     atomic_output,
     check_output,
     config_from_args,
+    pipeline_from_args,
     read_integer,
     require_extra,
     require_verilator,
     shown,
-    tile_from_args,
     tile_size,
     usage_error,
 )
@@ -202,6 +203,7 @@ class RenderCommand(Command):
             help="with --engine verilator or amaranth: the pipeline's tile WIDTHxHEIGHT, "
             "powers of two (default 64x32; limits: docs/hardware.md)",
         )
+        add_pipeline_option(parser, "with --engine verilator or amaranth")
         parser.add_argument("-o", "--output", help="PNG file to write (the figure with --compare)")
         parser.add_argument(
             "--stats",
@@ -306,6 +308,10 @@ def _check_options(args: argparse.Namespace, config) -> None:
         raise usage_error(PROG, "--compare renders with the model: --engine does not apply")
     if args.tile is not None and args.engine == "model":
         raise usage_error(PROG, "--tile sizes the hardware pipeline: add --engine verilator")
+    if args.pipeline is not None and args.engine == "model":
+        raise usage_error(
+            PROG, "--pipeline configures the hardware pipeline: add --engine verilator"
+        )
     if args.engine == "verilator":
         require_verilator(PROG)
     if args.no_skip and args.engine != "model":
@@ -358,14 +364,14 @@ def _cause(error: Exception) -> str:
     return f"{lines[0].rstrip(':')}: {cause}" if cause and lines[0].endswith(":") else lines[0]
 
 
-def _build_engine(engine: str, tile, bar: ProgressBar) -> None:
+def _build_engine(engine: str, pipeline, bar: ProgressBar) -> None:
     """Compile the Verilator harness first (cached; the first build takes half a minute), with
     the bar running, so that the engine's time is the simulation's alone."""
     if engine == "verilator":
         from ..sim.simulators import pipeline_harness
 
         with bar.ticking("verilator build of the pipeline (first time only, then cached)"):
-            pipeline_harness.build(tile)
+            pipeline_harness.build(pipeline)
         bar.close()
 
 
@@ -384,19 +390,20 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
         baseline = render_scene(plan, skip=False, progress=bar, canvas=canvas())
     if args.engine == "model":
         return render_scene(plan, skip=not args.no_skip, progress=bar, canvas=canvas()), baseline
-    tile = tile_from_args(args.tile, plan.config)
+    pipeline = pipeline_from_args(args.pipeline, args.tile, plan.config)
     paint = canvas()
     if paint is not None:  # red, green, blue (opaque paints: `tile_paints`), alpha if needed
-        tile = replace(tile, channels=3 if paint.background[3] == paint.full else 4)
-    check_clocks(plan, tile, args.engine)  # before the build
-    tile_paints(plan, tile, paint)  # a translucent paint is refused before the build
-    _build_engine(args.engine, tile, bar)
-    return render_pipeline(plan, args.engine, tile, progress=bar, canvas=paint), baseline
+        channels = 3 if paint.background[3] == paint.full else 4
+        pipeline = replace(pipeline, tile=replace(pipeline.tile, channels=channels))
+    check_clocks(plan, pipeline, args.engine)  # before the build
+    tile_paints(plan, pipeline.tile, paint)  # a translucent paint is refused before the build
+    _build_engine(args.engine, pipeline, bar)
+    return render_pipeline(plan, args.engine, pipeline, progress=bar, canvas=paint), baseline
 
 
-def _engine_line(result, stats: bool) -> str:
+def _engine_line(result, stats: bool, units: int) -> str:
     """What the engine did; the stepper's cycles (the timing model, work of its own) only
-    with --stats."""
+    with --stats; the pipeline's `units` setup units."""
     run = result.deltas
     cycles = f"{result.cycles:,} stepper cycles (timing model), " if stats else ""
     line = (
@@ -409,7 +416,8 @@ def _engine_line(result, stats: bool) -> str:
         return line
     counters = ", ".join(f"{name} {value:,}" for name, value in hw.stats.items())
     return (
-        f"{line}\npipeline ({result.engine}): {hw.clocks:,} clocks simulated in "
+        f"{line}\npipeline ({result.engine}): {units} setup unit{'s' * (units > 1)}, "
+        f"{hw.clocks:,} clocks simulated in "
         f"{hw.seconds:.2f} s ({hw.clocks_per_second / 1e6:.2f} M clocks/s); {counters}"
     )
 
@@ -454,9 +462,9 @@ def _render(args: argparse.Namespace, scene, plan, bar: ProgressBar) -> int:
         )
         return 1
     if not args.json:
-        print(_engine_line(result, args.stats))
+        print(_engine_line(result, args.stats, _setup_units(args)))
     say = print if not args.json else (lambda *a, **k: None)
-    figures = _figures(result) if args.json else {}
+    figures = _figures(result, _setup_units(args)) if args.json else {}
     report = _stats(plan, result, baseline, figures) if baseline is not None else []
     if args.output is not None:  # after the work that can fail: no file from a failed command
         with atomic_output(PROG, args.output) as temporary:
@@ -478,7 +486,14 @@ def _render(args: argparse.Namespace, scene, plan, bar: ProgressBar) -> int:
     return 0
 
 
-def _figures(result) -> dict:
+def _setup_units(args: argparse.Namespace) -> int:
+    """The setup units of the --pipeline configuration (compact if not given)."""
+    from ..model.pipeline import PIPELINES
+
+    return PIPELINES[args.pipeline or "compact"]
+
+
+def _figures(result, units: int) -> dict:
     from .stats import stats_numbers
 
     plan = result.plan
@@ -491,15 +506,16 @@ def _figures(result) -> dict:
         "config": str(plan.config),
         **numbers,
         "writes": numbers["deltas"],  # the accumulation buffer's writes
-        **_pipeline_figures(result),
+        **_pipeline_figures(result, units),
     }
 
 
-def _pipeline_figures(result) -> dict:
+def _pipeline_figures(result, units: int) -> dict:
     hw = result.pipeline
     if hw is None:
         return {}
     return {
+        "pipeline_setup_units": units,
         "pipeline_clocks": hw.clocks,
         "pipeline_seconds": round(hw.seconds, 6),
         "pipeline_stats": dict(hw.stats),

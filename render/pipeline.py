@@ -29,7 +29,7 @@ import numpy as np
 
 from ..model import Clip, Edge
 from ..model.beat import DELTAS
-from ..model.pipeline import Command
+from ..model.pipeline import Command, PipelineConfig, pipeline_config
 from ..model.tile import (
     EMPTY_END,
     Beats,
@@ -40,7 +40,7 @@ from ..model.tile import (
     TileStart,
     pack_paint,
 )
-from ..model.timing import EMPTY_EDGE_CYCLES, start_clip_cycles, unit_cycles
+from ..model.timing import EMPTY_EDGE_CYCLES, setup_latency, start_clip_cycles, unit_cycles
 from .engines import EngineUnavailable, run_deltas
 from .render import (
     EdgeArrays,
@@ -53,10 +53,11 @@ from .render import (
 from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
-# The most clocks (`clock_estimate`, an upper estimate: 3.2 to 9.5 times the cycle model's
-# clocks on the built-ins) a scene may need in each simulator: 60 s of Verilator at its
-# measured 1 to 1.5 million clocks per second; for Amaranth's simulator (about 500 clocks
-# per second) the built-ins' 1.3 million (docs/scenes.md, "Errors and limits").
+# The most clocks (`clock_estimate`, an upper estimate: 1.2 to 2.1 times the cycle model's
+# clocks on the built-ins, the HUD, serif text and the 1080p scene) a scene may need in each
+# simulator: 60 s of Verilator at its measured 1 to 1.5 million clocks per second; for
+# Amaranth's simulator (about 500 clocks per second) the built-ins' 1.3 million
+# (docs/scenes.md, "Errors and limits").
 MAX_PIPELINE_CLOCKS = {"verilator": 60_000_000, "amaranth": 1_500_000}
 
 
@@ -289,7 +290,7 @@ def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
 def render_pipeline(
     plan: Plan,
     engine: str = "verilator",
-    tile: TileConfig | None = None,
+    pipeline: PipelineConfig | TileConfig | None = None,
     *,
     seed: int | None = None,
     idle: float = 0.0,
@@ -300,14 +301,17 @@ def render_pipeline(
     """Render `plan` through the hardware pipeline in a simulator: the image is the pixels
     the hardware sent. The model's render is made beside it (its figures are the model's
     stepper and accumulation counts) and `Render.mismatches` counts the pixels where the
-    two differ (0, or it is a bug). `seed`: random idle clocks and back-pressure. A colour
-    scene's `canvas` (a fresh `Canvas`; 3 channels): the image is the canvas's (opaque)."""
+    two differ (0, or it is a bug). `pipeline`: a `PipelineConfig`, or a `TileConfig` (the
+    compact pipeline; None: its default tile). `seed`: random idle clocks and back-pressure.
+    A colour scene's `canvas` (a fresh `Canvas`; 3 channels): the image is the canvas's
+    (opaque)."""
     if engine not in PIPELINE_ENGINES:
         raise EngineUnavailable(f"the pipeline runs in {' or '.join(PIPELINE_ENGINES)}")
-    tile = tile or TileConfig(plan.config)
+    pipeline = pipeline_config(pipeline or TileConfig(plan.config))
+    tile = pipeline.tile
     if tile.config != plan.config:
         raise ValueError("the tile's stepper configuration is not the plan's")
-    check_clocks(plan, tile, engine)
+    check_clocks(plan, pipeline, engine)
     commands = scene_commands(plan, tile, canvas)
     model = render_scene(plan, skip=True, canvas=canvas)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
@@ -316,13 +320,13 @@ def render_pipeline(
 
         if report is not None:
             report(0, len(commands))
-        run = pipeline_harness.run(tile, commands, seed=seed or 0, idle=idle, stall=stall)
+        run = pipeline_harness.run(pipeline, commands, seed=seed or 0, idle=idle, stall=stall)
         if report is not None:
             report(len(commands), len(commands))
     else:
         from ..sim.simulators.amaranth_sim import run_pipeline
 
-        run = run_pipeline(tile, commands, seed=seed, idle=idle, stall=stall, progress=report)
+        run = run_pipeline(pipeline, commands, seed=seed, idle=idle, stall=stall, progress=report)
     if run.errors or run.edge_errors:
         raise RuntimeError(
             f"the pipeline dropped {run.errors} commands and {run.edge_errors} edges as bad"
@@ -338,56 +342,122 @@ def render_pipeline(
     )
 
 
-def clock_estimate(plan: Plan, tile: TileConfig) -> tuple[int, int]:
+def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[int, int]:
     """An upper estimate of the pipeline's clocks on `scene_commands(plan, tile)`, and of the
     number of those commands, from the plan without making them (numpy, per row of tiles;
-    no cycle model): every stage's work added as if none overlapped. Per edge, in every tile
-    of its rows from its own rightwards (`tile_jobs` sends fewer: the ones wholly left of a
-    tile merged into at most as many vertical edges, none longer than the rows), its setup
-    (`unit_cycles`, `start_clip_cycles`) and one clock per pixel of its major axis (of its
-    height when projected); per polygon in a tile a scan of the tile's rows its edges
-    reach (whole rows); per tile a flush of its pixels; and the clear pass after reset.
+    no cycle model), counting what `tile_jobs` sends each tile: the edges crossing it, and
+    for each polygon with edges wholly left of it at most as many merged vertical edges as
+    it has edges on either side (`_merged_projection`: one per rise of the winding of the
+    left edges, which is minus the rest's; none for a polygon wholly left of the tile).
+    Each sent edge costs its columns in the tile (an x-major one's in the tile's rows; a
+    merged one's its polygon's rows) and a clock, or its unit's `unit_cycles` with them
+    over the setup units if more (`start_clip_cycles` more for a start-clipped one); each
+    polygon a setup latency and a scan of the rows its edges reach, from its least cell
+    to its greatest (to the tile's last column if it has edges outside the tile), at least
+    the rows read whole; per tile its work or its flush, whichever is more (the flush runs
+    beside the next tile's work); and the clear pass after reset. 1.2 to
+    2.1 times the cycle model's clocks on the built-ins, the HUD, serif text and the 1080p
+    scene of `benchmarks/bench_pipeline.py`, compact and fast (docs/scenes.md).
     `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
-    (6.7 s for the text's 287,121) and needs the commands."""
-    config, S = plan.config, S_of(plan)
+    and needs the commands."""
+    pipeline = pipeline_config(pipeline)
+    tile, config = pipeline.tile, plan.config
     sent = edges_to_send(plan, skip=True)["sent"]
-    lo_x, lo_y, hi_x, hi_y = (box[sent] for box in _write_boxes(plan.coords, plan.offset, S))
+    lo_x, lo_y, hi_x, hi_y = (
+        box[sent] for box in _write_boxes(plan.coords, plan.offset, S_of(plan))
+    )
     c = plan.coords[sent]
-    span = np.where(plan.left[sent], 0, abs(c[:, 2] - c[:, 0]))
-    cost = np.maximum(span, abs(c[:, 3] - c[:, 1])) // S + unit_cycles(config, fmt=DELTAS)
-    cost += start_clip_cycles(config) + 2
+    dx, dy = abs(c[:, 2] - c[:, 0]), abs(c[:, 3] - c[:, 1])
+    x_major = dx >= dy
+    run = dx / np.maximum(dy, 1)  # columns per row (of an x-major edge)
+    units = pipeline.setup_units
+    unit = unit_cycles(config, units, DELTAS)  # a unit's clocks per edge, but its columns
+
+    def edge_clocks(columns):
+        """An edge's clocks in a stream: its columns and a clock (the stepper), or its
+        unit's clocks over the units (a unit holds the edge while it is stepped)."""
+        return np.maximum(columns + 1, (unit + columns) / units)
+
+    setup = unit / units
+    clipped = start_clip_cycles(config) / pipeline.setup_units
+    latency = setup_latency(config, DELTAS) - setup  # a polygon's first edge, over its setup
     owner = plan.polygon[sent]
     width, height = plan.scene.width, plan.scene.height
-    rights = np.arange(0, width, tile.width) + tile.width  # each tile's first column right of it
-    clocks, commands = tile.pixels, 0  # the clear pass after a reset: a cell a clock
+    tiles_x = np.arange(0, width, tile.width)
+    clocks, commands = float(tile.pixels), 0  # the clear pass after a reset: a cell a clock
     for ty in range(0, height, tile.height):
         band = np.flatnonzero((hi_y >= ty) & (lo_y < ty + tile.height))
-        order = band[np.argsort(lo_x[band], kind="stable")]
-        edges = np.searchsorted(lo_x[order], rights, side="left")  # edges sent to each tile
-        spent = np.concatenate([[0], np.cumsum(cost[order])])[edges]
-        # a polygon is in the tiles from its leftmost edge's on, scanning its rows there
-        first = np.full(len(plan.polygons), np.iinfo(np.int64).max)
-        top = np.full(len(plan.polygons), np.iinfo(np.int64).max)
-        bottom = np.full(len(plan.polygons), np.iinfo(np.int64).min)
-        np.minimum.at(first, owner[band], lo_x[band])
-        np.minimum.at(top, owner[band], np.maximum(lo_y[band], ty))
-        np.maximum.at(bottom, owner[band], np.minimum(hi_y[band], ty + tile.height - 1))
-        present = np.flatnonzero(bottom >= top)
-        by_x = np.argsort(first[present], kind="stable")
-        rows = (bottom - top + 1)[present][by_x]
-        polygons = np.searchsorted(first[present][by_x], rights, side="left")
-        scanned = np.concatenate([[0], np.cumsum(rows)])[polygons]
-        clocks += int(spent.sum() + scanned.sum() * tile.width + 8 * polygons.sum())
-        clocks += len(rights) * (tile.width * tile.height + 8)  # the flushes
-        commands += int(edges.sum() + 2 * polygons.sum()) + 2 * len(rights)
-    return clocks, commands
+        b_lo_x, b_hi_x, b_major = lo_x[band], hi_x[band], x_major[band]
+        rows = np.minimum(hi_y[band], ty + tile.height - 1) - np.maximum(lo_y[band], ty) + 1
+        # an x-major edge's columns in the band's rows (the setup cuts it to them)
+        run_b = np.maximum(run[band], 1)  # 1 for a y-major edge (not used)
+        in_band = np.where(x_major[band], np.ceil((rows + 1) * run_b) + 1, 0)
+        starts_above = ~b_major & (lo_y[band] < ty)  # y-major, its start cut by the tile
+        mine, total, merged, extent = _band_polygons(
+            owner[band], b_hi_x, lo_y[band], hi_y[band], tile, ty, len(tiles_x)
+        )
+        n = len(total)  # polygons in the band
+        for t, tx in enumerate(tiles_x):
+            right = tx + tile.width - 1
+            crossing = (b_lo_x <= right) & (b_hi_x >= tx)
+            span = np.minimum(b_hi_x, right) - b_lo_x + 1
+            columns = np.where(b_major, np.minimum(span, in_band), rows)
+            # and the rows of an x-major edge's columns in the tile
+            width_in = np.minimum(b_hi_x, right) - np.maximum(b_lo_x, tx) + 1
+            reach = np.where(b_major, np.minimum(rows, np.ceil(width_in / run_b) + 4), rows)
+            n_merged = merged[:, t]
+            sent_edges = int(crossing.sum() + n_merged.sum())
+            # each polygon scans the rows its edges reach, from its least to its greatest
+            # cell, on to the tile's last column if it goes on outside the tile (a sum);
+            # a row not seen since the flush is read whole (the tile's rows at most)
+            k = mine[crossing]
+            scan_rows = np.zeros(n, dtype=np.int64)
+            # (the write box's margin less one: the deltas of a row lie well within it)
+            np.maximum.at(scan_rows, k, np.maximum(reach[crossing].astype(np.int64) - 2, 1))
+            first = np.full(n, right + 1, dtype=np.int64)
+            np.minimum.at(first, k, np.maximum(b_lo_x[crossing] + 1, tx))
+            last = np.full(n, tx - 1, dtype=np.int64)
+            np.maximum.at(last, k, np.minimum(b_hi_x[crossing] - 1, right))
+            inside = np.bincount(k, minlength=n)
+            last[inside < total] = right  # edges outside the tile's columns
+            projected = n_merged > 0
+            scan_rows[projected] = extent[projected]
+            first[projected], last[projected] = tx, right
+            present = (scan_rows > 0).sum()
+            work = edge_clocks(columns[crossing]).sum() + (edge_clocks(extent) * n_merged).sum()
+            work += clipped * (crossing & starts_above).sum()
+            scanned = (scan_rows * (last + 1 - first)).sum()
+            work += (latency + 8) * present + max(scanned, tile.width * min(tile.height, scanned))
+            clocks += max(work, tile.pixels + 8)  # the flush runs beside the next tile's work
+            commands += sent_edges + 2 * int(present) + 2
+    return int(clocks), commands
 
 
-def check_clocks(plan: Plan, tile: TileConfig, engine: str) -> None:
+def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: int):
+    """Per edge of a band of tiles its polygon's index among the band's (`mine`), and per
+    polygon: its edges in the band (`total`), for each tile at most how many merged edges
+    it gets there (`merged`, polygons x tiles: as many as its edges wholly left of the tile
+    or as the others, whichever is fewer) and its rows in the band (`extent`)."""
+    polygons, mine = np.unique(owner, return_inverse=True)
+    left_of = np.minimum(hi_x // tile.width + 1, tiles)  # the first tile it is wholly left of
+    left = np.zeros((len(polygons), tiles + 1), dtype=np.int64)
+    np.add.at(left, (mine, left_of), 1)
+    left = np.cumsum(left, axis=1)[:, :tiles]
+    total = np.bincount(mine, minlength=len(polygons))
+    merged = np.minimum(left, total[:, None] - left)
+    top = np.full(len(polygons), ty + tile.height, dtype=np.int64)
+    np.minimum.at(top, mine, np.maximum(lo_y, ty))
+    bottom = np.full(len(polygons), ty - 1, dtype=np.int64)
+    np.maximum.at(bottom, mine, np.minimum(hi_y, ty + tile.height - 1))
+    return mine, total, merged, bottom - top + 1
+
+
+def check_clocks(plan: Plan, tile: PipelineConfig | TileConfig, engine: str) -> None:
     """Refuse (SceneError, one line) a scene whose `clock_estimate` passes the engine's
     limit, before any command is made or the simulator built: it would run for minutes or
     hours."""
     (clocks, commands), limit = clock_estimate(plan, tile), MAX_PIPELINE_CLOCKS[engine]
+    tile = pipeline_config(tile).tile
     if clocks > limit:
         raise SceneError(
             f"the scene needs about {clocks:,} pipeline clocks ({commands:,} commands in "

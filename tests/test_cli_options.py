@@ -164,6 +164,10 @@ def test_demo_spokes_are_bounded_by_their_time(capsys):
         (["synth", "--top", "pipeline", "--core", "deltas"], "--top pipeline has its own"),
         (["synth", "--top", "pipeline", "--setup-units", "2"], "--setup-units sizes the core"),
         (["render", "--builtin", "text", "--tile", "64x32"], "--tile sizes the hardware"),
+        (["render", "--builtin", "text", "--pipeline", "fast"], "--pipeline configures the"),
+        (["verilog", "--pipeline", "fast"], "--pipeline configures the polygon pipeline"),
+        (["synth", "--pipeline", "compact"], "--pipeline configures the polygon pipeline"),
+        (["verilog", "--top", "pipeline", "--pipeline", "quick"], "invalid choice: 'quick'"),
     ],
 )
 def test_conflicting_options_are_refused(capsys, argv, fragment):

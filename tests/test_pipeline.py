@@ -7,6 +7,7 @@ lint-clean."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
@@ -17,7 +18,14 @@ from hypothesis import strategies as st
 
 from edgeaa.hdl.pipeline import EdgePipeline, command_layout, pipeline_verilog
 from edgeaa.model import EdgeConfig
-from edgeaa.model.pipeline import COMMAND_VERSION, Command, command_fields, command_ops
+from edgeaa.model.pipeline import (
+    COMMAND_VERSION,
+    PIPELINES,
+    Command,
+    PipelineConfig,
+    command_fields,
+    command_ops,
+)
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import TileConfig, TileModel
 from edgeaa.render import SceneError, builtin, parse_scene, plan_scene, render_scene
@@ -239,6 +247,24 @@ def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
     assert "module edgeaa_pipeline" in out.read_text()
     assert main(["verilog", "--top", "pipeline", "--tile", "6x4"]) == 2
     assert "power of two" in capsys.readouterr().err
+    fast = tmp_path / "fast.v"
+    argv = ["verilog", "--top", "pipeline", "--tile", "8x4", *small, "--pipeline", "fast"]
+    assert main([*argv, "-o", str(fast)]) == 0
+    units = PIPELINES["fast"]  # the fast pipeline's core has its setup array
+    assert f"unit{units - 1}" in fast.read_text() and "unit1" not in out.read_text()
+
+
+def test_the_named_configurations():
+    assert PIPELINES == {"compact": 1, "fast": 4}
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4)
+    assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
+    assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
+    assert EdgePipeline(TILE).core.setup_units == 1
+    for bad, error in [(0, ValueError), (17, ValueError), (True, TypeError), (2.0, TypeError)]:
+        with pytest.raises(error):
+            PipelineConfig(TILE, bad)
+    with pytest.raises(ValueError, match="no pipeline named"):
+        PipelineConfig.named("quick")
 
 
 # -- the compiled pipeline (Verilator) -----------------------------------------------------------
@@ -254,6 +280,37 @@ def test_verilator_renders_every_builtin_to_the_renderers_image(name):
     assert run.errors == run.edge_errors == 0
     assert len(run.pixels) == expected_pixels(TILE, scene_commands(plan, TILE))
     assert run.stats["resolve_stall"] == 0  # the harness's sink is always ready
+
+
+@pytest.mark.parametrize("name", BUILTINS)
+def test_the_fast_pipeline_renders_every_builtin_to_the_renderers_image(name):
+    plan = plan_scene(builtin(name, DEFAULT), DEFAULT)
+    result = render_pipeline(plan, "verilator", PipelineConfig.named("fast", TILE))
+    assert result.mismatches == 0 and result.pipeline.errors == result.pipeline.edge_errors == 0
+    assert np.array_equal(result.image, render_scene(plan).image)
+
+
+@settings(max_examples=15, deadline=None, database=None)
+@given(data=st.data(), seed=st.integers(0, 2**31), units=st.sampled_from([2, 3, 4]))
+def test_several_setup_units_under_back_pressure_give_the_renderers_image(data, seed, units):
+    scene = data.draw(small_scenes(DEFAULT))
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units)
+    plan = plan_scene(scene, DEFAULT)
+    result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4)
+    assert result.mismatches == 0, f"seed {seed}, {units} units"
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_the_fast_pipeline_drops_bad_commands_as_the_model_does(seed):
+    from edgeaa.sim.simulators import pipeline_harness
+
+    tile = TileConfig(SMALL, 8, 8)
+    commands = bad_commands(SMALL.subpixel_scale)
+    want, result = model_frames(tile, commands)
+    run = pipeline_harness.run(PipelineConfig(tile, 4), commands, seed=seed, idle=0.3, stall=0.3)
+    assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors), f"seed {seed}"
+    for frame, model in zip(run.frames(tile), want, strict=True):
+        assert np.array_equal(frame, model), f"seed {seed}"
 
 
 @settings(max_examples=25, deadline=None, database=None)
@@ -366,6 +423,10 @@ def test_edgeaa_render_engine_verilator_writes_the_pipelines_png(tmp_path, capsy
     assert "pipeline (verilator)" in text and "M clocks/s" in text, text
     assert main(["render", "--builtin", "text", "--tile", "16x8"]) == 2
     assert "--engine verilator" in capsys.readouterr().err
+    assert main([*args, "--pipeline", "fast", "-o", str(out), "--quiet", "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["pipeline_setup_units"] == PIPELINES["fast"]
+    assert figures["pipeline_mismatches"] == 0
 
 
 def test_a_bad_tile_is_refused_before_the_scene_is_planned(capsys, monkeypatch):

@@ -22,7 +22,7 @@ from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_const
 from edgeaa.model import EdgeConfig, pipeline_timing, timing
 from edgeaa.model import tile as tile_model
 from edgeaa.model.beat import DELTAS
-from edgeaa.model.pipeline import Command
+from edgeaa.model.pipeline import Command, PipelineConfig
 from edgeaa.model.pipeline_timing import pipeline_cycles
 from edgeaa.model.tile import RESOLVE_OPS, TileConfig
 from edgeaa.render import parse_scene, plan_scene
@@ -44,11 +44,12 @@ class Transfers:
     clocks: int  # clock 0 to the last transfer, inclusive
 
 
-def run_transfers(tile: TileConfig, commands: list[Command]) -> Transfers:
+def run_transfers(tile: TileConfig | PipelineConfig, commands: list[Command]) -> Transfers:
     """`EdgePipeline` in Amaranth's simulator, commands back to back, the sink always ready:
     the clock of every command taken, delta beat into the accumulator, cell into the resolve
     and pixel out; after the last, the harness's drain (nothing more may move)."""
     dut = EdgePipeline(tile)
+    tile = dut.tile
     payloads = [command_const(tile, c) for c in commands]
     expected = expected_pixels(tile, commands)
     out = Transfers([], [], [], [], {}, 0)
@@ -101,7 +102,9 @@ def first_difference(name: str, got, want) -> str:
     return f"{name}: {len(got)} in the hardware, {len(want)} in the model"
 
 
-def check_clock_for_clock(tile: TileConfig, commands, hw: Transfers, label: str) -> None:
+def check_clock_for_clock(
+    tile: TileConfig | PipelineConfig, commands, hw: Transfers, label: str
+) -> None:
     model = pipeline_cycles(tile, commands)
     for name, got, want in (
         ("command", hw.commands, model.commands),
@@ -216,6 +219,27 @@ def test_a_random_colour_command_stream_with_bad_commands_in_the_models_clocks()
     check_clock_for_clock(COLOUR_TILE, commands, hw, "colour seed 4")
 
 
+@pytest.mark.parametrize(("units", "seed"), [(2, 2), (3, 10), (4, 7)])
+def test_several_setup_units_in_the_models_clocks(units, seed):
+    """The fast pipeline's array of setup units, with the bad commands and the stalls."""
+    pipeline = PipelineConfig(SMALL_TILE, units)
+    commands = random_commands(random.Random(seed), SMALL_TILE)
+    hw = run_transfers(pipeline, commands)
+    check_clock_for_clock(pipeline, commands, hw, f"{units} units, seed {seed}")
+    assert hw.stats["core_stall"] > 0 and hw.stats["acc_stall"] > 0  # the stall is exercised
+    # the single unit's model does not fit the array's clocks
+    with pytest.raises(AssertionError):
+        check_clock_for_clock(SMALL_TILE, commands, hw, "one unit's model")
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(scene=small_scenes(SMALL))
+def test_random_scenes_with_two_setup_units_as_the_model_says(scene):
+    pipeline = PipelineConfig(SMALL_TILE, 2)
+    commands = scene_commands(plan_scene(scene, SMALL), SMALL_TILE)
+    check_clock_for_clock(pipeline, commands, run_transfers(pipeline, commands), f"{scene}")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", range(100, 140))
 def test_many_random_command_streams_in_the_models_clocks(seed):
@@ -275,14 +299,23 @@ def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
 
 
 @pytest.mark.parametrize(
-    "name", ["text", "starburst", pytest.param("hatch", marks=pytest.mark.slow)]
+    ("name", "pipeline"),
+    [
+        ("text", "compact"),
+        ("text", "fast"),
+        ("starburst", "compact"),
+        pytest.param("starburst", "fast", marks=pytest.mark.slow),
+        pytest.param("hatch", "compact", marks=pytest.mark.slow),
+        pytest.param("hatch", "fast", marks=pytest.mark.slow),
+    ],
 )
-def test_verilator_runs_the_builtins_in_the_models_clocks(name):
+def test_verilator_runs_the_builtins_in_the_models_clocks(name, pipeline):
     from edgeaa.render import builtin
     from edgeaa.sim.simulators import pipeline_harness
 
     tile = TileConfig(DEFAULT)
     commands = scene_commands(plan_scene(builtin(name, DEFAULT), DEFAULT), tile)
+    tile = PipelineConfig.named(pipeline, tile)
     run = pipeline_harness.run(tile, commands)
     model = pipeline_cycles(tile, commands)
     got = run.pixels[:, 0]
@@ -291,7 +324,7 @@ def test_verilator_runs_the_builtins_in_the_models_clocks(name):
     )
     assert list(got) == model.pixels, first_difference("pixel", got, model.pixels)
     assert run.stats == model.stats
-    assert run.clocks == model.clocks + pixel_drain_clocks(tile)
+    assert run.clocks == model.clocks + pixel_drain_clocks(tile.tile)
 
 
 def test_schedule_without_idles_or_a_stall_is_the_back_to_back_one():

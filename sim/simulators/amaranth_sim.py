@@ -20,7 +20,7 @@ from ...hdl import LineCore
 from ...hdl.pipeline import STATS, EdgePipeline, command_const
 from ...model import Clip, Edge, EdgeConfig
 from ...model.beat import edge_columns
-from ...model.pipeline import Command
+from ...model.pipeline import Command, PipelineConfig
 from ...model.tile import TileConfig
 from .amaranth_runner import Probe, SimulationHang, Sink, Source, Trace, row_decoder, run_component
 from .commands import edge_command
@@ -95,7 +95,7 @@ def run(config: EdgeConfig, edges: list[Edge], *, progress=None, top=LineCore) -
 
 
 def run_pipeline(
-    tile: TileConfig,
+    pipeline: PipelineConfig | TileConfig,
     commands: list[Command],
     *,
     seed: int | None = None,
@@ -106,13 +106,15 @@ def run_pipeline(
     """The polygon pipeline (`EdgePipeline`) on `commands`, as the compiled harness
     (`edgeaa.sim.simulators.pipeline_harness.run`) drives it: seeded random idle clocks on
     the source and back-pressure on the sink when `seed` is given; stops after the expected
-    pixels and a drain, or raises `PipelineHang`. `progress(done, total)` as commands go in."""
-    dut = EdgePipeline(tile)
+    pixels and a drain, or raises `PipelineHang`. `progress(done, total)` as commands go in.
+    `pipeline`: a `PipelineConfig`, or a `TileConfig` (the compact pipeline)."""
+    dut = EdgePipeline(pipeline)
+    tile = dut.tile
     source = Source("commands", [command_const(tile, c) for c in commands])
     pixels = row_decoder(dut.pixels.payload.shape(), PIXEL_COLUMNS[1:])
     sink = Sink("pixels", expected_pixels(tile, commands), pixels)
     counters = (dut.errors, dut.edge_errors, *(dut.stats[name] for name in STATS))
-    tag = f"[pipeline seed={seed} idle={idle} stall={stall} {tile}]"
+    tag = f"[pipeline seed={seed} idle={idle} stall={stall} {dut.pipeline}]"
     try:
         trace = run_component(
             dut, [source], [sink], drain=pixel_drain_clocks(tile),

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ...hdl.pipeline import STATS, EdgePipeline, pipeline_verilog
-from ...model.pipeline import CODE, Command, command_fields
+from ...model.pipeline import CODE, Command, PipelineConfig, command_fields, pipeline_config
 from ...model.tile import TileConfig
 from . import harness
 
@@ -103,22 +103,30 @@ def command_format(tile: TileConfig) -> harness.StreamFormat:
     return harness.StreamFormat("commands", tuple((name,) for name in command_fields(tile)))
 
 
-@functools.cache
-def pipeline_top(tile: TileConfig) -> harness.HarnessTop:
+def pipeline_top(pipeline: PipelineConfig | TileConfig) -> harness.HarnessTop:
     """The pipeline as the harness drives it: `command_format` in, `PIXEL_FORMAT` out."""
-    return harness.harness_top(EdgePipeline(tile), TOP, command_format(tile), PIXEL_FORMAT)
+    return _top(pipeline_config(pipeline))
 
 
-def build(tile: TileConfig, *, optimize: str = "-O2") -> Path:
-    """Compile the pipeline and the harness (cached by their text); returns the executable."""
-    verilog = functools.partial(pipeline_verilog, tile, name=TOP)
-    return harness.build(("pipeline", tile, optimize), pipeline_top(tile), verilog, optimize)
+@functools.cache
+def _top(pipeline: PipelineConfig) -> harness.HarnessTop:
+    tile = pipeline.tile
+    return harness.harness_top(EdgePipeline(pipeline), TOP, command_format(tile), PIXEL_FORMAT)
 
 
-def use_executable(tile: TileConfig, exe: Path, *, optimize: str = "-O2") -> None:
-    """Run `tile`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
+def build(pipeline: PipelineConfig | TileConfig, *, optimize: str = "-O2") -> Path:
+    """Compile the pipeline (a `PipelineConfig`, or a `TileConfig`: the compact one) and the
+    harness (cached by their text); returns the executable."""
+    pipeline = pipeline_config(pipeline)
+    verilog = functools.partial(pipeline_verilog, pipeline, name=TOP)
+    key = ("pipeline", pipeline, optimize)
+    return harness.build(key, pipeline_top(pipeline), verilog, optimize)
+
+
+def use_executable(pipeline: PipelineConfig | TileConfig, exe: Path, *, optimize="-O2") -> None:
+    """Run `pipeline`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
     workers are handed the driver's), instead of generating and hashing the Verilog again."""
-    harness.use_executable(("pipeline", tile, optimize), exe)
+    harness.use_executable(("pipeline", pipeline_config(pipeline), optimize), exe)
 
 
 def _command_rows(tile: TileConfig, commands: list[Command]) -> np.ndarray:
@@ -127,7 +135,7 @@ def _command_rows(tile: TileConfig, commands: list[Command]) -> np.ndarray:
 
 
 def run(
-    tile: TileConfig,
+    pipeline: PipelineConfig | TileConfig,
     commands: list[Command],
     *,
     seed: int = 0,
@@ -135,11 +143,14 @@ def run(
     stall: float = 0.0,
     max_quiet: int | None = None,
 ) -> PipelineRun:
-    """Simulate the pipeline on `commands`; `idle`/`stall` are probabilities per clock."""
+    """Simulate the pipeline (a `PipelineConfig`, or a `TileConfig`: the compact one) on
+    `commands`; `idle`/`stall` are probabilities per clock."""
     harness.check_probabilities(idle, stall)
+    pipeline = pipeline_config(pipeline)
+    tile = pipeline.tile
     done = harness.run_harness(
-        build(tile),
-        pipeline_top(tile),
+        build(pipeline),
+        pipeline_top(pipeline),
         _command_rows(tile, commands),
         seed=seed,
         idle=idle,
