@@ -305,6 +305,10 @@ def top_options(d: Draft, p_top: float, p_tile: float, p_core: float) -> None:
         core = d.choice("--core", ["writes", "deltas"])
         if top == "pipeline" and core == "deltas":
             d.bad("--core deltas with --top pipeline")
+    if d.chance(p_tile / 2):
+        d.choice("--pipeline", ["compact", "fast"])
+        if top != "pipeline":
+            d.bad("--pipeline without --top pipeline")
 
 
 def verilog_case(d: Draft, quick: bool) -> None:

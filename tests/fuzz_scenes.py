@@ -428,6 +428,10 @@ def _render_engine(d: Draft, quick: bool, config: bool, size: tuple[int, int]) -
             d.bad("--tile without a hardware engine")
         elif not quick and d.chance(0.03):
             argv[-1] = "1024x1024"  # large, accepted today: it must finish or be refused
+    if d.chance(0.3 if hardware else 0.03):  # fast builds anew in Verilator: compact there
+        d.choice("--pipeline", ["compact"] if engine == "verilator" else ["compact", "fast"])
+        if not hardware:
+            d.bad("--pipeline without a hardware engine")
     if hardware and "--compare" in argv:
         d.bad("--compare with a hardware engine")
     if hardware and "--no-skip" in argv:
