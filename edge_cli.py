@@ -508,7 +508,8 @@ class SynthCommand(Command):
         if args.top == "pipeline":
             pipeline = pipeline_from_args(args.pipeline, args.tile, config)
             tile, name = pipeline.tile, args.pipeline or "compact"
-            heading = f"pipeline {name} ({pipeline.setup_units} setup units), tile "
+            units = pipeline.setup_units
+            heading = f"pipeline {name} ({units} setup unit{'s' * (units > 1)}), tile "
             heading += f"{tile.width}x{tile.height}, {config}"
             return heading, {"pipeline": lambda: EdgePipeline(pipeline), **baseline}
         if args.top == "peripheral":

@@ -330,7 +330,7 @@ def test_synth_top_pipeline_synthesises_the_pipeline_and_counts_its_block_rams(m
     assert [target for target, _ in made] == ["ice40", "ice40", "ecp5", "ecp5"]
     pipes = [design for _, design in made if isinstance(design, EdgePipeline)]
     assert len(pipes) == 2 and all((p.tile.width, p.tile.height) == (32, 16) for p in pipes)
-    assert "pipeline, tile 32x16" in captured.out.splitlines()[0]
+    assert "pipeline compact (1 setup unit), tile 32x16" in captured.out.splitlines()[0]
     rows = _synth_rows(captured.out)
     assert rows["ice40", "pipeline"] == ["9000", "4000", "50.0", "28"]
     assert rows["ecp5", "pipeline"] == ["9000", "4000", "50.0", "9"]
