@@ -256,9 +256,11 @@ def edge_case(d: Draft, quick: bool) -> None:
     d.add(*coordinates)
     if d.chance(0.2):
         d.choice("--inside", ["left", "right"])
+    d.config()  # first: the intensities' range follows --intensity-bits
+    top = _full_scale(d.case.argv)
     for name in ("--i-in", "--i-out"):
         if d.chance(0.1):
-            d.integer(name, 0, 255, [0, 128, 255])
+            d.integer(name, 0, top, [0, (top + 1) // 2, top])
     if d.chance(0.1):
         d.add("--clip", *(d.rng.choice(["0", "5", "100"]) for _ in range(4)))
         if d.chance(0.2):
@@ -266,9 +268,18 @@ def edge_case(d: Draft, quick: bool) -> None:
             d.bad("clip of 50 digits")
     if d.chance(0.3):
         d.add("--json")
-    d.config()
     if d.chance(0.1):
         mutate_argv(d, ["--inside", "--i-in", "--i-out", "--mode"])
+
+
+def _full_scale(argv: list[str]) -> int:
+    """The largest intensity of the --intensity-bits in `argv` (8 bits unless a valid one is
+    given: an invalid one makes the case bad anyway)."""
+    if "--intensity-bits" in argv[:-1]:
+        value = argv[argv.index("--intensity-bits") + 1]
+        if value.isascii() and value.isdigit() and 1 <= int(value) <= 16:
+            return (1 << int(value)) - 1
+    return 255
 
 
 def demo_case(d: Draft, quick: bool) -> None:
