@@ -277,7 +277,7 @@ def _full_scale(argv: list[str]) -> int:
     given: an invalid one makes the case bad anyway)."""
     if "--intensity-bits" in argv[:-1]:
         value = argv[argv.index("--intensity-bits") + 1]
-        if value.isascii() and value.isdigit() and 1 <= int(value) <= 16:
+        if value.isascii() and value.isdigit() and len(value) <= 2 and 1 <= int(value) <= 16:
             return (1 << int(value)) - 1
     return 255
 
