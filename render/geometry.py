@@ -143,12 +143,154 @@ def side_fills(
     mid = edges[:, 0:2] + edges[:, 2:4]  # the midpoint, doubled
     d = edges[:, 2:4] - edges[:, 0:2]
     normal = np.stack([d[:, 1], -d[:, 0]], axis=1)
-    left = winding_numbers(doubled, mid, normal, d)
-    right = winding_numbers(doubled, mid, -normal, d)
+    left = np.zeros(len(edges), dtype=np.int64)
+    right = np.zeros(len(edges), dtype=np.int64)
+    swept = _swept(edges, group)  # polygons whose banded pairs would be too many
+    band = ~swept  # the polygons' y ranges are disjoint: each part counts its own edges
+    left[band] = winding_numbers(doubled[band], mid[band], normal[band], d[band])
+    right[band] = winding_numbers(doubled[band], mid[band], -normal[band], d[band])
+    if swept.any():
+        k = len(np.flatnonzero(swept))
+        points = np.concatenate([mid[swept]] * 2)
+        first = np.concatenate([normal[swept], -normal[swept]])
+        second = np.concatenate([d[swept]] * 2)
+        w = _sweep_sides(doubled[swept], points, first, second)
+        left[swept], right[swept] = w[:k], w[k:]
     if isinstance(rule, str):
         return fills(left, rule), fills(right, rule)
     odd = np.asarray(rule) == "evenodd"
     return tuple(np.where(odd, fills(w, "evenodd"), fills(w, "nonzero")) for w in (left, right))
+
+
+def _sweep_sides(edges: np.ndarray, points, first, second) -> np.ndarray:
+    """`winding_numbers` of the perturbed points for noded edges (none crosses or touches
+    another's interior), from the sweep's first edge east of each point (`_first_east`):
+    the point's face is the face just west of that edge, whose winding number is the face's
+    just east of it plus the edge's and its coincident copies' crossings (+1 down, -1 up);
+    and the face just east of an edge is the face of its own east midpoint query when that
+    is among the points. So each point's winding number is a sum along a chain of points,
+    taken by pointer doubling: O(P log P) in numpy after the sweep's O((E + P) log E).
+
+    The points must be the edges' midpoints perturbed to both sides, as `side_fills` makes
+    them: first the east or west of edge k for k < E, then the other side (E + k)."""
+    n = len(edges)
+    east_of = _first_east(edges.tolist(), points.tolist(), first.tolist(), second.tolist())
+    h = np.array(east_of, dtype=np.int64)
+    swap = (edges[:, 0] > edges[:, 2]) | (
+        (edges[:, 0] == edges[:, 2]) & (edges[:, 1] > edges[:, 3])
+    )
+    canon = np.where(swap[:, None], edges[:, [2, 3, 0, 1]], edges)
+    _, cls = np.unique(canon, axis=0, return_inverse=True)
+    cls = cls.reshape(-1)
+    step = np.bincount(cls, weights=np.sign(edges[:, 3] - edges[:, 1])).astype(np.int64)
+    # the query on the east of edge k: the first (M + e1 n, n = (dy, -dx)) when dy > 0
+    east = np.where(first[:n, 0] > 0, np.arange(n), n + np.arange(n))
+    found = h >= 0
+    nxt = np.where(found, east[np.maximum(h, 0)], -1)
+    w = np.where(found, step[cls[np.maximum(h, 0)]], 0)
+    for _ in range(64):
+        more = nxt >= 0
+        if not more.any():
+            return w
+        w = w + np.where(more, w[np.maximum(nxt, 0)], 0)
+        nxt = np.where(more, nxt[np.maximum(nxt, 0)], -1)
+    raise RuntimeError("the sweep's chain of faces did not end (a bug: please report)")
+
+
+SWEEP_PAIRS = 64  # level pairs per edge past which a polygon's sides come from the sweep
+
+
+def _sign(v: int) -> int:
+    return (v > 0) - (v < 0)
+
+
+def _first_east(edges: list, points: list, first: list, second: list) -> list[int]:
+    """Per perturbed point, the first edge its ray to +x crosses (-1 if none), by a sweep
+    down the rows: the edges that cross a row, kept in x order in a list, each point located
+    among them by binary search with the exact test of `winding_numbers`. The order of two
+    edges never changes along the rows only while no edge crosses or touches another's
+    interior (noded edges, as the plan's are). O((E + P) log E) comparisons."""
+    events: dict[int, list] = {}  # y: points above it, edges ending, starting, points below
+    for k, (_, ay, _, by) in enumerate(edges):
+        if ay != by:
+            events.setdefault(max(ay, by), [[], [], [], []])[1].append(k)
+            events.setdefault(min(ay, by), [[], [], [], []])[2].append(k)
+    for q, (p, v1, v2) in enumerate(zip(points, first, second, strict=True)):
+        below = (v1[1] or v2[1]) > 0  # the point moves down (+y) from its row
+        events.setdefault(p[1], [[], [], [], []])[3 if below else 0].append(q)
+    low = [
+        (ax, ay, bx - ax, by - ay) if ay < by else (bx, by, ax - bx, ay - by)
+        for ax, ay, bx, by in edges
+    ]  # from the low end, dy > 0
+    active: list[int] = []
+    out = [-1] * len(points)
+
+    def before(x: int, y: int, dx: int, dy: int, s: int, f: int) -> bool:
+        """Whether the line through (x, y) of direction (dx, dy > 0) is west of active edge f
+        at row y + s e (or equal)."""
+        fx, fy, fdx, fdy = low[f]
+        c = (x - fx) * fdy - (y - fy) * fdx
+        if c:
+            return c < 0
+        return s * (dx * fdy - fdx * dy) <= 0
+
+    def place(x: int, y: int, dx: int, dy: int, s: int) -> int:
+        a, b = 0, len(active)
+        while a < b:
+            m = (a + b) >> 1
+            if before(x, y, dx, dy, s, active[m]):
+                b = m
+            else:
+                a = m + 1
+        return a
+
+    def locate(q: int) -> None:
+        (px, py), (v1x, v1y), (v2x, v2y) = points[q], first[q], second[q]
+        a, b = 0, len(active)
+        while a < b:
+            m = (a + b) >> 1
+            ax, ay, bx, by = edges[active[m]]
+            ex, ey = bx - ax, by - ay
+            t = ex * (py - ay) - (px - ax) * ey or ex * v1y - v1x * ey or ex * v2y - v2x * ey
+            if _sign(t) * _sign(ey) > 0:  # the point is west of this edge
+                b = m
+            else:
+                a = m + 1
+        if a < len(active):
+            out[q] = active[a]
+
+    for y in sorted(events):
+        above, ending, starting, below = events[y]
+        for q in above:
+            locate(q)
+        for k in ending:  # at row y - e: found among the edges equal to it by identity
+            x, _, dx, dy = low[k]
+            i = place(x + dx, y, dx, dy, -1)
+            while active[i] != k:
+                i += 1
+            del active[i]
+        for k in starting:
+            x, _, dx, dy = low[k]
+            active.insert(place(x, y, dx, dy, 1), k)
+        for q in below:
+            locate(q)
+    return out
+
+
+def _swept(edges: np.ndarray, group) -> np.ndarray:
+    """Per edge, whether its polygon's sides come from the sweep (`_sweep_sides`): its
+    midpoint-edge pairs at the same rows (`level_pairs`) pass SWEEP_PAIRS per edge, where
+    the banded pairs of `winding_numbers` would be quadratic (a star, a comb)."""
+    if not len(edges):
+        return np.zeros(0, dtype=bool)
+    group = np.zeros(len(edges), dtype=np.int64) if group is None else np.asarray(group)
+    ys = edges[:, 1::2]
+    lo, hi = np.sort(2 * ys.min(axis=1)), np.sort(2 * ys.max(axis=1))
+    mid = ys.sum(axis=1)
+    met = np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
+    pairs = np.bincount(group, weights=met)
+    sizes = np.bincount(group)
+    return (pairs > SWEEP_PAIRS * sizes)[group]
 
 
 def _group_shift(ys: np.ndarray, group) -> np.ndarray:
