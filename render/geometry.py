@@ -204,6 +204,42 @@ def _sign(v: int) -> int:
     return (v > 0) - (v < 0)
 
 
+def _low_ends(edges: list) -> list[tuple[int, int, int, int]]:
+    """Each edge as its low end (x, y) and its direction (dx, dy) from there, dy >= 0."""
+    return [
+        (ax, ay, bx - ax, by - ay) if ay < by else (bx, by, ax - bx, ay - by)
+        for ax, ay, bx, by in edges
+    ]
+
+
+def _place(active: list, low: list, x: int, y: int, dx: int, dy: int, s: int) -> int:
+    """Where the line through (x, y) of direction (dx, dy > 0) goes in `active` (edges in x
+    order at row y + s e, e > 0 infinitesimal): before the first edge it is not east of."""
+    a, b = 0, len(active)
+    while a < b:
+        m = (a + b) >> 1
+        fx, fy, fdx, fdy = low[active[m]]
+        c = (x - fx) * fdy - (y - fy) * fdx  # its x at row y against f's, times fdy > 0
+        if c < 0 or (c == 0 and s * (dx * fdy - fdx * dy) <= 0):  # then by slope
+            b = m
+        else:
+            a = m + 1
+    return a
+
+
+def _remove(active: list, low: list, k: int, y: int) -> int:
+    """Take edge k out of `active` at its high end's row y (the order at row y - e); its
+    index. Among the edges equal to it there, found by identity."""
+    x, _, dx, dy = low[k]
+    i = _place(active, low, x + dx, y, dx, dy, -1)
+    while i < len(active) and active[i] != k:
+        i += 1
+    if i == len(active):  # only if the order was broken by edges that cross
+        i = active.index(k)
+    del active[i]
+    return i
+
+
 def _first_east(edges: list, points: list, first: list, second: list) -> list[int]:
     """Per perturbed point, the first edge its ray to +x crosses (-1 if none), by a sweep
     down the rows: the edges that cross a row, kept in x order in a list, each point located
@@ -218,31 +254,9 @@ def _first_east(edges: list, points: list, first: list, second: list) -> list[in
     for q, (p, v1, v2) in enumerate(zip(points, first, second, strict=True)):
         below = (v1[1] or v2[1]) > 0  # the point moves down (+y) from its row
         events.setdefault(p[1], [[], [], [], []])[3 if below else 0].append(q)
-    low = [
-        (ax, ay, bx - ax, by - ay) if ay < by else (bx, by, ax - bx, ay - by)
-        for ax, ay, bx, by in edges
-    ]  # from the low end, dy > 0
+    low = _low_ends(edges)
     active: list[int] = []
     out = [-1] * len(points)
-
-    def before(x: int, y: int, dx: int, dy: int, s: int, f: int) -> bool:
-        """Whether the line through (x, y) of direction (dx, dy > 0) is west of active edge f
-        at row y + s e (or equal)."""
-        fx, fy, fdx, fdy = low[f]
-        c = (x - fx) * fdy - (y - fy) * fdx
-        if c:
-            return c < 0
-        return s * (dx * fdy - fdx * dy) <= 0
-
-    def place(x: int, y: int, dx: int, dy: int, s: int) -> int:
-        a, b = 0, len(active)
-        while a < b:
-            m = (a + b) >> 1
-            if before(x, y, dx, dy, s, active[m]):
-                b = m
-            else:
-                a = m + 1
-        return a
 
     def locate(q: int) -> None:
         (px, py), (v1x, v1y), (v2x, v2y) = points[q], first[q], second[q]
@@ -263,18 +277,58 @@ def _first_east(edges: list, points: list, first: list, second: list) -> list[in
         above, ending, starting, below = events[y]
         for q in above:
             locate(q)
-        for k in ending:  # at row y - e: found among the edges equal to it by identity
-            x, _, dx, dy = low[k]
-            i = place(x + dx, y, dx, dy, -1)
-            while active[i] != k:
-                i += 1
-            del active[i]
+        for k in ending:
+            _remove(active, low, k, y)
         for k in starting:
             x, _, dx, dy = low[k]
-            active.insert(place(x, y, dx, dy, 1), k)
+            active.insert(_place(active, low, x, y, dx, dy, 1), k)
         for q in below:
             locate(q)
     return out
+
+
+def _sweep_neighbours(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of edges that are ever neighbours in a sweep's x order (Shamos and Hoey):
+    if any two edges cross, touch one's interior or overlap, some such pair is among them.
+
+    The plane is sheared first, y' = M y + x with M past the x range: an affine map (it
+    keeps every crossing, touch and overlap) under which no edge is horizontal and no two
+    distinct points share a row, so the sweep meets one vertex at a time. Up to the first
+    such point, the edges' order along a row is the same at every row, and the edges
+    through it are neighbours just before it or just after its vertex's insertions; every
+    neighbour pair is recorded when it forms. Zero-length edges are left out (they split
+    nothing). O(n log n) comparisons in Python."""
+    rows = seg.tolist()
+    if not rows:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    m = 2 * (int(seg[:, 0::2].max()) - int(seg[:, 0::2].min())) + 1
+    sheared = [(ax, m * ay + ax, bx, m * by + bx) for ax, ay, bx, by in rows]
+    events: dict[int, list] = {}  # row: edges ending, edges starting
+    for k, (_, ay, _, by) in enumerate(sheared):
+        if ay != by:
+            events.setdefault(max(ay, by), [[], []])[0].append(k)
+            events.setdefault(min(ay, by), [[], []])[1].append(k)
+    low = _low_ends(sheared)
+    active: list[int] = []
+    left, right = [], []
+    for y in sorted(events):
+        ending, starting = events[y]
+        for k in ending:
+            i = _remove(active, low, k, y)
+            if 0 < i < len(active):
+                left.append(active[i - 1])
+                right.append(active[i])
+        for k in starting:
+            x, _, dx, dy = low[k]
+            i = _place(active, low, x, y, dx, dy, 1)
+            if i > 0:
+                left.append(active[i - 1])
+                right.append(k)
+            if i < len(active):
+                left.append(k)
+                right.append(active[i])
+            active.insert(i, k)
+    return np.array(left, dtype=np.int64), np.array(right, dtype=np.int64)
 
 
 def _swept(edges: np.ndarray, group) -> np.ndarray:
@@ -435,6 +489,7 @@ def _round_div(num: int, den: int) -> int:
 
 SAFE = 1 << 30  # |coordinate| below this keeps _may_split's products inside int64
 PAIRS = 1 << 16  # edge pairs per numpy pass of _candidate_pairs (fits in the caches)
+SWEEP_BOXES = 64  # overlapping boxes per edge past which a sweep looks for any split first
 
 
 class NodingLimit(ValueError):
@@ -528,7 +583,11 @@ def _candidate_pairs(seg: np.ndarray):
     A sweep along the axis whose intervals overlap least: with the edges sorted by their low
     end, edge p's partners are the edges after it whose low end is at most p's high end, one
     searchsorted. The other axis and the exact test (`_may_split`) filter them in numpy, in
-    chunks of about PAIRS pairs.
+    chunks of about PAIRS pairs. When that axis gives more than SWEEP_BOXES pairs per edge
+    (a star, a spiral: boxes that all overlap), a sweep's neighbour pairs
+    (`_sweep_neighbours`, O(n log n)) first tell whether any pair splits: if none, there is
+    nothing to yield. (Where some pair does, the pairs are still all tested: quadratic when
+    the boxes overlap so and something crosses.)
     """
     n = len(seg)
     lo = np.minimum(seg[:, 0:2], seg[:, 2:4]).T.copy()  # rows: x, y
@@ -544,6 +603,8 @@ def _candidate_pairs(seg: np.ndarray):
     lo_o, hi_o = lo[1 - axis], hi[1 - axis]
     exact = seg.dtype.kind in "iu" and n and seg.min() > -SAFE and seg.max() < SAFE
     cols = seg.T.astype(np.int64) if exact else None  # rows: x0, y0, x1, y1
+    if exact and best[0] > SWEEP_BOXES * n and not _may_split(cols, *_sweep_neighbours(seg)).any():
+        return  # no two edges split each other: nothing to yield, without the B pairs
     cum = np.cumsum(counts)
     p0 = 0
     while p0 < n:

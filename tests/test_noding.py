@@ -499,3 +499,85 @@ def test_a_radial_star_is_swept(monkeypatch):
     assert geometry._swept(swept.coords, swept.polygon).all()
     assert swept.inside.tolist() == banded.inside.tolist()
     assert (swept.inside != "").sum() > 2000
+
+
+# --- the crossing search's neighbour sweep: it finds a split whenever there is one ----------
+
+
+def _with_defect(contours: list[np.ndarray], rng: np.random.Generator) -> list[np.ndarray]:
+    """Noded contours with at most one defect: a vertex moved onto another edge's midpoint
+    (a T), onto another vertex (a shared end), or an edge doubled back over half of itself
+    (a collinear overlap)."""
+    from edgeaa.render.render import _node
+
+    noded = [c.copy() for c in _node(contours)[0] if len(c) >= 2]
+    if not noded:
+        return noded
+    ci, cj = int(rng.integers(len(noded))), int(rng.integers(len(noded)))
+    c, other = noded[ci], noded[cj]
+    i, j = int(rng.integers(len(c))), int(rng.integers(len(other)))
+    a, b = other[j], other[(j + 1) % len(other)]
+    kind = int(rng.integers(4))
+    if kind == 0 and not ((b - a) % 2).any():
+        c[i] = (a + b) // 2  # on the grid
+    elif kind == 1:
+        c[i] = a
+    elif kind == 2 and not ((b - a) % 2).any():  # a b m b: back over the half m b
+        noded[cj] = np.insert(other, j + 2, [(a + b) // 2, b], axis=0)
+    return noded
+
+
+@settings(derandomize=True, deadline=None, max_examples=400)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    family=st.sampled_from(sorted(set(FAMILIES) - {"huge"})),
+    n=st.integers(2, 30),
+    parts=st.integers(1, 3),
+    defect=st.booleans(),
+)
+def test_the_neighbour_sweep_finds_a_split_whenever_there_is_one(seed, family, n, parts, defect):
+    """Whether any pair of the sweep's neighbours splits is whether any pair at all does (by
+    brute force): on raw random polygons and on noded ones with one defect (few splits,
+    all of them degenerate: T-junctions, shared ends, collinear overlaps, horizontals)."""
+    note(f"input: polygon(seed={seed}, family={family!r}, n={n}, parts={parts}), {defect}")
+    contours = polygon(seed, family, n, parts)
+    if defect:
+        contours = _with_defect(contours, np.random.default_rng(seed))
+    seg = geometry.contour_segments(contours)
+    if not len(seg):
+        return
+    found = geometry._may_split(seg.T.astype(np.int64), *geometry._sweep_neighbours(seg))
+    assert bool(found.any()) == bool(_productive_pairs(seg))
+
+
+@pytest.mark.parametrize("family", sorted(set(FAMILIES) - {"huge"}))
+@pytest.mark.parametrize("seed", range(4))
+def test_split_crossings_is_the_reference_with_the_neighbour_sweep_first(monkeypatch, family, seed):
+    """Every search checked by the sweep first (SWEEP_BOXES 0): the same pairs, so the same
+    splits, as the reference's, raw and noded."""
+    monkeypatch.setattr(geometry, "SWEEP_BOXES", 0)
+    contours = polygon(seed, family, 60 + 40 * seed, parts=1 + seed % 3)
+    assert_same(contours)
+    assert_same(_with_defect(contours, np.random.default_rng(seed)))
+    seg = geometry.contour_segments(contours)
+    assert set(_candidate_pairs(seg)) == _productive_pairs(seg)
+
+
+NEIGHBOUR_CASES = {
+    "an X whose arms meet only after an edge between them ends": [
+        [[0, 0], [10, 10]], [[10, 0], [0, 10]], [[5, 0], [5, 2]],
+    ],
+    "a T: a vertex on a horizontal edge's interior": [[[0, 0], [10, 0]], [[4, 0], [4, 9]]],
+    "a horizontal crossing a vertical": [[[0, 5], [10, 5]], [[4, 0], [4, 9]]],
+    "collinear overlap from one vertex": [[[0, 0], [8, 8]], [[0, 0], [4, 4], [0, 9]]],
+    "shared ends only": [[[0, 0], [8, 8], [8, 0]], [[8, 8], [16, 0], [16, 16]]],
+    "coincident copies only": [[[0, 0], [8, 8], [8, 0]], [[8, 8], [0, 0], [0, 8]]],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(NEIGHBOUR_CASES))
+def test_the_neighbour_sweep_on_hand_made_cases(name):
+    contours = [np.array(c, dtype=np.int64) for c in NEIGHBOUR_CASES[name]]
+    seg = geometry.contour_segments(contours)
+    found = geometry._may_split(seg.T.astype(np.int64), *geometry._sweep_neighbours(seg))
+    assert bool(found.any()) == bool(_productive_pairs(seg)), name
