@@ -334,17 +334,20 @@ def _sweep_neighbours(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def _swept(edges: np.ndarray, group) -> np.ndarray:
     """Per edge, whether its polygon's sides come from the sweep (`_sweep_sides`): its
     midpoint-edge pairs at the same rows (`level_pairs`) pass SWEEP_PAIRS per edge, where
-    the banded pairs of `winding_numbers` would be quadratic (a star, a comb)."""
+    the banded pairs of `winding_numbers` would be quadratic (a star, a comb). The edges'
+    polygons already stacked by `side_fills`."""
     if not len(edges):
         return np.zeros(0, dtype=bool)
     group = np.zeros(len(edges), dtype=np.int64) if group is None else np.asarray(group)
-    ys = edges[:, 1::2]
+    pairs = np.bincount(group, weights=_level_counts(edges[:, 1::2]))
+    return (pairs > SWEEP_PAIRS * np.bincount(group))[group]
+
+
+def _level_counts(ys: np.ndarray) -> np.ndarray:
+    """Per edge (its two y), how many edges' closed y ranges hold its midpoint."""
     lo, hi = np.sort(2 * ys.min(axis=1)), np.sort(2 * ys.max(axis=1))
-    mid = ys.sum(axis=1)
-    met = np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
-    pairs = np.bincount(group, weights=met)
-    sizes = np.bincount(group)
-    return (pairs > SWEEP_PAIRS * sizes)[group]
+    mid = ys.sum(axis=1)  # doubled, as side_fills tests them
+    return np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
 
 
 def _group_shift(ys: np.ndarray, group) -> np.ndarray:
@@ -354,18 +357,16 @@ def _group_shift(ys: np.ndarray, group) -> np.ndarray:
 
 
 def level_pairs(edges: np.ndarray, group: np.ndarray | None = None) -> int:
-    """How many (midpoint, edge) pairs `side_fills` tests, twice: per edge midpoint, the
-    edges of its polygon whose closed y range holds it (O(E log E), nothing tested)."""
+    """How many (midpoint, edge) pairs the banded `winding_numbers` would test for
+    `side_fills`, twice: per edge midpoint, the edges of its polygon whose closed y range
+    holds it (O(E log E), nothing tested; polygons past SWEEP_PAIRS per edge are swept)."""
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
     if not len(edges):
         return 0
     ys = edges[:, 1::2]
     if group is not None:
         ys = ys + _group_shift(ys, group)
-    lo, hi = np.sort(2 * ys.min(axis=1)), np.sort(2 * ys.max(axis=1))
-    mid = ys.sum(axis=1)  # doubled, as side_fills tests them
-    met = np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
-    return 2 * int(met.sum())
+    return 2 * int(_level_counts(ys).sum())
 
 
 def inside_sides(
