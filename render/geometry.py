@@ -143,12 +143,211 @@ def side_fills(
     mid = edges[:, 0:2] + edges[:, 2:4]  # the midpoint, doubled
     d = edges[:, 2:4] - edges[:, 0:2]
     normal = np.stack([d[:, 1], -d[:, 0]], axis=1)
-    left = winding_numbers(doubled, mid, normal, d)
-    right = winding_numbers(doubled, mid, -normal, d)
+    left = np.zeros(len(edges), dtype=np.int64)
+    right = np.zeros(len(edges), dtype=np.int64)
+    swept = _swept(edges, group)  # polygons whose banded pairs would be too many
+    band = ~swept  # the polygons' y ranges are disjoint: each part counts its own edges
+    left[band] = winding_numbers(doubled[band], mid[band], normal[band], d[band])
+    right[band] = winding_numbers(doubled[band], mid[band], -normal[band], d[band])
+    if swept.any():
+        k = len(np.flatnonzero(swept))
+        points = np.concatenate([mid[swept]] * 2)
+        first = np.concatenate([normal[swept], -normal[swept]])
+        second = np.concatenate([d[swept]] * 2)
+        w = _sweep_sides(doubled[swept], points, first, second)
+        left[swept], right[swept] = w[:k], w[k:]
     if isinstance(rule, str):
         return fills(left, rule), fills(right, rule)
     odd = np.asarray(rule) == "evenodd"
     return tuple(np.where(odd, fills(w, "evenodd"), fills(w, "nonzero")) for w in (left, right))
+
+
+def _sweep_sides(edges: np.ndarray, points, first, second) -> np.ndarray:
+    """`winding_numbers` of the perturbed points for noded edges (none crosses or touches
+    another's interior), from the sweep's first edge east of each point (`_first_east`):
+    the point's face is the face just west of that edge, whose winding number is the face's
+    just east of it plus the edge's and its coincident copies' crossings (+1 down, -1 up);
+    and the face just east of an edge is the face of its own east midpoint query when that
+    is among the points. So each point's winding number is a sum along a chain of points,
+    taken by pointer doubling: O(P log P) in numpy after the sweep's O((E + P) log E).
+
+    The points must be the edges' midpoints perturbed to both sides, as `side_fills` makes
+    them: first the east or west of edge k for k < E, then the other side (E + k)."""
+    n = len(edges)
+    east_of = _first_east(edges.tolist(), points.tolist(), first.tolist(), second.tolist())
+    h = np.array(east_of, dtype=np.int64)
+    swap = (edges[:, 0] > edges[:, 2]) | (
+        (edges[:, 0] == edges[:, 2]) & (edges[:, 1] > edges[:, 3])
+    )
+    canon = np.where(swap[:, None], edges[:, [2, 3, 0, 1]], edges)
+    _, cls = np.unique(canon, axis=0, return_inverse=True)
+    cls = cls.reshape(-1)
+    step = np.bincount(cls, weights=np.sign(edges[:, 3] - edges[:, 1])).astype(np.int64)
+    # the query on the east of edge k: the first (M + e1 n, n = (dy, -dx)) when dy > 0
+    east = np.where(first[:n, 0] > 0, np.arange(n), n + np.arange(n))
+    found = h >= 0
+    nxt = np.where(found, east[np.maximum(h, 0)], -1)
+    w = np.where(found, step[cls[np.maximum(h, 0)]], 0)
+    for _ in range(64):
+        more = nxt >= 0
+        if not more.any():
+            return w
+        w = w + np.where(more, w[np.maximum(nxt, 0)], 0)
+        nxt = np.where(more, nxt[np.maximum(nxt, 0)], -1)
+    raise RuntimeError("the sweep's chain of faces did not end (a bug: please report)")
+
+
+SWEEP_PAIRS = 64  # level pairs per edge past which a polygon's sides come from the sweep
+
+
+def _sign(v: int) -> int:
+    return (v > 0) - (v < 0)
+
+
+def _low_ends(edges: list) -> list[tuple[int, int, int, int]]:
+    """Each edge as its low end (x, y) and its direction (dx, dy) from there, dy >= 0."""
+    return [
+        (ax, ay, bx - ax, by - ay) if ay < by else (bx, by, ax - bx, ay - by)
+        for ax, ay, bx, by in edges
+    ]
+
+
+def _place(active: list, low: list, x: int, y: int, dx: int, dy: int, s: int) -> int:
+    """Where the line through (x, y) of direction (dx, dy > 0) goes in `active` (edges in x
+    order at row y + s e, e > 0 infinitesimal): before the first edge it is not east of."""
+    a, b = 0, len(active)
+    while a < b:
+        m = (a + b) >> 1
+        fx, fy, fdx, fdy = low[active[m]]
+        c = (x - fx) * fdy - (y - fy) * fdx  # its x at row y against f's, times fdy > 0
+        if c < 0 or (c == 0 and s * (dx * fdy - fdx * dy) <= 0):  # then by slope
+            b = m
+        else:
+            a = m + 1
+    return a
+
+
+def _remove(active: list, low: list, k: int, y: int) -> int:
+    """Take edge k out of `active` at its high end's row y (the order at row y - e); its
+    index. Among the edges equal to it there, found by identity."""
+    x, _, dx, dy = low[k]
+    i = _place(active, low, x + dx, y, dx, dy, -1)
+    while i < len(active) and active[i] != k:
+        i += 1
+    if i == len(active):  # only if the order was broken by edges that cross
+        i = active.index(k)
+    del active[i]
+    return i
+
+
+def _first_east(edges: list, points: list, first: list, second: list) -> list[int]:
+    """Per perturbed point, the first edge its ray to +x crosses (-1 if none), by a sweep
+    down the rows: the edges that cross a row, kept in x order in a list, each point located
+    among them by binary search with the exact test of `winding_numbers`. The order of two
+    edges never changes along the rows only while no edge crosses or touches another's
+    interior (noded edges, as the plan's are). O((E + P) log E) comparisons."""
+    events: dict[int, list] = {}  # y: points above it, edges ending, starting, points below
+    for k, (_, ay, _, by) in enumerate(edges):
+        if ay != by:
+            events.setdefault(max(ay, by), [[], [], [], []])[1].append(k)
+            events.setdefault(min(ay, by), [[], [], [], []])[2].append(k)
+    for q, (p, v1, v2) in enumerate(zip(points, first, second, strict=True)):
+        below = (v1[1] or v2[1]) > 0  # the point moves down (+y) from its row
+        events.setdefault(p[1], [[], [], [], []])[3 if below else 0].append(q)
+    low = _low_ends(edges)
+    active: list[int] = []
+    out = [-1] * len(points)
+
+    def locate(q: int) -> None:
+        (px, py), (v1x, v1y), (v2x, v2y) = points[q], first[q], second[q]
+        a, b = 0, len(active)
+        while a < b:
+            m = (a + b) >> 1
+            ax, ay, bx, by = edges[active[m]]
+            ex, ey = bx - ax, by - ay
+            t = ex * (py - ay) - (px - ax) * ey or ex * v1y - v1x * ey or ex * v2y - v2x * ey
+            if _sign(t) * _sign(ey) > 0:  # the point is west of this edge
+                b = m
+            else:
+                a = m + 1
+        if a < len(active):
+            out[q] = active[a]
+
+    for y in sorted(events):
+        above, ending, starting, below = events[y]
+        for q in above:
+            locate(q)
+        for k in ending:
+            _remove(active, low, k, y)
+        for k in starting:
+            x, _, dx, dy = low[k]
+            active.insert(_place(active, low, x, y, dx, dy, 1), k)
+        for q in below:
+            locate(q)
+    return out
+
+
+def _sweep_neighbours(seg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every pair of edges that are ever neighbours in a sweep's x order (Shamos and Hoey):
+    if any two edges cross, touch one's interior or overlap, some such pair is among them.
+
+    The plane is sheared first, y' = M y + x with M past the x range: an affine map (it
+    keeps every crossing, touch and overlap) under which no edge is horizontal and no two
+    distinct points share a row, so the sweep meets one vertex at a time. Up to the first
+    such point, the edges' order along a row is the same at every row, and the edges
+    through it are neighbours just before it or just after its vertex's insertions; every
+    neighbour pair is recorded when it forms. Zero-length edges are left out (they split
+    nothing). O(n log n) comparisons in Python."""
+    rows = seg.tolist()
+    if not rows:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    m = 2 * (int(seg[:, 0::2].max()) - int(seg[:, 0::2].min())) + 1
+    sheared = [(ax, m * ay + ax, bx, m * by + bx) for ax, ay, bx, by in rows]
+    events: dict[int, list] = {}  # row: edges ending, edges starting
+    for k, (_, ay, _, by) in enumerate(sheared):
+        if ay != by:
+            events.setdefault(max(ay, by), [[], []])[0].append(k)
+            events.setdefault(min(ay, by), [[], []])[1].append(k)
+    low = _low_ends(sheared)
+    active: list[int] = []
+    left, right = [], []
+    for y in sorted(events):
+        ending, starting = events[y]
+        for k in ending:
+            i = _remove(active, low, k, y)
+            if 0 < i < len(active):
+                left.append(active[i - 1])
+                right.append(active[i])
+        for k in starting:
+            x, _, dx, dy = low[k]
+            i = _place(active, low, x, y, dx, dy, 1)
+            if i > 0:
+                left.append(active[i - 1])
+                right.append(k)
+            if i < len(active):
+                left.append(k)
+                right.append(active[i])
+            active.insert(i, k)
+    return np.array(left, dtype=np.int64), np.array(right, dtype=np.int64)
+
+
+def _swept(edges: np.ndarray, group) -> np.ndarray:
+    """Per edge, whether its polygon's sides come from the sweep (`_sweep_sides`): its
+    midpoint-edge pairs at the same rows (`level_pairs`) pass SWEEP_PAIRS per edge, where
+    the banded pairs of `winding_numbers` would be quadratic (a star, a comb). The edges'
+    polygons already stacked by `side_fills`."""
+    if not len(edges):
+        return np.zeros(0, dtype=bool)
+    group = np.zeros(len(edges), dtype=np.int64) if group is None else np.asarray(group)
+    pairs = np.bincount(group, weights=_level_counts(edges[:, 1::2]))
+    return (pairs > SWEEP_PAIRS * np.bincount(group))[group]
+
+
+def _level_counts(ys: np.ndarray) -> np.ndarray:
+    """Per edge (its two y), how many edges' closed y ranges hold its midpoint."""
+    lo, hi = np.sort(2 * ys.min(axis=1)), np.sort(2 * ys.max(axis=1))
+    mid = ys.sum(axis=1)  # doubled, as side_fills tests them
+    return np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
 
 
 def _group_shift(ys: np.ndarray, group) -> np.ndarray:
@@ -158,18 +357,16 @@ def _group_shift(ys: np.ndarray, group) -> np.ndarray:
 
 
 def level_pairs(edges: np.ndarray, group: np.ndarray | None = None) -> int:
-    """How many (midpoint, edge) pairs `side_fills` tests, twice: per edge midpoint, the
-    edges of its polygon whose closed y range holds it (O(E log E), nothing tested)."""
+    """How many (midpoint, edge) pairs the banded `winding_numbers` would test for
+    `side_fills`, twice: per edge midpoint, the edges of its polygon whose closed y range
+    holds it (O(E log E), nothing tested; polygons past SWEEP_PAIRS per edge are swept)."""
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
     if not len(edges):
         return 0
     ys = edges[:, 1::2]
     if group is not None:
         ys = ys + _group_shift(ys, group)
-    lo, hi = np.sort(2 * ys.min(axis=1)), np.sort(2 * ys.max(axis=1))
-    mid = ys.sum(axis=1)  # doubled, as side_fills tests them
-    met = np.searchsorted(lo, mid, side="right") - np.searchsorted(hi, mid, side="left")
-    return 2 * int(met.sum())
+    return 2 * int(_level_counts(ys).sum())
 
 
 def inside_sides(
@@ -293,6 +490,7 @@ def _round_div(num: int, den: int) -> int:
 
 SAFE = 1 << 30  # |coordinate| below this keeps _may_split's products inside int64
 PAIRS = 1 << 16  # edge pairs per numpy pass of _candidate_pairs (fits in the caches)
+SWEEP_BOXES = 64  # overlapping boxes per edge past which a sweep looks for any split first
 
 
 class NodingLimit(ValueError):
@@ -386,7 +584,11 @@ def _candidate_pairs(seg: np.ndarray):
     A sweep along the axis whose intervals overlap least: with the edges sorted by their low
     end, edge p's partners are the edges after it whose low end is at most p's high end, one
     searchsorted. The other axis and the exact test (`_may_split`) filter them in numpy, in
-    chunks of about PAIRS pairs.
+    chunks of about PAIRS pairs. When that axis gives more than SWEEP_BOXES pairs per edge
+    (a star, a spiral: boxes that all overlap), a sweep's neighbour pairs
+    (`_sweep_neighbours`, O(n log n)) first tell whether any pair splits: if none, there is
+    nothing to yield. (Where some pair does, the pairs are still all tested: quadratic when
+    the boxes overlap so and something crosses.)
     """
     n = len(seg)
     lo = np.minimum(seg[:, 0:2], seg[:, 2:4]).T.copy()  # rows: x, y
@@ -402,6 +604,8 @@ def _candidate_pairs(seg: np.ndarray):
     lo_o, hi_o = lo[1 - axis], hi[1 - axis]
     exact = seg.dtype.kind in "iu" and n and seg.min() > -SAFE and seg.max() < SAFE
     cols = seg.T.astype(np.int64) if exact else None  # rows: x0, y0, x1, y1
+    if exact and best[0] > SWEEP_BOXES * n and not _may_split(cols, *_sweep_neighbours(seg)).any():
+        return  # no two edges split each other: nothing to yield, without the B pairs
     cum = np.cumsum(counts)
     p0 = 0
     while p0 < n:

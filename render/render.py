@@ -51,12 +51,10 @@ from .geometry import (
     contour_segments,
     hot_points,
     inside_sides,
-    level_pairs,
     snap_round,
     split_crossings,
 )
 from .scene import (
-    MAX_INSIDE_PAIRS,
     MAX_NODED_EDGES,
     MAX_STEPPED_COLUMNS,
     Scene,
@@ -475,14 +473,6 @@ def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
     counts = np.diff(np.asarray(starts, dtype=np.int64))
     group = np.repeat(np.arange(len(scene.polygons)), counts)
     rules = np.array([p.fill_rule for p in scene.polygons] or ["nonzero"])[group]
-    pairs = level_pairs(coords, group)
-    if pairs > MAX_INSIDE_PAIRS:
-        raise SceneError(
-            f"the inside test of the scene's {len(coords):,} edges (after splitting) would "
-            f"compare {pairs:,} pairs of an edge's midpoint and an edge level with it, more "
-            f"than the limit of {MAX_INSIDE_PAIRS:,} (about 20 s): polygons with many edges "
-            "spanning the same rows (a comb of tall teeth); split them into smaller polygons"
-        )
     inside = inside_sides(coords, rules, group).astype("<U5")
     return inside, _drop_coincident(coords, inside, group)
 

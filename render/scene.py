@@ -35,7 +35,6 @@ MAX_PIXELS = 1 << 24  # width x height: 16,777,216 (4096 x 4096); the image is i
 MAX_EDGES = 400_000  # edges of a scene, curves flattened
 MAX_POLYGON_EDGES = 20_000  # edges of one polygon as written (curve pieces included)
 MAX_NODED_EDGES = 100_000  # edges of one polygon after splitting at crossings (docs/scenes.md)
-MAX_INSIDE_PAIRS = 300_000_000  # (midpoint, level edge) pairs of the inside test: about 20 s
 MAX_STEPPED_COLUMNS = 4_000_000  # columns the engine steps in a scene: about 1.7 GB at peak
 MAX_COORD = float(1 << 20)  # px, |x| and |y|: 16 times the widest coordinate range
 FILL_RULES = {"nonzero": "nonzero", "non-zero": "nonzero", "evenodd": "evenodd"}

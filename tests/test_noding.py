@@ -383,3 +383,201 @@ def test_a_polygon_that_splitting_again_never_nodes_is_snap_rounded():
     pieces = [plan.coords[plan.contour == c][:, 0:2] for c in np.unique(plan.contour)]
     assert crossings_left(pieces) == []
     assert render_scene(plan).image.any()
+
+
+# --- the fill-rule sides from the sweep against the banded winding numbers ------------------
+
+
+def _as_quantized(contours: list[np.ndarray]) -> list[np.ndarray]:
+    """The contours as the plan's quantization leaves them: no vertex repeated in a row (no
+    zero-length edge, whose midpoint has no sides), at least 3 distinct vertices each."""
+    out = []
+    for c in contours:
+        c = c[np.any(c != np.roll(c, 1, axis=0), axis=1)]
+        if len(np.unique(c, axis=0)) >= 3:
+            out.append(c)
+    return out
+
+
+def _sides_both_ways(monkeypatch, edges, rules, group=None):
+    """side_fills with every polygon swept and with none (the banded winding numbers)."""
+    monkeypatch.setattr(geometry, "SWEEP_PAIRS", 0)
+    swept = geometry.side_fills(edges, rules, group)
+    monkeypatch.setattr(geometry, "SWEEP_PAIRS", 10**18)
+    banded = geometry.side_fills(edges, rules, group)
+    return swept, banded
+
+
+@settings(derandomize=True, deadline=None, max_examples=300)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    family=st.sampled_from(sorted(set(FAMILIES) - {"huge"})),  # past int64: refused by plans
+    n=st.integers(1, 80),
+    parts=st.integers(1, 4),
+    polygons=st.integers(1, 3),
+)
+def test_the_swept_sides_are_the_banded_ones_on_noded_polygons(seed, family, n, parts, polygons):
+    """Noded by the plan's noding (`render._node`): self-intersecting stars, soups, walks,
+    collinear overlaps, shared and repeated vertices, many vertices in one pixel; several
+    polygons at once (stacked by group) with both fill rules."""
+    import pytest as _pytest
+
+    from edgeaa.render.render import _node
+
+    note(f"input: polygon(seed={seed}, family={family!r}, n={n}, parts={parts}) x {polygons}")
+    edges, group, rules = [], [], []
+    for g in range(polygons):
+        noded, _ = _node(_as_quantized(polygon(seed + g, family, n, parts)))
+        seg = geometry.contour_segments([c for c in noded if len(c) >= 2])
+        edges.append(seg)
+        group += [g] * len(seg)
+        rules += ["evenodd" if (seed + g) % 2 else "nonzero"] * len(seg)
+    edges = np.concatenate(edges)
+    mp = _pytest.MonkeyPatch()
+    try:
+        swept, banded = _sides_both_ways(mp, edges, np.array(rules), np.array(group))
+    finally:
+        mp.undo()
+    for s, b in zip(swept, banded, strict=True):
+        assert s.tolist() == b.tolist()
+
+
+def radial_star(n: int) -> tuple:
+    """n vertices alternating 240 px and 20 px from the centre of a 512 px square: every
+    edge spans most of the rows (the banded pairs' quadratic case)."""
+    a = 2 * np.pi * np.arange(n) / n
+    r = np.where(np.arange(n) % 2 == 0, 240.0, 20.0)
+    return tuple(zip((256 + r * np.cos(a)).tolist(), (256 + r * np.sin(a)).tolist(), strict=True))
+
+
+def _plans_both_ways(monkeypatch, scene):
+    from edgeaa.model import EdgeConfig
+    from edgeaa.render import plan_scene
+
+    monkeypatch.setattr(geometry, "SWEEP_PAIRS", 0)
+    swept = plan_scene(scene, EdgeConfig())
+    monkeypatch.setattr(geometry, "SWEEP_PAIRS", 10**18)
+    banded = plan_scene(scene, EdgeConfig())
+    return swept, banded
+
+
+def _corpus_scenes():
+    from edgeaa.model import EdgeConfig
+    from edgeaa.render import Polygon, Scene, builtin
+    from edgeaa.render.builtin import BUILTINS
+    from edgeaa.render.corpus import adversarial_scenes, font_scene
+
+    scenes = [builtin(name, EdgeConfig()) for name in BUILTINS]
+    scenes += [font_scene(font, size)[0] for font in ("DejaVuSans", "cmr10") for size in (9, 32)]
+    scenes += list(adversarial_scenes())
+    sliver = ((1.0, 1.0), (500.0, 1.5), (1.0, 1.25), (500.0, 1.0), (1.0, 2.0))
+    stars = [
+        Polygon((radial_star(n),), 200, rule) for n, rule in ((600, "nonzero"), (300, "evenodd"))
+    ]
+    scenes.append(Scene(512, 512, (*stars, Polygon((sliver,), 100, "evenodd")), background=0))
+    return scenes
+
+
+def test_the_plans_are_the_same_swept_or_banded(monkeypatch):
+    """The built-ins, fonts, the corpus's adversarial scenes, two radial stars and a
+    self-crossing sliver: every edge's inside side (so every image) the same both ways."""
+    for scene in _corpus_scenes():
+        swept, banded = _plans_both_ways(monkeypatch, scene)
+        assert np.array_equal(swept.coords, banded.coords), scene.name
+        assert swept.inside.tolist() == banded.inside.tolist(), scene.name
+        assert swept.duplicates == banded.duplicates, scene.name
+
+
+def test_a_radial_star_is_swept(monkeypatch):
+    """3,000 vertices (the radial star of benchmarks/bench_sweep.py): the plan sweeps it and
+    gets the banded winding numbers' sides."""
+    from edgeaa.render import Polygon, Scene
+
+    scene = Scene(512, 512, (Polygon((radial_star(3000),), 255, "nonzero"),), background=0)
+    swept, banded = _plans_both_ways(monkeypatch, scene)
+    monkeypatch.undo()
+    assert geometry._swept(swept.coords, swept.polygon).all()
+    assert swept.inside.tolist() == banded.inside.tolist()
+    assert (swept.inside != "").sum() > 2000
+
+
+# --- the crossing search's neighbour sweep: it finds a split whenever there is one ----------
+
+
+def _with_defect(contours: list[np.ndarray], rng: np.random.Generator) -> list[np.ndarray]:
+    """Noded contours with at most one defect: a vertex moved onto another edge's midpoint
+    (a T), onto another vertex (a shared end), or an edge doubled back over half of itself
+    (a collinear overlap)."""
+    from edgeaa.render.render import _node
+
+    noded = [c.copy() for c in _node(contours)[0] if len(c) >= 2]
+    if not noded:
+        return noded
+    ci, cj = int(rng.integers(len(noded))), int(rng.integers(len(noded)))
+    c, other = noded[ci], noded[cj]
+    i, j = int(rng.integers(len(c))), int(rng.integers(len(other)))
+    a, b = other[j], other[(j + 1) % len(other)]
+    kind = int(rng.integers(4))
+    if kind == 0 and not ((b - a) % 2).any():
+        c[i] = (a + b) // 2  # on the grid
+    elif kind == 1:
+        c[i] = a
+    elif kind == 2 and not ((b - a) % 2).any():  # a b m b: back over the half m b
+        noded[cj] = np.insert(other, j + 2, [(a + b) // 2, b], axis=0)
+    return noded
+
+
+@settings(derandomize=True, deadline=None, max_examples=400)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    family=st.sampled_from(sorted(set(FAMILIES) - {"huge"})),
+    n=st.integers(2, 30),
+    parts=st.integers(1, 3),
+    defect=st.booleans(),
+)
+def test_the_neighbour_sweep_finds_a_split_whenever_there_is_one(seed, family, n, parts, defect):
+    """Whether any pair of the sweep's neighbours splits is whether any pair at all does (by
+    brute force): on raw random polygons and on noded ones with one defect (few splits,
+    all of them degenerate: T-junctions, shared ends, collinear overlaps, horizontals)."""
+    note(f"input: polygon(seed={seed}, family={family!r}, n={n}, parts={parts}), {defect}")
+    contours = polygon(seed, family, n, parts)
+    if defect:
+        contours = _with_defect(contours, np.random.default_rng(seed))
+    seg = geometry.contour_segments(contours)
+    if not len(seg):
+        return
+    found = geometry._may_split(seg.T.astype(np.int64), *geometry._sweep_neighbours(seg))
+    assert bool(found.any()) == bool(_productive_pairs(seg))
+
+
+@pytest.mark.parametrize("family", sorted(set(FAMILIES) - {"huge"}))
+@pytest.mark.parametrize("seed", range(4))
+def test_split_crossings_is_the_reference_with_the_neighbour_sweep_first(monkeypatch, family, seed):
+    """Every search checked by the sweep first (SWEEP_BOXES 0): the same pairs, so the same
+    splits, as the reference's, raw and noded."""
+    monkeypatch.setattr(geometry, "SWEEP_BOXES", 0)
+    contours = polygon(seed, family, 60 + 40 * seed, parts=1 + seed % 3)
+    assert_same(contours)
+    assert_same(_with_defect(contours, np.random.default_rng(seed)))
+    seg = geometry.contour_segments(contours)
+    assert set(_candidate_pairs(seg)) == _productive_pairs(seg)
+
+
+NEIGHBOUR_CASES = {
+    "an X whose arms meet only after an edge between them ends": [
+        [[0, 0], [10, 10]], [[10, 0], [0, 10]], [[5, 0], [5, 2]],
+    ],
+    "a T: a vertex on a horizontal edge's interior": [[[0, 0], [10, 0]], [[4, 0], [4, 9]]],
+    "a horizontal crossing a vertical": [[[0, 5], [10, 5]], [[4, 0], [4, 9]]],
+    "collinear overlap from one vertex": [[[0, 0], [8, 8]], [[0, 0], [4, 4], [0, 9]]],
+    "shared ends only": [[[0, 0], [8, 8], [8, 0]], [[8, 8], [16, 0], [16, 16]]],
+    "coincident copies only": [[[0, 0], [8, 8], [8, 0]], [[8, 8], [0, 0], [0, 8]]],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", sorted(NEIGHBOUR_CASES))
+def test_the_neighbour_sweep_on_hand_made_cases(name):
+    contours = [np.array(c, dtype=np.int64) for c in NEIGHBOUR_CASES[name]]
+    seg = geometry.contour_segments(contours)
+    found = geometry._may_split(seg.T.astype(np.int64), *geometry._sweep_neighbours(seg))
+    assert bool(found.any()) == bool(_productive_pairs(seg)), name

@@ -1248,21 +1248,20 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
     assert len(commands) <= count <= 1.1 * len(commands)
 
 
-def test_the_inside_test_and_the_engine_refuse_work_past_their_limits(monkeypatch):
-    """A comb of tall teeth: every midpoint is level with every edge (the inside test's
-    pairs), and every edge steps the image's height (the engine's columns)."""
+def test_a_comb_is_swept_and_the_engine_refuses_work_past_its_limit(monkeypatch):
+    """A comb of tall teeth: every midpoint is level with every edge, so its inside sides
+    come from the sweep (no limit on those pairs any more), and every edge steps the
+    image's height (the engine's columns, still limited)."""
+    from edgeaa.render import geometry
     from edgeaa.render import render as planner
-    from edgeaa.render.geometry import level_pairs
 
     teeth = [p for k in range(40) for p in ((2 + k, 1.0), (2.5 + k, 60.0))]
     comb = Scene(64, 64, (Polygon((tuple(teeth),)),))
     whole = plan(comb, DEFAULT)
-    pairs = level_pairs(whole.coords, whole.polygon)
-    assert pairs > 80 * 80  # each of the 80 teeth's edges is level with the others
-    monkeypatch.setattr(planner, "MAX_INSIDE_PAIRS", pairs - 1)
-    with pytest.raises(SceneError, match=f"limit of {pairs - 1:,}"):
-        plan(comb, DEFAULT)
-    monkeypatch.setattr(planner, "MAX_INSIDE_PAIRS", pairs)
+    assert geometry.level_pairs(whole.coords, whole.polygon) > 80 * 80
+    assert geometry._swept(whole.coords, whole.polygon).all()
+    monkeypatch.setattr(geometry, "SWEEP_PAIRS", 1 << 62)
+    assert plan(comb, DEFAULT).inside.tolist() == whole.inside.tolist()
     monkeypatch.setattr(planner, "MAX_STEPPED_COLUMNS", 80 * 59 - 1)
     with pytest.raises(SceneError, match="columns"):
         render_scene(comb, DEFAULT)
