@@ -836,14 +836,19 @@ def _draw_disjoint(plan: Plan, run: list[int], deltas: DeltaRun, picks, image, c
     counts["cells"] += int(width.sum())
     r, c = np.nonzero(q)
     mine = owner[r]
-    pixel_rows, pixel_cols = image_row[r], c + x0[mine]
-    below = image[pixel_rows, pixel_cols].astype(np.int64)
     qq = q[r, c].astype(np.int64)
-    full = qq == d[mine]  # whole pixels take the intensity, no division
-    new = np.where(full, value[mine], composite(below, qq, value[mine], d[mine]))
+    _composite_into(image, image_row[r], c + x0[mine], qq, value[mine], d[mine], counts)
+
+
+def _composite_into(image, rows, cols, q, value, d, counts) -> None:
+    """Composite `value` at coverage `q` of `d` over the image's pixels (rows, cols) (each
+    may be an array, one per pixel), storing only the pixels that change."""
+    below = image[rows, cols].astype(np.int64)
+    full = q == d  # whole pixels take the intensity, no division
+    new = np.where(full, value, composite(below, q, value, d))
     changed = new != below
     counts["stores"] += int(np.count_nonzero(changed))
-    image[pixel_rows[changed], pixel_cols[changed]] = new[changed]
+    image[rows[changed], cols[changed]] = new[changed]
 
 
 def _draw_polygon(
@@ -868,9 +873,4 @@ def _draw_polygon(
             canvas.draw(poly.index, rows, cols, qq, d)
             counts["stores"] += len(qq)
             continue
-        below = image[rows, cols].astype(np.int64)
-        full = qq == d  # whole pixels take the intensity, no division
-        new = np.where(full, poly.intensity, composite(below, qq, poly.intensity, d))
-        changed = new != below
-        counts["stores"] += int(np.count_nonzero(changed))
-        image[rows[changed], cols[changed]] = new[changed]
+        _composite_into(image, rows, cols, qq, poly.intensity, d, counts)
