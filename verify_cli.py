@@ -168,7 +168,8 @@ class VerifyCommand(Command):
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
-        from .sim.verification.regress import ClusterUnavailable, RunMismatch, ShardStore
+        from .sim.verification.records import RunMismatch, ShardStore
+        from .sim.verification.regress import ClusterUnavailable
 
         plan, workers, cluster = self._plan(args)
         try:

@@ -21,7 +21,7 @@ import platform
 import pstats
 
 from edgeaa.model import EdgeConfig
-from edgeaa.sim.verification import regress
+from edgeaa.sim.verification import records, regress
 from edgeaa.sim.verification.shards import CompiledCore, ShardTask, check_shard, default_shards
 
 PROJECTED_EDGES = 10**9
@@ -35,9 +35,9 @@ def measure(config: EdgeConfig, edges: int, seed: int, workers: int) -> dict:
     runner = regress.open_runner(config, "verilator", workers, cluster=None)
     try:
         warm_up = regress.Plan(config, 100 * workers, workers, seed + 1)
-        regress.run_plan(warm_up, runner, regress.ShardStore(None, warm_up.manifest()))
+        regress.run_plan(warm_up, runner, records.ShardStore(None, warm_up.manifest()))
         plan = regress.Plan(config, edges, default_shards(edges), seed)
-        summary = regress.run_plan(plan, runner, regress.ShardStore(None, plan.manifest()))
+        summary = regress.run_plan(plan, runner, records.ShardStore(None, plan.manifest()))
     finally:
         runner.close()
     if not summary["passed"]:

@@ -18,7 +18,7 @@ import pytest
 from edgeaa.cli import main
 from edgeaa.model import EdgeConfig, run_edge
 from edgeaa.model.beat import COLUMN
-from edgeaa.sim.verification import regress, scene_shards, shards
+from edgeaa.sim.verification import records, regress, scene_shards, shards
 from edgeaa.sim.verification.scoreboard import beats_to_array, expected_beats
 from edgeaa.sim.verification.workloads import random_scene, random_sim_edges
 
@@ -38,8 +38,8 @@ def no_cluster_from_the_environment(monkeypatch):
     monkeypatch.delenv(regress.ADDRESS_VARIABLE, raising=False)
 
 
-def records(directory) -> list[str]:
-    return (directory / regress.RECORDS).read_text().splitlines(keepends=True)
+def record_lines(directory) -> list[str]:
+    return (directory / records.RECORDS).read_text().splitlines(keepends=True)
 
 
 def without_times(record: dict) -> dict:
@@ -106,7 +106,7 @@ def test_a_run_on_a_local_dask_cluster_gives_the_pools_records(capsys, tmp_path)
     assert status == 0, err
 
     def by_index(directory):
-        rows = [without_times(json.loads(line)) for line in records(tmp_path / directory)]
+        rows = [without_times(json.loads(line)) for line in record_lines(tmp_path / directory)]
         return sorted(rows, key=lambda record: record["index"])
 
     assert by_index("dask") == by_index("pool")
@@ -144,7 +144,7 @@ def test_progress_shows_edges_per_second_and_time_left(monkeypatch):
     stream = io.StringIO()
     bar = progress.ProgressBar("verify", plan.edges, stream=stream, delay=0.0, unit="edges")
     runner = regress.open_runner(DEFAULT, "verilator", workers=0, cluster=None)
-    summary = regress.run_plan(plan, runner, regress.ShardStore(None, plan.manifest()), bar)
+    summary = regress.run_plan(plan, runner, records.ShardStore(None, plan.manifest()), bar)
     lines = stream.getvalue().splitlines()
     pieces = [30, 50, 80, 100, 100]  # streams of 50 edges: pieces of 30 and 20, then the shard
     done = [int(line.split("(")[1].split("/")[0]) for line in lines]
@@ -166,7 +166,7 @@ def test_a_local_pool_shows_progress_inside_a_shard():
         summary = regress.run_plan(
             plan,
             runner,
-            regress.ShardStore(None, plan.manifest()),
+            records.ShardStore(None, plan.manifest()),
             progress=lambda *args: seen.append(args[0]),
         )
     finally:
@@ -281,7 +281,7 @@ def test_a_crashing_worker_is_reported_and_not_recorded(capsys, monkeypatch, tmp
     )
     assert status == 1 and [m["kind"] for m in summary["mismatches"]] == ["crash", "crash"]
     assert "segmentation fault" in summary["mismatches"][0]["message"]
-    assert not (tmp_path / regress.RECORDS).exists()  # a rerun tries them again
+    assert not (tmp_path / records.RECORDS).exists()  # a rerun tries them again
 
 
 # -- scenes through the pipeline ------------------------------------------------------------
@@ -315,8 +315,8 @@ def test_a_scene_run_checks_every_pixel_and_resumes(capsys, monkeypatch, tmp_pat
     assert (first["scenes_checked"], first["shards_run"]) == (4, 2)
     assert first["pixels_checked"] == sum(s.width * s.height for s in scenes)
     assert first["clocks_checked"] > 4 * 2048 and first["failed_scenes_checked"] == 0
-    kept = records(tmp_path)
-    (tmp_path / regress.RECORDS).write_text(kept[0] + kept[1][:30])
+    kept = record_lines(tmp_path)
+    (tmp_path / records.RECORDS).write_text(kept[0] + kept[1][:30])
     ran = []
     original = scene_shards.check_scenes
 
@@ -388,9 +388,9 @@ def test_a_scene_records_schema_holds_its_own_records():
     crash = regress.crash_result(task, RuntimeError("x"))
     mismatch = crash["mismatches"][0] | {"scene": task.seed}
     record = {key: value for key, value in crash.items() if key != "crashed"}
-    assert regress.record_error(record | {"mismatches": [mismatch] * 6}, manifest) is None
-    assert regress.record_error(record | {"mismatches": [mismatch] * 7}, manifest)
-    assert "the plan's" in regress.record_error(record | {"seed": task.seed + 1}, manifest)
+    assert records.record_error(record | {"mismatches": [mismatch] * 6}, manifest) is None
+    assert records.record_error(record | {"mismatches": [mismatch] * 7}, manifest)
+    assert "the plan's" in records.record_error(record | {"seed": task.seed + 1}, manifest)
 
 
 # -- resuming --------------------------------------------------------------------------------
@@ -400,9 +400,9 @@ def test_a_rerun_skips_recorded_shards(capsys, monkeypatch, tmp_path):
     argv = ["--edges", "600", "--shards", "6", "--workers", "0", "--out", str(tmp_path)]
     status, first, _ = verify(capsys, *argv)
     assert status == 0 and first["shards_run"] == 6
-    kept = records(tmp_path)
+    kept = record_lines(tmp_path)
     # As if interrupted: three shards recorded, the fourth line cut short.
-    (tmp_path / regress.RECORDS).write_text("".join(kept[:3]) + kept[3][:40])
+    (tmp_path / records.RECORDS).write_text("".join(kept[:3]) + kept[3][:40])
     ran = []
     original = shards.check_shard
 
@@ -413,9 +413,9 @@ def test_a_rerun_skips_recorded_shards(capsys, monkeypatch, tmp_path):
     monkeypatch.setattr(shards, "check_shard", counted)
     status, second, err = verify(capsys, *argv)
     assert status == 0 and second["passed"]
-    assert f"{tmp_path / regress.RECORDS} line 4 was cut short" in err and err.count("\n") == 1
+    assert f"{tmp_path / records.RECORDS} line 4 was cut short" in err and err.count("\n") == 1
     assert sorted(ran) == [3, 4, 5] and (second["shards_resumed"], second["shards_run"]) == (3, 3)
-    lines = records(tmp_path)
+    lines = record_lines(tmp_path)
     assert lines[:3] == kept[:3] and len(lines) == 6  # the cut line dropped, nothing redone
     assert [without_times(json.loads(x)) for x in sorted(lines)] == [
         without_times(json.loads(x)) for x in sorted(kept)
@@ -466,14 +466,14 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     deadline = time.monotonic() + 120
-    while not (tmp_path / regress.RECORDS).exists() or len(records(tmp_path)) < 2:
+    while not (tmp_path / records.RECORDS).exists() or len(record_lines(tmp_path)) < 2:
         assert proc.poll() is None and time.monotonic() < deadline, proc.communicate()
         time.sleep(0.02)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
-    kept = records(tmp_path)
+    kept = record_lines(tmp_path)
     assert 2 <= len(kept) < 400
     rerun = subprocess.run(
         [*command, "--json"], capture_output=True, text=True, check=False, env=env, timeout=600
@@ -482,7 +482,7 @@ def test_an_interrupted_run_finishes_on_rerun_without_redoing_shards(tmp_path):
     summary = json.loads(rerun.stdout)
     assert summary["passed"] and summary["shards_resumed"] == len(kept)
     assert summary["shards_run"] == 400 - len(kept) and summary["edges_checked"] == 40000
-    assert records(tmp_path)[: len(kept)] == kept
+    assert record_lines(tmp_path)[: len(kept)] == kept
 
 
 # -- records it did not write ---------------------------------------------------------------
@@ -495,7 +495,7 @@ def recorded_run(tmp_path_factory):
     """The record of a finished run of `RECORDED`: run.json and three lines of shards.jsonl."""
     directory = tmp_path_factory.mktemp("recorded")
     assert main(["verify", *RECORDED, "--out", str(directory), "--quiet", "--json"]) == 0
-    return {name: (directory / name).read_bytes() for name in (regress.MANIFEST, regress.RECORDS)}
+    return {name: (directory / name).read_bytes() for name in (records.MANIFEST, records.RECORDS)}
 
 
 def refused(capsys, directory, name: str, where: str):
@@ -519,18 +519,18 @@ def refused(capsys, directory, name: str, where: str):
         (b"[" * 30_000 + b"]" * 30_000, "nests too deeply"),
         (b'{"format": 1, "config": ', "is not JSON"),
         (b"\xff\xfe{}", "is not UTF-8 text"),
-        (b" " * (regress.MAX_MANIFEST + 1), "is larger than 65,536 bytes"),
+        (b" " * (records.MAX_MANIFEST + 1), "is larger than 65,536 bytes"),
         (None, "is a directory"),
     ],
     ids=["list", "string", "null", "deep", "truncated", "not-utf8", "huge", "directory"],
 )
 def test_a_run_record_it_did_not_write_is_refused(capsys, tmp_path, content, what):
     if content is None:
-        (tmp_path / regress.MANIFEST).mkdir()
+        (tmp_path / records.MANIFEST).mkdir()
     else:
-        (tmp_path / regress.MANIFEST).write_bytes(content)
-    assert what in refused(capsys, tmp_path, regress.MANIFEST, "")
-    assert not (tmp_path / regress.RECORDS).exists()
+        (tmp_path / records.MANIFEST).write_bytes(content)
+    assert what in refused(capsys, tmp_path, records.MANIFEST, "")
+    assert not (tmp_path / records.RECORDS).exists()
 
 
 def damaged_manifest(manifest: dict, how: str) -> dict:
@@ -546,9 +546,9 @@ def damaged_manifest(manifest: dict, how: str) -> dict:
 
 @pytest.mark.parametrize("how", ["config", "nested", "workload", "format"])
 def test_a_run_record_of_the_wrong_shape_is_refused(capsys, tmp_path, recorded_run, how):
-    manifest = json.loads(recorded_run[regress.MANIFEST])
-    (tmp_path / regress.MANIFEST).write_text(json.dumps(damaged_manifest(manifest, how)))
-    refused(capsys, tmp_path, regress.MANIFEST, "")
+    manifest = json.loads(recorded_run[records.MANIFEST])
+    (tmp_path / records.MANIFEST).write_text(json.dumps(damaged_manifest(manifest, how)))
+    refused(capsys, tmp_path, records.MANIFEST, "")
 
 
 def damage(record: dict, how: str):
@@ -592,11 +592,11 @@ LINE_DAMAGE = [
 
 @pytest.mark.parametrize("how", LINE_DAMAGE)
 def test_a_damaged_shard_record_is_named_and_refused(capsys, tmp_path, recorded_run, how):
-    (tmp_path / regress.MANIFEST).write_bytes(recorded_run[regress.MANIFEST])
-    lines = recorded_run[regress.RECORDS].splitlines(keepends=True)
+    (tmp_path / records.MANIFEST).write_bytes(recorded_run[records.MANIFEST])
+    lines = recorded_run[records.RECORDS].splitlines(keepends=True)
     lines[1] = json.dumps(damage(json.loads(lines[1]), how)).encode() + b"\n"
-    (tmp_path / regress.RECORDS).write_bytes(b"".join(lines))
-    refused(capsys, tmp_path, regress.RECORDS, " line 2")
+    (tmp_path / records.RECORDS).write_bytes(b"".join(lines))
+    refused(capsys, tmp_path, records.RECORDS, " line 2")
 
 
 @pytest.mark.parametrize(
@@ -605,40 +605,40 @@ def test_a_damaged_shard_record_is_named_and_refused(capsys, tmp_path, recorded_
         (lambda line: line[:40] + b"\n", "is not JSON"),  # cut short, then a newline
         (lambda line: b"\xff" + line, "is not UTF-8 text"),
         (lambda line: b"[" * 30_000 + b"\n", "nests too deeply"),
-        (lambda line: b" " * regress.MAX_LINE + line, "is longer than 65,536 bytes"),
+        (lambda line: b" " * records.MAX_LINE + line, "is longer than 65,536 bytes"),
         (lambda line: b"\n", "is not JSON"),
     ],
     ids=["truncated", "not-utf8", "deep", "huge", "empty"],
 )
 def test_a_damaged_line_is_named_and_refused(capsys, tmp_path, recorded_run, line, what):
-    (tmp_path / regress.MANIFEST).write_bytes(recorded_run[regress.MANIFEST])
-    lines = recorded_run[regress.RECORDS].splitlines(keepends=True)
+    (tmp_path / records.MANIFEST).write_bytes(recorded_run[records.MANIFEST])
+    lines = recorded_run[records.RECORDS].splitlines(keepends=True)
     lines[1] = line(lines[1])
-    (tmp_path / regress.RECORDS).write_bytes(b"".join(lines))
-    assert what in refused(capsys, tmp_path, regress.RECORDS, " line 2")
+    (tmp_path / records.RECORDS).write_bytes(b"".join(lines))
+    assert what in refused(capsys, tmp_path, records.RECORDS, " line 2")
 
 
 def test_a_shard_recorded_twice_and_a_records_directory_are_refused(capsys, tmp_path, recorded_run):
-    (tmp_path / regress.MANIFEST).write_bytes(recorded_run[regress.MANIFEST])
-    lines = recorded_run[regress.RECORDS].splitlines(keepends=True)
-    (tmp_path / regress.RECORDS).write_bytes(b"".join([*lines, lines[0]]))
-    err = refused(capsys, tmp_path, regress.RECORDS, " line 4")
+    (tmp_path / records.MANIFEST).write_bytes(recorded_run[records.MANIFEST])
+    lines = recorded_run[records.RECORDS].splitlines(keepends=True)
+    (tmp_path / records.RECORDS).write_bytes(b"".join([*lines, lines[0]]))
+    err = refused(capsys, tmp_path, records.RECORDS, " line 4")
     assert "records shard 0 again" in err
-    (tmp_path / regress.RECORDS).unlink()
-    (tmp_path / regress.RECORDS).mkdir()
-    assert "is a directory" in refused(capsys, tmp_path, regress.RECORDS, "")
+    (tmp_path / records.RECORDS).unlink()
+    (tmp_path / records.RECORDS).mkdir()
+    assert "is a directory" in refused(capsys, tmp_path, records.RECORDS, "")
 
 
 def test_its_own_record_passes_the_schema(recorded_run):
     """Every field `check_shard` writes, a mismatch's included, is one the schema knows."""
-    manifest = json.loads(recorded_run[regress.MANIFEST])
-    record = json.loads(recorded_run[regress.RECORDS].splitlines()[0])
+    manifest = json.loads(recorded_run[records.MANIFEST])
+    record = json.loads(recorded_run[records.RECORDS].splitlines()[0])
     task = next(regress.Plan(DEFAULT, edges=30, shards=3, seed=6).tasks())
     crash = regress.crash_result(task, RuntimeError("x"))
     mismatch = crash["mismatches"][0]
-    assert regress.record_error(record, manifest) is None
-    assert regress.record_error({**record, "mismatches": [mismatch] * 6}, manifest) is None
-    assert regress.record_error({**record, "mismatches": [mismatch] * 7}, manifest)
+    assert records.record_error(record, manifest) is None
+    assert records.record_error({**record, "mismatches": [mismatch] * 6}, manifest) is None
+    assert records.record_error({**record, "mismatches": [mismatch] * 7}, manifest)
 
 
 def test_a_long_record_is_read_in_bounded_memory(tmp_path):
@@ -647,9 +647,9 @@ def test_a_long_record_is_read_in_bounded_memory(tmp_path):
     summary lists at most MAX_LISTED mismatches and counts them all."""
     count = 20_000
     plan = regress.Plan(DEFAULT, edges=2 * count, shards=count, seed=4)
-    (tmp_path / regress.MANIFEST).write_text(json.dumps(plan.manifest()))
+    (tmp_path / records.MANIFEST).write_text(json.dumps(plan.manifest()))
     mismatch = regress.crash_result(next(plan.tasks()), RuntimeError("x"))["mismatches"][0]
-    with open(tmp_path / regress.RECORDS, "w") as file:
+    with open(tmp_path / records.RECORDS, "w") as file:
         for task in plan.tasks():
             found = [{**mismatch, "shard": task.index}] if task.index % 100 == 7 else []
             record = {"index": task.index, "seed": task.seed, "edges": task.edges, "beats": 9}
@@ -657,7 +657,7 @@ def test_a_long_record_is_read_in_bounded_memory(tmp_path):
             file.write(json.dumps({**record, "mismatches": found}) + "\n")
     tracemalloc.start()
     try:
-        store = regress.ShardStore(tmp_path, plan.manifest())
+        store = records.ShardStore(tmp_path, plan.manifest())
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -667,15 +667,15 @@ def test_a_long_record_is_read_in_bounded_memory(tmp_path):
     summary = regress.summarize(
         plan,
         store.totals,
-        regress.Totals(store.totals.summed),
-        regress.Totals(store.totals.summed),
+        records.Totals(store.totals.summed),
+        records.Totals(store.totals.summed),
         count,
         1,
     )
     assert (summary["edges_checked"], summary["beats_checked"]) == (2 * count, 9 * count)
     assert summary["mismatch_count"] == count // 100 and not summary["passed"]
     assert [m["shard"] for m in summary["mismatches"]] == list(range(7, count, 100))[:100]
-    assert regress.MAX_LISTED == 100
+    assert records.MAX_LISTED == 100
 
 
 # -- a shard in bounded pieces ---------------------------------------------------------------

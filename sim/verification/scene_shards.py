@@ -41,6 +41,17 @@ def first_scene_seed(run_seed: int) -> int:
     return int.from_bytes(digest[:6], "little")
 
 
+def scene_range(
+    scenes: int, shards: int, seed: int, shard_seed: int | None, index: int
+) -> tuple[int, int]:
+    """(first scene seed, scenes) of shard `index` of a `ScenePlan` of these fields: the run's
+    scene seeds are consecutive, split into shards that differ by at most one scene."""
+    if shard_seed is not None:
+        return shard_seed, scenes
+    base, extra = divmod(scenes, shards)
+    return first_scene_seed(seed) + index * base + min(index, extra), base + (index < extra)
+
+
 def default_scene_shards(scenes: int) -> int:
     """Shards of about `SHARD_SCENES` scenes, a function of the scene count only (a rerun on
     other workers resumes the same shards)."""
