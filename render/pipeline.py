@@ -16,8 +16,8 @@ the renderer's, bit for bit (tested).
 
 A colour scene (planned as its coverage, `edgeaa.render.paint`) goes through a pipeline of
 3 channels (`TileConfig.channels`; 4, alpha too, for a translucent background): each
-polygon's begin carries its paint, each tile its background, from the `Canvas`; the
-hardware draws opaque colours only (`tile_paints`). Its image is the canvas's, bit for bit.
+polygon's begin carries its paint and alpha, each tile its background, from the `Canvas`
+(`tile_paints`). Its image is the canvas's, bit for bit.
 """
 
 from __future__ import annotations
@@ -194,25 +194,21 @@ class TilePaints:
 def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
     """The paints of `plan` from `canvas` (`edgeaa.render.paint.Canvas`, a colour scene's,
     for a tile of 3 channels, or 4 with alpha: a translucent background), or grey (no canvas,
-    1 channel). The hardware composites opaque paint only: a polygon's colour with alpha
-    below full scale is refused (SceneError, one line), and with 3 channels the background's."""
+    1 channel): each polygon's red, green, blue and alpha (`PAINT`), the background's
+    channels. A translucent background in 3 channels is refused (SceneError, one line)."""
     if (canvas is not None) != (tile.channels > 1):
         raise ValueError(
             f"a {'colour' if canvas else 'grey'} scene in a {tile.channels}-channel tile"
         )
     if canvas is None:
         return TilePaints(None, (None,) * len(plan.polygons))
-    full, channels = canvas.full, tile.channels
-    background = [("the background", canvas.background[3])] if channels == 3 else []
-    for what, alpha in background + [
-        (f"polygon {p.index}", canvas.paints[p.index, 3]) for p in plan.polygons
-    ]:
-        if alpha != full:
-            raise SceneError(
-                f"{what} has alpha {int(alpha)} of {full}: the hardware pipeline draws opaque "
-                "colours only; use --engine model"
-            )
-    paints = tuple(tuple(int(v) for v in canvas.paints[p.index, :channels]) for p in plan.polygons)
+    full, channels, alpha = canvas.full, tile.channels, int(canvas.background[3])
+    if channels == 3 and alpha != full:
+        raise SceneError(
+            f"the background has alpha {alpha} of {full}: a 3-channel pipeline's pixels are "
+            "opaque; use 4 channels"
+        )
+    paints = tuple(tuple(int(v) for v in canvas.paints[p.index]) for p in plan.polygons)
     return TilePaints(tuple(int(v) for v in canvas.background[:channels]), paints)
 
 
@@ -303,8 +299,8 @@ def render_pipeline(
     stepper and accumulation counts) and `Render.mismatches` counts the pixels where the
     two differ (0, or it is a bug). `pipeline`: a `PipelineConfig`, or a `TileConfig` (the
     compact pipeline; None: its default tile). `seed`: random idle clocks and back-pressure.
-    A colour scene's `canvas` (a fresh `Canvas`; 3 channels): the image is the canvas's
-    (opaque)."""
+    A colour scene's `canvas` (a fresh `Canvas`; 3 or 4 channels): the image is the
+    canvas's."""
     if engine not in PIPELINE_ENGINES:
         raise EngineUnavailable(f"the pipeline runs in {' or '.join(PIPELINE_ENGINES)}")
     pipeline = pipeline_config(pipeline or TileConfig(plan.config))

@@ -281,12 +281,12 @@ WRONG += ["EMPTY_EDGE_CYCLES"]
 def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
     commands, hw = wrong_model_run
     check_clock_for_clock(SMALL_TILE, commands, hw, "the right model")
-    latency = tile_model.resolve_latency(SMALL) + 1
+    latency = tile_model.resolve_latency(SMALL_TILE) + 1
     for module in (timing, tile_model, pipeline_timing):
         if wrong in WRONG_WAITS and hasattr(module, "beat_wait"):
             monkeypatch.setattr(module, "beat_wait", WRONG_WAITS[wrong])
         elif wrong == "resolve_latency" and hasattr(module, wrong):
-            monkeypatch.setattr(module, wrong, lambda config: latency)
+            monkeypatch.setattr(module, wrong, lambda tile: latency)
         elif wrong == "pipeline_depth" and hasattr(module, wrong):  # the deltas core's, + 1
             depth = getattr(module, wrong)
             monkeypatch.setattr(
