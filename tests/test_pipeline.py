@@ -8,6 +8,7 @@ lint-clean."""
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -267,6 +268,36 @@ def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
     assert main([*argv, "-o", str(fast)]) == 0
     units = PIPELINES["fast"]  # the fast pipeline's core has its setup array
     assert f"unit{units - 1}" in fast.read_text() and "unit1" not in out.read_text()
+
+
+def test_edgeaa_verilog_channels(tmp_path, capsys):
+    """`--channels 1|3|4` on `edgeaa verilog --top pipeline`: the colour pipeline's paint
+    port (red, green, blue and alpha) and pixel value; refused for the core and the
+    peripheral (grey), each in one line; the help says it."""
+    from edgeaa.cli import main
+
+    small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
+    for channels in (1, 3, 4):
+        out = tmp_path / f"c{channels}.v"
+        argv = ["verilog", "--top", "pipeline", "--tile", "8x4", *small, "-o", str(out)]
+        assert main([*argv, "--channels", str(channels)]) == 0
+        text = out.read_text()
+        assert ("commands__payload__paint" in text) == (channels > 1)
+        assert re.search(rf"output \[{4 * channels - 1}:0\] pixels__payload__value", text)
+        if channels > 1:
+            assert re.search(r"input \[15:0\] commands__payload__paint", text)
+    capsys.readouterr()
+    for argv, message in [
+        (["--top", "peripheral", "--channels", "3"], "--top peripheral writes grey pixels"),
+        (["--channels", "3"], "--channels sets the polygon pipeline's pixel"),
+        (["--top", "pipeline", "--channels", "2"], "invalid choice: 2 (choose from 1, 3, 4)"),
+    ]:
+        assert main(["verilog", *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err and "Traceback" not in err, err
+    with pytest.raises(SystemExit):
+        main(["verilog", "--help"])
+    assert "--channels" in capsys.readouterr().out
 
 
 def test_the_named_configurations():
