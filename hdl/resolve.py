@@ -194,12 +194,15 @@ class TileResolve(wiring.Component):
             )
             q, stages = pre.q, [s1, s2, pre]
             paints = [pre.paint[bits * k :][:bits] for k in range(3)]
-            paints = (paints + [Const(tile.config.full_scale, bits)])[: tile.channels]
+            paints = (paints + [None])[: tile.channels]  # None: alpha's, full scale
             belows = [pre.below[bits * k :][:bits] for k in range(tile.channels)]
         negs, nums = [], []
         for k, (paint, below) in enumerate(zip(paints, belows, strict=True)):
-            neg = paint < below
-            diff = Mux(neg, below - paint, paint - below)[:bits]
+            if paint is None:  # towards full scale: never below, and full - below is ~below
+                neg, diff = Const(0, 1), ~below
+            else:
+                neg = paint < below
+                diff = Mux(neg, below - paint, paint - below)[:bits]
             product = _product(m, q, diff, "" if k == 0 else f"_c{k}")
             negs.append(neg)
             nums.append(((product << 1) + pre.d - neg)[: 2 * bits + 2])  # >= 0 unless q = 0

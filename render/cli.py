@@ -396,7 +396,7 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
         channels = 3 if paint.background[3] == paint.full else 4
         pipeline = replace(pipeline, tile=replace(pipeline.tile, channels=channels))
     check_clocks(plan, pipeline, args.engine)  # before the build
-    tile_paints(plan, pipeline.tile, paint)  # a translucent paint is refused before the build
+    tile_paints(plan, pipeline.tile, paint)  # what it cannot draw is refused before the build
     _build_engine(args.engine, pipeline, bar)
     return render_pipeline(plan, args.engine, pipeline, progress=bar, canvas=paint), baseline
 
