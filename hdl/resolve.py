@@ -2,8 +2,8 @@
 """The tile's resolve (`TileResolve`): cell sums in, composited pixels into the tile's pixel
 memory, the tile out on a flush. `edgeaa.model.tile` is the model and the cycle model.
 
-One cell per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks from taking a
-cell to writing its pixel:
+One cell per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks (I + 4 in
+colour) from taking a cell to writing its pixel:
 
 * take (clock r): the pixel's read is issued;
 * s1: the row's prefix sum (restarting at the row's first cell, ``start``) and whether
@@ -11,12 +11,16 @@ cell to writing its pixel:
   bit per row: rows never written read as the background and no clear pass is needed);
 * s2: the fill rule (`edgeaa.model.accumulate.fill`; even-odd by h + 1 compare-subtract
   steps, exact within the cells' range) and the pixel below;
-* s3: the intensity offset q (a shift; 0 when I_in == I_out) and the unsigned numerator of
-  `edgeaa.model.tile.composite_steps` (one I x I product);
-* s4 .. s(I + 3): one quotient bit each, restoring division by 2 D (one register: every
-  cell in flight is one polygon's), the partial remainder shifted left with the dividend's
-  next bit, the quotient's bits shifting into the dividend's low bits as they go; the last
-  stage writes ``below +- quotient`` (or ``below`` when q = 0).
+* colour only, sa: the intensity offset q (a shift; 0 when I_in == I_out) times the paint's
+  alpha over full scale, rounded half up (`_alpha`, `edgeaa.model.tile.alpha_steps`: one
+  product and two additions, no divider), with the pixel below, the paint and D;
+* s3: the intensity offset q (grey; colour: sa's q') and the unsigned numerator of
+  `edgeaa.model.tile.composite_steps` (one I x I product per channel; the alpha channel's
+  paint is full scale);
+* the I stages after s3: one quotient bit each, restoring division by 2 D (one register:
+  every cell in flight is one polygon's), the partial remainder shifted left with the
+  dividend's next bit, the quotient's bits shifting into the dividend's low bits as they
+  go; the last stage writes ``below +- quotient`` (or ``below`` when q = 0).
 
 The values a cell only carries go through two delay lines, not registers: x and y from the
 take to the last stage, the pixel below, q = 0 and the sign from s3 to it (the stages keep
