@@ -185,21 +185,9 @@ class TileResolve(wiring.Component):
         pre, stages = s2, [s1, s2]  # the stage before s3
         if tile.channels == 1:
             paints, belows = [s2.intensity], [s2.below]
-        else:  # colour: the alpha stage, q' = round(q A / full), and the paint's channels
-            colour = s2.intensity[bits:]  # red, green, blue, alpha (`PAINT`)
-            pre = _stage(
-                m,
-                "sa",
-                valid=s2.valid,
-                q=_alpha(m, q, colour[bits * 3 :][:bits], bits),
-                below=s2.below,
-                paint=colour[: bits * 3],
-                d=s2.d,
-            )
+        else:  # colour: the alpha stage
+            pre, paints, belows = self._alpha_stage(m, s2, q)
             q, stages = pre.q, [s1, s2, pre]
-            paints = [pre.paint[bits * k :][:bits] for k in range(3)]
-            paints = (paints + [None])[: tile.channels]  # None: alpha's, full scale
-            belows = [pre.below[bits * k :][:bits] for k in range(tile.channels)]
         negs, nums = [], []
         for k, (paint, below) in enumerate(zip(paints, belows, strict=True)):
             if paint is None:  # towards full scale: never below, and full - below is ~below
@@ -262,6 +250,25 @@ class TileResolve(wiring.Component):
         self._row_done_y = last.y
         assert len(stages) == self.latency, (len(stages), self.latency)
         return stages
+
+    def _alpha_stage(self, m, s2, q):
+        """Colour's stage sa: q' = round(q A / full) (`_alpha`), and the pixel below, the
+        paint's three colours and D carried to s3; returns it, each channel's paint (None:
+        the alpha channel's, full scale) and each channel's pixel below."""
+        bits, channels = self._tile.config.intensity_bits, self._tile.channels
+        colour = s2.intensity[bits:]  # red, green, blue, alpha (`PAINT`)
+        sa = _stage(
+            m,
+            "sa",
+            valid=s2.valid,
+            q=_alpha(m, q, colour[bits * 3 :][:bits], bits),
+            below=s2.below,
+            paint=colour[: bits * 3],
+            d=s2.d,
+        )
+        paints = [sa.paint[bits * k :][:bits] for k in range(3)] + [None]
+        belows = [sa.below[bits * k :][:bits] for k in range(channels)]
+        return sa, paints[:channels], belows
 
     def _fill(self, s, ifix, evenodd):
         """`fill` on a prefix sum within the cells' range: non-zero min(|s|, ifix); even-odd
