@@ -158,7 +158,7 @@ class TileConfig:
 class TileStart(NamedTuple):
     x0: int  # engine pixels of the tile's first column and row
     y0: int
-    background: int | tuple  # an intensity, or a value per channel (3 channels)
+    background: int | tuple  # an intensity, or a value per channel (colour)
 
 
 class Beats(NamedTuple):

@@ -238,7 +238,7 @@ def tile_ops(
 
 def render_tiles(plan: Plan, tile: TileConfig, engine: str = "model", canvas=None) -> np.ndarray:
     """The image, tile by tile, through the tile model (deltas from `engine`); a colour
-    scene's (`canvas`, 3 channels) as (height, width, 3)."""
+    scene's (`canvas`, 3 or 4 channels) as (height, width, channels)."""
     model, paints = TileModel(tile), tile_paints(plan, tile, canvas)
     frames = [
         model.run(tile_ops(plan, tile, job, engine, paints))[0] for job in tile_jobs(plan, tile)
@@ -250,7 +250,8 @@ def scene_commands(plan: Plan, tile: TileConfig, canvas=None) -> list[Command]:
     """The scene as pipeline commands (format `COMMAND_VERSION`): per tile, its start, each
     polygon meeting it (begin, edges, end) and a flush. The top clips each edge to the tile
     (`tile_clip`); an edge wholly left of the image is sent as its projection. A colour
-    scene (`canvas`, 3 channels): each begin and tile with its paint."""
+    scene (`canvas`, 3 or 4 channels): each begin with its paint and alpha, each tile
+    with its background."""
     ox, oy = plan.offset
     paints, bits = tile_paints(plan, tile, canvas), plan.config.intensity_bits
     background = pack_paint(paints.background or (), bits)
@@ -273,7 +274,7 @@ def scene_commands(plan: Plan, tile: TileConfig, canvas=None) -> list[Command]:
 
 def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
     """The image from the frames of the tiles of `tile_jobs`, in order ((height, width, 3)
-    for a tile of 3 channels; every pixel is some tile's)."""
+    for a colour tile; every pixel is some tile's)."""
     channels = (tile.channels,) if tile.channels > 1 else ()
     image = np.zeros((plan.scene.height, plan.scene.width, *channels), np.int64)
     for job, frame in zip(tile_jobs(plan, tile), frames, strict=True):
