@@ -437,11 +437,12 @@ def tile_size(text: str) -> tuple[int, int]:
 DEFAULT_TILE = (64, 32)
 
 
-def tile_from_args(size: tuple[int, int] | None, config: EdgeConfig):
-    """The pipeline's `TileConfig` for `--tile` (parsed by `tile_size`; None: the default)."""
+def tile_from_args(size: tuple[int, int] | None, config: EdgeConfig, channels: int = 1):
+    """The pipeline's `TileConfig` for `--tile` (parsed by `tile_size`; None: the default)
+    and `--channels`."""
     from .model.tile import TileConfig
 
-    return TileConfig(config, *(size or DEFAULT_TILE))
+    return TileConfig(config, *(size or DEFAULT_TILE), channels=channels)
 
 
 def add_pipeline_option(parser: argparse.ArgumentParser, applies: str) -> None:
@@ -459,8 +460,10 @@ def add_pipeline_option(parser: argparse.ArgumentParser, applies: str) -> None:
     )
 
 
-def pipeline_from_args(name: str | None, size: tuple[int, int] | None, config: EdgeConfig):
-    """The `PipelineConfig` for `--pipeline` (None: compact) and `--tile`."""
+def pipeline_from_args(
+    name: str | None, size: tuple[int, int] | None, config: EdgeConfig, channels: int = 1
+):
+    """The `PipelineConfig` for `--pipeline` (None: compact), `--tile` and `--channels`."""
     from .model.pipeline import PipelineConfig
 
-    return PipelineConfig.named(name or "compact", tile_from_args(size, config))
+    return PipelineConfig.named(name or "compact", tile_from_args(size, config, channels))

@@ -279,10 +279,34 @@ def _add_tile_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_channels_option(parser: argparse.ArgumentParser) -> None:
+    from .model.tile import CHANNELS
+
+    parser.add_argument(
+        "--channels",
+        type=int,
+        choices=CHANNELS,
+        default=None,
+        help="with --top pipeline: the pixel's channels, 1 grey (default), 3 red, green and "
+        "blue, 4 and alpha (premultiplied); in colour each command carries red, green, blue "
+        "and alpha (command format version 2; docs/hardware.md, 'Colour'). --top peripheral "
+        "is grey only",
+    )
+
+
 def _check_top(prog: str, args: argparse.Namespace) -> None:
     """Refuse the options that do nothing for --top, then fill in the core's default."""
     if args.top == "core" and args.tile is not None:
         raise usage_error(prog, "--tile sizes the polygon pipeline: add --top pipeline")
+    if args.top == "core" and args.channels is not None:
+        raise usage_error(prog, "--channels sets the polygon pipeline's pixel: add --top pipeline")
+    if args.top == "peripheral" and args.channels not in (None, 1):
+        raise usage_error(
+            prog,
+            f"--top peripheral writes grey pixels (its framebuffer writer): --channels "
+            f"{args.channels} needs --top pipeline",
+        )
+    args.channels = args.channels or 1
     if args.top != "pipeline" and args.pipeline is not None:
         raise usage_error(prog, "--pipeline configures the polygon pipeline: add --top pipeline")
     if args.top != "core" and args.core is not None:
@@ -338,6 +362,7 @@ class VerilogCommand(Command):
             help="what to write",
         )
         _add_tile_option(parser)
+        _add_channels_option(parser)
         add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         add_config_options(parser)
@@ -347,7 +372,7 @@ class VerilogCommand(Command):
 
         if args.top == "core":
             return core_verilog(args.core_top(config), name=args.name)
-        pipeline = pipeline_from_args(args.pipeline, args.tile, config)
+        pipeline = pipeline_from_args(args.pipeline, args.tile, config, args.channels)
         if args.top == "peripheral":  # around the compact pipeline (`--pipeline` refused)
             from .hdl.peripheral import peripheral_verilog
 
@@ -489,6 +514,7 @@ class SynthCommand(Command):
             "behind a Wishbone register window, with its framebuffer writer)",
         )
         _add_tile_option(parser)
+        _add_channels_option(parser)
         add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         parser.add_argument(
@@ -506,11 +532,12 @@ class SynthCommand(Command):
 
         baseline = {"bresenham": lambda: BresenhamLine(config=config)}
         if args.top == "pipeline":
-            pipeline = pipeline_from_args(args.pipeline, args.tile, config)
+            pipeline = pipeline_from_args(args.pipeline, args.tile, config, args.channels)
             tile, name = pipeline.tile, args.pipeline or "compact"
             units = pipeline.setup_units
             heading = f"pipeline {name} ({units} setup unit{'s' * (units > 1)}), tile "
-            heading += f"{tile.width}x{tile.height}, {config}"
+            heading += f"{tile.width}x{tile.height}, {tile.channels} channel"
+            heading += f"{'s' * (tile.channels > 1)}, {config}"
             return heading, {"pipeline": lambda: EdgePipeline(pipeline), **baseline}
         if args.top == "peripheral":
             from .hdl.peripheral import EdgePeripheral

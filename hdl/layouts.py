@@ -18,7 +18,7 @@ from amaranth.lib import data
 from ..model.bank import bank_fields
 from ..model.beat import CELL_FIELDS, CELLS, DELTA_PAYLOAD_PATHS, LANES, PAYLOAD_PATHS, PIXEL_FIELDS
 from ..model.config import EdgeConfig, RegisterWidth
-from ..model.tile import OPS, RESOLVE_OPS, TileConfig
+from ..model.tile import OPS, PAINT, RESOLVE_OPS, TileConfig
 
 __all__ = [
     "CELL_OP",
@@ -145,13 +145,14 @@ def _code_bits(names) -> int:
 
 def _polygon_fields(tile: TileConfig) -> dict:
     """What a polygon's end carries: its intensity, I_out and fill rule (1: even-odd); and a
-    tile's background. With 3 channels (`TileConfig.channels`) the ``intensity`` field is the
-    intensity and then the paint, red, green and blue (I bits each: the accumulator passes
-    it on whole), and the background is a value per channel, red in the low bits."""
+    tile's background. In colour (`TileConfig.channels` 3 or 4) the ``intensity`` field is
+    the intensity and then the paint, red, green, blue and alpha (`PAINT`, I bits each: the
+    accumulator passes it on whole), and the background is a value per channel, red in the
+    low bits."""
     bits = tile.config.intensity_bits
     colour = tile.channels > 1
     return {
-        "intensity": unsigned(bits * (1 + tile.channels) if colour else bits),
+        "intensity": unsigned(bits * (1 + len(PAINT)) if colour else bits),
         "i_out": unsigned(bits),
         "evenodd": unsigned(1),
         "background": unsigned(bits * tile.channels),

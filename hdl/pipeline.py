@@ -1,8 +1,8 @@
 # amaranth: UnusedElaboratable=no
 """The polygon pipeline (`EdgePipeline`): polygon commands in (`edgeaa.model.pipeline`,
-version 1), a tile's pixels out. A tile of 3 channels (`TileConfig.channels`) takes each
-begin's paint and each tile's background from the command's ``paint`` field and sends a
-value per channel. Setup and stepper (`PolygonCore`),
+version 2), a tile's pixels out. A tile of 3 or 4 channels (`TileConfig.channels`) takes
+each begin's paint (red, green, blue and alpha) and each tile's background from the
+command's ``paint`` field and sends a value per channel. Setup and stepper (`PolygonCore`),
 accumulation memory (`TileAccumulator`) and resolve (`TileResolve`), joined by streams.
 
 The command stage passes each edge of a polygon to the core with the polygon's intensities
@@ -25,7 +25,7 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model.pipeline import CODE, OP_BITS, PipelineConfig, command_fields, pipeline_config
-from ..model.tile import OPS, TileConfig
+from ..model.tile import OPS, PAINT, TileConfig
 from .accumulator import TileAccumulator
 from .core import ERRORS_BITS, PolygonCore, flat_verilog
 from .layouts import tile_pixel_layout
@@ -45,7 +45,7 @@ def command_layout(tile: TileConfig) -> data.StructLayout:
     fields = {"op": unsigned(OP_BITS), "x0": coord, "y0": coord, "x1": coord, "y1": coord}
     fields.update({"i_in": intensity, "i_out": intensity, "flag": unsigned(1)})
     if tile.channels > 1:  # the begin's colour, the tile's background (`Command.paint`)
-        fields["paint"] = unsigned(config.intensity_bits * tile.channels)
+        fields["paint"] = unsigned(config.intensity_bits * len(PAINT))
     return data.StructLayout(fields)
 
 
@@ -118,7 +118,8 @@ class EdgePipeline(wiring.Component):
         paint, intensity, background = None, params["intensity"], c.i_in
         if tile.channels > 1:  # the end carries the paint after the intensity
             paint = Signal(len(c.paint), name="paint")
-            intensity, background = Cat(params["intensity"], paint), c.paint
+            background = c.paint[: config.intensity_bits * tile.channels]
+            intensity = Cat(params["intensity"], paint)
         origin = [Signal(config.coord_bits + 1, name=n) for n in ("tile_x0", "tile_y0")]
         top = 1 << config.coord_bits
         is_ = {key: c.op == code for key, code in CODE.items()}

@@ -2,8 +2,8 @@
 """The tile's resolve (`TileResolve`): cell sums in, composited pixels into the tile's pixel
 memory, the tile out on a flush. `edgeaa.model.tile` is the model and the cycle model.
 
-One cell per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks from taking a
-cell to writing its pixel:
+One cell per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks (I + 4 in
+colour) from taking a cell to writing its pixel:
 
 * take (clock r): the pixel's read is issued;
 * s1: the row's prefix sum (restarting at the row's first cell, ``start``) and whether
@@ -11,12 +11,16 @@ cell to writing its pixel:
   bit per row: rows never written read as the background and no clear pass is needed);
 * s2: the fill rule (`edgeaa.model.accumulate.fill`; even-odd by h + 1 compare-subtract
   steps, exact within the cells' range) and the pixel below;
-* s3: the intensity offset q (a shift; 0 when I_in == I_out) and the unsigned numerator of
-  `edgeaa.model.tile.composite_steps` (one I x I product);
-* s4 .. s(I + 3): one quotient bit each, restoring division by 2 D (one register: every
-  cell in flight is one polygon's), the partial remainder shifted left with the dividend's
-  next bit, the quotient's bits shifting into the dividend's low bits as they go; the last
-  stage writes ``below +- quotient`` (or ``below`` when q = 0).
+* colour only, sa: the intensity offset q (a shift; 0 when I_in == I_out) times the paint's
+  alpha over full scale, rounded half up (`_alpha`, `edgeaa.model.tile.alpha_steps`: one
+  product and two additions, no divider), with the pixel below, the paint and D;
+* s3: the intensity offset q (grey; colour: sa's q') and the unsigned numerator of
+  `edgeaa.model.tile.composite_steps` (one I x I product per channel; the alpha channel's
+  paint is full scale);
+* the I stages after s3: one quotient bit each, restoring division by 2 D (one register:
+  every cell in flight is one polygon's), the partial remainder shifted left with the
+  dividend's next bit, the quotient's bits shifting into the dividend's low bits as they
+  go; the last stage writes ``below +- quotient`` (or ``below`` when q = 0).
 
 The values a cell only carries go through two delay lines, not registers: x and y from the
 take to the last stage, the pixel below, q = 0 and the sign from s3 to it (the stages keep
@@ -94,7 +98,7 @@ class TileResolve(wiring.Component):
     @property
     def latency(self) -> int:
         """Clocks from taking a cell to writing its pixel (`resolve_latency`)."""
-        return resolve_latency(self._tile.config)
+        return resolve_latency(self._tile)
 
     def elaborate(self, platform):
         m = Module()
@@ -178,18 +182,22 @@ class TileResolve(wiring.Component):
         )
         q = Mux(s2.d == 0, 0, (s2.cov + (1 << (F - 1))) >> F)[: bits + 1]
         # each channel: its paint (the intensity, grey) against the pixel below, one numerator
+        pre, stages = s2, [s1, s2]  # the stage before s3
         if tile.channels == 1:
             paints, belows = [s2.intensity], [s2.below]
-        else:
-            paints = [s2.intensity[bits * (k + 1) :][:bits] for k in range(tile.channels)]
-            belows = [s2.below[bits * k :][:bits] for k in range(tile.channels)]
+        else:  # colour: the alpha stage
+            pre, paints, belows = self._alpha_stage(m, s2, q)
+            q, stages = pre.q, [s1, s2, pre]
         negs, nums = [], []
         for k, (paint, below) in enumerate(zip(paints, belows, strict=True)):
-            neg = paint < below
-            diff = Mux(neg, below - paint, paint - below)[:bits]
+            if paint is None:  # towards full scale: never below, and full - below is ~below
+                neg, diff = Const(0, 1), ~below
+            else:
+                neg = paint < below
+                diff = Mux(neg, below - paint, paint - below)[:bits]
             product = _product(m, q, diff, "" if k == 0 else f"_c{k}")
             negs.append(neg)
-            nums.append(((product << 1) + s2.d - neg)[: 2 * bits + 2])  # >= 0 unless q = 0
+            nums.append(((product << 1) + pre.d - neg)[: 2 * bits + 2])  # >= 0 unless q = 0
         # 2 D: one register, as every cell in flight is one polygon's (its first cell waits
         # for the pipeline to empty)
         d2 = Signal(bits + 1, name="d2")
@@ -198,7 +206,7 @@ class TileResolve(wiring.Component):
         self.observe.d2 = d2
         # the pixel below, q = 0 and the sign from s3 to the last stage
         carry = _delay_line(
-            m, self.observe, "carry", ptr, bits, below=s2.below, zero=q == 0, neg=Cat(*negs)
+            m, self.observe, "carry", ptr, bits, below=pre.below, zero=q == 0, neg=Cat(*negs)
         )
         # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
         # bits) and the dividend's low bits, which the quotient's bits replace one a stage;
@@ -207,11 +215,12 @@ class TileResolve(wiring.Component):
         s3 = _stage(
             m,
             "s3",
-            valid=s2.valid,
+            valid=pre.valid,
             **{f"rem{n}": num[bits:][: bits + 1] for n, num in zip(names, nums, strict=True)},
             **{f"low{n}": num[:bits] for n, num in zip(names, nums, strict=True)},
         )
-        stages = [s1, s2, s3]
+        stages.append(s3)
+        carried = len(stages) - 1  # the stages before s3 (the carry line starts there)
         for j in reversed(range(bits)):  # quotient bit j
             prev, fields = stages[-1], {}
             for n in names:
@@ -222,7 +231,7 @@ class TileResolve(wiring.Component):
                 fields[f"low{n}"] = Cat(fits, low[:-1])
             stages.append(_stage(m, f"q{j}", valid=prev.valid, **fields))
         for k, st in enumerate(stages[:-1], start=1):  # where stage k's values are now
-            st.delayed = {"xy": ptr - k} | ({"carry": ptr - (k - 2)} if k >= 3 else {})
+            st.delayed = {"xy": ptr - k} | ({"carry": ptr - (k - carried)} if k > carried else {})
         last = stages[-1]
         last.__dict__.update(x=xy.x, y=xy.y, below=carry.below, zero=carry.zero, neg=carry.neg)
         news = []
@@ -241,6 +250,25 @@ class TileResolve(wiring.Component):
         self._row_done_y = last.y
         assert len(stages) == self.latency, (len(stages), self.latency)
         return stages
+
+    def _alpha_stage(self, m, s2, q):
+        """Colour's stage sa: q' = round(q A / full) (`_alpha`), and the pixel below, the
+        paint's three colours and D carried to s3; returns it, each channel's paint (None:
+        the alpha channel's, full scale) and each channel's pixel below."""
+        bits, channels = self._tile.config.intensity_bits, self._tile.channels
+        colour = s2.intensity[bits:]  # red, green, blue, alpha (`PAINT`)
+        sa = _stage(
+            m,
+            "sa",
+            valid=s2.valid,
+            q=_alpha(m, q, colour[bits * 3 :][:bits], bits),
+            below=s2.below,
+            paint=colour[: bits * 3],
+            d=s2.d,
+        )
+        paints = [sa.paint[bits * k :][:bits] for k in range(3)] + [None]
+        belows = [sa.below[bits * k :][:bits] for k in range(channels)]
+        return sa, paints[:channels], belows
 
     def _fill(self, s, ifix, evenodd):
         """`fill` on a prefix sum within the cells' range: non-zero min(|s|, ifix); even-odd
@@ -313,6 +341,14 @@ class TileResolve(wiring.Component):
             out.last.eq(plast),
             out.value.eq(Mux(pwritten, frd.data, fbackground)),
         ]
+
+
+def _alpha(m, q, alpha, bits: int):
+    """``round(q * alpha / full)`` half up, full = 2**bits - 1, with no divider
+    (`edgeaa.model.tile.alpha_steps`): y = q alpha + 2**(bits - 1) - 1, then
+    (y + (y >> bits) + 1) >> bits; q and alpha at most full."""
+    y = _product(m, q, alpha, "_alpha") + ((1 << (bits - 1)) - 1)
+    return ((y + (y >> bits) + 1) >> bits)[: bits + 1]
 
 
 def _product(m, a, b, suffix: str = ""):

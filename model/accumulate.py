@@ -93,6 +93,13 @@ class Resolved:
     cells_scanned: int
 
 
+def alpha_coverage(q, alpha: int, full: int):
+    """A translucent paint's coverage: q (in steps of full scale) times alpha / full,
+    rounded half up (`edgeaa.render.paint.Canvas`; the resolve's alpha stage,
+    `edgeaa.model.tile.alpha_steps`)."""
+    return _rdiv(q * alpha, full)
+
+
 def resolve_rows(
     window: Window, x: np.ndarray, y: np.ndarray, delta: np.ndarray, rule: str, ifix: int
 ):

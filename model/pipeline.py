@@ -1,4 +1,4 @@
-"""The polygon pipeline's command format (version 1) and its model: commands in, the tile ops
+"""The polygon pipeline's command format (version 2) and its model: commands in, the tile ops
 of `edgeaa.model.tile` out (`command_ops`), whose frames are the pipeline's pixels.
 
 One command per transfer of the top's ``commands`` stream (`edgeaa.hdl.pipeline`), the
@@ -13,10 +13,17 @@ fields ``op, x0, y0, x1, y1, i_in, i_out, flag``:
 * ``flush`` (4): send the tile's pixels (row by row); the tile is the background again.
 
 A pipeline of 3 or 4 channels (`TileConfig.channels`) has one more field, ``paint``: red,
-green, blue (and alpha), ``intensity_bits`` each, red in the low bits (`pack_paint`). A
-begin's paint is the polygon's colour (its coverage, in steps of ``|i_in - i_out|``,
-composites each channel towards it), a tile's paint its background (``i_in`` unused); grey
-pipelines have no paint field and ignore it.
+green, blue and alpha (`PAINT`), ``intensity_bits`` each, red in the low bits
+(`pack_paint`), whatever the channels. A begin's paint is the polygon's colour, straight
+(not premultiplied), and its alpha: its coverage, in steps of ``|i_in - i_out|``, times
+alpha / full scale (rounded half up) composites each channel towards it. A tile's paint is
+its background, premultiplied, its first ``channels`` values (a 3-channel tile's alpha
+unused; ``i_in`` unused). Grey pipelines have no paint field and ignore it.
+
+Versions (`COMMAND_VERSION`, in the peripheral's ``info`` register): 1 had a paint of the
+tile's channels, opaque (the alpha, if any, was the alpha channel's target); 2 (issue 27)
+a paint of red, green, blue and alpha in every colour pipeline. Grey commands are the same
+in both.
 
 Codes 5 to 7 are unknown. Bad commands are dropped and counted in ``errors``, never hang the
 pipeline and never touch another polygon's pixels: an unknown code; an edge or an end outside
@@ -34,7 +41,7 @@ from .beat import delta_column_beats
 from .config import EdgeConfig
 from .edge import Clip, Edge, EdgeError
 from .step import run_edge_deltas
-from .tile import Beats, Flush, PolygonEnd, TileConfig, TileStart, unpack_paint
+from .tile import PAINT, Beats, Flush, PolygonEnd, TileConfig, TileStart, unpack_paint
 from .timing import MAX_SETUP_UNITS
 
 __all__ = [
@@ -51,7 +58,7 @@ __all__ = [
     "tile_clip",
 ]
 
-COMMAND_VERSION = 1
+COMMAND_VERSION = 2
 COMMANDS = ("tile", "begin", "edge", "end", "flush")  # codes 0 .. 4
 OP_BITS = 3
 CODE = {name: code for code, name in enumerate(COMMANDS)}
@@ -109,7 +116,7 @@ class Command(NamedTuple):
     i_in: int = 0
     i_out: int = 0
     flag: int = 0
-    paint: int = 0  # 3 channels only: the polygon's colour or the tile's background, packed
+    paint: int = 0  # colour only: the polygon's colour and alpha, or the tile's background
 
     @classmethod
     def tile(cls, x0: int, y0: int, background: int, paint: int = 0) -> Command:
@@ -170,17 +177,17 @@ def decode_commands(tile: TileConfig, commands):
     config = tile.config
     polygon = None  # the open polygon's end, or None outside one
     clip = tile_clip(config, tile, 0, 0)
-    colour = tile.channels > 1
+    colour, bits = tile.channels > 1, config.intensity_bits
     for command in commands:
-        paint = (
-            unpack_paint(command.paint, config.intensity_bits, tile.channels) if colour else None
-        )
+        paint = unpack_paint(command.paint, bits, len(PAINT)) if colour else None
         name, ended = command.name, None
         if polygon is not None and name in ("begin", "tile", "flush"):
             ended, polygon = polygon, None  # a polygon with no end: ended here
         op = edge = error = None
         if name == "tile" and max(command.x0, command.y0) <= 1 << config.coord_bits:
-            op = TileStart(command.x0, command.y0, paint if colour else command.i_in)
+            op = TileStart(
+                command.x0, command.y0, paint[: tile.channels] if colour else command.i_in
+            )
             clip = tile_clip(config, tile, command.x0, command.y0)
         elif name == "begin":
             rule = "evenodd" if command.flag else "nonzero"

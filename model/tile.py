@@ -18,10 +18,13 @@ order, a stream of *ops* (the accumulator's input):
 * `Flush`: the tile's pixels go out row by row, and the tile is the background again.
 
 Channels (`TileConfig.channels`). A tile of 3 channels holds red, green and blue per
-pixel, one of 4 alpha too (premultiplied: a transparent background): a `PolygonEnd`'s one
-coverage q (in steps of D) composites each channel towards its paint, a `composite` per
-channel side by side with the same divisor 2 D, and a `TileStart`'s background is a value
-per channel. One channel is grey: the paint is the intensity.
+pixel, one of 4 alpha too (premultiplied: a transparent background). A colour
+`PolygonEnd`'s paint is red, green, blue and alpha A (`PAINT`): its coverage q (in steps of
+D) is first scaled by the alpha, q' = round(q A / full) half up (`alpha_coverage`; the
+resolve's alpha stage, `alpha_steps`), then composites each channel towards its paint
+(alpha's towards full scale), a `composite` per channel side by side with the same divisor
+2 D; a `TileStart`'s background is a value per channel. One channel is grey: the paint is
+the intensity, and there is no alpha stage.
 
 Widths. A cell holds its sum modulo ``2**cell_bits`` (``cell_bits`` = the delta register +
 ``headroom_bits``): the prefix sum of a row is then exact while it lies within
@@ -54,13 +57,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .accumulate import FILL_RULES, composite, fill, intensity_offset
+from .accumulate import FILL_RULES, alpha_coverage, composite, fill, intensity_offset
 from .beat import CELL_FIELDS, CELLS, DeltaBeat
 from .config import EdgeConfig
 
 __all__ = [
     "CHANNELS",
     "OPS",
+    "PAINT",
     "Beats",
     "Flush",
     "PolygonEnd",
@@ -69,6 +73,7 @@ __all__ = [
     "Scan",
     "TileOverflow",
     "TileStart",
+    "alpha_steps",
     "beat_clocks",
     "composite_steps",
     "pack_paint",
@@ -83,6 +88,10 @@ RESOLVE_OPS = ("cell", "tile", "flush")
 
 
 CHANNELS = (1, 3, 4)  # a pixel's channels: grey; red, green and blue; and alpha
+# A colour polygon's paint (the command's ``paint`` field, format version 2; `PolygonEnd`),
+# red in the low bits, whatever the tile's channels: a 3-channel tile draws translucent
+# paints too (its pixels stay opaque).
+PAINT = ("red", "green", "blue", "alpha")
 
 
 def pack_paint(values, bits: int) -> int:
@@ -149,7 +158,7 @@ class TileConfig:
 class TileStart(NamedTuple):
     x0: int  # engine pixels of the tile's first column and row
     y0: int
-    background: int | tuple  # an intensity, or a value per channel (3 channels)
+    background: int | tuple  # an intensity, or a value per channel (colour)
 
 
 class Beats(NamedTuple):
@@ -166,8 +175,9 @@ class Beats(NamedTuple):
 
 
 class PolygonEnd(NamedTuple):
-    """A polygon's resolve: its coverage in steps of D = |intensity - I_out| composites
-    towards `paint` in each channel (None: towards the intensity, grey)."""
+    """A polygon's resolve: its coverage in steps of D = |intensity - I_out|, scaled by the
+    paint's alpha (`alpha_coverage`), composites towards `paint` (`PAINT`: red, green, blue,
+    alpha) in each channel, alpha's towards full scale (None: towards the intensity, grey)."""
 
     intensity: int
     i_out: int
@@ -208,6 +218,15 @@ def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> in
             num -= (2 * d) << j
             quotient |= 1 << j
     return below - quotient if neg else below + quotient
+
+
+def alpha_steps(q: int, alpha: int, bits: int) -> int:
+    """`alpha_coverage` as the resolve computes it (no divider; docs/hardware.md, "Colour"):
+    with full = 2**bits - 1, round(q A / full) half up = floor(y / full) for
+    y = q A + 2**(bits - 1) - 1, and floor(y / full) = (y + (y >> bits) + 1) >> bits for
+    every y below 2**bits * full (q and A at most full)."""
+    y = q * alpha + (1 << (bits - 1)) - 1
+    return (y + (y >> bits) + 1) >> bits
 
 
 class Scan(NamedTuple):
@@ -297,7 +316,10 @@ class TileModel:
         limit = self.tile.winding_limit * ifix
         rows = np.flatnonzero(self.touched)
         runs = []
-        paint = (end.intensity,) * self.tile.channels if end.paint is None else end.paint
+        channels, full = self.tile.channels, self.tile.config.full_scale
+        targets = (end.intensity,) * channels
+        if end.paint is not None:  # red, green, blue, alpha; alpha's channel towards full
+            targets = (*end.paint[:3], full)[:channels]
         for row in rows:
             first, last, stop = self.span(row)
             runs.append((last - first + 1, stop))
@@ -313,7 +335,9 @@ class TileModel:
                 )
             read = slice(first, last + 1)  # outside it the sum is 0: the pixel stays
             q = intensity_offset(fill(sums[read], end.rule, ifix), F).astype(np.int64)
-            for k, value in enumerate(paint):  # each channel, the same coverage
+            if end.paint is not None:
+                q = alpha_coverage(q, end.paint[3], full)
+            for k, value in enumerate(targets):  # each channel, the same coverage
                 below = self._planes[row, read, k]
                 self._planes[row, read, k] = composite(below, q, value, d)
         self.seen |= self.touched
@@ -346,10 +370,10 @@ EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
 FLUSH_START = 2  # flush taken by the resolve in f: pixel 0 out in f + 2
 
 
-def resolve_latency(config: EdgeConfig) -> int:
+def resolve_latency(tile: TileConfig) -> int:
     """Clocks from the resolve taking a cell to writing its pixel: prefix sum (with the pixel
-    read), fill, offset and product, one clock per quotient bit."""
-    return config.intensity_bits + 3
+    read), fill, (colour: the alpha stage,) offset and product, one clock per quotient bit."""
+    return tile.config.intensity_bits + 3 + (tile.channels > 1)
 
 
 @dataclass
@@ -376,7 +400,7 @@ class TileClock:
     clocks as the top's counters do (`edgeaa.hdl.pipeline.STATS`)."""
 
     def __init__(self, tile: TileConfig):
-        self.tile, self.latency = tile, resolve_latency(tile.config)
+        self.tile, self.latency = tile, resolve_latency(tile)
         self.timing = TileTiming()
         self.ready = 0
         self.quiet = 0  # first clock no cell is in flight in the resolve

@@ -392,11 +392,11 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
         return render_scene(plan, skip=not args.no_skip, progress=bar, canvas=canvas()), baseline
     pipeline = pipeline_from_args(args.pipeline, args.tile, plan.config)
     paint = canvas()
-    if paint is not None:  # red, green, blue (opaque paints: `tile_paints`), alpha if needed
+    if paint is not None:  # red, green, blue; alpha too for a translucent background
         channels = 3 if paint.background[3] == paint.full else 4
         pipeline = replace(pipeline, tile=replace(pipeline.tile, channels=channels))
     check_clocks(plan, pipeline, args.engine)  # before the build
-    tile_paints(plan, pipeline.tile, paint)  # a translucent paint is refused before the build
+    tile_paints(plan, pipeline.tile, paint)  # what it cannot draw is refused before the build
     _build_engine(args.engine, pipeline, bar)
     return render_pipeline(plan, args.engine, pipeline, progress=bar, canvas=paint), baseline
 

@@ -20,7 +20,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..model.accumulate import composite
+from ..model.accumulate import alpha_coverage, composite
 from .scene import Scene
 
 CHANNELS = 4  # red, green, blue, alpha
@@ -66,7 +66,7 @@ class Canvas:
         if d != self.full:
             raise ValueError(f"a colour scene's coverage is in steps of {self.full}, not {d}")
         red, green, blue, alpha = (int(v) for v in self.paints[index])
-        q = (2 * q * alpha + self.full) // (2 * self.full)
+        q = alpha_coverage(q, alpha, self.full)
         live = q != 0
         rows, cols, q = rows[live], cols[live], q[live]
         for channel, value in enumerate((red, green, blue, self.full)):

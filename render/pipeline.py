@@ -16,8 +16,8 @@ the renderer's, bit for bit (tested).
 
 A colour scene (planned as its coverage, `edgeaa.render.paint`) goes through a pipeline of
 3 channels (`TileConfig.channels`; 4, alpha too, for a translucent background): each
-polygon's begin carries its paint, each tile its background, from the `Canvas`; the
-hardware draws opaque colours only (`tile_paints`). Its image is the canvas's, bit for bit.
+polygon's begin carries its paint and alpha, each tile its background, from the `Canvas`
+(`tile_paints`). Its image is the canvas's, bit for bit.
 """
 
 from __future__ import annotations
@@ -194,25 +194,21 @@ class TilePaints:
 def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
     """The paints of `plan` from `canvas` (`edgeaa.render.paint.Canvas`, a colour scene's,
     for a tile of 3 channels, or 4 with alpha: a translucent background), or grey (no canvas,
-    1 channel). The hardware composites opaque paint only: a polygon's colour with alpha
-    below full scale is refused (SceneError, one line), and with 3 channels the background's."""
+    1 channel): each polygon's red, green, blue and alpha (`PAINT`), the background's
+    channels. A translucent background in 3 channels is refused (SceneError, one line)."""
     if (canvas is not None) != (tile.channels > 1):
         raise ValueError(
             f"a {'colour' if canvas else 'grey'} scene in a {tile.channels}-channel tile"
         )
     if canvas is None:
         return TilePaints(None, (None,) * len(plan.polygons))
-    full, channels = canvas.full, tile.channels
-    background = [("the background", canvas.background[3])] if channels == 3 else []
-    for what, alpha in background + [
-        (f"polygon {p.index}", canvas.paints[p.index, 3]) for p in plan.polygons
-    ]:
-        if alpha != full:
-            raise SceneError(
-                f"{what} has alpha {int(alpha)} of {full}: the hardware pipeline draws opaque "
-                "colours only; use --engine model"
-            )
-    paints = tuple(tuple(int(v) for v in canvas.paints[p.index, :channels]) for p in plan.polygons)
+    full, channels, alpha = canvas.full, tile.channels, int(canvas.background[3])
+    if channels == 3 and alpha != full:
+        raise SceneError(
+            f"the background has alpha {alpha} of {full}: a 3-channel pipeline's pixels are "
+            "opaque; use 4 channels"
+        )
+    paints = tuple(tuple(int(v) for v in canvas.paints[p.index]) for p in plan.polygons)
     return TilePaints(tuple(int(v) for v in canvas.background[:channels]), paints)
 
 
@@ -242,7 +238,7 @@ def tile_ops(
 
 def render_tiles(plan: Plan, tile: TileConfig, engine: str = "model", canvas=None) -> np.ndarray:
     """The image, tile by tile, through the tile model (deltas from `engine`); a colour
-    scene's (`canvas`, 3 channels) as (height, width, 3)."""
+    scene's (`canvas`, 3 or 4 channels) as (height, width, channels)."""
     model, paints = TileModel(tile), tile_paints(plan, tile, canvas)
     frames = [
         model.run(tile_ops(plan, tile, job, engine, paints))[0] for job in tile_jobs(plan, tile)
@@ -254,7 +250,8 @@ def scene_commands(plan: Plan, tile: TileConfig, canvas=None) -> list[Command]:
     """The scene as pipeline commands (format `COMMAND_VERSION`): per tile, its start, each
     polygon meeting it (begin, edges, end) and a flush. The top clips each edge to the tile
     (`tile_clip`); an edge wholly left of the image is sent as its projection. A colour
-    scene (`canvas`, 3 channels): each begin and tile with its paint."""
+    scene (`canvas`, 3 or 4 channels): each begin with its paint and alpha, each tile
+    with its background."""
     ox, oy = plan.offset
     paints, bits = tile_paints(plan, tile, canvas), plan.config.intensity_bits
     background = pack_paint(paints.background or (), bits)
@@ -277,7 +274,7 @@ def scene_commands(plan: Plan, tile: TileConfig, canvas=None) -> list[Command]:
 
 def image_from_frames(plan: Plan, tile: TileConfig, frames) -> np.ndarray:
     """The image from the frames of the tiles of `tile_jobs`, in order ((height, width, 3)
-    for a tile of 3 channels; every pixel is some tile's)."""
+    for a colour tile; every pixel is some tile's)."""
     channels = (tile.channels,) if tile.channels > 1 else ()
     image = np.zeros((plan.scene.height, plan.scene.width, *channels), np.int64)
     for job, frame in zip(tile_jobs(plan, tile), frames, strict=True):
@@ -303,8 +300,8 @@ def render_pipeline(
     stepper and accumulation counts) and `Render.mismatches` counts the pixels where the
     two differ (0, or it is a bug). `pipeline`: a `PipelineConfig`, or a `TileConfig` (the
     compact pipeline; None: its default tile). `seed`: random idle clocks and back-pressure.
-    A colour scene's `canvas` (a fresh `Canvas`; 3 channels): the image is the canvas's
-    (opaque)."""
+    A colour scene's `canvas` (a fresh `Canvas`; 3 or 4 channels): the image is the
+    canvas's."""
     if engine not in PIPELINE_ENGINES:
         raise EngineUnavailable(f"the pipeline runs in {' or '.join(PIPELINE_ENGINES)}")
     pipeline = pipeline_config(pipeline or TileConfig(plan.config))

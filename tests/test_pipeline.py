@@ -8,6 +8,7 @@ lint-clean."""
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -27,7 +28,7 @@ from edgeaa.model.pipeline import (
     command_ops,
 )
 from edgeaa.model.pipeline_timing import pipeline_cycles
-from edgeaa.model.tile import TileConfig, TileModel
+from edgeaa.model.tile import TileConfig, TileModel, pack_paint
 from edgeaa.render import SceneError, builtin, parse_scene, plan_scene, render_scene
 from edgeaa.render.builtin import BUILTINS
 from edgeaa.render.paint import Canvas, coverage_scene
@@ -54,15 +55,17 @@ def model_frames(tile: TileConfig, commands):
 
 
 def test_the_command_format_and_interface():
-    assert COMMAND_VERSION == 1
+    assert COMMAND_VERSION == 2
     tile = TileConfig(SMALL, 8, 4)
     dut = EdgePipeline(tile)
     members = {"commands", "pixels", "errors", "edge_errors", "stats"}
     assert set(dut.signature.members) == members
     assert set(command_layout(tile).members) == set(command_fields(tile))
     assert set(Command._fields) - set(command_fields(tile)) == {"paint"}
-    colour = replace(tile, channels=3)
-    assert set(command_layout(colour).members) == set(Command._fields)
+    for channels in (3, 4):  # red, green, blue and alpha, whatever the channels
+        colour = command_layout(replace(tile, channels=channels))
+        assert set(colour.members) == set(Command._fields)
+        assert colour.members["paint"].width == 4 * SMALL.intensity_bits
 
 
 def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
@@ -80,38 +83,49 @@ def test_a_scene_goes_through_the_pipeline_to_the_renderers_image():
     assert run.stats["resolve_stall"] == 0
 
 
-def colour_scene(data, scene, opaque: bool = True):
-    """`scene` with a random paint per polygon and background (alpha full when `opaque`)."""
+# an alpha: often transparent, opaque or just off them (q' = 0 or q), else any
+ALPHAS = st.one_of(st.sampled_from([0.0, 1.0, 0.5, 1 / 255, 254 / 255]), st.floats(0, 1))
+
+
+def colour_scene(data, scene, channels: int = 3):
+    """`scene` with a random paint and alpha per polygon, and a random background, opaque
+    for 3 channels (a 3-channel tile's pixels are opaque), of any alpha for 4."""
     unit = st.floats(0, 1)
 
-    def paint():
-        return tuple(data.draw(unit) for _ in range(3)) + (1.0 if opaque else data.draw(unit),)
+    def paint(alpha):
+        return tuple(data.draw(unit) for _ in range(3)) + (data.draw(alpha),)
 
-    polygons = tuple(replace(p, paint=paint()) for p in scene.polygons)
-    return replace(scene, polygons=polygons, background_paint=paint())
+    polygons = tuple(replace(p, paint=paint(ALPHAS)) for p in scene.polygons)
+    background = paint(st.just(1.0) if channels == 3 else ALPHAS)
+    return replace(scene, polygons=polygons, background_paint=background)
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.data(), st.sampled_from([(4, 2), (16, 8)]))
-def test_a_colour_scene_through_three_channel_tiles_is_the_canvas(data, size):
-    """Each polygon's paint composited per channel in the tiles (`TileModel`, 3 channels):
-    the canvas's image (`edgeaa.render.paint`), bit for bit."""
-    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
+@given(st.data(), st.sampled_from([(4, 2), (16, 8)]), st.sampled_from([3, 4]))
+def test_a_colour_scene_through_colour_tiles_is_the_canvas(data, size, channels):
+    """Each polygon's paint and alpha composited per channel in the tiles (`TileModel`, 3 or
+    4 channels): the canvas's image (`edgeaa.render.paint`), bit for bit."""
+    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)), channels)
     full = DEFAULT.full_scale
     plan = plan_scene(coverage_scene(scene), DEFAULT)
     want = render_scene(plan, canvas=Canvas(scene, full)).image
-    assert (want[..., 3] == full).all()
-    tile = TileConfig(DEFAULT, *size, channels=3)
-    assert np.array_equal(render_tiles(plan, tile, canvas=Canvas(scene, full)), want[..., :3])
+    if channels == 3:
+        assert (want[..., 3] == full).all()
+    tile = TileConfig(DEFAULT, *size, channels=channels)
+    got = render_tiles(plan, tile, canvas=Canvas(scene, full))
+    assert np.array_equal(got, want[..., :channels])
 
 
-def test_the_hardware_refuses_a_translucent_paint():
-    scene = parse_scene({**TINY_SCENE, "background_color": [1, 1, 1]})
+def test_a_translucent_background_needs_four_channels():
+    scene = parse_scene({**TINY_SCENE, "background_color": [1, 1, 1, 0.5]})
     scene = replace(scene, polygons=(replace(scene.polygons[0], paint=(1, 0, 0, 0.5)),))
     plan = plan_scene(coverage_scene(scene), DEFAULT)
-    tile = TileConfig(DEFAULT, 16, 8, channels=3)
-    with pytest.raises(SceneError, match="opaque colours only"):
-        scene_commands(plan, tile, Canvas(scene, DEFAULT.full_scale))
+    canvas = Canvas(scene, DEFAULT.full_scale)
+    with pytest.raises(SceneError, match="background has alpha 128 of 255.*use 4 channels"):
+        scene_commands(plan, TileConfig(DEFAULT, 16, 8, channels=3), canvas)
+    commands = scene_commands(plan, TileConfig(DEFAULT, 16, 8, channels=4), canvas)
+    begin = next(c for c in commands if c.name == "begin")
+    assert begin.paint == pack_paint((255, 0, 0, 128), 8)  # straight colour, then alpha
 
 
 @settings(max_examples=60, deadline=None)
@@ -220,22 +234,24 @@ def test_the_pipeline_verilog_is_lint_clean(channels):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def test_a_colour_scene_in_amaranths_simulator_is_the_canvas():
+@pytest.mark.parametrize(("channels", "background"), [(3, "#203040"), (4, "#20304080")])
+def test_a_colour_scene_in_amaranths_simulator_is_the_canvas(channels, background):
+    """Translucent paints (and a translucent background in 4 channels) in the hardware."""
     polygons = [
         {**{k: v for k, v in p.items() if k != "intensity"}, "color": c}
         for p, c in zip(TINY_SCENE["polygons"], COLOURS, strict=False)
     ]
     size = {k: TINY_SCENE[k] for k in ("width", "height")}
-    scene = parse_scene({**size, "background_color": "#203040", "polygons": polygons})
+    scene = parse_scene({**size, "background_color": background, "polygons": polygons})
     plan = plan_scene(coverage_scene(scene), DEFAULT)
-    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    tile = TileConfig(DEFAULT, 16, 8, channels=channels)
     result = render_pipeline(plan, "amaranth", tile, canvas=Canvas(scene, DEFAULT.full_scale))
     want = render_scene(plan, canvas=Canvas(scene, DEFAULT.full_scale)).image
     assert result.mismatches == 0 and np.array_equal(result.image, want)
     assert len(set(map(tuple, want.reshape(-1, 4).tolist()))) > 10  # colour, not one grey
 
 
-COLOURS = ["#ff8000", [0.1, 0.9, 0.5], "#0000ff", "#c0c0c0"]
+COLOURS = ["#ff800099", [0.1, 0.9, 0.5, 0.3], "#0000ff", "#c0c0c001"]  # with alpha
 
 
 def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
@@ -252,6 +268,36 @@ def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
     assert main([*argv, "-o", str(fast)]) == 0
     units = PIPELINES["fast"]  # the fast pipeline's core has its setup array
     assert f"unit{units - 1}" in fast.read_text() and "unit1" not in out.read_text()
+
+
+def test_edgeaa_verilog_channels(tmp_path, capsys):
+    """`--channels 1|3|4` on `edgeaa verilog --top pipeline`: the colour pipeline's paint
+    port (red, green, blue and alpha) and pixel value; refused for the core and the
+    peripheral (grey), each in one line; the help says it."""
+    from edgeaa.cli import main
+
+    small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
+    for channels in (1, 3, 4):
+        out = tmp_path / f"c{channels}.v"
+        argv = ["verilog", "--top", "pipeline", "--tile", "8x4", *small, "-o", str(out)]
+        assert main([*argv, "--channels", str(channels)]) == 0
+        text = out.read_text()
+        assert ("commands__payload__paint" in text) == (channels > 1)
+        assert re.search(rf"output \[{4 * channels - 1}:0\] pixels__payload__value", text)
+        if channels > 1:
+            assert re.search(r"input \[15:0\] commands__payload__paint", text)
+    capsys.readouterr()
+    for argv, message in [
+        (["--top", "peripheral", "--channels", "3"], "--top peripheral writes grey pixels"),
+        (["--channels", "3"], "--channels sets the polygon pipeline's pixel"),
+        (["--top", "pipeline", "--channels", "2"], "invalid choice: 2 (choose from 1, 3, 4)"),
+    ]:
+        assert main(["verilog", *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and message in err and "Traceback" not in err, err
+    with pytest.raises(SystemExit):
+        main(["verilog", "--help"])
+    assert "--channels" in capsys.readouterr().out
 
 
 def test_the_named_configurations():
@@ -326,11 +372,12 @@ def test_verilator_under_back_pressure_gives_the_renderers_image_on_random_scene
 @settings(max_examples=15, deadline=None, database=None)
 @given(data=st.data(), seed=st.integers(0, 2**31))
 def test_verilator_renders_random_colour_scenes_as_the_canvas_under_back_pressure(data, seed):
-    """Three channels: each polygon's paint composited per channel in the hardware, the
-    canvas's image (`edgeaa.render.paint`) bit for bit."""
-    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
+    """Three and four channels: each polygon's paint and alpha composited per channel in the
+    hardware, the canvas's image (`edgeaa.render.paint`) bit for bit."""
+    channels = data.draw(st.sampled_from([3, 4]))
+    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)), channels)
     plan = plan_scene(coverage_scene(scene), DEFAULT)
-    tile = TileConfig(DEFAULT, 16, 8, channels=3)
+    tile = TileConfig(DEFAULT, 16, 8, channels=channels)
     canvas = Canvas(scene, DEFAULT.full_scale)
     result = render_pipeline(plan, "verilator", tile, seed=seed, idle=0.3, stall=0.4, canvas=canvas)
     want = render_scene(plan, canvas=Canvas(scene, DEFAULT.full_scale)).image
@@ -387,7 +434,7 @@ def test_verilator_drops_bad_colour_commands_as_the_model_does(channels):
 
     rng = random.Random(channels)
     tile = TileConfig(SMALL, 8, 8, channels=channels)
-    top = 1 << (channels * SMALL.intensity_bits)
+    top = 1 << (4 * SMALL.intensity_bits)  # red, green, blue and alpha
     commands = [c._replace(paint=rng.randrange(top)) for c in bad_commands(SMALL.subpixel_scale)]
     want, result = model_frames(tile, commands)
     run = pipeline_harness.run(tile, commands, seed=channels, idle=0.3, stall=0.3)

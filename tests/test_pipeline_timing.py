@@ -197,12 +197,12 @@ COLOUR_TILE = TileConfig(SMALL, 16, 8, channels=3)
 @settings(max_examples=2, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(data=st.data())
 def test_random_colour_scenes_go_through_the_hardware_as_the_model_says(data):
-    """Three channels add no clock: the resolve's channels run side by side."""
+    """Translucent paints in three channels: the channels run side by side, the alpha stage
+    is one clock more of the resolve's latency (`resolve_latency`)."""
     unit = st.floats(0, 1)
     scene = data.draw(small_scenes(SMALL))
     polygons = tuple(
-        replace(p, paint=(data.draw(unit), data.draw(unit), data.draw(unit), 1.0))
-        for p in scene.polygons
+        replace(p, paint=tuple(data.draw(unit) for _ in range(4))) for p in scene.polygons
     )
     scene = replace(scene, polygons=polygons, background_paint=(0.2, 0.4, 0.6, 1.0))
     plan = plan_scene(coverage_scene(scene), SMALL)
@@ -211,12 +211,17 @@ def test_random_colour_scenes_go_through_the_hardware_as_the_model_says(data):
     check_clock_for_clock(COLOUR_TILE, commands, hw, f"colour scene {scene}")
 
 
-def test_a_random_colour_command_stream_with_bad_commands_in_the_models_clocks():
+def test_a_random_colour_command_stream_with_bad_commands_in_the_models_clocks(monkeypatch):
+    """Paints of any colour and alpha; the grey latency (no alpha stage) is caught."""
     rng = random.Random(4)
-    colours = 1 << (3 * SMALL.intensity_bits)
+    colours = 1 << (4 * SMALL.intensity_bits)  # red, green, blue and alpha
     commands = [c._replace(paint=rng.randrange(colours)) for c in random_commands(rng, COLOUR_TILE)]
     hw = run_transfers(COLOUR_TILE, commands)
     check_clock_for_clock(COLOUR_TILE, commands, hw, "colour seed 4")
+    assert tile_model.resolve_latency(COLOUR_TILE) == SMALL.intensity_bits + 4
+    monkeypatch.setattr(tile_model, "resolve_latency", lambda tile: tile.config.intensity_bits + 3)
+    with pytest.raises(AssertionError):
+        check_clock_for_clock(COLOUR_TILE, commands, hw, "the grey latency in colour")
 
 
 @pytest.mark.parametrize(("units", "seed"), [(2, 2), (3, 10), (4, 7)])
@@ -281,12 +286,12 @@ WRONG += ["EMPTY_EDGE_CYCLES"]
 def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
     commands, hw = wrong_model_run
     check_clock_for_clock(SMALL_TILE, commands, hw, "the right model")
-    latency = tile_model.resolve_latency(SMALL) + 1
+    latency = tile_model.resolve_latency(SMALL_TILE) + 1
     for module in (timing, tile_model, pipeline_timing):
         if wrong in WRONG_WAITS and hasattr(module, "beat_wait"):
             monkeypatch.setattr(module, "beat_wait", WRONG_WAITS[wrong])
         elif wrong == "resolve_latency" and hasattr(module, wrong):
-            monkeypatch.setattr(module, wrong, lambda config: latency)
+            monkeypatch.setattr(module, wrong, lambda tile: latency)
         elif wrong == "pipeline_depth" and hasattr(module, wrong):  # the deltas core's, + 1
             depth = getattr(module, wrong)
             monkeypatch.setattr(

@@ -259,7 +259,6 @@ def test_render_writes_rgba_and_rgb_pngs(tmp_path, capsys):
         ("<rect/>", ["--scale", "900"], "more than the limit"),
         ("<rect/>", ["--size", "3x3", "--scale", "2"], "--size and --scale cannot"),
         ('<circle r="3"/>', ["--coord-bits", "4"], "larger than the coordinate range"),
-        ('<circle r="3" fill-opacity="0.5"/>', ["--engine", "amaranth"], "opaque colours only"),
     ],
 )
 def test_bad_svg_is_refused_in_one_line(tmp_path, capsys, body, argv, message):
@@ -388,13 +387,15 @@ def test_json_shapes_are_svgs_shapes(tmp_path):
 
 
 def test_a_colour_svg_through_the_verilator_pipeline_is_the_models_png(tmp_path, capsys):
-    # Opaque fills and a stroke over a coloured background: the hardware's 3 channels give
-    # the model's PNG byte for byte (the render also counts mismatching pixels: none).
+    # Fills, translucent ones and a translucent stroke over a coloured background and a
+    # transparent corner: the hardware gives the model's PNG byte for byte (the render also
+    # counts mismatching pixels: none).
     body = (
-        '<rect width="40" height="40" fill="#203040"/>'
-        '<circle cx="15.3" cy="17.2" r="11" fill="orange"/>'
-        '<path d="M 4 30 Q 20 2 36 30" fill="none" stroke="rgb(20, 200, 120)" stroke-width="3"/>'
-        '<rect x="22.5" y="20.25" width="14" height="9" rx="3" fill="#00f" fill-rule="evenodd"/>'
+        '<rect width="40" height="36" fill="#203040"/>'
+        '<circle cx="15.3" cy="17.2" r="11" fill="orange" fill-opacity="0.7"/>'
+        '<path d="M 4 30 Q 20 2 36 30" fill="none" stroke="rgb(20, 200, 120)" stroke-width="3"'
+        ' stroke-opacity="0.45"/>'
+        '<rect x="22.5" y="20.25" width="14" height="19" rx="3" fill="#00f" opacity="0.3"/>'
     )
     path = write(tmp_path, body)
     outputs = {}
@@ -404,4 +405,5 @@ def test_a_colour_svg_through_the_verilator_pipeline_is_the_models_png(tmp_path,
         assert main(argv) == 0, capsys.readouterr().err
     assert outputs["model"].read_bytes() == outputs["verilator"].read_bytes()
     image = np.asarray(__import__("PIL.Image").Image.open(outputs["verilator"]))
-    assert image.shape == (40, 40, 3) and len({tuple(p) for p in image.reshape(-1, 3)}) > 20
+    assert image.shape == (40, 40, 4) and len({tuple(p) for p in image.reshape(-1, 4)}) > 20
+    assert {0, 255} < set(image[..., 3].ravel().tolist())  # translucent, opaque and clear

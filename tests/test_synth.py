@@ -343,6 +343,37 @@ def test_synth_top_pipeline_synthesises_the_pipeline_and_counts_its_block_rams(m
     assert not any(isinstance(design, EdgePipeline) for _, design in made)
 
 
+def test_synth_channels_makes_the_colour_pipeline_and_the_peripheral_refuses_it(
+    monkeypatch, capsys
+):
+    """`--channels 3` synthesises a 3-channel pipeline (faked Yosys); the peripheral (grey
+    framebuffer) and the core refuse it in one line; the help says it."""
+    from amaranth.hdl import Fragment
+
+    from edgeaa import edge_cli
+    from edgeaa.sim.synthesis import SynthResult
+
+    made = []
+
+    def fake(make, target, seed, stage=None):
+        made.append(make())
+        Fragment.get(made[-1], None)  # elaborated, as the real synthesis would (no warning)
+        return SynthResult(target, "dev", 9, 4, 0, {}, 4, False, fmax_mhz=50.0), None
+
+    monkeypatch.setattr(edge_cli, "_synthesize", fake)
+    argv = ["--top", "pipeline", "--tile", "32x16", "--channels", "3", "--target", "ecp5"]
+    status, captured = _run_synth(capsys, *argv)
+    assert status == 0, captured.err
+    assert made[0].tile.channels == 3 and "tile 32x16, 3 channels" in captured.out
+    for argv in (["--top", "peripheral", "--channels", "4"], ["--channels", "3"]):
+        status, captured = _run_synth(capsys, *argv)
+        assert status == 2 and captured.err.count("\n") == 1 and "--channels" in captured.err
+    assert len(made) == 2  # nothing synthesised for the refused ones
+    with pytest.raises(SystemExit):
+        _run_synth(capsys, "--help")
+    assert "--channels" in capsys.readouterr().out
+
+
 def test_synth_top_pipeline_rejects_a_bad_tile(capsys):
     status, captured = _run_synth(capsys, "--top", "pipeline", "--tile", "30x16")
     assert status == 2 and "--tile" in captured.err

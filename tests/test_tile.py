@@ -15,7 +15,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from edgeaa.model import EdgeConfig
-from edgeaa.model.accumulate import FILL_RULES, composite, fill, intensity_offset
+from edgeaa.model.accumulate import (
+    FILL_RULES,
+    alpha_coverage,
+    composite,
+    fill,
+    intensity_offset,
+)
 from edgeaa.model.tile import (
     Beats,
     Flush,
@@ -24,6 +30,7 @@ from edgeaa.model.tile import (
     TileModel,
     TileOverflow,
     TileStart,
+    alpha_steps,
     composite_steps,
 )
 from edgeaa.render import builtin, plan_scene, render_scene
@@ -73,6 +80,27 @@ def test_the_resolves_division_is_the_renderers_composite_at_8_and_16_bits():
             q = rng.choice([1, d, rng.randint(1, d)])
             want = int(composite(below, q, intensity, d))
             assert composite_steps(below, q, intensity, d, bits) == want
+
+
+@pytest.mark.parametrize("bits", range(1, 13))
+def test_the_resolves_alpha_stage_is_the_canvass_rounding_everywhere(bits):
+    """round(q A / full) half up with no divider (`alpha_steps`), every q and A in [0,
+    full], up to 12 bits; wider at random below."""
+    full = (1 << bits) - 1
+    q, alpha = np.meshgrid(np.arange(full + 1), np.arange(full + 1))
+    want = alpha_coverage(q, alpha, full)
+    assert np.array_equal(alpha_steps(q, alpha, bits), want), bits
+    assert want.max() == full and (want <= q).all()
+
+
+@pytest.mark.parametrize("bits", [13, 14, 15, 16])
+def test_the_resolves_alpha_stage_at_random_up_to_16_bits(bits):
+    rng = np.random.default_rng(bits)
+    full = (1 << bits) - 1
+    q, alpha = rng.integers(0, full + 1, (2, 200_000))
+    q[:100], alpha[:100] = full, rng.integers(0, full + 1, 100)  # the largest products
+    want = alpha_coverage(q, alpha, full)
+    assert np.array_equal(alpha_steps(q, alpha, bits), want), f"seed {bits}"
 
 
 def _ops(tile: TileConfig, cells, end: PolygonEnd):

@@ -44,7 +44,9 @@ def test_the_interfaces():
     assert set(acc.signature.members) == {"ops", "cells", "scanning", "busy"}
     assert set(res.signature.members) == {"cells", "pixels", "flushing"}
     assert acc.cells.signature.flip() == res.cells.signature
-    assert res.latency == resolve_latency(SMALL) == SMALL.intensity_bits + 3
+    assert res.latency == resolve_latency(tile) == SMALL.intensity_bits + 3
+    colour = TileResolve(TileConfig(SMALL, 8, 4, channels=3))
+    assert colour.latency == SMALL.intensity_bits + 4  # the alpha stage
     assert set(Stages(tile).signature.members) == {"ops", "pixels"}
 
 

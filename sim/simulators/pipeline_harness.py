@@ -52,7 +52,7 @@ class PipelineRun:
 
     def frames(self, tile: TileConfig) -> list[np.ndarray]:
         """The flushed tiles' values, (height, width) each ((height, width, channels) for a
-        tile of 3 channels), in order. Raises RuntimeError
+        colour tile), in order. Raises RuntimeError
         unless the pixels came as the pipeline sends them: whole tiles, row by row, each
         pixel at its place and ``last`` on a tile's final pixel only."""
         x, y, values, last = (self.pixels[:, PIXEL_COLUMNS.index(n)] for n in PIXEL_COLUMNS[1:])

@@ -47,7 +47,6 @@ from .resolve import check_pixels
 from .run import FormalResult, find_tools, report, run_harness, sby_script
 from .stream import held, hold_rule
 from .tile_common import (
-    SMALL_CONFIG,
     SMALL_TILE,
     TILE_CHECKS,
     TILE_FAULTS,
@@ -228,7 +227,7 @@ TILE_PROOFS: dict[str, TileProof] = {
             "resolve",
             ("pixels",),
             "prove",
-            resolve_latency(SMALL_CONFIG) + 1,  # a cell in flight is written within k
+            resolve_latency(SMALL_TILE) + 1,  # a cell in flight is written within k
             description="pixels equal the model's composite of exact prefix sums within the "
             "documented range (no overflow; k-induction with the pipeline's and the pixel "
             "memory's invariants)",
