@@ -25,12 +25,12 @@ from .model.numbers import shown
 from .progress import ProgressBar
 
 BOARD_CHOICES = ("ulx3s-85f",)  # `edgeaa.sim.board_build.BOARDS`
-GIF_NAME = "board-hud.gif"
+GIF_NAME = "board_hud.gif"
 GIF_MILLISECONDS = 250  # each frame of the GIF
 
 
 def page_name(k: int) -> str:
-    return f"board-page{k}.png"
+    return f"board_page{k}.png"
 
 
 class BoardCommand(Command):
@@ -43,8 +43,8 @@ class BoardCommand(Command):
         "yowasp-ecppack) into DIR/edgeaa_board.bit with the tools' files and logs; the "
         "place and route takes tens of minutes. With --simulate: the board's logic in "
         "Verilator (no PLL and serializer: the pixels and TMDS words before them), one "
-        "frame a page as DIR/board-page<k>.png, checked against the model bit for bit, and "
-        "DIR/board-hud.gif, the pages there and back."
+        "frame a page as DIR/board_page<k>.png, checked against the model bit for bit, and "
+        "DIR/board_hud.gif, the pages there and back."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
@@ -138,8 +138,8 @@ class BoardCommand(Command):
             mismatches = int((image != want).sum())
             figures["mismatches"] += mismatches
             figures["runs"].append(
-                {"roll": ROLLS[k], "clocks": run.clocks, "seconds": round(run.seconds, 2),
-                 "mismatches": mismatches}
+                {"roll": ROLLS[k], "drawn_by_clock": run.drawn_by, "clocks": run.clocks,
+                 "seconds": round(run.seconds, 2), "mismatches": mismatches}
             )  # fmt: skip
             frames.append(Image.fromarray(image.astype("uint8")))
             with atomic_output(self.prog, str(out / page_name(k))) as temporary:

@@ -68,6 +68,15 @@ class BoardRun:
     width: int
     height: int
 
+    @property
+    def drawn_by(self) -> int:
+        """The clock of the first active pixel shown after the page was drawn (the drawing
+        ended in the clocks before it; 0: no pixel was shown while drawing)."""
+        drawing = np.flatnonzero(self.rows[:, VIDEO_COLUMNS.index("drawing")])
+        if not len(drawing) or drawing[-1] + 1 >= len(self.rows):
+            return 0
+        return int(self.rows[drawing[-1] + 1, 0])
+
     def last_frame(self) -> np.ndarray:
         """The last whole frame's bytes, (height, width); RuntimeError unless it is whole,
         in raster order, after the page was drawn, and its TMDS words are the reference's."""
