@@ -27,7 +27,7 @@ TILE = TileConfig(EdgeConfig(), 16, 8)
 SMALL = VideoTiming(6, 2, 3, 1, 4, 1, 2, 1, pixel_hz=1e6)  # 12 x 8 clocks a frame
 
 
-def _run(dut, bench, clocks: int | None = None):
+def _run(dut, bench):
     sim = Simulator(dut)
     sim.add_clock(1e-6)
     sim.add_testbench(bench)
