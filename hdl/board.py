@@ -52,6 +52,8 @@ __all__ = [
     "BoardCore",
     "DisplayListPlayer",
     "FramebufferRAM",
+    "PageSequence",
+    "TMDSSerializer",
     "ULX3STop",
     "VideoTimer",
     "board_setup",
@@ -355,10 +357,67 @@ class BoardCore(wiring.Component):
 _STAGED = ("h", "v", "active", "hsync", "vsync")
 
 
+class PageSequence(wiring.Component):
+    """The pages in turn for the board: page 0 once after reset, then, when there is more
+    than one, the next (after the last, 0 again) once `hold_frames` frames have begun since
+    the last page was taken (``frames`` is the video's frame counter)."""
+
+    def __init__(self, pages: int, hold_frames: int):
+        self._pages, self._hold = pages, hold_frames
+        super().__init__({"frames": In(32), "page": Out(stream.Signature(range(max(pages, 2))))})
+
+    def elaborate(self, platform):
+        m = Module()
+        page, taken = self.page, self.page.valid & self.page.ready
+        shown = Signal(range(self._hold + 1))
+        last = Signal(2)
+        m.d.sync += last.eq(self.frames[:2])
+        new_frame = last != self.frames[:2]
+        with m.If(taken):
+            wrap = page.payload == self._pages - 1
+            m.d.sync += [page.payload.eq(Mux(wrap, 0, page.payload + 1)), shown.eq(0)]
+        with m.Elif(new_frame & (shown != self._hold)):
+            m.d.sync += shown.eq(shown + 1)
+        first = Signal(init=1)
+        with m.If(taken):
+            m.d.sync += first.eq(0)
+        again = (shown == self._hold) if self._pages > 1 else Const(0)
+        m.d.comb += page.valid.eq(first | again)
+        return m
+
+
+class TMDSSerializer(wiring.Component):
+    """Four lanes of 10-bit words (``words``: lane k at bits 10k..10k+9, from the pixel clock
+    domain ``sync``) as 2 bits a clock of the ``shift`` domain (5 times the pixel clock, from
+    the same PLL: related clocks, whose crossing nextpnr times): ``o0`` is each lane's bit sent first (an ODDRX1F's D0, on the
+    rising edge), ``o1`` the next. A word is taken on the shift clock after the pixel clock's
+    edge that set it (a path of one shift clock) and sent bit 0 first over 5 shift clocks."""
+
+    def __init__(self, lanes: int = 4):
+        self._lanes = lanes
+        super().__init__({"words": In(10 * lanes), "o0": Out(lanes), "o1": Out(lanes)})
+
+    def elaborate(self, platform):
+        m = Module()
+        shifters = [Signal(10, name=f"shift{k}") for k in range(self._lanes)]
+        phase = Signal(range(5))
+        m.d.shift += phase.eq(Mux(phase == 4, 0, phase + 1))
+        for k, shifter in enumerate(shifters):
+            with m.If(phase == 4):
+                m.d.shift += shifter.eq(self.words.word_select(k, 10))
+            with m.Else():
+                m.d.shift += shifter.eq(shifter >> 2)
+        m.d.comb += [
+            self.o0.eq(Cat(s[0] for s in shifters)),
+            self.o1.eq(Cat(s[1] for s in shifters)),
+        ]
+        return m
+
+
 class ULX3STop(Elaboratable):
-    """`BoardCore` on the ULX3S: clocks from the PLL, pages 0, 1, ... in turn (the next once
-    the last is drawn and `hold_frames` frames have been shown), DVI on the GPDI connector,
-    LED 0 on while drawing, LED 1 once a page has been drawn, LED 7 the PLL's lock."""
+    """`BoardCore` on the ULX3S: clocks from the PLL, the pages in turn (`PageSequence`, 30
+    frames apart), DVI on the GPDI connector (`TMDSSerializer` into ODDRX1F), LED 0 on while
+    drawing, LED 1 once a page has been drawn, LED 7 the PLL's lock."""
 
     def __init__(self, core: BoardCore, pages: int, hold_frames: int = 30):
         self._core, self._pages, self._hold = core, pages, hold_frames
@@ -367,20 +426,9 @@ class ULX3STop(Elaboratable):
         m = Module()
         m.submodules.core = core = self._core
         locked = self._clocks(m, platform)
-        page = Signal(range(max(self._pages, 2)))
-        shown = Signal(range(self._hold + 1))
-        last_frames = Signal(2)
-        m.d.sync += last_frames.eq(core.frames[:2])
-        new_frame = last_frames != core.frames[:2]
-        with m.If(core.page.valid & core.page.ready):
-            m.d.sync += [page.eq(Mux(page == self._pages - 1, 0, page + 1)), shown.eq(0)]
-        with m.Elif(new_frame & (shown != self._hold)):
-            m.d.sync += shown.eq(shown + 1)
-        first = Signal(init=1)  # page 0 once after reset; more pages in turn
-        with m.If(core.page.valid & core.page.ready):
-            m.d.sync += first.eq(0)
-        again = (shown == self._hold) if self._pages > 1 else Const(0)
-        m.d.comb += [core.page.payload.eq(page), core.page.valid.eq(first | again)]
+        m.submodules.pages = pages = PageSequence(self._pages, self._hold)
+        m.d.comb += pages.frames.eq(core.frames)
+        wiring.connect(m, pages.page, core.page)
         self._dvi(m, platform, core.tmds)
         leds = [platform.request("led", k, dir="-") for k in (0, 1, 7)]
         for k, (port, value) in enumerate(
@@ -415,25 +463,17 @@ class ULX3STop(Elaboratable):
         return locked
 
     def _dvi(self, m: Module, platform, tmds) -> None:
-        """Each lane's 10-bit word, bit 0 first, as 5 shift clocks of 2 bits (ODDRX1F: D0 on
-        the rising edge). The word is taken from the pixel clock's register on the shift
-        clock after it changed (both clocks come from the same PLL, in phase)."""
+        """The three TMDS lanes and the clock lane through `TMDSSerializer` and ODDRX1F onto
+        the connector's pairs (the P pins, LVCMOS33D)."""
         pins = ("d", "clk", "cec", "eth", "scl", "sda")  # the rest left unconnected
         hdmi = platform.request("hdmi", 0, dir={name: "-" for name in pins})
-        words = Cat(tmds, Const(CLOCK_WORD, 10))  # lanes d0, d1, d2, clk
-        shifters = [Signal(10, name=f"shift{k}") for k in range(4)]
-        phase = Signal(range(5))
-        m.d.shift += phase.eq(Mux(phase == 4, 0, phase + 1))
-        for k, shifter in enumerate(shifters):
-            with m.If(phase == 4):
-                m.d.shift += shifter.eq(words.word_select(k, 10))
-            with m.Else():
-                m.d.shift += shifter.eq(shifter >> 2)
+        m.submodules.serializer = serializer = TMDSSerializer()
+        m.d.comb += serializer.words.eq(Cat(tmds, Const(CLOCK_WORD, 10)))  # d0, d1, d2, clk
         m.submodules.d = data_out = io.DDRBuffer("o", hdmi.d, o_domain="shift")
         m.submodules.clk = clk_out = io.DDRBuffer("o", hdmi.clk, o_domain="shift")
         m.d.comb += [
-            data_out.o[0].eq(Cat(s[0] for s in shifters[:3])),
-            data_out.o[1].eq(Cat(s[1] for s in shifters[:3])),
-            clk_out.o[0].eq(shifters[3][0]),
-            clk_out.o[1].eq(shifters[3][1]),
+            data_out.o[0].eq(serializer.o0[:3]),
+            data_out.o[1].eq(serializer.o1[:3]),
+            clk_out.o[0].eq(serializer.o0[3]),
+            clk_out.o[1].eq(serializer.o1[3]),
         ]

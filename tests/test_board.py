@@ -15,7 +15,14 @@ import numpy as np
 import pytest
 from amaranth.sim import Simulator
 
-from edgeaa.hdl.board import DisplayListPlayer, FramebufferRAM, VideoTimer, board_setup
+from edgeaa.hdl.board import (
+    DisplayListPlayer,
+    FramebufferRAM,
+    PageSequence,
+    TMDSSerializer,
+    VideoTimer,
+    board_setup,
+)
 from edgeaa.hdl.peripheral import REGISTERS, pack_command
 from edgeaa.model import EdgeConfig
 from edgeaa.model.pipeline import Command
@@ -212,3 +219,87 @@ def test_the_bitstream_builds(tmp_path):
     assert result.bitstream.stat().st_size > 100_000
     assert 150 < result.brams <= result.brams_available
     assert result.fmax_mhz and all(achieved > 0 for achieved, _ in result.fmax_mhz.values())
+
+
+def test_the_page_sequence_offers_page_0_then_the_next_every_hold_frames():
+    dut = PageSequence(3, hold_frames=2)
+    taken = []
+
+    async def bench(ctx):
+        frames = 0
+        for clock in range(200):
+            if clock % 7 == 6:  # a new frame every 7 clocks
+                frames += 1
+                ctx.set(dut.frames, frames)
+            ready = clock % 3 == 0
+            ctx.set(dut.page.ready, ready)
+            if ready and ctx.get(dut.page.valid):
+                taken.append((frames, ctx.get(dut.page.payload)))
+            await ctx.tick()
+
+    _run(dut, bench)
+    assert [page for _, page in taken][:7] == [0, 1, 2, 0, 1, 2, 0]
+    gaps = [b[0] - a[0] for a, b in zip(taken, taken[1:], strict=False)]
+    assert min(gaps) >= 2, taken  # hold_frames frames begun between two pages
+
+
+def test_one_page_is_offered_once():
+    dut = PageSequence(1, hold_frames=1)
+    offers = []
+
+    async def bench(ctx):
+        ctx.set(dut.page.ready, 1)
+        for clock in range(50):
+            ctx.set(dut.frames, clock // 3)
+            offers.append(ctx.get(dut.page.valid))
+            await ctx.tick()
+
+    _run(dut, bench)
+    assert offers[0] and sum(offers) == 1
+
+
+def test_the_serializer_sends_each_lanes_words_bit_0_first_two_bits_a_shift_clock():
+    """The pixel clock at 40 ns, the shift clock at 8 ns, rising together: the bits of each
+    lane, read D0 then D1 clock by clock, are the words set on the pixel clock, 10 bits
+    each, after a fixed delay."""
+    from amaranth.hdl import ClockDomain, Module
+
+    rng = random.Random(5)
+    words = [[rng.randrange(1 << 10) for _ in range(4)] for _ in range(40)]
+    m = Module()
+    m.domains.sync, m.domains.shift = ClockDomain("sync"), ClockDomain("shift")
+    m.submodules.dut = dut = TMDSSerializer()
+    bits = [[] for _ in range(4)]
+
+    async def pixels(ctx):
+        for word in words:
+            ctx.set(dut.words, sum(w << 10 * k for k, w in enumerate(word)))
+            await ctx.tick("sync")
+
+    async def shift(ctx):
+        for _ in range(5 * len(words)):
+            await ctx.tick("shift")
+            o0, o1 = ctx.get(dut.o0), ctx.get(dut.o1)
+            for k in range(4):
+                bits[k] += [o0 >> k & 1, o1 >> k & 1]
+
+    sim = Simulator(m)
+    sim.add_clock(40e-9, domain="sync")
+    sim.add_clock(8e-9, domain="shift")
+    sim.add_testbench(pixels)
+    sim.add_testbench(shift)
+    sim.run()
+
+    def aligned(lane: list[int], start: int) -> list[int]:  # 10-bit words from bit `start`
+        return [sum(b << i for i, b in enumerate(lane[j : j + 10])) for j in range(start, 390, 10)]
+
+    start = next(s for s in range(20) if aligned(bits[0], s)[2:6] in _windows(words, 0))
+    for k in range(4):
+        sent, lane = aligned(bits[k], start), [word[k] for word in words]
+        lag = lane.index(sent[2]) - 2
+        assert abs(lag) <= 2 and sent[2:36] == lane[lag + 2 : lag + 36], f"lane {k}"
+
+
+def _windows(words, k: int) -> list[list[int]]:
+    lane = [word[k] for word in words]
+    return [lane[i : i + 4] for i in range(len(lane) - 3)]
