@@ -14,6 +14,7 @@ import pytest
 from amaranth.sim import Simulator
 
 from edgeaa.hdl.board import (
+    SETTLE_CLOCKS,
     DisplayListPlayer,
     FramebufferRAM,
     PageSequence,
@@ -102,10 +103,14 @@ def test_the_player_writes_the_setup_then_each_commands_words_in_order(seed):
     rng = random.Random(seed)
     writes, drawn = [], []
 
-    async def target(ctx):  # stalls at random, acks after 0 to 2 clocks
+    log = []  # per clock: (drawn before it, busy in it)
+
+    async def target(ctx):  # stalls at random, acks 1 to 3 clocks after taking a request
         bus, due = dut.bus, []
         while True:
-            ctx.set(dut.busy, rng.random() < 0.3)
+            busy = rng.random() < 0.3
+            log.append((ctx.get(dut.drawn), busy))
+            ctx.set(dut.busy, busy)
             stall = rng.random() < 0.5
             ctx.set(bus.stall, stall)
             ctx.set(bus.ack, bool(due) and due[0] == 0)
@@ -139,6 +144,9 @@ def test_the_player_writes_the_setup_then_each_commands_words_in_order(seed):
         counts.append(len(want))
     assert writes == want, f"seed {seed}"
     assert drawn == counts, f"seed {seed}: a page counted as drawn before its writes"
+    for t in range(1, len(log)):  # drawn rose in clock t - 1: busy low in the 4 before it
+        if log[t][0] != log[t - 1][0]:
+            assert not any(busy for _, busy in log[t - 1 - SETTLE_CLOCKS : t - 1]), (seed, t)
 
 
 def test_a_zero_initial_block_becomes_a_loop_and_nothing_else_changes():
