@@ -169,7 +169,7 @@ class DisplayListPlayer(wiring.Component):
     each page asked for on ``page``, each command's words (the last pushes it), one request
     at a time, each held while stalled. A page is drawn when ``busy`` (the peripheral's) has
     been low for `SETTLE_CLOCKS` after its last command; then ``drawn`` counts it and the
-    next page is taken."""
+    next page is taken. A page number past the last is taken and ignored."""
 
     def __init__(self, tile: TileConfig, pages: list[list[Command]], setup):
         if not pages or not all(pages):
@@ -389,9 +389,10 @@ class PageSequence(wiring.Component):
 class TMDSSerializer(wiring.Component):
     """Four lanes of 10-bit words (``words``: lane k at bits 10k..10k+9, from the pixel clock
     domain ``sync``) as 2 bits a clock of the ``shift`` domain (5 times the pixel clock, from
-    the same PLL: related clocks, whose crossing nextpnr times): ``o0`` is each lane's bit sent first (an ODDRX1F's D0, on the
-    rising edge), ``o1`` the next. A word is taken on the shift clock after the pixel clock's
-    edge that set it (a path of one shift clock) and sent bit 0 first over 5 shift clocks."""
+    the same PLL: related clocks, whose crossing nextpnr times): ``o0`` is each lane's bit
+    sent first (an ODDRX1F's D0, on the rising edge), ``o1`` the next. A word is taken every
+    5 shift clocks (a path of at least one shift clock from the pixel clock's register) and
+    sent bit 0 first over the next 5."""
 
     def __init__(self, lanes: int = 4):
         self._lanes = lanes

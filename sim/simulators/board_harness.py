@@ -172,6 +172,8 @@ def frames_for(plan, core: BoardCore) -> int:
 
 def run(core: BoardCore, pages, page: int, frames: int) -> BoardRun:
     """Reset, ask for `page`, record `frames` whole frames of video."""
+    if not 0 <= page < len(pages):
+        raise ValueError(f"page {page} of {len(pages)} pages (0 to {len(pages) - 1})")
     timing = core.timing
     done = harness.run_harness(
         build(core, pages),
