@@ -237,7 +237,7 @@ HUGE = "9" * 5000
         (["bench", "--seed", "-1"], "must be an integer in [0, 4294967295]"),
         (["verilog", "--name", "a b"], "must be a plain Verilog identifier"),
         (["verilog", "-o", "/dev/full"], "unsupported format (allowed: .v, .sv)"),
-        ([], "give a command (edge, demo"),
+        ([], "give a command (board, edge, demo"),
     ],
 )
 def test_hostile_arguments_are_one_line_errors(capsys, argv, fragment):
