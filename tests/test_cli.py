@@ -160,7 +160,9 @@ def test_synth_prints_both_cores_and_their_ratio(capsys):
 
 # -- the command registry --------------------------------------------------------------------
 
-COMMAND_NAMES = ["edge", "demo", "verilog", "synth", "verify", "plot", "bench", "stress", "render"]
+COMMAND_NAMES = [
+    "board", "edge", "demo", "verilog", "synth", "verify", "plot", "bench", "stress", "render"
+]  # fmt: skip
 
 
 def test_every_registered_command_is_in_the_help_in_order(capsys):
@@ -182,7 +184,8 @@ def test_command_modules_do_not_import_the_entry_point():
     # The commands register on import; only the entry point may import them all (no cycle).
     program = (
         "import sys\n"
-        "import edgeaa.edge_cli, edgeaa.verify_cli, edgeaa.analysis.cli, edgeaa.render.cli\n"
+        "import edgeaa.board_cli, edgeaa.edge_cli, edgeaa.verify_cli, edgeaa.analysis.cli\n"
+        "import edgeaa.render.cli\n"
         "from edgeaa.command import COMMANDS\n"
         "print(' '.join(COMMANDS), 'edgeaa.cli' in sys.modules)\n"
     )
@@ -234,7 +237,7 @@ HUGE = "9" * 5000
         (["bench", "--seed", "-1"], "must be an integer in [0, 4294967295]"),
         (["verilog", "--name", "a b"], "must be a plain Verilog identifier"),
         (["verilog", "-o", "/dev/full"], "unsupported format (allowed: .v, .sv)"),
-        ([], "give a command (edge, demo"),
+        ([], "give a command (board, edge, demo"),
     ],
 )
 def test_hostile_arguments_are_one_line_errors(capsys, argv, fragment):
