@@ -12,9 +12,10 @@
    and emits its signed-area deltas (`edgeaa.model.column.column_deltas`); per polygon, add
    them into an accumulation buffer over the polygon's window, prefix-sum the touched rows,
    apply the fill rule and composite the coverage over what is below
-   (`edgeaa.model.accumulate`). Polygons whose windows share no pixel are accumulated
-   together in one buffer (`_disjoint_runs`), each after every earlier polygon whose window
-   meets its own: the same image, with numpy's per-call cost paid once per run.
+   (`edgeaa.model.accumulate`). Many polygons are accumulated together in one buffer
+   (`_accumulation_runs`) and composited in waves of windows that share no pixel, each
+   polygon after every earlier polygon whose window meets its own: the same image, with
+   numpy's per-call cost paid once per run (and once per wave to composite).
 
 The boundary edges alone bound the filled region, each with its inside on one side, so the
 sums are the region's exact area (up to the estimate) even where subpaths overlap or cross.
@@ -26,6 +27,7 @@ the difference is the work, which `edgeaa render --stats` reports.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -699,16 +701,17 @@ def render_scene(
     by_poly = np.searchsorted(polygon_of[order], np.arange(len(plan.polygons) + 1))
     drawn = [i for i in range(len(plan.polygons)) if by_poly[i + 1] > by_poly[i]]
     batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
-    for run in _disjoint_runs(plan, drawn) if batch else [[i] for i in drawn]:
+    for run in _accumulation_runs(plan, drawn) if batch else [[[i]] for i in drawn]:
         if progress is not None:
-            progress(run[0], len(plan.polygons), "accumulate")
-        picks = [order[by_poly[i] : by_poly[i + 1]] for i in run]
-        if len(run) == 1:
+            progress(run[0][0], len(plan.polygons), "accumulate")
+        polys = [i for wave in run for i in wave]
+        picks = [order[by_poly[i] : by_poly[i + 1]] for i in polys]
+        if len(polys) == 1:
             _draw_polygon(
-                plan, plan.polygons[run[0]], deltas.take(picks[0]), image, skip, counts, canvas
+                plan, plan.polygons[polys[0]], deltas.take(picks[0]), image, skip, counts, canvas
             )
         else:
-            _draw_disjoint(plan, run, deltas.take(np.concatenate(picks)), picks, image, counts)
+            _draw_run(plan, run, deltas.take(np.concatenate(picks)), picks, image, counts)
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t
@@ -746,44 +749,45 @@ def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
         )
 
 
-RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_disjoint_runs`)
+RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_accumulation_runs`)
 RUN_CELLS = 1 << 18  # and its cells (2 MiB of int64)
 RUN_PAIRS = 1 << 22  # candidate window pairs past which runs are not looked for
 
 
-def _disjoint_runs(plan: Plan, drawn: list[int]) -> list[list[int]]:
-    """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_disjoint`): no
-    two windows of a run share a pixel, and a polygon comes after every earlier polygon whose
-    window meets its own (its wave is one more than theirs: the compositing order is kept
-    wherever it matters). A run holds at most RUN_POLYGONS polygons and RUN_CELLS cells of
-    buffer (rows times the widest window); a polygon with an empty window draws nothing and
-    is a run of its own. Past RUN_PAIRS candidate pairs (windows heaped on each other),
-    every polygon is a run of its own, in order."""
+def _accumulation_runs(plan: Plan, drawn: list[int]) -> list[list[list[int]]]:
+    """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_run`), each run
+    a list of waves: no two windows of a wave share a pixel, and a polygon's wave comes after
+    the wave of every earlier polygon whose window meets its own (one more than theirs), so
+    compositing wave by wave keeps the order wherever it matters. A run holds at most
+    RUN_POLYGONS polygons and RUN_CELLS cells of buffer (its windows' areas at most); a
+    polygon with an empty window draws nothing and is a run of its own. Past RUN_PAIRS
+    candidate pairs (windows heaped on each other), every polygon is a run of its own, in
+    order."""
     boxes = np.array([plan.polygons[i].window for i in drawn], dtype=np.int64).reshape(-1, 4)
     live = (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
     ids = np.flatnonzero(live)
     pairs = _meeting_windows(boxes[ids])
     if pairs is None:
-        return [[i] for i in drawn]
+        return [[[i]] for i in drawn]
     earlier: list[list[int]] = [[] for _ in ids]  # positions in ids, drawn order
     for a, b in zip(*(np.sort(np.stack(pairs), axis=0).tolist()), strict=True):
         earlier[b].append(a)
     wave = [0] * len(ids)
     for k, before in enumerate(earlier):
         wave[k] = 1 + max((wave[j] for j in before), default=-1)
-    runs = [[drawn[i]] for i in np.flatnonzero(~live)]
-    run: list[int] = []
-    last = rows = widest = 0
+    runs = [[[drawn[i]]] for i in np.flatnonzero(~live)]
+    run: list[list[int]] = []
+    last = size = cells = 0
     for k in np.argsort(wave, kind="stable").tolist():  # by wave, in order within one
         x0, y0, x1, y1 = boxes[ids[k]].tolist()
-        height, width = y1 - y0, max(widest, x1 - x0)
-        if run and (
-            wave[k] != last or len(run) >= RUN_POLYGONS or (rows + height) * width > RUN_CELLS
-        ):
+        area = (y1 - y0) * (x1 - x0)
+        if run and (size >= RUN_POLYGONS or cells + area > RUN_CELLS):
             runs.append(run)
-            run, rows, width = [], 0, x1 - x0
-        run.append(drawn[ids[k]])
-        last, rows, widest = wave[k], rows + height, width
+            run, size, cells = [], 0, 0
+        if not run or wave[k] != last:
+            run.append([])
+        run[-1].append(drawn[ids[k]])
+        last, size, cells = wave[k], size + 1, cells + area
     return runs + [run] if run else runs
 
 
@@ -804,40 +808,81 @@ def _meeting_windows(boxes: np.ndarray):
     return a[meet], b[meet]
 
 
-def _draw_disjoint(plan: Plan, run: list[int], deltas: DeltaRun, picks, image, counts):
-    """`_draw_polygon` on every polygon of a run at once (their windows share no pixel): each
-    polygon's touched rows become rows of one buffer as wide as the widest window, the cells
-    past a polygon's own window masked, so every pixel gets exactly what `_draw_polygon`
-    gives it, with the numpy calls paid once per run instead of once per polygon."""
+class _InPlace(ArrayArith):
+    """`ArrayArith` whose abs and min write into their first operand: the fill rule on a
+    buffer of `_draw_run`'s own, without a fresh array (and its pages) per step."""
+
+    @staticmethod
+    def abs(a):
+        return np.abs(a, out=a)
+
+    @staticmethod
+    def min(a, b):
+        return np.minimum(a, b, out=a)
+
+
+def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, picks, image, counts):
+    """`_draw_polygon` on every polygon of a run (`_accumulation_runs`) at once: each
+    polygon's touched rows, each as wide as its window, laid end to end in one flat buffer
+    whose first cell of a row takes away the previous row's total, so that one prefix sum
+    gives every row's own. The coverage is composited wave by wave (the windows of a wave
+    share no pixel). Every pixel gets exactly what `_draw_polygon` gives it, in the same
+    order, with the numpy calls paid once per run, and once per wave to composite."""
     config = plan.config
-    polys = [plan.polygons[i] for i in run]
-    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).T
+    polys = [plan.polygons[i] for wave in run for i in wave]
+    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).reshape(-1, 4).T
     d = np.array([abs(p.intensity - p.i_out) for p in polys], dtype=np.int64)
     value = np.array([p.intensity for p in polys], dtype=np.int64)
     odd = np.array([p.rule == "evenodd" for p in polys], dtype=bool)
-    k = np.repeat(np.arange(len(run)), [len(pick) for pick in picks])  # each delta's polygon
+    k = np.repeat(np.arange(len(polys)), [len(pick) for pick in picks])  # each delta's polygon
     x, y, delta = deltas.x, deltas.y, deltas.delta
     keep = (y >= y0[k]) & (y < y1[k]) & (x < x1[k])
     k, y, delta = k[keep], y[keep], delta[keep]
     x = np.maximum(x[keep], x0[k]) - x0[k]
-    rows, row_of = np.unique(k * plan.scene.height + y, return_inverse=True)
-    owner, image_row = np.divmod(rows, plan.scene.height)
+    # the rows touched, in order of polygon then row, without a sort: each window's rows
+    base = np.cumsum(y1 - y0) - (y1 - y0)
+    key = base[k] + y - y0[k]
+    touched = np.zeros(int((y1 - y0).sum()), dtype=bool)
+    touched[key] = True
+    rows = np.flatnonzero(touched)
+    owner = np.searchsorted(base, rows, side="right") - 1
+    image_row = rows - base[owner] + y0[owner]
+    row_of = np.cumsum(touched)[key] - 1
     width = (x1 - x0)[owner]
-    buffer = np.zeros((len(rows), int(width.max(initial=0))), dtype=np.int64)
-    np.add.at(buffer, (row_of, x), delta)
-    sums = np.cumsum(buffer, axis=1)
-    ifix = (d[owner] << config.F)[:, None]
-    coverage = nonzero_coverage(ArrayArith, sums, ifix)
-    if odd.any():
-        coverage = np.where(odd[owner][:, None], evenodd_coverage(ArrayArith, sums, ifix), coverage)
-    q = intensity_offset(coverage, config.F)
-    q[np.arange(buffer.shape[1])[None, :] >= width[:, None]] = 0  # past the polygon's window
+    start = np.cumsum(width) - width
+    # |a row's partial sums| <= its sum of |delta|, a cell <= that and the previous row's;
+    # int32 when these, 2 ifix (even-odd's period) and ifix + 2**F fit (half the memory)
+    shift = d << config.F
+    size = np.zeros(len(rows), dtype=np.int64)
+    np.add.at(size, row_of, np.abs(delta))
+    bound = max(int(size.max(initial=0)), int(shift.max(initial=0)) + (1 << config.F))
+    dtype = np.int32 if 2 * bound < 1 << 31 else np.int64
+    delta = delta.astype(dtype)
+    sums = np.zeros(int(width.sum()), dtype=dtype)
+    np.add.at(sums, start[row_of] + x, delta)
+    totals = np.zeros(len(rows), dtype=dtype)
+    np.add.at(totals, row_of, delta)
+    sums[start[1:]] -= totals[:-1]
+    np.cumsum(sums, out=sums)  # in place: every fresh array costs its pages
+    same = len(shift) and (shift == shift[0]).all()
+    ifix = int(shift[0]) if same else np.repeat(shift[owner], width).astype(dtype)
+    odd_cells = np.repeat(odd[owner], width) if odd.any() else None
+    folded = None if odd_cells is None else evenodd_coverage(ArrayArith, sums, ifix)
+    coverage = nonzero_coverage(_InPlace, sums, ifix)  # sums becomes the coverage
+    if odd_cells is not None:
+        np.copyto(coverage, folded, where=odd_cells)
     counts["rows"] += len(rows)
-    counts["cells"] += int(width.sum())
-    r, c = np.nonzero(q)
-    mine = owner[r]
-    qq = q[r, c].astype(np.int64)
-    _composite_into(image, image_row[r], c + x0[mine], qq, value[mine], d[mine], counts)
+    counts["cells"] += len(sums)
+    # intensity_offset(c) > 0 iff c >= half a step: only those cells are rounded
+    cells = np.flatnonzero(coverage >= 1 << (config.F - 1))  # by row: by polygon, wave
+    row = np.searchsorted(start, cells, side="right") - 1
+    mine = owner[row]
+    qq = intensity_offset(coverage[cells].astype(np.int64), config.F)
+    r, c = image_row[row], cells - start[row] + x0[mine]
+    waves = np.cumsum([0] + [len(wave) for wave in run])
+    for lo, hi in itertools.pairwise(np.searchsorted(mine, waves).tolist()):
+        w = slice(lo, hi)
+        _composite_into(image, r[w], c[w], qq[w], value[mine[w]], d[mine[w]], counts)
 
 
 def _composite_into(image, rows, cols, q, value, d, counts) -> None:

@@ -1173,13 +1173,16 @@ def _many_polygons(seed: int) -> Scene:
 
 @pytest.mark.parametrize("seed", range(12))
 def test_polygons_accumulated_in_runs_give_the_polygon_by_polygon_image(seed, monkeypatch):
-    """Polygons whose windows share no pixel are accumulated in one buffer (`_disjoint_runs`,
-    `_draw_disjoint`): the same image and the same counts as one polygon at a time, in order."""
+    """Polygons are accumulated in one buffer and composited in waves of windows that share
+    no pixel (`_accumulation_runs`, `_draw_run`): the same image and the same counts as one
+    polygon at a time, in order."""
     from edgeaa.render import render as renderer
 
     scene = _many_polygons(seed)
-    runs = renderer._disjoint_runs(plan(scene, DEFAULT), list(range(len(scene.polygons))))
+    runs = renderer._accumulation_runs(plan(scene, DEFAULT), list(range(len(scene.polygons))))
     assert len(runs) < len(scene.polygons) or len(scene.polygons) < 5, seed  # runs of several
+    waves = [wave for run in runs for wave in run]
+    assert max(map(len, runs)) > 1 or len(waves) == len(runs), seed  # runs of several waves
     scenes = [scene]
     if seed == 0:
         scenes += [builtin(name, DEFAULT) for name in ("starburst", "text", "hatch")]
@@ -1187,7 +1190,7 @@ def test_polygons_accumulated_in_runs_give_the_polygon_by_polygon_image(seed, mo
         p = plan(scene, DEFAULT)
         together = render_scene(p)
         with monkeypatch.context() as m:
-            m.setattr(renderer, "_disjoint_runs", lambda plan, drawn: [[i] for i in drawn])
+            m.setattr(renderer, "_accumulation_runs", lambda plan, drawn: [[[i]] for i in drawn])
             alone = render_scene(p)
         note = f"{scene.name}, seed {seed}"
         assert np.array_equal(together.image, alone.image), note
