@@ -24,7 +24,12 @@ loading the scene), its rasterizing engine + accumulate; both against AGG's time
 geometric means over the scenes. The slopes are least-squares fits of log CPU time against
 log edges (the page) and log polygons (the map).
 
-    python benchmarks/bench_stages.py [--repeats 3] [--quick] [--json FILE] [--write-docs]
+    python benchmarks/bench_stages.py [--repeats 3] [--quick] [--only WORD] [--json FILE]
+        [--write-docs]
+
+The process keeps freed memory for reuse as `edgeaa render` does (`keep_freed_memory`), and
+AGG and Skia run in it too. --only runs the scenes whose name holds WORD (for profiling;
+no slopes, no docs).
 
 --write-docs replaces the section between the markers in docs/results.md with the tables.
 """
@@ -50,6 +55,7 @@ from edgeaa.render import builtin, parse_scene, plan_scene, render_scene
 from edgeaa.render.builtin import glyph_polygons
 from edgeaa.render.cli import write_png
 from edgeaa.render.corpus import ICONS, font_file, font_scene, icon_scene
+from edgeaa.render.render import keep_freed_memory
 from edgeaa.render.scene import Polygon, Scene
 
 STAGES = ("flatten", "parse", "plan", "engine", "accumulate", "write", "agg", "skia")
@@ -246,7 +252,9 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="fewer and smaller scenes")
     parser.add_argument("--json", help="write the figures to this file")
     parser.add_argument("--write-docs", action="store_true")
+    parser.add_argument("--only", help="only the scenes whose name holds this")
     args = parser.parse_args()
+    keep_freed_memory()  # as `edgeaa render` does
     logging.getLogger("fontTools").setLevel(logging.ERROR)  # cmr10's old timestamps
     config = EdgeConfig()
     sizes, glyphs, cells = (
@@ -259,6 +267,12 @@ def main() -> int:
     makers.append(icon_sheet)
     pages = [lambda g=g: page(g) for g in glyphs]
     maps = [lambda c=c: map_scene(c) for c in cells]
+    if args.only:
+        for make in makers + pages + maps:
+            if args.only in make().name:
+                row = run_scene(make, config, args.repeats)
+                print(stage_table([row]), flush=True)
+        return 0
     rows = []
     for make in makers + pages + maps:
         rows.append(run_scene(make, config, args.repeats))

@@ -244,9 +244,10 @@ class RenderCommand(Command):
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
-        from .render import edges_to_send, plan_scene
+        from .render import edges_to_send, keep_freed_memory, plan_scene
         from .scene import SceneError, check_pixels
 
+        keep_freed_memory()  # numpy's temporaries reuse pages instead of faulting in new ones
         config = config_from_args(args)
         _check_options(args, config)
         crop = args.crop

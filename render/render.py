@@ -606,6 +606,30 @@ def _check_range(config, scene, contours, owners, offset, need=None) -> None:
 # -- rendering ----------------------------------------------------------------------------------
 
 
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3  # glibc's mallopt parameters (malloc.h)
+KEEP_FREED = 64 << 20  # bytes of freed memory malloc keeps at the heap's top for reuse
+HEAP_ARRAYS = 32 << 20  # blocks up to this size come from the heap (glibc's largest)
+
+
+def keep_freed_memory() -> bool:
+    """Ask glibc's malloc to keep freed memory for reuse (up to KEEP_FREED at the heap's
+    top, blocks up to HEAP_ARRAYS from the heap) rather than hand it back to the kernel after
+    each numpy temporary: every fresh page costs a fault, about 2.5 us on the measured
+    machine (a VM), more than the arithmetic on it (the 1,250-cell map's render 65 -> 40 ms
+    CPU, docs/results.md section 7). Process-wide, so `edgeaa render` calls it, not the
+    library. False (and nothing done) without glibc."""
+    import ctypes
+
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
+    return bool(mallopt(M_MMAP_THRESHOLD, HEAP_ARRAYS)) & bool(
+        mallopt(M_TRIM_THRESHOLD, KEEP_FREED)
+    )
+
+
 @dataclass
 class Render:
     image: np.ndarray  # (height, width) intensities, the narrowest unsigned type

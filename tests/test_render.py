@@ -1279,3 +1279,13 @@ def test_stats_with_a_horizontal_edge_left_of_the_image(tmp_path, capsys):
     out = tmp_path / "left.png"
     assert main(["render", str(scene), "--stats", "--quiet", "-o", str(out)]) == 0
     assert out.exists() and "edges partly outside" in capsys.readouterr().out
+
+
+def test_the_render_command_keeps_freed_memory_on_glibc():
+    """`keep_freed_memory` sets glibc's malloc thresholds (True there), and says False where
+    there is no mallopt."""
+    import platform
+
+    from edgeaa.render.render import keep_freed_memory
+
+    assert keep_freed_memory() is (platform.libc_ver()[0] == "glibc")
