@@ -556,32 +556,58 @@ def split_crossings(
     n edges and B pairs whose bounding boxes overlap, and Python work only for the pairs that
     do split (k). Quadratic only when B is, as for random vertex soups, where k is too.
     """
+    out, inserted, _ = split_contours(contours, limit)
+    return out, int(sum(inserted))
+
+
+def split_contours(
+    contours: list[np.ndarray], limit: int | None = None
+) -> tuple[list[np.ndarray], list[int], int]:
+    """`split_crossings` with the points inserted into each contour, and the number of edge
+    pairs that split (the count its `limit` is held against)."""
     if not contours:
-        return contours, 0
+        return contours, [], 0
     seg = contour_segments(contours)
     rows = seg.tolist()
     splits: dict[int, list] = {}
+    pairs = 0
     for i, j in _count_pairs(_candidate_pairs(seg), limit):
         _intersect(i, j, rows, splits)
+        pairs += 1
     if not splits:
-        return contours, 0
-    return _insert_splits(contours, splits)
+        return contours, [0] * len(contours), pairs
+    out, inserted = _insert_splits(contours, splits, seg)
+    return out, inserted, pairs
 
 
-def _insert_splits(contours: list[np.ndarray], splits: dict) -> tuple[list[np.ndarray], int]:
-    """The contours with each edge's split points inserted in order along it."""
-    out, inserted, base = [], 0, 0
-    for pts in contours:
-        points = []
+def _insert_splits(
+    contours: list[np.ndarray], splits: dict, seg: np.ndarray
+) -> tuple[list[np.ndarray], list[int]]:
+    """The contours (their edges `seg`) with each edge's split points inserted in order
+    along it, and how many points each got. A contour none of whose edges splits is only
+    cleared of repeated vertices (there are none in a plan's)."""
+    repeats = np.flatnonzero(np.all(seg[:, 0:2] == seg[:, 2:4], axis=1))  # zero length
+    sizes = np.array([len(c) for c in contours], dtype=np.int64)
+    owner = np.repeat(np.arange(len(contours)), sizes)
+    touched = set(owner[list(splits)].tolist()) | set(owner[repeats].tolist())
+    out, inserted, base = [], [], 0
+    for c, pts in enumerate(contours):
+        if c not in touched:  # as the loop below would give it
+            base += len(pts)
+            out.append(np.asarray(pts, dtype=np.int64))
+            inserted.append(0)
+            continue
+        points, added = [], 0
         for k, row in enumerate(pts.tolist()):
             points.append(tuple(map(int, row)))
             for p in _along(splits.get(base + k, ())):
                 if p != points[-1]:
                     points.append(p)
-                    inserted += 1
+                    added += 1
         base += len(pts)
         kept = [p for i, p in enumerate(points) if p != points[i - 1]]  # cyclic dedup
         out.append(np.array(kept or points[:1], dtype=np.int64))
+        inserted.append(added)
     return out, inserted
 
 

@@ -54,6 +54,7 @@ from .geometry import (
     hot_points,
     inside_sides,
     snap_round,
+    split_contours,
     split_crossings,
 )
 from .scene import (
@@ -355,11 +356,14 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     by_polygon: list[list[np.ndarray]] = [[] for _ in scene.polygons]
     for (k, _, _), pts in zip(owners, contours, strict=True):
         by_polygon[k].append(pts.astype(np.int64) + shift)
-    crossing = _crossing(by_polygon)
+    crossing, noded = _crossing(by_polygon)
     final, owner = [], []  # the contours after splitting, in order, and their polygons
     for i, mine in enumerate(by_polygon):
         if crossing[i]:  # only these need a look again, polygon by polygon
             mine, inserted = _node_polygon(i, mine)
+            crossings += inserted
+        elif i in noded:  # noded in its batch
+            mine, inserted = noded[i]
             crossings += inserted
         final += [q for q in mine if len(q) >= 2]
         owner += [i] * sum(len(q) >= 2 for q in mine)
@@ -372,27 +376,34 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     return coords, polygon, contour, starts, crossings
 
 
-def _crossing(by_polygon: list[list[np.ndarray]]) -> np.ndarray:
+def _crossing(by_polygon: list[list[np.ndarray]]) -> tuple[np.ndarray, dict]:
     """Whether each polygon has edges that cross or touch (`split_crossings` would insert a
     point), for many polygons in one search: each is moved right, past the previous one,
     so that no two polygons' boxes meet, in batches whose coordinates stay below
     geometry.SAFE / 2 (the search's exact integer filter). A batch whose points would pass
-    the limit is left to the polygons one by one (True)."""
+    the limit is left to the polygons one by one (True).
+
+    A crossing polygon whose batch splitting leaves nothing to split in a second round
+    (searched in one batch too) is noded already: `_node`'s result, given back in the dict
+    (polygon: contours and points inserted) and not left to `_node_polygon` (False)."""
     out = np.ones(len(by_polygon), dtype=bool)
+    noded: dict[int, tuple[list[np.ndarray], int]] = {}
     batch: list[int] = []
     moved: list[np.ndarray] = []
+    shifts: list[np.ndarray] = []
     base = 0
 
     def flush():
         if batch:
             try:
-                after, _ = split_crossings(moved, MAX_NODED_EDGES)
-                sizes = np.array([len(c) for c in after]) != np.array([len(c) for c in moved])
-                owner = np.repeat(batch, [len(by_polygon[i]) for i in batch])
-                out[batch] = False
-                out[owner[sizes]] = True
+                after, inserted, pairs = split_contours(moved, MAX_NODED_EDGES)
             except NodingLimit:
-                pass
+                return
+            sizes = np.array([len(c) for c in after]) != np.array([len(c) for c in moved])
+            owner = np.repeat(batch, [len(by_polygon[i]) for i in batch])
+            out[batch] = False
+            out[owner[sizes]] = True
+            _node_batch(by_polygon, owner, after, inserted, pairs, shifts, out, noded)
 
     for i, mine in enumerate(by_polygon):
         if not mine:
@@ -402,14 +413,43 @@ def _crossing(by_polygon: list[list[np.ndarray]]) -> np.ndarray:
         lo, hi = points.min(axis=0), points.max(axis=0)
         if base + (hi[0] - lo[0]) + 1 >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
             flush()
-            batch, moved, base = [], [], 0
+            batch, moved, shifts, base = [], [], [], 0
         if hi[0] - lo[0] >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
             continue  # too wide for any batch: one by one
         batch.append(i)
-        moved += [c - lo + np.array([base, 0]) for c in mine]
+        shift = np.array([base, 0]) - lo
+        moved += [c + shift for c in mine]
+        shifts += [shift] * len(mine)
         base += int(hi[0] - lo[0]) + 1
     flush()
-    return out
+    return out, noded
+
+
+def _node_batch(by_polygon, owner, after, inserted, pairs, shifts, out, noded) -> None:
+    """The second round of `_node` for the crossing polygons of a batch (`_crossing`), at
+    once: a polygon it splits no more is noded (into `noded`, out False) where `_node` alone
+    would have given the same, within its limit, exact filter and size (otherwise it stays
+    True, for `_node_polygon`)."""
+    crossing = np.flatnonzero(out[owner])  # contours of the batch's crossing polygons
+    if not len(crossing):
+        return
+    try:
+        _, more, pairs2 = split_contours([after[c] for c in crossing], MAX_NODED_EDGES)
+    except NodingLimit:
+        return  # each alone, where its own limit decides
+    split_again = set(owner[crossing[np.array(more) > 0]].tolist())
+    for i in dict.fromkeys(owner[crossing].tolist()):
+        mine = by_polygon[i]
+        n = sum(map(len, mine))
+        points = np.concatenate(mine)
+        exact = points.min() > -SAFE and points.max() < SAFE  # as `_node`'s search is alone
+        if i in split_again or not exact or max(pairs, pairs2) >= MAX_NODED_EDGES - n:
+            continue
+        picks = np.flatnonzero(owner == i)
+        contours = [after[c] - shifts[c] for c in picks]
+        if sum(map(len, contours)) <= MAX_NODED_EDGES:
+            noded[i] = (contours, sum(inserted[c] for c in picks))
+            out[i] = False
 
 
 def _node_polygon(i: int, mine: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
@@ -707,9 +747,9 @@ def render_scene(
 
     t = time.perf_counter()
     arrays = edge_arrays(plan, sent, clip=skip)
-    _check_columns(config, arrays)
+    setups = _check_columns(config, arrays)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
-    run, shapes = run_deltas(config, arrays, engine, progress=report)
+    run, shapes = run_deltas(config, arrays, engine, progress=report, setups=setups)
     deltas = run.in_image(sent, plan.offset)
     timings["engine"] = time.perf_counter() - t
 
@@ -759,18 +799,21 @@ def render_scene(
     )
 
 
-def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
+def _check_columns(config: EdgeConfig, arrays: EdgeArrays):
     """Refuse edges that step more than MAX_STEPPED_COLUMNS columns in all (the engines hold
-    every column's four cells: about 300 bytes a column at its peak)."""
+    every column's four cells: about 300 bytes a column at its peak); their setups (a
+    `SetupBatch`, which the engine takes on)."""
     from ..model.edge import setup_batch
 
-    columns = int(setup_batch(config, *arrays.args(), arrays.clip).columns.sum())
+    setups = setup_batch(config, *arrays.args(), arrays.clip)
+    columns = int(setups.columns.sum())
     if columns > MAX_STEPPED_COLUMNS:
         raise SceneError(
             f"the scene's {len(arrays):,} edges step {columns:,} columns (pixels along each "
             f"edge's major axis, within the image's rows and left of its right side), more "
             f"than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
         )
+    return setups
 
 
 RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_accumulation_runs`)
