@@ -292,8 +292,10 @@ def _quantize(scene: Scene, S: int):
     )
     distinct = np.bincount(owner[order][~same], minlength=len(sizes))
     counts = np.bincount(owner, minlength=len(sizes))
-    parts = np.split(kept, np.cumsum(counts)[:-1])
-    indices = np.split(local[keep], np.cumsum(counts)[:-1])
+    ends = np.cumsum(counts).tolist()  # slices, not np.split: its cost is per piece
+    kept_local = local[keep]
+    parts = [kept[a:b] for a, b in zip([0, *ends], ends, strict=False)]
+    indices = [kept_local[a:b] for a, b in zip([0, *ends], ends, strict=False)]
     contours, owners = [], []
     for (i, j), part, index, n in zip(labels, parts, indices, distinct.tolist(), strict=True):
         if n >= 3:
@@ -405,24 +407,44 @@ def _crossing(by_polygon: list[list[np.ndarray]]) -> tuple[np.ndarray, dict]:
             out[owner[sizes]] = True
             _node_batch(by_polygon, owner, after, inserted, pairs, shifts, out, noded)
 
+    boxes = _polygon_boxes(by_polygon)
     for i, mine in enumerate(by_polygon):
         if not mine:
             out[i] = False
             continue
-        points = np.concatenate(mine)
-        lo, hi = points.min(axis=0), points.max(axis=0)
-        if base + (hi[0] - lo[0]) + 1 >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+        lo_x, lo_y, hi_x, hi_y = boxes[i]
+        if base + (hi_x - lo_x) + 1 >= SAFE // 2 or hi_y - lo_y >= SAFE // 2:
             flush()
             batch, moved, shifts, base = [], [], [], 0
-        if hi[0] - lo[0] >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+        if hi_x - lo_x >= SAFE // 2 or hi_y - lo_y >= SAFE // 2:
             continue  # too wide for any batch: one by one
         batch.append(i)
-        shift = np.array([base, 0]) - lo
+        shift = np.array([base - lo_x, -lo_y])
         moved += [c + shift for c in mine]
         shifts += [shift] * len(mine)
-        base += int(hi[0] - lo[0]) + 1
+        base += hi_x - lo_x + 1
     flush()
     return out, noded
+
+
+def _polygon_boxes(by_polygon: list[list[np.ndarray]]) -> list[list[int]]:
+    """Each polygon's bounding box of its contours' points (x0, y0, x1, y1, inclusive; zeros
+    for a polygon without contours), for all polygons in a few numpy calls."""
+    contours = [c for mine in by_polygon for c in mine if len(c)]
+    if not contours:
+        return [[0, 0, 0, 0]] * len(by_polygon)
+    points = np.concatenate(contours)
+    sizes = np.array([len(c) for c in contours], dtype=np.int64)
+    per_polygon = np.array([sum(len(c) > 0 for c in mine) for mine in by_polygon])
+    owner = np.repeat(np.arange(len(by_polygon)), per_polygon)
+    owner = np.repeat(owner, sizes)  # each point's polygon, ascending
+    starts = np.searchsorted(owner, np.arange(len(by_polygon)))
+    has = per_polygon > 0
+    boxes = np.zeros((len(by_polygon), 4), dtype=np.int64)
+    first = starts[has]
+    boxes[has, 0:2] = np.minimum.reduceat(points, first, axis=0)
+    boxes[has, 2:4] = np.maximum.reduceat(points, first, axis=0)
+    return boxes.tolist()
 
 
 def _node_batch(by_polygon, owner, after, inserted, pairs, shifts, out, noded) -> None:
