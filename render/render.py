@@ -858,25 +858,25 @@ def _accumulation_runs(plan: Plan, drawn: list[int]) -> list[list[list[int]]]:
     pairs = _meeting_windows(boxes[ids])
     if pairs is None:
         return [[[i]] for i in drawn]
-    earlier: list[list[int]] = [[] for _ in ids]  # positions in ids, drawn order
-    for a, b in zip(*(np.sort(np.stack(pairs), axis=0).tolist()), strict=True):
-        earlier[b].append(a)
+    a, b = np.sort(np.stack(pairs), axis=0)  # positions in ids, a before b in drawn order
+    by_later = np.lexsort((a, b))
     wave = [0] * len(ids)
-    for k, before in enumerate(earlier):
-        wave[k] = 1 + max((wave[j] for j in before), default=-1)
+    for j, k in zip(a[by_later].tolist(), b[by_later].tolist(), strict=True):
+        if wave[j] >= wave[k]:  # every pair ending at j came before: wave[j] is final
+            wave[k] = wave[j] + 1
+    areas = ((boxes[ids, 2] - boxes[ids, 0]) * (boxes[ids, 3] - boxes[ids, 1])).tolist()
+    polys = np.asarray(drawn)[ids].tolist()
     runs = [[[drawn[i]]] for i in np.flatnonzero(~live)]
     run: list[list[int]] = []
     last = size = cells = 0
     for k in np.argsort(wave, kind="stable").tolist():  # by wave, in order within one
-        x0, y0, x1, y1 = boxes[ids[k]].tolist()
-        area = (y1 - y0) * (x1 - x0)
-        if run and (size >= RUN_POLYGONS or cells + area > RUN_CELLS):
+        if run and (size >= RUN_POLYGONS or cells + areas[k] > RUN_CELLS):
             runs.append(run)
             run, size, cells = [], 0, 0
         if not run or wave[k] != last:
             run.append([])
-        run[-1].append(drawn[ids[k]])
-        last, size, cells = wave[k], size + 1, cells + area
+        run[-1].append(polys[k])
+        last, size, cells = wave[k], size + 1, cells + areas[k]
     return runs + [run] if run else runs
 
 
