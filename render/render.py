@@ -783,21 +783,25 @@ def render_scene(
         image = canvas.image
     counts = {"rows": 0, "cells": 0, "stores": 0}
     polygon_of = plan.polygon[deltas.edge]
-    order = np.argsort(polygon_of, kind="stable")
-    by_poly = np.searchsorted(polygon_of[order], np.arange(len(plan.polygons) + 1))
+    # the engine keeps the edges' order, and a polygon's edges are consecutive: no sort then
+    order = None if (np.diff(polygon_of) >= 0).all() else np.argsort(polygon_of, kind="stable")
+    by_poly = np.searchsorted(
+        polygon_of if order is None else polygon_of[order], np.arange(len(plan.polygons) + 1)
+    )
     drawn = [i for i in range(len(plan.polygons)) if by_poly[i + 1] > by_poly[i]]
     batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
     for run in _accumulation_runs(plan, drawn) if batch else [[[i]] for i in drawn]:
         if progress is not None:
             progress(run[0][0], len(plan.polygons), "accumulate")
-        polys = [i for wave in run for i in wave]
-        picks = [order[by_poly[i] : by_poly[i + 1]] for i in polys]
+        polys = np.array([i for wave in run for i in wave])
+        lo, size = by_poly[polys], by_poly[polys + 1] - by_poly[polys]
+        picks = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(size.sum())
+        picks = picks if order is None else order[picks]  # the polygons' deltas, in order
         if len(polys) == 1:
-            _draw_polygon(
-                plan, plan.polygons[polys[0]], deltas.take(picks[0]), image, skip, counts, canvas
-            )
+            poly = plan.polygons[polys[0]]
+            _draw_polygon(plan, poly, deltas.take(picks), image, skip, counts, canvas)
         else:
-            _draw_run(plan, run, deltas.take(np.concatenate(picks)), picks, image, counts)
+            _draw_run(plan, run, deltas.take(picks), size, image, counts)
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t
@@ -910,7 +914,7 @@ class _InPlace(ArrayArith):
         return np.minimum(a, b, out=a)
 
 
-def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, picks, image, counts):
+def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, counts):
     """`_draw_polygon` on every polygon of a run (`_accumulation_runs`) at once: each
     polygon's touched rows, each as wide as its window, laid end to end in one flat buffer
     whose first cell of a row takes away the previous row's total, so that one prefix sum
@@ -923,7 +927,7 @@ def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, picks, image, 
     d = np.array([abs(p.intensity - p.i_out) for p in polys], dtype=np.int64)
     value = np.array([p.intensity for p in polys], dtype=np.int64)
     odd = np.array([p.rule == "evenodd" for p in polys], dtype=bool)
-    k = np.repeat(np.arange(len(polys)), [len(pick) for pick in picks])  # each delta's polygon
+    k = np.repeat(np.arange(len(polys)), sizes)  # each delta's polygon (`sizes` deltas each)
     x, y, delta = deltas.x, deltas.y, deltas.delta
     keep = (y >= y0[k]) & (y < y1[k]) & (x < x1[k])
     k, y, delta = k[keep], y[keep], delta[keep]
@@ -963,26 +967,29 @@ def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, picks, image, 
     counts["rows"] += len(rows)
     counts["cells"] += len(sums)
     # intensity_offset(c) > 0 iff c >= half a step: only those cells are rounded
-    cells = np.flatnonzero(coverage >= 1 << (config.F - 1))  # by row: by polygon, wave
-    row = np.searchsorted(start, cells, side="right") - 1
+    covered = coverage >= 1 << (config.F - 1)
+    cells = np.flatnonzero(covered)  # by row: by polygon, so by wave
+    row = np.repeat(np.arange(len(rows)), np.add.reduceat(covered, start, dtype=np.int64))
     mine = owner[row]
     qq = intensity_offset(coverage[cells].astype(np.int64), config.F)
-    r, c = image_row[row], cells - start[row] + x0[mine]
+    pixel = image_row[row] * image.shape[1] + (cells - start[row] + x0[mine])
+    value, d = value[mine], d[mine]
     waves = np.cumsum([0] + [len(wave) for wave in run])
+    flat = image.reshape(-1, copy=False)  # a view (an error rather than a copy)
     for lo, hi in itertools.pairwise(np.searchsorted(mine, waves).tolist()):
         w = slice(lo, hi)
-        _composite_into(image, r[w], c[w], qq[w], value[mine[w]], d[mine[w]], counts)
+        _composite_into(flat, pixel[w], qq[w], value[w], d[w], counts)
 
 
-def _composite_into(image, rows, cols, q, value, d, counts) -> None:
-    """Composite `value` at coverage `q` of `d` over the image's pixels (rows, cols) (each
-    may be an array, one per pixel), storing only the pixels that change."""
-    below = image[rows, cols].astype(np.int64)
+def _composite_into(flat, pixel, q, value, d, counts) -> None:
+    """Composite `value` at coverage `q` of `d` over the pixels `pixel` of the flattened
+    image (each may be an array, one per pixel), storing only the pixels that change."""
+    below = flat[pixel].astype(np.int64)
     full = q == d  # whole pixels take the intensity, no division
     new = np.where(full, value, composite(below, q, value, d))
     changed = new != below
     counts["stores"] += int(np.count_nonzero(changed))
-    image[rows[changed], cols[changed]] = new[changed]
+    flat[pixel[changed]] = new[changed]
 
 
 def _draw_polygon(
@@ -1007,4 +1014,5 @@ def _draw_polygon(
             canvas.draw(poly.index, rows, cols, qq, d)
             counts["stores"] += len(qq)
             continue
-        _composite_into(image, rows, cols, qq, poly.intensity, d, counts)
+        flat = image.reshape(-1, copy=False)  # a view (an error rather than a copy)
+        _composite_into(flat, rows * scene.width + cols, qq, poly.intensity, d, counts)
