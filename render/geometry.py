@@ -568,12 +568,13 @@ def split_contours(
     if not contours:
         return contours, [], 0
     seg = contour_segments(contours)
-    rows = seg.tolist()
+    found = list(_count_pairs(_candidate_pairs(seg), limit))
+    edges = sorted({k for pair in found for k in pair})
+    rows = dict(zip(edges, seg[edges].tolist(), strict=True))  # only the edges that split
     splits: dict[int, list] = {}
-    pairs = 0
-    for i, j in _count_pairs(_candidate_pairs(seg), limit):
+    for i, j in found:
         _intersect(i, j, rows, splits)
-        pairs += 1
+    pairs = len(found)
     if not splits:
         return contours, [0] * len(contours), pairs
     out, inserted = _insert_splits(contours, splits, seg)
