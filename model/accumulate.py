@@ -42,8 +42,7 @@ class Window:
 
 def nonzero_coverage(arith, sums, ifix):
     """Non-zero: |sum| clamped at a full pixel."""
-    magnitude = arith.select(sums < 0, -sums, sums)
-    return arith.select(magnitude > ifix, ifix, magnitude)
+    return arith.min(arith.abs(sums), ifix)
 
 
 def evenodd_coverage(arith, sums, ifix):

@@ -4,7 +4,7 @@ One column of the stepping loop: the exit depths above and below (`exit_depths`)
 N-segment triangle estimate (`triangle_estimate`), the column's scaled areas
 (`column_areas`), the output value (`output_value`) and the advance to the next column
 (`advance`). Each function takes an *arithmetic* that says how to select, negate a
-condition and check a register's width:
+condition, take a magnitude or a minimum (`abs`, `min`) and check a register's width:
 
 * `IntArith` on Python ints: the step model (`step.run_edge`), raising `WidthError` as soon
   as a value does not fit its register;
@@ -72,6 +72,9 @@ class IntArith:
     def pick(index: int, values):
         return values[index]
 
+    abs = staticmethod(abs)
+    min = staticmethod(min)
+
     def check(self, name: str, value: int, where: bool = True) -> int:
         if where:
             lo, hi = self.bounds[name]
@@ -100,6 +103,10 @@ class ArrayArith:
     @staticmethod
     def pick(index, values):
         return pick_by_select(np.where, index, values)
+
+    # one numpy call each where a select would be two (the fill rule on whole buffers)
+    abs = staticmethod(np.abs)
+    min = staticmethod(np.minimum)
 
     def check(self, name: str, values, where=True):
         picked = values if where is True else np.asarray(values)[where]

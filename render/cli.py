@@ -71,10 +71,12 @@ def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str
         return _write_colour_png(image, full_scale, path)
     bits = 8 if intensity_bits <= 8 else 16
     top = (1 << bits) - 1
-    data = image.astype(np.int64)
+    dtype = np.uint8 if bits == 8 else np.uint16
     if full_scale != top:
-        data = (2 * data * top + full_scale) // (2 * full_scale)
-    array = data.astype(np.uint8 if bits == 8 else np.uint16)
+        data = image.astype(np.int64)
+        array = ((2 * data * top + full_scale) // (2 * full_scale)).astype(dtype)
+    else:  # the values as they are (no int64 copy of the image)
+        array = image.astype(dtype, copy=False)
     Image.fromarray(array).save(path, format="PNG")
     scaled = "" if full_scale == top else f", scaled from {intensity_bits} bits"
     return f"{bits}-bit greyscale{scaled}"
@@ -244,9 +246,10 @@ class RenderCommand(Command):
         add_config_options(parser)
 
     def run(self, args: argparse.Namespace) -> int:
-        from .render import edges_to_send, plan_scene
+        from .render import edges_to_send, keep_freed_memory, plan_scene
         from .scene import SceneError, check_pixels
 
+        keep_freed_memory()  # numpy's temporaries reuse pages instead of faulting in new ones
         config = config_from_args(args)
         _check_options(args, config)
         crop = args.crop

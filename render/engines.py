@@ -134,20 +134,23 @@ class DeltaRun:
         )  # fmt: skip
 
 
-def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None):
+def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None, setups=None):
     """The accumulation deltas of the edges `arrays` (a `render.render.EdgeArrays`, all
     valid) through an engine, in order: four cells per stepped column. Returns the run and
     the edges' (columns, clipped_start) arrays from their setup, for the timing model.
-    progress(done, total) is called as edges complete."""
+    progress(done, total) is called as edges complete. `setups`: the edges' `SetupBatch`
+    when the caller has it already (`edgeaa.model.edge.setup_batch` of `arrays`)."""
     from ..model.edge import setup_batch
 
     if engine not in ENGINES:
         raise ValueError(f"engine must be one of {', '.join(ENGINES)}, not {engine!r}")
+    if setups is None:
+        setups = setup_batch(config, *arrays.args(), arrays.clip)
     if engine == "model":
-        return _model_deltas(config, arrays, progress)
+        return _model_deltas(config, arrays, progress, setups)
     from ..hdl.core import PolygonCore  # a simulator's render only: a model render loads no hdl
 
-    batch = setup_batch(config, *arrays.args(), arrays.clip)
+    batch = setups
     shapes = (batch.columns, batch.clipped_start)
     if not len(arrays):
         empty = np.zeros(0, dtype=np.int64)
@@ -174,13 +177,13 @@ def cycles_of(config: EdgeConfig, shapes, fmt: BeatFormat = WRITES) -> int:
     return stream_cycles(config, *shapes, fmt=fmt)
 
 
-def _model_deltas(config: EdgeConfig, arrays, progress):
-    from ..model.vector import run_deltas_arrays
+def _model_deltas(config: EdgeConfig, arrays, progress, setups):
+    from ..model.vector import run_setup_deltas
 
     start = time.perf_counter()
     if progress is not None:
         progress(0, len(arrays))
-    batch = run_deltas_arrays(config, *arrays.args(), arrays.clip)
+    batch = run_setup_deltas(config, setups)
     if progress is not None:
         progress(len(arrays), len(arrays))
     run = DeltaRun(

@@ -54,27 +54,48 @@ def winding_numbers(
     (`_stabbing_pairs`): the work is the sum over the points of the edges met by a short
     horizontal band around each, not P x E.
     """
+    return _windings(edges, points, [(first, second)])[0]
+
+
+def _windings(edges: np.ndarray, points: np.ndarray, perturbations) -> list[np.ndarray]:
+    """`winding_numbers` of the same points under several perturbations (first, second),
+    from one search for the pairs. Only a pair where P is on the edge's line or on the row
+    of one of its ends (a tie) depends on the perturbation: the others are decided once,
+    and the perturbed test runs on the ties alone."""
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
     points = np.asarray(points, dtype=np.int64).reshape(-1, 2)
-    first = np.broadcast_to(np.asarray(first, dtype=np.int64), points.shape)
-    second = np.broadcast_to(np.asarray(second, dtype=np.int64), points.shape)
-    out = np.zeros(len(points), dtype=np.int64)
-    lo = np.minimum(edges[:, 1], edges[:, 3])
-    hi = np.maximum(edges[:, 1], edges[:, 3])
-    for q, e in _stabbing_pairs(lo, hi, points[:, 1]):
-        ax, ay, bx, by = (edges[e, i] for i in range(4))
-        ex, ey = bx - ax, by - ay
-        px, py = points[q, 0], points[q, 1]
+    ax, ay, bx, by = (edges[:, i].copy() for i in range(4))
+    ex, ey = bx - ax, by - ay
+    px, py = points[:, 0].copy(), points[:, 1].copy()
+    n = len(points)
+    common = np.zeros(n, dtype=np.int64)
+    ties_q, ties_e = [], []
+    for q, e in _stabbing_pairs(np.minimum(ay, by), np.maximum(ay, by), py):
+        y = py[q]
+        above_a, above_b = ay[e] - y, by[e] - y  # > 0: the end is below P on the image
+        t0 = ex[e] * (y - ay[e]) - (px[q] - ax[e]) * ey[e]
+        tie = (above_a == 0) | (above_b == 0) | (t0 == 0)
+        up = (above_a < 0) & (above_b > 0) & (t0 > 0)  # never a tie: every term nonzero
+        down = (above_a > 0) & (above_b < 0) & (t0 < 0)
+        common += np.bincount(q[up], minlength=n) - np.bincount(q[down], minlength=n)
+        ties_q.append(q[tie])
+        ties_e.append(e[tie])
+    q = np.concatenate(ties_q) if ties_q else np.zeros(0, dtype=np.int64)
+    e = np.concatenate(ties_e) if ties_e else np.zeros(0, dtype=np.int64)
+    out = []
+    for first, second in perturbations:
+        first = np.broadcast_to(np.asarray(first, dtype=np.int64), points.shape)
+        second = np.broadcast_to(np.asarray(second, dtype=np.int64), points.shape)
         v1x, v1y, v2x, v2y = first[q, 0], first[q, 1], second[q, 0], second[q, 1]
         sy = _lex_sign(v1y, v2y)  # the point's y moves up (-) or down (+) from py
-        a_le = (ay < py) | ((ay == py) & (sy > 0))  # a.y <= P.y
-        b_gt = (by > py) | ((by == py) & (sy < 0))  # b.y > P.y
-        left = _lex_sign(ex * (py - ay) - (px - ax) * ey, ex * v1y - v1x * ey, ex * v2y - v2x * ey)
+        y, ex_, ey_ = py[q], ex[e], ey[e]
+        a_le = (ay[e] < y) | ((ay[e] == y) & (sy > 0))  # a.y <= P.y
+        b_gt = (by[e] > y) | ((by[e] == y) & (sy < 0))  # b.y > P.y
+        t0 = ex_ * (y - ay[e]) - (px[q] - ax[e]) * ey_
+        left = _lex_sign(t0, ex_ * v1y - v1x * ey_, ex_ * v2y - v2x * ey_)
         up = a_le & b_gt & (left > 0)
         down = ~a_le & ~b_gt & (left < 0)
-        out += np.bincount(q, weights=up.astype(np.int64) - down, minlength=len(out)).astype(
-            np.int64
-        )
+        out.append(common + np.bincount(q[up], minlength=n) - np.bincount(q[down], minlength=n))
     return out
 
 
@@ -147,8 +168,9 @@ def side_fills(
     right = np.zeros(len(edges), dtype=np.int64)
     swept = _swept(edges, group)  # polygons whose banded pairs would be too many
     band = ~swept  # the polygons' y ranges are disjoint: each part counts its own edges
-    left[band] = winding_numbers(doubled[band], mid[band], normal[band], d[band])
-    right[band] = winding_numbers(doubled[band], mid[band], -normal[band], d[band])
+    left[band], right[band] = _windings(
+        doubled[band], mid[band], [(normal[band], d[band]), (-normal[band], d[band])]
+    )
     if swept.any():
         k = len(np.flatnonzero(swept))
         points = np.concatenate([mid[swept]] * 2)
@@ -534,32 +556,59 @@ def split_crossings(
     n edges and B pairs whose bounding boxes overlap, and Python work only for the pairs that
     do split (k). Quadratic only when B is, as for random vertex soups, where k is too.
     """
+    out, inserted, _ = split_contours(contours, limit)
+    return out, int(sum(inserted))
+
+
+def split_contours(
+    contours: list[np.ndarray], limit: int | None = None
+) -> tuple[list[np.ndarray], list[int], int]:
+    """`split_crossings` with the points inserted into each contour, and the number of edge
+    pairs that split (the count its `limit` is held against)."""
     if not contours:
-        return contours, 0
+        return contours, [], 0
     seg = contour_segments(contours)
-    rows = seg.tolist()
+    found = list(_count_pairs(_candidate_pairs(seg), limit))
+    edges = sorted({k for pair in found for k in pair})
+    rows = dict(zip(edges, seg[edges].tolist(), strict=True))  # only the edges that split
     splits: dict[int, list] = {}
-    for i, j in _count_pairs(_candidate_pairs(seg), limit):
+    for i, j in found:
         _intersect(i, j, rows, splits)
+    pairs = len(found)
     if not splits:
-        return contours, 0
-    return _insert_splits(contours, splits)
+        return contours, [0] * len(contours), pairs
+    out, inserted = _insert_splits(contours, splits, seg)
+    return out, inserted, pairs
 
 
-def _insert_splits(contours: list[np.ndarray], splits: dict) -> tuple[list[np.ndarray], int]:
-    """The contours with each edge's split points inserted in order along it."""
-    out, inserted, base = [], 0, 0
-    for pts in contours:
-        points = []
+def _insert_splits(
+    contours: list[np.ndarray], splits: dict, seg: np.ndarray
+) -> tuple[list[np.ndarray], list[int]]:
+    """The contours (their edges `seg`) with each edge's split points inserted in order
+    along it, and how many points each got. A contour none of whose edges splits is only
+    cleared of repeated vertices (there are none in a plan's)."""
+    repeats = np.flatnonzero(np.all(seg[:, 0:2] == seg[:, 2:4], axis=1))  # zero length
+    sizes = np.array([len(c) for c in contours], dtype=np.int64)
+    owner = np.repeat(np.arange(len(contours)), sizes)
+    touched = set(owner[list(splits)].tolist()) | set(owner[repeats].tolist())
+    out, inserted, base = [], [], 0
+    for c, pts in enumerate(contours):
+        if c not in touched:  # as the loop below would give it
+            base += len(pts)
+            out.append(np.asarray(pts, dtype=np.int64))
+            inserted.append(0)
+            continue
+        points, added = [], 0
         for k, row in enumerate(pts.tolist()):
             points.append(tuple(map(int, row)))
             for p in _along(splits.get(base + k, ())):
                 if p != points[-1]:
                     points.append(p)
-                    inserted += 1
+                    added += 1
         base += len(pts)
         kept = [p for i, p in enumerate(points) if p != points[i - 1]]  # cyclic dedup
         out.append(np.array(kept or points[:1], dtype=np.int64))
+        inserted.append(added)
     return out, inserted
 
 

@@ -12,9 +12,10 @@
    and emits its signed-area deltas (`edgeaa.model.column.column_deltas`); per polygon, add
    them into an accumulation buffer over the polygon's window, prefix-sum the touched rows,
    apply the fill rule and composite the coverage over what is below
-   (`edgeaa.model.accumulate`). Polygons whose windows share no pixel are accumulated
-   together in one buffer (`_disjoint_runs`), each after every earlier polygon whose window
-   meets its own: the same image, with numpy's per-call cost paid once per run.
+   (`edgeaa.model.accumulate`). Many polygons are accumulated together in one buffer
+   (`_accumulation_runs`) and composited in waves of windows that share no pixel, each
+   polygon after every earlier polygon whose window meets its own: the same image, with
+   numpy's per-call cost paid once per run (and once per wave to composite).
 
 The boundary edges alone bound the filled region, each with its inside on one side, so the
 sums are the region's exact area (up to the estimate) even where subpaths overlap or cross.
@@ -26,6 +27,7 @@ the difference is the work, which `edgeaa render --stats` reports.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -52,6 +54,7 @@ from .geometry import (
     hot_points,
     inside_sides,
     snap_round,
+    split_contours,
     split_crossings,
 )
 from .scene import (
@@ -270,10 +273,14 @@ def _quantize(scene: Scene, S: int):
     labels = [(i, j) for i, poly in enumerate(scene.polygons) for j in range(len(poly.contours))]
     if not labels:
         return [], [], 0
-    flat = [p for poly in scene.polygons for contour in poly.contours for p in contour]
     sizes = np.array([len(c) for poly in scene.polygons for c in poly.contours], dtype=np.int64)
     first = np.cumsum(sizes) - sizes
-    pts = np.floor(np.asarray(flat, dtype=np.float64).reshape(-1, 2) * S + 0.5)
+    chain = itertools.chain.from_iterable  # twice as fast as np.asarray on the tuples
+    values = np.fromiter(chain(chain(chain(p.contours) for p in scene.polygons)), np.float64)
+    if len(values) != 2 * sizes.sum():  # not all (x, y): np.asarray says what is wrong
+        flat = [p for poly in scene.polygons for contour in poly.contours for p in contour]
+        values = np.asarray(flat, dtype=np.float64)
+    pts = np.floor(values.reshape(-1, 2) * S + 0.5)
     local = np.arange(len(pts)) - np.repeat(first, sizes)  # index in its contour
     prev = np.arange(len(pts)) - 1
     prev[first] = first + sizes - 1  # a contour's first vertex follows its last
@@ -289,8 +296,10 @@ def _quantize(scene: Scene, S: int):
     )
     distinct = np.bincount(owner[order][~same], minlength=len(sizes))
     counts = np.bincount(owner, minlength=len(sizes))
-    parts = np.split(kept, np.cumsum(counts)[:-1])
-    indices = np.split(local[keep], np.cumsum(counts)[:-1])
+    ends = np.cumsum(counts).tolist()  # slices, not np.split: its cost is per piece
+    kept_local = local[keep]
+    parts = [kept[a:b] for a, b in zip([0, *ends], ends, strict=False)]
+    indices = [kept_local[a:b] for a, b in zip([0, *ends], ends, strict=False)]
     contours, owners = [], []
     for (i, j), part, index, n in zip(labels, parts, indices, distinct.tolist(), strict=True):
         if n >= 3:
@@ -353,11 +362,14 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     by_polygon: list[list[np.ndarray]] = [[] for _ in scene.polygons]
     for (k, _, _), pts in zip(owners, contours, strict=True):
         by_polygon[k].append(pts.astype(np.int64) + shift)
-    crossing = _crossing(by_polygon)
+    crossing, noded = _crossing(by_polygon)
     final, owner = [], []  # the contours after splitting, in order, and their polygons
     for i, mine in enumerate(by_polygon):
         if crossing[i]:  # only these need a look again, polygon by polygon
             mine, inserted = _node_polygon(i, mine)
+            crossings += inserted
+        elif i in noded:  # noded in its batch
+            mine, inserted = noded[i]
             crossings += inserted
         final += [q for q in mine if len(q) >= 2]
         owner += [i] * sum(len(q) >= 2 for q in mine)
@@ -370,44 +382,100 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     return coords, polygon, contour, starts, crossings
 
 
-def _crossing(by_polygon: list[list[np.ndarray]]) -> np.ndarray:
+def _crossing(by_polygon: list[list[np.ndarray]]) -> tuple[np.ndarray, dict]:
     """Whether each polygon has edges that cross or touch (`split_crossings` would insert a
     point), for many polygons in one search: each is moved right, past the previous one,
     so that no two polygons' boxes meet, in batches whose coordinates stay below
     geometry.SAFE / 2 (the search's exact integer filter). A batch whose points would pass
-    the limit is left to the polygons one by one (True)."""
+    the limit is left to the polygons one by one (True).
+
+    A crossing polygon whose batch splitting leaves nothing to split in a second round
+    (searched in one batch too) is noded already: `_node`'s result, given back in the dict
+    (polygon: contours and points inserted) and not left to `_node_polygon` (False)."""
     out = np.ones(len(by_polygon), dtype=bool)
+    noded: dict[int, tuple[list[np.ndarray], int]] = {}
     batch: list[int] = []
     moved: list[np.ndarray] = []
+    shifts: list[np.ndarray] = []
     base = 0
 
     def flush():
         if batch:
             try:
-                after, _ = split_crossings(moved, MAX_NODED_EDGES)
-                sizes = np.array([len(c) for c in after]) != np.array([len(c) for c in moved])
-                owner = np.repeat(batch, [len(by_polygon[i]) for i in batch])
-                out[batch] = False
-                out[owner[sizes]] = True
+                after, inserted, pairs = split_contours(moved, MAX_NODED_EDGES)
             except NodingLimit:
-                pass
+                return
+            sizes = np.array([len(c) for c in after]) != np.array([len(c) for c in moved])
+            owner = np.repeat(batch, [len(by_polygon[i]) for i in batch])
+            out[batch] = False
+            out[owner[sizes]] = True
+            _node_batch(by_polygon, owner, after, inserted, pairs, shifts, out, noded)
 
+    boxes = _polygon_boxes(by_polygon)
     for i, mine in enumerate(by_polygon):
         if not mine:
             out[i] = False
             continue
-        points = np.concatenate(mine)
-        lo, hi = points.min(axis=0), points.max(axis=0)
-        if base + (hi[0] - lo[0]) + 1 >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+        lo_x, lo_y, hi_x, hi_y = boxes[i]
+        if base + (hi_x - lo_x) + 1 >= SAFE // 2 or hi_y - lo_y >= SAFE // 2:
             flush()
-            batch, moved, base = [], [], 0
-        if hi[0] - lo[0] >= SAFE // 2 or hi[1] - lo[1] >= SAFE // 2:
+            batch, moved, shifts, base = [], [], [], 0
+        if hi_x - lo_x >= SAFE // 2 or hi_y - lo_y >= SAFE // 2:
             continue  # too wide for any batch: one by one
         batch.append(i)
-        moved += [c - lo + np.array([base, 0]) for c in mine]
-        base += int(hi[0] - lo[0]) + 1
+        shift = np.array([base - lo_x, -lo_y])
+        moved += [c + shift for c in mine]
+        shifts += [shift] * len(mine)
+        base += hi_x - lo_x + 1
     flush()
-    return out
+    return out, noded
+
+
+def _polygon_boxes(by_polygon: list[list[np.ndarray]]) -> list[list[int]]:
+    """Each polygon's bounding box of its contours' points (x0, y0, x1, y1, inclusive; zeros
+    for a polygon without contours), for all polygons in a few numpy calls."""
+    contours = [c for mine in by_polygon for c in mine if len(c)]
+    if not contours:
+        return [[0, 0, 0, 0]] * len(by_polygon)
+    points = np.concatenate(contours)
+    sizes = np.array([len(c) for c in contours], dtype=np.int64)
+    per_polygon = np.array([sum(len(c) > 0 for c in mine) for mine in by_polygon])
+    owner = np.repeat(np.arange(len(by_polygon)), per_polygon)
+    owner = np.repeat(owner, sizes)  # each point's polygon, ascending
+    starts = np.searchsorted(owner, np.arange(len(by_polygon)))
+    has = per_polygon > 0
+    boxes = np.zeros((len(by_polygon), 4), dtype=np.int64)
+    first = starts[has]
+    boxes[has, 0:2] = np.minimum.reduceat(points, first, axis=0)
+    boxes[has, 2:4] = np.maximum.reduceat(points, first, axis=0)
+    return boxes.tolist()
+
+
+def _node_batch(by_polygon, owner, after, inserted, pairs, shifts, out, noded) -> None:
+    """The second round of `_node` for the crossing polygons of a batch (`_crossing`), at
+    once: a polygon it splits no more is noded (into `noded`, out False) where `_node` alone
+    would have given the same, within its limit, exact filter and size (otherwise it stays
+    True, for `_node_polygon`)."""
+    crossing = np.flatnonzero(out[owner])  # contours of the batch's crossing polygons
+    if not len(crossing):
+        return
+    try:
+        _, more, pairs2 = split_contours([after[c] for c in crossing], MAX_NODED_EDGES)
+    except NodingLimit:
+        return  # each alone, where its own limit decides
+    split_again = set(owner[crossing[np.array(more) > 0]].tolist())
+    for i in dict.fromkeys(owner[crossing].tolist()):
+        mine = by_polygon[i]
+        n = sum(map(len, mine))
+        points = np.concatenate(mine)
+        exact = points.min() > -SAFE and points.max() < SAFE  # as `_node`'s search is alone
+        if i in split_again or not exact or max(pairs, pairs2) >= MAX_NODED_EDGES - n:
+            continue
+        picks = np.flatnonzero(owner == i)
+        contours = [after[c] - shifts[c] for c in picks]
+        if sum(map(len, contours)) <= MAX_NODED_EDGES:
+            noded[i] = (contours, sum(inserted[c] for c in picks))
+            out[i] = False
 
 
 def _node_polygon(i: int, mine: list[np.ndarray]) -> tuple[list[np.ndarray], int]:
@@ -604,6 +672,30 @@ def _check_range(config, scene, contours, owners, offset, need=None) -> None:
 # -- rendering ----------------------------------------------------------------------------------
 
 
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3  # glibc's mallopt parameters (malloc.h)
+KEEP_FREED = 64 << 20  # bytes of freed memory malloc keeps at the heap's top for reuse
+HEAP_ARRAYS = 32 << 20  # blocks up to this size come from the heap (glibc's largest)
+
+
+def keep_freed_memory() -> bool:
+    """Ask glibc's malloc to keep freed memory for reuse (up to KEEP_FREED at the heap's
+    top, blocks up to HEAP_ARRAYS from the heap) rather than hand it back to the kernel after
+    each numpy temporary: every fresh page costs a fault, about 2.5 us on the measured
+    machine (a VM), more than the arithmetic on it (the 1,250-cell map's render 65 -> 40 ms
+    CPU, docs/results.md section 7). Process-wide, so `edgeaa render` calls it, not the
+    library. False (and nothing done) without glibc."""
+    import ctypes
+
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
+    return bool(mallopt(M_MMAP_THRESHOLD, HEAP_ARRAYS)) & bool(
+        mallopt(M_TRIM_THRESHOLD, KEEP_FREED)
+    )
+
+
 @dataclass
 class Render:
     image: np.ndarray  # (height, width) intensities, the narrowest unsigned type
@@ -681,9 +773,9 @@ def render_scene(
 
     t = time.perf_counter()
     arrays = edge_arrays(plan, sent, clip=skip)
-    _check_columns(config, arrays)
+    setups = _check_columns(config, arrays)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
-    run, shapes = run_deltas(config, arrays, engine, progress=report)
+    run, shapes = run_deltas(config, arrays, engine, progress=report, setups=setups)
     deltas = run.in_image(sent, plan.offset)
     timings["engine"] = time.perf_counter() - t
 
@@ -695,20 +787,25 @@ def render_scene(
         image = canvas.image
     counts = {"rows": 0, "cells": 0, "stores": 0}
     polygon_of = plan.polygon[deltas.edge]
-    order = np.argsort(polygon_of, kind="stable")
-    by_poly = np.searchsorted(polygon_of[order], np.arange(len(plan.polygons) + 1))
+    # the engine keeps the edges' order, and a polygon's edges are consecutive: no sort then
+    order = None if (np.diff(polygon_of) >= 0).all() else np.argsort(polygon_of, kind="stable")
+    by_poly = np.searchsorted(
+        polygon_of if order is None else polygon_of[order], np.arange(len(plan.polygons) + 1)
+    )
     drawn = [i for i in range(len(plan.polygons)) if by_poly[i + 1] > by_poly[i]]
     batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
-    for run in _disjoint_runs(plan, drawn) if batch else [[i] for i in drawn]:
+    for run in _accumulation_runs(plan, drawn) if batch else [[[i]] for i in drawn]:
         if progress is not None:
-            progress(run[0], len(plan.polygons), "accumulate")
-        picks = [order[by_poly[i] : by_poly[i + 1]] for i in run]
-        if len(run) == 1:
-            _draw_polygon(
-                plan, plan.polygons[run[0]], deltas.take(picks[0]), image, skip, counts, canvas
-            )
+            progress(run[0][0], len(plan.polygons), "accumulate")
+        polys = np.array([i for wave in run for i in wave])
+        lo, size = by_poly[polys], by_poly[polys + 1] - by_poly[polys]
+        picks = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(size.sum())
+        picks = picks if order is None else order[picks]  # the polygons' deltas, in order
+        if len(polys) == 1:
+            poly = plan.polygons[polys[0]]
+            _draw_polygon(plan, poly, deltas.take(picks), image, skip, counts, canvas)
         else:
-            _draw_disjoint(plan, run, deltas.take(np.concatenate(picks)), picks, image, counts)
+            _draw_run(plan, run, deltas.take(picks), size, image, counts)
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t
@@ -732,58 +829,62 @@ def render_scene(
     )
 
 
-def _check_columns(config: EdgeConfig, arrays: EdgeArrays) -> None:
+def _check_columns(config: EdgeConfig, arrays: EdgeArrays):
     """Refuse edges that step more than MAX_STEPPED_COLUMNS columns in all (the engines hold
-    every column's four cells: about 300 bytes a column at its peak)."""
+    every column's four cells: about 300 bytes a column at its peak); their setups (a
+    `SetupBatch`, which the engine takes on)."""
     from ..model.edge import setup_batch
 
-    columns = int(setup_batch(config, *arrays.args(), arrays.clip).columns.sum())
+    setups = setup_batch(config, *arrays.args(), arrays.clip)
+    columns = int(setups.columns.sum())
     if columns > MAX_STEPPED_COLUMNS:
         raise SceneError(
             f"the scene's {len(arrays):,} edges step {columns:,} columns (pixels along each "
             f"edge's major axis, within the image's rows and left of its right side), more "
             f"than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
         )
+    return setups
 
 
-RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_disjoint_runs`)
+RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_accumulation_runs`)
 RUN_CELLS = 1 << 18  # and its cells (2 MiB of int64)
 RUN_PAIRS = 1 << 22  # candidate window pairs past which runs are not looked for
 
 
-def _disjoint_runs(plan: Plan, drawn: list[int]) -> list[list[int]]:
-    """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_disjoint`): no
-    two windows of a run share a pixel, and a polygon comes after every earlier polygon whose
-    window meets its own (its wave is one more than theirs: the compositing order is kept
-    wherever it matters). A run holds at most RUN_POLYGONS polygons and RUN_CELLS cells of
-    buffer (rows times the widest window); a polygon with an empty window draws nothing and
-    is a run of its own. Past RUN_PAIRS candidate pairs (windows heaped on each other),
-    every polygon is a run of its own, in order."""
+def _accumulation_runs(plan: Plan, drawn: list[int]) -> list[list[list[int]]]:
+    """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_run`), each run
+    a list of waves: no two windows of a wave share a pixel, and a polygon's wave comes after
+    the wave of every earlier polygon whose window meets its own (one more than theirs), so
+    compositing wave by wave keeps the order wherever it matters. A run holds at most
+    RUN_POLYGONS polygons and RUN_CELLS cells of buffer (its windows' areas at most); a
+    polygon with an empty window draws nothing and is a run of its own. Past RUN_PAIRS
+    candidate pairs (windows heaped on each other), every polygon is a run of its own, in
+    order."""
     boxes = np.array([plan.polygons[i].window for i in drawn], dtype=np.int64).reshape(-1, 4)
     live = (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
     ids = np.flatnonzero(live)
     pairs = _meeting_windows(boxes[ids])
     if pairs is None:
-        return [[i] for i in drawn]
-    earlier: list[list[int]] = [[] for _ in ids]  # positions in ids, drawn order
-    for a, b in zip(*(np.sort(np.stack(pairs), axis=0).tolist()), strict=True):
-        earlier[b].append(a)
+        return [[[i]] for i in drawn]
+    a, b = np.sort(np.stack(pairs), axis=0)  # positions in ids, a before b in drawn order
+    by_later = np.lexsort((a, b))
     wave = [0] * len(ids)
-    for k, before in enumerate(earlier):
-        wave[k] = 1 + max((wave[j] for j in before), default=-1)
-    runs = [[drawn[i]] for i in np.flatnonzero(~live)]
-    run: list[int] = []
-    last = rows = widest = 0
+    for j, k in zip(a[by_later].tolist(), b[by_later].tolist(), strict=True):
+        if wave[j] >= wave[k]:  # every pair ending at j came before: wave[j] is final
+            wave[k] = wave[j] + 1
+    areas = ((boxes[ids, 2] - boxes[ids, 0]) * (boxes[ids, 3] - boxes[ids, 1])).tolist()
+    polys = np.asarray(drawn)[ids].tolist()
+    runs = [[[drawn[i]]] for i in np.flatnonzero(~live)]
+    run: list[list[int]] = []
+    last = size = cells = 0
     for k in np.argsort(wave, kind="stable").tolist():  # by wave, in order within one
-        x0, y0, x1, y1 = boxes[ids[k]].tolist()
-        height, width = y1 - y0, max(widest, x1 - x0)
-        if run and (
-            wave[k] != last or len(run) >= RUN_POLYGONS or (rows + height) * width > RUN_CELLS
-        ):
+        if run and (size >= RUN_POLYGONS or cells + areas[k] > RUN_CELLS):
             runs.append(run)
-            run, rows, width = [], 0, x1 - x0
-        run.append(drawn[ids[k]])
-        last, rows, widest = wave[k], rows + height, width
+            run, size, cells = [], 0, 0
+        if not run or wave[k] != last:
+            run.append([])
+        run[-1].append(polys[k])
+        last, size, cells = wave[k], size + 1, cells + areas[k]
     return runs + [run] if run else runs
 
 
@@ -804,51 +905,95 @@ def _meeting_windows(boxes: np.ndarray):
     return a[meet], b[meet]
 
 
-def _draw_disjoint(plan: Plan, run: list[int], deltas: DeltaRun, picks, image, counts):
-    """`_draw_polygon` on every polygon of a run at once (their windows share no pixel): each
-    polygon's touched rows become rows of one buffer as wide as the widest window, the cells
-    past a polygon's own window masked, so every pixel gets exactly what `_draw_polygon`
-    gives it, with the numpy calls paid once per run instead of once per polygon."""
+class _InPlace(ArrayArith):
+    """`ArrayArith` whose abs and min write into their first operand: the fill rule on a
+    buffer of `_draw_run`'s own, without a fresh array (and its pages) per step."""
+
+    @staticmethod
+    def abs(a):
+        return np.abs(a, out=a)
+
+    @staticmethod
+    def min(a, b):
+        return np.minimum(a, b, out=a)
+
+
+def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, counts):
+    """`_draw_polygon` on every polygon of a run (`_accumulation_runs`) at once: each
+    polygon's touched rows, each as wide as its window, laid end to end in one flat buffer
+    whose first cell of a row takes away the previous row's total, so that one prefix sum
+    gives every row's own. The coverage is composited wave by wave (the windows of a wave
+    share no pixel). Every pixel gets exactly what `_draw_polygon` gives it, in the same
+    order, with the numpy calls paid once per run, and once per wave to composite."""
     config = plan.config
-    polys = [plan.polygons[i] for i in run]
-    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).T
+    polys = [plan.polygons[i] for wave in run for i in wave]
+    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).reshape(-1, 4).T
     d = np.array([abs(p.intensity - p.i_out) for p in polys], dtype=np.int64)
     value = np.array([p.intensity for p in polys], dtype=np.int64)
     odd = np.array([p.rule == "evenodd" for p in polys], dtype=bool)
-    k = np.repeat(np.arange(len(run)), [len(pick) for pick in picks])  # each delta's polygon
+    k = np.repeat(np.arange(len(polys)), sizes)  # each delta's polygon (`sizes` deltas each)
     x, y, delta = deltas.x, deltas.y, deltas.delta
     keep = (y >= y0[k]) & (y < y1[k]) & (x < x1[k])
     k, y, delta = k[keep], y[keep], delta[keep]
     x = np.maximum(x[keep], x0[k]) - x0[k]
-    rows, row_of = np.unique(k * plan.scene.height + y, return_inverse=True)
-    owner, image_row = np.divmod(rows, plan.scene.height)
+    # the rows touched, in order of polygon then row, without a sort: each window's rows
+    base = np.cumsum(y1 - y0) - (y1 - y0)
+    key = base[k] + y - y0[k]
+    touched = np.zeros(int((y1 - y0).sum()), dtype=bool)
+    touched[key] = True
+    rows = np.flatnonzero(touched)
+    owner = np.searchsorted(base, rows, side="right") - 1
+    image_row = rows - base[owner] + y0[owner]
+    row_of = np.cumsum(touched)[key] - 1
     width = (x1 - x0)[owner]
-    buffer = np.zeros((len(rows), int(width.max(initial=0))), dtype=np.int64)
-    np.add.at(buffer, (row_of, x), delta)
-    sums = np.cumsum(buffer, axis=1)
-    ifix = (d[owner] << config.F)[:, None]
-    coverage = nonzero_coverage(ArrayArith, sums, ifix)
-    if odd.any():
-        coverage = np.where(odd[owner][:, None], evenodd_coverage(ArrayArith, sums, ifix), coverage)
-    q = intensity_offset(coverage, config.F)
-    q[np.arange(buffer.shape[1])[None, :] >= width[:, None]] = 0  # past the polygon's window
+    start = np.cumsum(width) - width
+    # |a row's partial sums| <= its sum of |delta|, a cell <= that and the previous row's;
+    # int32 when these, 2 ifix (even-odd's period) and ifix + 2**F fit (half the memory)
+    shift = d << config.F
+    size = np.zeros(len(rows), dtype=np.int64)
+    np.add.at(size, row_of, np.abs(delta))
+    bound = max(int(size.max(initial=0)), int(shift.max(initial=0)) + (1 << config.F))
+    dtype = np.int32 if 2 * bound < 1 << 31 else np.int64
+    delta = delta.astype(dtype)
+    sums = np.zeros(int(width.sum()), dtype=dtype)
+    np.add.at(sums, start[row_of] + x, delta)
+    totals = np.zeros(len(rows), dtype=dtype)
+    np.add.at(totals, row_of, delta)
+    sums[start[1:]] -= totals[:-1]
+    np.cumsum(sums, out=sums)  # in place: every fresh array costs its pages
+    same = len(shift) and (shift == shift[0]).all()
+    ifix = int(shift[0]) if same else np.repeat(shift[owner], width).astype(dtype)
+    odd_cells = np.repeat(odd[owner], width) if odd.any() else None
+    folded = None if odd_cells is None else evenodd_coverage(ArrayArith, sums, ifix)
+    coverage = nonzero_coverage(_InPlace, sums, ifix)  # sums becomes the coverage
+    if odd_cells is not None:
+        np.copyto(coverage, folded, where=odd_cells)
     counts["rows"] += len(rows)
-    counts["cells"] += int(width.sum())
-    r, c = np.nonzero(q)
-    mine = owner[r]
-    qq = q[r, c].astype(np.int64)
-    _composite_into(image, image_row[r], c + x0[mine], qq, value[mine], d[mine], counts)
+    counts["cells"] += len(sums)
+    # intensity_offset(c) > 0 iff c >= half a step: only those cells are rounded
+    covered = coverage >= 1 << (config.F - 1)
+    cells = np.flatnonzero(covered)  # by row: by polygon, so by wave
+    row = np.repeat(np.arange(len(rows)), np.add.reduceat(covered, start, dtype=np.int64))
+    mine = owner[row]
+    qq = intensity_offset(coverage[cells].astype(np.int64), config.F)
+    pixel = image_row[row] * image.shape[1] + (cells - start[row] + x0[mine])
+    value, d = value[mine], d[mine]
+    waves = np.cumsum([0] + [len(wave) for wave in run])
+    flat = image.reshape(-1, copy=False)  # a view (an error rather than a copy)
+    for lo, hi in itertools.pairwise(np.searchsorted(mine, waves).tolist()):
+        w = slice(lo, hi)
+        _composite_into(flat, pixel[w], qq[w], value[w], d[w], counts)
 
 
-def _composite_into(image, rows, cols, q, value, d, counts) -> None:
-    """Composite `value` at coverage `q` of `d` over the image's pixels (rows, cols) (each
-    may be an array, one per pixel), storing only the pixels that change."""
-    below = image[rows, cols].astype(np.int64)
+def _composite_into(flat, pixel, q, value, d, counts) -> None:
+    """Composite `value` at coverage `q` of `d` over the pixels `pixel` of the flattened
+    image (each may be an array, one per pixel), storing only the pixels that change."""
+    below = flat[pixel].astype(np.int64)
     full = q == d  # whole pixels take the intensity, no division
     new = np.where(full, value, composite(below, q, value, d))
     changed = new != below
     counts["stores"] += int(np.count_nonzero(changed))
-    image[rows[changed], cols[changed]] = new[changed]
+    flat[pixel[changed]] = new[changed]
 
 
 def _draw_polygon(
@@ -873,4 +1018,5 @@ def _draw_polygon(
             canvas.draw(poly.index, rows, cols, qq, d)
             counts["stores"] += len(qq)
             continue
-        _composite_into(image, rows, cols, qq, poly.intensity, d, counts)
+        flat = image.reshape(-1, copy=False)  # a view (an error rather than a copy)
+        _composite_into(flat, rows * scene.width + cols, qq, poly.intensity, d, counts)

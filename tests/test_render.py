@@ -1097,9 +1097,9 @@ def _split_edges_reference(scene, contours, owners, offset, S):
     by_polygon = [[] for _ in scene.polygons]
     for (k, _, _), pts in zip(owners, contours, strict=True):
         by_polygon[k].append(pts.astype(np.int64) + shift)
-    crossing = _crossing(by_polygon)
+    crossing, noded = _crossing(by_polygon)
     for i, mine in enumerate(by_polygon):
-        if crossing[i]:
+        if crossing[i] or i in noded:  # each crossing polygon noded alone
             mine, inserted = _node_polygon(i, mine)
             crossings += inserted
         for q in mine:
@@ -1173,13 +1173,16 @@ def _many_polygons(seed: int) -> Scene:
 
 @pytest.mark.parametrize("seed", range(12))
 def test_polygons_accumulated_in_runs_give_the_polygon_by_polygon_image(seed, monkeypatch):
-    """Polygons whose windows share no pixel are accumulated in one buffer (`_disjoint_runs`,
-    `_draw_disjoint`): the same image and the same counts as one polygon at a time, in order."""
+    """Polygons are accumulated in one buffer and composited in waves of windows that share
+    no pixel (`_accumulation_runs`, `_draw_run`): the same image and the same counts as one
+    polygon at a time, in order."""
     from edgeaa.render import render as renderer
 
     scene = _many_polygons(seed)
-    runs = renderer._disjoint_runs(plan(scene, DEFAULT), list(range(len(scene.polygons))))
+    runs = renderer._accumulation_runs(plan(scene, DEFAULT), list(range(len(scene.polygons))))
     assert len(runs) < len(scene.polygons) or len(scene.polygons) < 5, seed  # runs of several
+    waves = [wave for run in runs for wave in run]
+    assert max(map(len, runs)) > 1 or len(waves) == len(runs), seed  # runs of several waves
     scenes = [scene]
     if seed == 0:
         scenes += [builtin(name, DEFAULT) for name in ("starburst", "text", "hatch")]
@@ -1187,7 +1190,7 @@ def test_polygons_accumulated_in_runs_give_the_polygon_by_polygon_image(seed, mo
         p = plan(scene, DEFAULT)
         together = render_scene(p)
         with monkeypatch.context() as m:
-            m.setattr(renderer, "_disjoint_runs", lambda plan, drawn: [[i] for i in drawn])
+            m.setattr(renderer, "_accumulation_runs", lambda plan, drawn: [[[i]] for i in drawn])
             alone = render_scene(p)
         note = f"{scene.name}, seed {seed}"
         assert np.array_equal(together.image, alone.image), note
@@ -1276,3 +1279,42 @@ def test_stats_with_a_horizontal_edge_left_of_the_image(tmp_path, capsys):
     out = tmp_path / "left.png"
     assert main(["render", str(scene), "--stats", "--quiet", "-o", str(out)]) == 0
     assert out.exists() and "edges partly outside" in capsys.readouterr().out
+
+
+def test_the_render_command_keeps_freed_memory_on_glibc():
+    """`keep_freed_memory` sets glibc's malloc thresholds (True there), and says False where
+    there is no mallopt."""
+    import platform
+
+    from edgeaa.render.render import keep_freed_memory
+
+    assert keep_freed_memory() is (platform.libc_ver()[0] == "glibc")
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_polygons_noded_in_their_batch_plan_as_when_noded_alone(seed, monkeypatch):
+    """`_crossing` nodes the polygons whose crossings one round settles in its batches
+    (`_node_batch`); the plan is the one `_node_polygon` gives each polygon alone: the same
+    edges, sides, windows and crossings count, and the same image."""
+    from edgeaa.render import render as renderer
+
+    rng = np.random.default_rng(seed)
+    print(f"seed {seed}")
+    polygons = []
+    for k in range(int(rng.integers(3, 25))):
+        cx, cy = rng.uniform(4, 92), rng.uniform(4, 60)
+        pts = tuple((cx + rng.uniform(-9, 9), cy + rng.uniform(-9, 9)) for _ in range(6))
+        polygons.append(Polygon((pts,), int(rng.integers(0, 256)), "nonzero", f"p{k}"))
+    polygons += [Polygon((UNNODED["pentagon s=4"],), 30, "evenodd", "snapped")]  # 2nd round
+    scene = Scene(96, 64, tuple(polygons), 255, name=f"crossing {seed}")
+    together = plan(scene, DEFAULT)
+    _, noded = renderer._crossing([[np.array(c, np.int64) for c in p.contours] for p in polygons])
+    assert noded, seed  # some polygons were noded in their batch
+    with monkeypatch.context() as m:
+        m.setattr(renderer, "_crossing", lambda by: (np.ones(len(by), dtype=bool), {}))
+        alone = plan(scene, DEFAULT)
+    assert together.crossings == alone.crossings > 0, seed
+    for name in ("coords", "polygon", "contour", "inside"):
+        assert np.array_equal(getattr(together, name), getattr(alone, name)), (seed, name)
+    assert together.polygons == alone.polygons, seed
+    assert np.array_equal(render_scene(together).image, render_scene(alone).image), seed

@@ -107,6 +107,12 @@ class HdlArith:
     def pick(self, index, values):
         return pick_by_select(self.select, index, values)
 
+    def abs(self, value):
+        return self.select(value < 0, -value, value)
+
+    def min(self, a, b):
+        return self.select(a > b, b, a)
+
     def check(self, name: str, value, where=True):
         group = self.GROUPS.get(name)
         if group is not None and where is not False:
