@@ -320,6 +320,12 @@ def top_options(d: Draft, p_top: float, p_tile: float, p_core: float) -> None:
         d.choice("--pipeline", ["compact", "fast"])
         if top != "pipeline":
             d.bad("--pipeline without --top pipeline")
+    if d.chance(p_tile / 2):
+        channels = d.choice("--channels", ["1", "3", "4"])
+        if top == "core":
+            d.bad("--channels with --top core")
+        elif top != "pipeline" and channels != "1":
+            d.bad("colour --channels without --top pipeline")
 
 
 def verilog_case(d: Draft, quick: bool) -> None:
@@ -371,6 +377,32 @@ def synth_case(d: Draft, quick: bool) -> None:
         (["--top", "core", "--tile", "16x16"], "--tile with --top core"),
     ]
     require_invalid(d, fallbacks)
+
+
+BOARD_OUTPUTS = [  # (-o folder, files made first, why it is refused)
+    ("", {}, "-o names no folder"),
+    ("taken", {"taken": b"a file"}, "-o is a file"),
+    ("no/such/folder", {}, "-o's parent does not exist"),
+]
+
+
+def board_case(d: Draft, quick: bool) -> None:
+    """Every board case is invalid: a bitstream takes ten minutes and a simulation builds the
+    board in Verilator for minutes."""
+    if d.chance(0.3):
+        d.choice("--board", ["ulx3s-85f"], hostile=0.6)
+    if d.chance(0.5):
+        d.add("--simulate")
+    if d.chance(0.3):
+        d.add("--json")
+    if d.chance(0.8):
+        folder, files, why = d.rng.choice(BOARD_OUTPUTS)
+        d.add(d.rng.choice(["-o", "--output"]), folder)
+        d.case.files.update(files)
+        d.bad(why)
+    if d.chance(0.2):
+        mutate_argv(d, ["--board", "--output"])
+    require_invalid(d, [(["-o", ""], "-o names no folder")])
 
 
 PLOT_DEFAULTS = {

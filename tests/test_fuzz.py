@@ -48,6 +48,7 @@ from fuzz_cases import (
     Case,
     Draft,
     bench_case,
+    board_case,
     demo_case,
     describe,
     edge_case,
@@ -66,7 +67,8 @@ SLOW_CASES = 10_000
 SEED = int(os.environ.get("EDGEAA_FUZZ_SEED", "20240615"))
 COMMANDS = [  # (weight, generator)
     (40, render_case), (14, edge_case), (12, verify_case), (8, verilog_case), (6, demo_case),
-    (5, synth_case), (4, plot_case), (4, bench_case), (4, stress_case), (1, top_level_case),
+    (5, synth_case), (4, plot_case), (4, bench_case), (4, stress_case), (2, board_case),
+    (1, top_level_case),
 ]  # fmt: skip
 FAILURES = (
     "traceback", "memory", "hang", "accepted bad input", "bad error", "bad status",
