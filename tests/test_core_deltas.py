@@ -344,7 +344,7 @@ def test_compiled_harness(name):
 
 
 def test_python_and_compiled_simulators_agree_clock_for_clock():
-    config = CORE_CONFIGS["seg2"]
+    config = CORE_CONFIGS["seg4"]  # built for test_compiled_harness too
     edges = random_sim_edges(config, 20, 31, max_pixels=24, bad_fraction=0.1, clip_fraction=0.5)
     slow = amaranth_sim.run(config, edges, top=PolygonCore)
     fast = verilator_harness.run(config, edges, top=PolygonCore)
