@@ -493,6 +493,17 @@ def test_the_amaranth_engine_renders_a_small_scene_through_the_pipeline():
     assert np.array_equal(result.image, render_scene(plan).image)
 
 
+def test_the_amaranth_engine_renders_through_two_pixel_lanes_under_back_pressure():
+    """The Amaranth runner reads the fast pipeline's beats of two pixels (`pixel_rows`)."""
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
+    fast = PipelineConfig.named("fast", TileConfig(DEFAULT, 16, 8))
+    assert fast.pixel_lanes == 2
+    result = render_pipeline(plan, "amaranth", fast, seed=5, idle=0.2, stall=0.4)
+    assert result.mismatches == 0 and result.pipeline.engine == "amaranth"
+    assert np.array_equal(result.image, render_scene(plan).image)
+    assert result.pipeline.stats["resolve_stall"] > 0
+
+
 def test_edgeaa_render_engine_verilator_writes_the_pipelines_png(tmp_path, capsys):
     from edgeaa.cli import main
 
