@@ -450,7 +450,11 @@ def add_pipeline_option(parser: argparse.ArgumentParser, applies: str) -> None:
     (`edgeaa.model.pipeline.PIPELINES`); `applies` says when it applies."""
     from .model.pipeline import PIPELINES
 
-    units = ", ".join(f"{name} {n} setup unit{'s' * (n > 1)}" for name, n in PIPELINES.items())
+    units = ", ".join(
+        f"{name} {p['setup_units']} setup unit{'s' * (p['setup_units'] > 1)} and "
+        f"{p['pixel_lanes']} pixel lane{'s' * (p['pixel_lanes'] > 1)}"
+        for name, p in PIPELINES.items()
+    )
     parser.add_argument(
         "--pipeline",
         choices=tuple(PIPELINES),

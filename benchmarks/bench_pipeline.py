@@ -2,8 +2,8 @@
 simulation speed (issue 26).
 
 Scenes (default configuration, tile 64 x 32 unless --tile), each through every named pipeline
-configuration (`edgeaa.model.pipeline.PIPELINES`: compact, one setup unit; fast, four; or
---pipelines): the built-ins; a 640 x 480 HUD
+configuration (`edgeaa.model.pipeline.PIPELINES`: compact, one setup unit; fast, four and
+a flush of two pixels a clock; or --pipelines): the built-ins; a 640 x 480 HUD
 page (`hud_scene`: 20 lines of 12 px DejaVu Sans Mono, a frame, a ring and a pitch ladder);
 one line of serif text (`edgeaa.render.corpus.font_scene`) in STIX, DejaVu Serif and cmr10
 (fonts matplotlib ships) at 9 to 32 px; and 1920 x 1080 with 40 large polygons
@@ -14,22 +14,26 @@ pipeline) and through the Verilated `EdgePipeline` (`edgeaa.sim.simulators.pipel
 build excluded, sink always ready), whose image is compared with the renderer's and whose
 clocks with the model's plus the harness's drain (equal, or the model is wrong).
 
-The rate table: clocks (the cycle model's), pixels per clock, the floor (the pixels flushed
-or the cells the resolve scans, `TileTiming.cells_scanned`, whichever is more: each takes a
-clock, and with the resolve's second pixel memory a flush runs beside the next tile's scan)
-and the clocks' ratio to it, frames per second at the configuration's measured Fmax on its
-device (`FMAX`: compact on the iCE40 HX8K, fast on the ECP5 25F; docs/hardware.md), and AGG's
-and Skia's time on one CPU core for the same polygons in the same run (aggdraw, and
-skia-python's raster surface with analytic antialiasing: the scene drawn into an 8-bit image,
-paths and paints built beforehand, the fastest of --repeats draws) and the FPGA's time over
-AGG's. The stage table: each stage's busy and stall
+The rate table: clocks (the cycle model's), pixels per clock, the floor (the flush's beats,
+the pixels flushed over the pixel lanes, `PipelineConfig.pixel_lanes`, or the cells the
+resolve scans, `TileTiming.cells_scanned`, one a clock, whichever is more: each beat and each
+cell takes a clock, and with the resolve's second pixel memory a flush runs beside the next
+tile's scan) and the clocks' ratio to it, frames per second at the configuration's measured
+Fmax on its device (`FMAX`: compact on the iCE40 HX8K, fast on the ECP5 25F;
+docs/hardware.md), and AGG's and Skia's time on one CPU core for the same polygons in the
+same run (aggdraw, and skia-python's raster surface with analytic antialiasing: the scene
+drawn into an 8-bit image, paths and paints built beforehand, the fastest of --repeats
+draws) and the FPGA's time over AGG's. The stage table: each stage's busy and stall
 counters as shares of the clocks, the stepper alone's clocks on the edges the renderer sends
 once (`edgeaa.model.timing`), and simulated clocks per second beside the stepper-only
 harness's on the same edges (the ratio is the steadier figure on a shared machine).
 --write puts both tables into docs/hardware.md between its markers.
 
     python benchmarks/bench_pipeline.py [--tile 64x32] [--pipelines compact,fast]
-        [--repeats 3] [--json] [--write]
+        [--scenes NAME,...] [--repeats 3] [--json] [--write]
+
+--scenes keeps the scenes whose name contains one of the given (case-insensitive; "HUD,
+STIX"); --write needs every scene.
 """
 
 from __future__ import annotations
@@ -220,19 +224,21 @@ def measure(scene: Scene, tile: TileConfig, pipelines: list[str], repeats: int) 
             key=lambda r: r.seconds,
         )
         image = image_from_frames(plan, tile, run.frames(tile))
-        flushed = len(timing.pixels)
+        flushed, lanes = len(timing.pixels), pipeline.pixel_lanes
         rows.append(
             {
                 "scene": scene.name,
                 "pipeline": name,
                 "setup_units": pipeline.setup_units,
+                "pixel_lanes": lanes,
                 "size": f"{scene.width}x{scene.height}",
                 "pixels": scene.width * scene.height,
                 "commands": len(commands),
                 "clocks": timing.clocks,
                 "flushed": flushed,
                 "scanned": timing.tile.cells_scanned,
-                "floor": max(flushed, timing.tile.cells_scanned),
+                # a beat of `lanes` pixels a clock; a scanned cell a clock
+                "floor": max(flushed // lanes, timing.tile.cells_scanned),
                 "verilator_clocks": run.clocks,
                 "drain": pipeline_harness.pixel_drain_clocks(tile),
                 "stepper_cycles": model.cycles,
@@ -252,7 +258,8 @@ def exact(r: dict) -> bool:
 
 
 def rate_table(rows: list[dict]) -> list[str]:
-    head = ["scene", "size", "pipeline", "clocks", "px/clock", "floor (flushed; scanned)"]
+    head = ["scene", "size", "pipeline", "clocks", "px/clock"]
+    head += ["floor (flushed / lanes; scanned)"]
     head += ["clocks/floor", "fps at Fmax", "AGG (ms)", "Skia (ms)", "FPGA/AGG"]
     head += ["Verilator: image, clocks"]
     lines = ["| " + " | ".join(head) + " |", "|---|---|---|" + "---:|" * (len(head) - 4) + "---|"]
@@ -262,7 +269,8 @@ def rate_table(rows: list[dict]) -> list[str]:
         check += "exact" if exact(r) else f"{r['verilator_clocks']:,} (MODEL WRONG)"
         cells = [r["scene"], r["size"], r["pipeline"], f"{r['clocks']:,}"]
         cells.append(f"{r['pixels'] / r['clocks']:.3f}")
-        floor = f"{r['floor']:,} ({r['flushed']:,}; {r['scanned']:,})"
+        lanes = f" / {r['pixel_lanes']}" if r["pixel_lanes"] > 1 else ""
+        floor = f"{r['floor']:,} ({r['flushed']:,}{lanes}; {r['scanned']:,})"
         cells += [floor, f"{r['clocks'] / r['floor']:.2f}", f"{1 / seconds:.1f}"]
         cells += [f"{1e3 * r['agg_seconds']:.2f}", f"{1e3 * r['skia_seconds']:.2f}"]
         cells += [f"{seconds / r['agg_seconds']:.1f}", check]
@@ -293,6 +301,9 @@ def main() -> int:
         default=",".join(PIPELINES),
         help=f"named configurations, comma-separated (default {','.join(PIPELINES)})",
     )
+    parser.add_argument(
+        "--scenes", help="only the scenes whose name contains one of these (comma-separated)"
+    )
     parser.add_argument("--repeats", type=int, default=3, help="runs per scene (fastest kept)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of tables")
     parser.add_argument("--write", action="store_true", help="write the tables into the docs")
@@ -305,12 +316,20 @@ def main() -> int:
     pipelines = args.pipelines.split(",")
     if not pipelines or any(name not in PIPELINES for name in pipelines):
         parser.error(f"--pipelines: names of {', '.join(PIPELINES)}, not {args.pipelines!r}")
+    if args.scenes is not None and args.write:
+        parser.error("--write: the tables are of every scene; leave out --scenes")
     tile = TileConfig(EdgeConfig(), int(match[1]), int(match[2]))
+    chosen = scenes(tile.config)
+    if args.scenes is not None:
+        wanted = [w.strip().lower() for w in args.scenes.split(",") if w.strip()]
+        chosen = [s for s in chosen if any(w in s.name.lower() for w in wanted)]
+        if not chosen:
+            parser.error(f"--scenes: no scene's name contains any of {args.scenes!r}")
     for name in pipelines:
         pipeline_harness.build(PipelineConfig.named(name, tile))
     verilator_harness.build(tile.config, top=PolygonCore)
     rows = []
-    for scene in scenes(tile.config):
+    for scene in chosen:
         print(f"{scene.name} ...", file=sys.stderr, flush=True)
         rows += measure(scene, tile, pipelines, args.repeats)
     machine = f"{platform.processor() or platform.machine()}, Python {platform.python_version()}"

@@ -31,6 +31,7 @@ __all__ = [
     "full_clip",
     "log2",
     "pixel_layout",
+    "pixel_value_fields",
     "register_shape",
     "setup_layout",
     "signed_widened",
@@ -197,14 +198,22 @@ def tile_cell_layout(tile: TileConfig) -> data.StructLayout:
     )
 
 
-def tile_pixel_layout(tile: TileConfig) -> data.StructLayout:
-    """One pixel of a flushed tile: its tile pixel, value (a value per channel, red in the low
-    bits), and ``last`` on the tile's last."""
+def tile_pixel_layout(tile: TileConfig, lanes: int = 1) -> data.StructLayout:
+    """One beat of a flushed tile: its first pixel's place, the values of `lanes` pixels side
+    by side (`pixel_value_fields`; a value per channel, red in the low bits), and ``last`` on
+    the tile's last beat."""
+    value = unsigned(tile.config.intensity_bits * tile.channels)
     return data.StructLayout(
         {
             "x": unsigned(tile.x_bits),
             "y": unsigned(tile.y_bits),
-            "value": unsigned(tile.config.intensity_bits * tile.channels),
+            **{name: value for name in pixel_value_fields(lanes)},
             "last": unsigned(1),
         }
     )
+
+
+def pixel_value_fields(lanes: int) -> tuple[str, ...]:
+    """The value fields of a pixel beat of `lanes` pixels (`tile_pixel_layout`): lane k, the
+    pixel at column ``x + k``, is ``value`` for k = 0, else ``value<k>``."""
+    return ("value", *(f"value{k}" for k in range(1, lanes)))

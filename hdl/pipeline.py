@@ -66,12 +66,13 @@ class EdgePipeline(wiring.Component):
         self._pipeline = pipeline_config(pipeline)
         self._tile = tile = self._pipeline.tile
         self.core = PolygonCore(tile.config, setup_units=self._pipeline.setup_units)
-        self.acc, self.res = TileAccumulator(tile), TileResolve(tile)
+        lanes = self._pipeline.pixel_lanes
+        self.acc, self.res = TileAccumulator(tile), TileResolve(tile, lanes)
         stats = data.StructLayout({name: unsigned(STATS_BITS) for name in STATS})
         super().__init__(
             {
                 "commands": In(stream.Signature(command_layout(tile))),
-                "pixels": Out(stream.Signature(tile_pixel_layout(tile))),
+                "pixels": Out(stream.Signature(tile_pixel_layout(tile, lanes))),
                 "errors": Out(unsigned(ERRORS_BITS)),
                 "edge_errors": Out(unsigned(ERRORS_BITS)),
                 "stats": Out(stats),

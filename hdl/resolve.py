@@ -38,18 +38,24 @@ and a flush are taken only when no cell is in flight (the pixels they read must 
 first). Two pixel memories (ping-pong): the resolve reads and writes one (``bank``); a flush
 hands it, with its written rows and background, to the flush side and the resolve goes on
 with the other, the tile the background again (no row written). The flush side reads its
-memory row by row, one pixel per clock while the ``pixels`` stream advances (its read
-port's enable is the advance, so a stalled pixel stays in the memory's output register),
-while the resolve takes the next tile's ops and cells; its first pixel is offered two
-clocks after the flush is taken, and the next flush waits until the last pixel has gone
+memory row by row, ``lanes`` pixels a clock while the ``pixels`` stream advances (its read
+ports' enable is the advance, so a stalled beat stays in the memories' output registers):
+a beat of the stream is lane k the pixel at column ``x + k`` (`PipelineConfig.pixel_lanes`;
+1 in the compact pipeline, 2 in the fast one). Each pixel memory is a memory per lane,
+banked by column modulo the lanes (a pixel's word is its address without the low bits), so
+a beat is one word of each lane's memory; the resolve reads and writes the memory of its
+pixel's lane (its read data chosen by the lane read a clock before). The flush goes on
+while the resolve takes the next tile's ops and cells; its first beat is offered two
+clocks after the flush is taken, and the next flush waits until the last beat has gone
 (its memory is then the resolve's again). A memory's read port is the resolve's or the
 flush's as ``bank`` says; each memory is one block RAM port pair, so the second memory
 costs the pixel memory's block RAMs again and a multiplexer per port.
 
 Observation points for the formal harness (``observe``, a namespace set when the resolve is
-elaborated; no logic of their own): ``memories`` the two pixel `Memory`, ``reads`` their read
-ports, ``bank`` the one the resolve writes, ``fwritten`` and ``fbackground`` the flushed
-tile's written rows and background, ``stages`` the pipeline's stages (s1 first; namespaces
+elaborated; no logic of their own): ``memories`` the two pixel memories (each a list of a
+`Memory` per lane), ``reads`` their read ports (likewise), ``bank`` the one the resolve
+writes, ``fwritten`` and ``fbackground`` the flushed tile's written rows and background,
+``stages`` the pipeline's stages (s1 first; namespaces
 of registers, each with ``valid``; the values a stage carries are in the delay lines,
 ``delays`` (their `Memory` by name, ``"xy"`` and ``"carry"``), at the address its
 ``delayed`` names per line (a value, no logic); the last stage's are its fields ``x``,
@@ -61,14 +67,16 @@ while ``flushing``).
 
 from __future__ import annotations
 
+import itertools
 import types
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, unsigned
+from amaranth.hdl import Array, Cat, Const, Module, Mux, Signal, Value, unsigned
 from amaranth.lib import data, memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..model.pipeline import PIXEL_LANES
 from ..model.tile import RESOLVE_OPS, TileConfig, resolve_latency
-from .layouts import tile_cell_layout, tile_pixel_layout
+from .layouts import pixel_value_fields, tile_cell_layout, tile_pixel_layout
 
 __all__ = ["TileResolve"]
 
@@ -79,14 +87,16 @@ class TileResolve(wiring.Component):
     """Resolve and pixel memory of a `TileConfig` tile. ``cells`` (in, `tile_cell_layout`),
     ``pixels`` (out, `tile_pixel_layout`); ``flushing`` is high while a tile goes out."""
 
-    def __init__(self, tile: TileConfig):
+    def __init__(self, tile: TileConfig, lanes: int = 1):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
-        self._tile = tile
+        if lanes not in PIXEL_LANES:
+            raise ValueError(f"lanes must be one of {PIXEL_LANES}, not {lanes!r}")
+        self._tile, self._lanes = tile, lanes
         super().__init__(
             {
                 "cells": In(stream.Signature(tile_cell_layout(tile))),
-                "pixels": Out(stream.Signature(tile_pixel_layout(tile))),
+                "pixels": Out(stream.Signature(tile_pixel_layout(tile, lanes))),
                 "flushing": Out(1),
             }
         )
@@ -96,18 +106,31 @@ class TileResolve(wiring.Component):
         return self._tile
 
     @property
+    def lanes(self) -> int:
+        """Pixels a flush sends a clock (`PipelineConfig.pixel_lanes`)."""
+        return self._lanes
+
+    @property
     def latency(self) -> int:
         """Clocks from taking a cell to writing its pixel (`resolve_latency`)."""
         return resolve_latency(self._tile)
 
     def elaborate(self, platform):
         m = Module()
-        tile = self._tile
-        # two pixel memories: the resolve writes one (``bank``) while a flush reads the other
+        tile, lanes = self._tile, self._lanes
+        # two pixel memories: the resolve writes one (``bank``) while a flush reads the other;
+        # each is a memory per lane, banked by column modulo the lanes (word: the pixel's
+        # address without its low bits), so a flush reads a beat's pixels in one clock
         value = unsigned(tile.config.intensity_bits * tile.channels)  # a value per channel
-        mems = [memory.Memory(shape=value, depth=tile.pixels, init=[]) for _ in range(2)]
-        m.submodules.pixels0, m.submodules.pixels1 = mems
-        reads, writes = [mem.read_port() for mem in mems], [mem.write_port() for mem in mems]
+        depth, lane_bits = tile.pixels // lanes, lanes.bit_length() - 1
+        mems = [
+            [memory.Memory(shape=value, depth=depth, init=[]) for _ in range(lanes)]
+            for _ in range(2)
+        ]
+        for k, j in itertools.product(range(2), range(lanes)):
+            m.submodules[f"pixels{k}" + (f"_lane{j}" if lanes > 1 else "")] = mems[k][j]
+        reads = [[mem.read_port() for mem in bank_mems] for bank_mems in mems]
+        writes = [[mem.write_port() for mem in bank_mems] for bank_mems in mems]
         bank = Signal()
         self.observe = types.SimpleNamespace(memories=mems, reads=reads, bank=bank)
         written = Signal(tile.height)  # rows written since the tile started
@@ -117,20 +140,30 @@ class TileResolve(wiring.Component):
         # the resolve's side: the read port of ``bank``, always enabled (it never stalls),
         # and its write port; the flush's: the other read port, enabled as the pixels advance
         rd = types.SimpleNamespace(
-            addr=Signal(range(tile.pixels)), data=Mux(bank, reads[1].data, reads[0].data)
+            addr=Signal(range(tile.pixels)), data=Mux(bank, reads[1][0].data, reads[0][0].data)
         )
         frd = types.SimpleNamespace(
-            addr=Signal(range(tile.pixels)), data=Mux(bank, reads[0].data, reads[1].data)
+            addr=Signal(range(tile.pixels)), data=Mux(bank, reads[0][0].data, reads[1][0].data)
         )
+        # the flush's read: a beat's pixels, a lane each
+        pairs = list(zip(*reads, strict=True))  # (bank 0's, bank 1's) read port of each lane
+        frd.lanes = [frd.data, *(Mux(bank, r0.data, r1.data) for r0, r1 in pairs[1:])]
         wr = types.SimpleNamespace(addr=Signal(range(tile.pixels)), data=Signal(value), en=Signal())
-        for k in range(2):
+        if lanes > 1:  # the resolve's read: the lane of the column it read a clock ago
+            read_lane = Signal(lane_bits, name="read_lane")
+            m.d.sync += read_lane.eq(rd.addr[:lane_bits])
+            rd.data = Array(Mux(bank, r1.data, r0.data) for r0, r1 in pairs)[read_lane]
+        for k, j in itertools.product(range(2), range(lanes)):
             mine = bank == k
+            write = wr.en & mine
+            if lanes > 1:
+                write = write & (wr.addr[:lane_bits] == j)
             m.d.comb += [
-                reads[k].addr.eq(Mux(mine, rd.addr, frd.addr)),
-                reads[k].en.eq(mine | advance),
-                writes[k].addr.eq(wr.addr),
-                writes[k].data.eq(wr.data),
-                writes[k].en.eq(wr.en & mine),
+                reads[k][j].addr.eq(Mux(mine, rd.addr, frd.addr)[lane_bits:]),
+                reads[k][j].en.eq(mine | advance),
+                writes[k][j].addr.eq(wr.addr[lane_bits:]),
+                writes[k][j].data.eq(wr.data),
+                writes[k][j].en.eq(write),
             ]
         stages = self._pipeline(m, rd, wr, written, background)
         busy = sum((s.valid for s in stages), start=0) != 0
@@ -323,14 +356,14 @@ class TileResolve(wiring.Component):
         with m.If(advance):
             m.d.sync += p_valid.eq(0)
         with m.If(self.flushing & advance):
-            end = (fx == tile.width - 1) & (fy == tile.height - 1)
+            end = (fx == tile.width - self._lanes) & (fy == tile.height - 1)
             m.d.sync += [
                 p_valid.eq(1),
                 px.eq(fx),
                 py.eq(fy),
                 plast.eq(end),
                 pwritten.eq(fwritten.bit_select(fy, 1)),
-                Cat(fx, fy).eq(Cat(fx, fy) + 1),
+                Cat(fx, fy).eq(Cat(fx, fy) + self._lanes),
             ]
             with m.If(end):
                 m.d.sync += self.flushing.eq(0)
@@ -339,7 +372,10 @@ class TileResolve(wiring.Component):
             out.x.eq(px),
             out.y.eq(py),
             out.last.eq(plast),
-            out.value.eq(Mux(pwritten, frd.data, fbackground)),
+            *(
+                out[name].eq(Mux(pwritten, data, fbackground))
+                for name, data in zip(pixel_value_fields(self._lanes), frd.lanes, strict=True)
+            ),
         ]
 
 

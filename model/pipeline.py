@@ -48,6 +48,7 @@ __all__ = [
     "COMMANDS",
     "COMMAND_VERSION",
     "PIPELINES",
+    "PIXEL_LANES",
     "Command",
     "PipelineConfig",
     "Decoded",
@@ -68,11 +69,15 @@ CODE = {name: code for code, name in enumerate(COMMANDS)}
 class PipelineConfig:
     """What a polygon pipeline is built with: its tile (`TileConfig`, with the stepper's
     `EdgeConfig`) and the setup units feeding its deltas stepper (`edgeaa.hdl.dispatch.
-    SetupArray` when more than one). The commands, the frames and the images do not depend
-    on `setup_units`; only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
+    SetupArray` when more than one) and the pixel lanes: the pixels the resolve's flush
+    sends a clock, side by side in one beat of its ``pixels`` stream (lane k the column
+    ``x + k``; its pixel memories banked by column modulo the lanes). The commands, the
+    frames and the images do not depend on `setup_units` or `pixel_lanes`; only the clocks
+    (`edgeaa.model.pipeline_timing`) and the area do."""
 
     tile: TileConfig = field(default_factory=TileConfig)
     setup_units: int = 1
+    pixel_lanes: int = 1
 
     def __post_init__(self):
         if not isinstance(self.tile, TileConfig):
@@ -82,6 +87,11 @@ class PipelineConfig:
             raise TypeError(f"setup_units must be an integer, not {units!r}")
         if not 1 <= units <= MAX_SETUP_UNITS:
             raise ValueError(f"setup_units must be in [1, {MAX_SETUP_UNITS}], not {units}")
+        lanes = self.pixel_lanes
+        if isinstance(lanes, bool) or not isinstance(lanes, int):
+            raise TypeError(f"pixel_lanes must be an integer, not {lanes!r}")
+        if lanes not in PIXEL_LANES:  # a power of two up to the narrowest tile's width
+            raise ValueError(f"pixel_lanes must be one of {PIXEL_LANES}, not {lanes}")
 
     @classmethod
     def named(cls, name: str, tile: TileConfig | None = None) -> PipelineConfig:
@@ -89,13 +99,19 @@ class PipelineConfig:
         tile if None)."""
         if name not in PIPELINES:
             raise ValueError(f"no pipeline named {name!r}: {', '.join(PIPELINES)}")
-        return cls(TileConfig() if tile is None else tile, PIPELINES[name])
+        return cls(TileConfig() if tile is None else tile, **PIPELINES[name])
 
+
+PIXEL_LANES = (1, 2, 4)  # a tile is at least 4 pixels wide: a row is whole beats
 
 # The named configurations, built from the same components (docs/hardware.md, "Display
-# rate"): their setup units. compact: the smallest, fits an iCE40 HX8K; fast: for the ECP5,
-# four units (of 2, 3, 4 and 6 measured on the HUD and on text, the knee of clocks over area).
-PIPELINES = {"compact": 1, "fast": 4}
+# rate"): their setup units and pixel lanes. compact: the smallest, fits an iCE40 HX8K; fast:
+# for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the knee of
+# clocks over area) and a flush of two pixels a clock.
+PIPELINES = {
+    "compact": {"setup_units": 1, "pixel_lanes": 1},
+    "fast": {"setup_units": 4, "pixel_lanes": 2},
+}
 
 
 def pipeline_config(pipeline) -> PipelineConfig:

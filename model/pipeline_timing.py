@@ -69,7 +69,7 @@ class _Top:
     def __init__(self, pipeline: PipelineConfig, count: int):
         self.tile = tile = pipeline.tile
         self.units = pipeline.setup_units
-        self.model, self.clock = TileModel(tile), TileClock(tile)
+        self.model, self.clock = TileModel(tile), TileClock(tile, pipeline.pixel_lanes)
         self.taken = [0] * count
         self.offer = 0  # clock the next command is offered
         self.polygon: list | None = None  # the open polygon's (index, shape or OTHER)
@@ -173,7 +173,7 @@ class _Top:
             "core_stall": self.stall,
             "acc_busy": len(tile.accepts) + clock.holding + clock.scanning,
             "acc_stall": clock.acc_stall,
-            "resolve_busy": clock.resolve_ops + len(tile.pixels) - clock.overlap,
+            "resolve_busy": clock.resolve_ops + len(tile.pixels) // clock.lanes - clock.overlap,
             "resolve_stall": 0,
         }
         return PipelineTiming(self.taken, self.beats, tile, stats)

@@ -361,9 +361,10 @@ class TileModel:
 # clock; a cell taken in r writes its pixel in clock r + `resolve_latency`. A polygon's first
 # cell, a tile and a flush wait until no cell is in flight (the pixels they read must be
 # written). The resolve has two pixel memories: a flush taken in f hands it the one the
-# resolve wrote, which it sends (pixel k in f + 2 + k, row by row) while the resolve takes
-# the next tile's ops and cells into the other; the next flush is taken from
-# f + width * height + 1 (the last pixel sent).
+# resolve wrote, which it sends (pixel k in f + 2 + k // lanes, row by row, `lanes` pixels a
+# beat: `edgeaa.model.pipeline.PipelineConfig.pixel_lanes`) while the resolve takes the next
+# tile's ops and cells into the other; the next flush is taken from
+# f + width * height / lanes + 1 (the last beat sent).
 
 SCAN_START = 3  # end taken in a: its first cell offered in a + 3
 EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
@@ -382,7 +383,7 @@ class TileTiming:
 
     accepts: list[int] = field(default_factory=list)  # accumulator input transfers
     cells: list[int] = field(default_factory=list)  # resolve input transfers of cells
-    pixels: list[int] = field(default_factory=list)  # pixel output transfers
+    pixels: list[int] = field(default_factory=list)  # each pixel's output transfer
     frames: list[np.ndarray] = field(default_factory=list)
     rows_scanned: int = 0
     cells_scanned: int = 0
@@ -397,10 +398,12 @@ class TileClock:
     """The tile stages' clocks, op by op, for ops offered at any clock: `ready` is the first
     clock the accumulator can take the next op (it stays ready from then until it takes a
     non-beat op). `timing` collects the transfers; `acc_stall` and `resolve_busy` count
-    clocks as the top's counters do (`edgeaa.hdl.pipeline.STATS`)."""
+    clocks as the top's counters do (`edgeaa.hdl.pipeline.STATS`). `lanes`: the pixels a
+    flush sends a clock (`edgeaa.model.pipeline.PipelineConfig.pixel_lanes`)."""
 
-    def __init__(self, tile: TileConfig):
+    def __init__(self, tile: TileConfig, lanes: int = 1):
         self.tile, self.latency = tile, resolve_latency(tile)
+        self.lanes = lanes
         self.timing = TileTiming()
         self.ready = 0
         self.quiet = 0  # first clock no cell is in flight in the resolve
@@ -454,9 +457,10 @@ class TileClock:
         self.resolve_ops += 1
         self._overlap(r, r + 1)
         if flush:
-            out.pixels.extend(range(r + FLUSH_START, r + FLUSH_START + tile.pixels))
+            beats = tile.pixels // self.lanes
+            out.pixels.extend(np.repeat(np.arange(beats) + r + FLUSH_START, self.lanes).tolist())
             out.frames.append(result)
-            self.flush_from, self.free = r + 1, r + tile.pixels + 1
+            self.flush_from, self.free = r + 1, r + beats + 1
         return a
 
     def _overlap(self, start: int, stop: int) -> None:

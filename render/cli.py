@@ -493,7 +493,7 @@ def _setup_units(args: argparse.Namespace) -> int:
     """The setup units of the --pipeline configuration (compact if not given)."""
     from ..model.pipeline import PIPELINES
 
-    return PIPELINES[args.pipeline or "compact"]
+    return PIPELINES[args.pipeline or "compact"]["setup_units"]
 
 
 def _figures(result, units: int) -> dict:

@@ -425,7 +425,8 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             work += clipped * (crossing & starts_above).sum()
             scanned = (scan_rows * (last + 1 - first)).sum()
             work += (latency + 8) * present + max(scanned, tile.width * min(tile.height, scanned))
-            clocks += max(work, tile.pixels + 8)  # the flush runs beside the next tile's work
+            # the flush (its beats) runs beside the next tile's work
+            clocks += max(work, tile.pixels // pipeline.pixel_lanes + 8)
             commands += sent_edges + 2 * int(present) + 2
     return int(clocks), commands
 

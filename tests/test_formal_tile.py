@@ -38,13 +38,17 @@ def _explain(result) -> str:
 # -- the proofs ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["acc_stream", "res_stream", "acc_deltas", "acc_sums"])
+@pytest.mark.parametrize(
+    "name", ["acc_stream", "res_stream", "res_stream_lanes", "acc_deltas", "acc_sums"]
+)
 def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
     assert result.passed, _explain(result)
 
 
-@pytest.mark.parametrize("name", ["acc_deltas_cover", "acc_sums_cover", "res_pixels_cover"])
+@pytest.mark.parametrize(
+    "name", ["acc_deltas_cover", "acc_sums_cover", "res_pixels_cover", "res_pixels_lanes_cover"]
+)
 def test_invariants_not_vacuous(tools, name):
     """Each invariant's premise is reached with its conclusion from power-on on `SMALL_TILE`
     (an implication whose premise is unreachable could never fail)."""
@@ -53,7 +57,7 @@ def test_invariants_not_vacuous(tools, name):
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", ["res_pixels"])
+@pytest.mark.parametrize("name", ["res_pixels", "res_pixels_lanes"])
 def test_slow_proofs(tools, name):
     result = run_tile_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -67,10 +71,13 @@ def test_slow_proofs(tools, name):
     [
         ("acc_stream", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
         ("res_stream", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
+        ("res_stream_lanes", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
         ("acc_sums", "lost_delta", 6, "cells: a beat taken with its last cell (bmc)"),
         ("acc_deltas", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         ("acc_sums", "stale_origin", 8, "sums: cell sum (bmc)"),
         ("res_pixels", "wide_range", 16, "pixels: value (bmc)"),
+        ("res_pixels_lanes", "wide_range", 16, "pixels: value (bmc)"),
+        ("res_pixels_lanes", "swap_lanes", 16, "pixels: value (bmc)"),
     ],
 )
 def test_fault_is_caught(tools, name, fault, depth, message):
@@ -91,6 +98,7 @@ def test_fault_is_caught(tools, name, fault, depth, message):
         ("acc_deltas", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
         ("acc_deltas", "stale_origin", None, "state: origin (basecase)"),
         ("res_pixels", "lost_first", None, "state: stage 0 order (basecase)"),
+        ("res_pixels_lanes", "lost_first", None, "state: stage 0 order (basecase)"),
         # the wrong pixel is written 8 clocks from power-on: one past the proof's k
         ("res_pixels", "wide_range", 9, "state: value (basecase)"),
     ],
@@ -114,6 +122,10 @@ def test_harness_rejects_unknown_options():
         TileHarness(SMALL_TILE, "resolve", ("deltas",))
     with pytest.raises(ValueError, match="fault must be one of"):
         TileHarness(SMALL_TILE, "resolve", ("stream",), fault="lost_delta")
+    with pytest.raises(ValueError, match="two or more pixel lanes"):
+        TileHarness(SMALL_TILE, "resolve", ("pixels",), fault="swap_lanes")
+    with pytest.raises(ValueError, match="pixel lanes are the resolve's"):
+        TileHarness(SMALL_TILE, "accumulator", ("stream",), lanes=2)
     with pytest.raises(TypeError, match="TileConfig"):
         TileHarness(None, "resolve", ())
     with pytest.raises(ValueError, match="proof must be one of"):

@@ -234,6 +234,15 @@ def test_the_pipeline_verilog_is_lint_clean(channels):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
+def test_the_pipeline_verilog_of_two_pixel_lanes_is_lint_clean():
+    from edgeaa.sim.simulators.verilator import lint
+
+    source = pipeline_verilog(PipelineConfig(TileConfig(SMALL, 8, 4), 1, 2))
+    assert "pixels__payload__value1" in source and "pixels__payload__value2" not in source
+    proc = lint(source)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
 @pytest.mark.parametrize(("channels", "background"), [(3, "#203040"), (4, "#20304080")])
 def test_a_colour_scene_in_amaranths_simulator_is_the_canvas(channels, background):
     """Translucent paints (and a translucent background in 4 channels) in the hardware."""
@@ -266,7 +275,7 @@ def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
     fast = tmp_path / "fast.v"
     argv = ["verilog", "--top", "pipeline", "--tile", "8x4", *small, "--pipeline", "fast"]
     assert main([*argv, "-o", str(fast)]) == 0
-    units = PIPELINES["fast"]  # the fast pipeline's core has its setup array
+    units = PIPELINES["fast"]["setup_units"]  # the fast pipeline's core has its setup array
     assert f"unit{units - 1}" in fast.read_text() and "unit1" not in out.read_text()
 
 
@@ -301,14 +310,22 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 
 def test_the_named_configurations():
-    assert PIPELINES == {"compact": 1, "fast": 4}
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4)
+    assert PIPELINES == {
+        "compact": {"setup_units": 1, "pixel_lanes": 1},
+        "fast": {"setup_units": 4, "pixel_lanes": 2},
+    }
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
     for bad, error in [(0, ValueError), (17, ValueError), (True, TypeError), (2.0, TypeError)]:
         with pytest.raises(error):
             PipelineConfig(TILE, bad)
+    assert EdgePipeline(PipelineConfig(TILE, 1, 4)).res.lanes == 4
+    assert EdgePipeline(TILE).res.lanes == 1
+    for bad, error in [(0, ValueError), (3, ValueError), (8, ValueError), (True, TypeError)]:
+        with pytest.raises(error):
+            PipelineConfig(TILE, 1, bad)
     with pytest.raises(ValueError, match="no pipeline named"):
         PipelineConfig.named("quick")
 
@@ -344,6 +361,69 @@ def test_several_setup_units_under_back_pressure_give_the_renderers_image(data, 
     plan = plan_scene(scene, DEFAULT)
     result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4)
     assert result.mismatches == 0, f"seed {seed}, {units} units"
+
+
+@settings(max_examples=12, deadline=None, database=None)
+@given(
+    data=st.data(),
+    seed=st.integers(0, 2**31),
+    units=st.sampled_from([1, 4]),
+    lanes=st.sampled_from([2, 4]),
+)
+def test_pixel_lanes_under_back_pressure_give_the_renderers_image(data, seed, units, lanes):
+    """A flush of two or four pixels a clock, the sink stalling at random: every pixel in its
+    place, the renderer's image."""
+    scene = data.draw(small_scenes(DEFAULT))
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units, lanes)
+    plan = plan_scene(scene, DEFAULT)
+    result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4)
+    assert result.mismatches == 0, f"seed {seed}, {units} units, {lanes} lanes"
+    assert result.pipeline.stats["resolve_stall"] > 0
+
+
+@settings(max_examples=4, deadline=None, database=None)
+@given(data=st.data(), seed=st.integers(0, 2**31))
+def test_two_lanes_of_four_channels_under_back_pressure_are_the_canvas(data, seed):
+    """Two pixels of red, green, blue and alpha a beat (64 bits of values)."""
+    scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
+    plan = plan_scene(coverage_scene(scene), DEFAULT)
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8, channels=4), 1, 2)
+    canvas = Canvas(scene, DEFAULT.full_scale)
+    result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4,
+                             canvas=canvas)  # fmt: skip
+    want = render_scene(plan, canvas=Canvas(scene, DEFAULT.full_scale)).image
+    assert result.mismatches == 0 and np.array_equal(result.image, want), f"seed {seed}"
+
+
+@pytest.mark.parametrize(("lanes", "seed"), [(2, 1), (4, 2)])
+def test_pixel_lanes_drop_bad_commands_as_the_model_does(lanes, seed):
+    from edgeaa.sim.simulators import pipeline_harness
+
+    tile = TileConfig(SMALL, 8, 8)
+    commands = bad_commands(SMALL.subpixel_scale)
+    want, result = model_frames(tile, commands)
+    pipeline = PipelineConfig(tile, 1, lanes)
+    run = pipeline_harness.run(pipeline, commands, seed=seed, idle=0.3, stall=0.3)
+    assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors)
+    for frame, model in zip(run.frames(tile), want, strict=True):
+        assert np.array_equal(frame, model), f"{lanes} lanes, seed {seed}"
+    clock, last = (run.pixels[:, PIXEL_COLUMNS.index(n)] for n in ("clock", "last"))
+    assert np.flatnonzero(last).tolist() == [tile.pixels - 1, 2 * tile.pixels - 1]
+    beats = clock.reshape(-1, lanes)  # a beat's pixels share its clock, each beat its own
+    assert (beats == beats[:, :1]).all() and len(set(beats[:, 0])) == len(beats)
+
+
+def test_a_beat_of_pixel_lanes_is_split_into_its_pixels():
+    from edgeaa.sim.simulators.pipeline_harness import beat_columns, pixel_rows
+
+    assert beat_columns(2) == ("x", "y", "value", "value1", "last")
+    beats = [[5, 2, 3, 10, 11, 0], [6, 4, 3, 12, 13, 1]]  # clock, x, y, value, value1, last
+    assert pixel_rows(beats, 2).tolist() == [
+        [5, 2, 3, 10, 0],
+        [5, 3, 3, 11, 0],
+        [6, 4, 3, 12, 0],
+        [6, 5, 3, 13, 1],
+    ]
 
 
 @pytest.mark.parametrize("seed", [1, 2])
@@ -460,6 +540,17 @@ def test_the_amaranth_engine_renders_a_small_scene_through_the_pipeline():
     assert np.array_equal(result.image, render_scene(plan).image)
 
 
+def test_the_amaranth_engine_renders_through_two_pixel_lanes_under_back_pressure():
+    """The Amaranth runner reads the fast pipeline's beats of two pixels (`pixel_rows`)."""
+    plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
+    fast = PipelineConfig.named("fast", TileConfig(DEFAULT, 16, 8))
+    assert fast.pixel_lanes == 2
+    result = render_pipeline(plan, "amaranth", fast, seed=5, idle=0.2, stall=0.4)
+    assert result.mismatches == 0 and result.pipeline.engine == "amaranth"
+    assert np.array_equal(result.image, render_scene(plan).image)
+    assert result.pipeline.stats["resolve_stall"] > 0
+
+
 def test_edgeaa_render_engine_verilator_writes_the_pipelines_png(tmp_path, capsys):
     from edgeaa.cli import main
 
@@ -472,7 +563,7 @@ def test_edgeaa_render_engine_verilator_writes_the_pipelines_png(tmp_path, capsy
     assert "--engine verilator" in capsys.readouterr().err
     assert main([*args, "--pipeline", "fast", "-o", str(out), "--quiet", "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
-    assert figures["pipeline_setup_units"] == PIPELINES["fast"]
+    assert figures["pipeline_setup_units"] == PIPELINES["fast"]["setup_units"]
     assert figures["pipeline_mismatches"] == 0
 
 

@@ -49,7 +49,7 @@ def run_transfers(tile: TileConfig | PipelineConfig, commands: list[Command]) ->
     the clock of every command taken, delta beat into the accumulator, cell into the resolve
     and pixel out; after the last, the harness's drain (nothing more may move)."""
     dut = EdgePipeline(tile)
-    tile = dut.tile
+    tile, lanes = dut.tile, dut.pipeline.pixel_lanes
     payloads = [command_const(tile, c) for c in commands]
     expected = expected_pixels(tile, commands)
     out = Transfers([], [], [], [], {}, 0)
@@ -79,8 +79,8 @@ def run_transfers(tile: TileConfig | PipelineConfig, commands: list[Command]) ->
             cell = c_valid and c_ready and op == RESOLVE_OPS.index("cell")
             moved = [offer and taken, pixel, b_valid and b_ready, cell]
             for hit, log in zip(moved, logs, strict=True):
-                if hit:
-                    log.append(clock)
+                if hit:  # a pixel beat: its lanes' pixels, each in the beat's clock
+                    log.extend([clock] * (lanes if log is out.pixels else 1))
             quiet = 0 if any(moved) or len(out.pixels) < expected else quiet + 1
             clock += 1
         out.stats = {name: ctx.get(dut.stats[name]) for name in STATS}
@@ -235,6 +235,28 @@ def test_several_setup_units_in_the_models_clocks(units, seed):
     # the single unit's model does not fit the array's clocks
     with pytest.raises(AssertionError):
         check_clock_for_clock(SMALL_TILE, commands, hw, "one unit's model")
+
+
+@pytest.mark.parametrize(("units", "lanes", "seed"), [(1, 2, 2), (4, 2, 7), (2, 4, 10)])
+def test_pixel_lanes_in_the_models_clocks(units, lanes, seed):
+    """A flush of `lanes` pixels a clock (the fast pipeline's two), with the bad commands and
+    the stalls: each pixel in its beat's clock."""
+    pipeline = PipelineConfig(SMALL_TILE, units, lanes)
+    commands = random_commands(random.Random(seed), SMALL_TILE)
+    hw = run_transfers(pipeline, commands)
+    check_clock_for_clock(pipeline, commands, hw, f"{units} units, {lanes} lanes, seed {seed}")
+    assert hw.stats["acc_stall"] > 0  # the stall is exercised
+    # the model of a flush of one pixel a clock does not fit
+    with pytest.raises(AssertionError):
+        check_clock_for_clock(PipelineConfig(SMALL_TILE, units), commands, hw, "one lane's")
+
+
+@settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(scene=small_scenes(SMALL))
+def test_random_scenes_in_the_fast_pipeline_as_the_model_says(scene):
+    pipeline = PipelineConfig.named("fast", SMALL_TILE)
+    commands = scene_commands(plan_scene(scene, SMALL), SMALL_TILE)
+    check_clock_for_clock(pipeline, commands, run_transfers(pipeline, commands), f"{scene}")
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])

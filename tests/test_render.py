@@ -1251,6 +1251,23 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
     assert len(commands) <= count <= 1.1 * len(commands)
 
 
+@pytest.mark.parametrize("name", ["text", "hatch"])
+def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
+    """Two pixel lanes (the fast pipeline): the estimate stays above the cycle model's
+    clocks and within 2.1 times, with the flush at two pixels a clock."""
+    from edgeaa.model.pipeline import PipelineConfig
+    from edgeaa.model.pipeline_timing import pipeline_cycles
+    from edgeaa.model.tile import TileConfig
+    from edgeaa.render import pipeline
+
+    p = plan(builtin(name, DEFAULT), DEFAULT)
+    fast = PipelineConfig.named("fast", TileConfig(DEFAULT))
+    assert fast.pixel_lanes == 2
+    exact = pipeline_cycles(fast, pipeline.scene_commands(p, fast.tile)).clocks
+    estimate, _ = pipeline.clock_estimate(p, fast)
+    assert exact <= estimate <= 2.1 * exact, (exact, estimate)
+
+
 def test_a_comb_is_swept_and_the_engine_refuses_work_past_its_limit(monkeypatch):
     """A comb of tall teeth: every midpoint is level with every edge, so its inside sides
     come from the sweep (no limit on those pairs any more), and every edge steps the

@@ -25,11 +25,12 @@ from ...model.tile import TileConfig
 from .amaranth_runner import Probe, SimulationHang, Sink, Source, Trace, row_decoder, run_component
 from .commands import edge_command
 from .pipeline_harness import (
-    PIXEL_COLUMNS,
     PipelineHang,
     PipelineRun,
+    beat_columns,
     expected_pixels,
     pixel_drain_clocks,
+    pixel_rows,
     stuck_limit,
 )
 from .verilator_harness import FastRun, drain_clocks
@@ -111,8 +112,9 @@ def run_pipeline(
     dut = EdgePipeline(pipeline)
     tile = dut.tile
     source = Source("commands", [command_const(tile, c) for c in commands])
-    pixels = row_decoder(dut.pixels.payload.shape(), PIXEL_COLUMNS[1:])
-    sink = Sink("pixels", expected_pixels(tile, commands), pixels)
+    lanes = dut.pipeline.pixel_lanes
+    pixels = row_decoder(dut.pixels.payload.shape(), beat_columns(lanes))
+    sink = Sink("pixels", expected_pixels(tile, commands) // lanes, pixels)
     counters = (dut.errors, dut.edge_errors, *(dut.stats[name] for name in STATS))
     tag = f"[pipeline seed={seed} idle={idle} stall={stall} {dut.pipeline}]"
     try:
@@ -126,6 +128,6 @@ def run_pipeline(
     rows = [(clock, *pixel) for clock, pixel in trace.beats[0]]
     errors, edge_errors, *stats = trace.final
     return PipelineRun(
-        np.array(rows, dtype=np.int64).reshape(-1, len(PIXEL_COLUMNS)), trace.clocks, errors,
-        edge_errors, dict(zip(STATS, stats, strict=True)), trace.seconds, engine="amaranth",
+        pixel_rows(rows, lanes), trace.clocks, errors, edge_errors,
+        dict(zip(STATS, stats, strict=True)), trace.seconds, engine="amaranth",
     )  # fmt: skip

@@ -4,7 +4,9 @@ generated harness (`edgeaa.sim.simulators.harness`): pipeline commands in, every
 with the clock it came in.
 
 A command row is `edgeaa.model.pipeline.Command`'s fields (a grey pipeline's without
-``paint``, `command_fields`); a pixel row is `PIXEL_COLUMNS`; the
+``paint``, `command_fields`); a pixel row is `PIXEL_COLUMNS` (a beat of several pixel lanes,
+`PipelineConfig.pixel_lanes`, comes as `beat_columns` and is split into a row per pixel,
+`pixel_rows`, each with the beat's clock); the
 clock each command was taken is kept too (`edgeaa.model.pipeline_timing` predicts both). A run
 stops when it has every pixel the flushes ask for and then `pixel_drain_clocks` quiet clocks
 have passed (an extra pixel in them is kept, so a duplicate shows), or when neither a command
@@ -21,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...hdl.layouts import pixel_value_fields
 from ...hdl.pipeline import STATS, EdgePipeline, pipeline_verilog
 from ...model.pipeline import CODE, Command, PipelineConfig, command_fields, pipeline_config
 from ...model.tile import TileConfig
@@ -28,7 +31,6 @@ from . import harness
 
 TOP = "edgeaa_pipeline"
 PIXEL_COLUMNS = ("clock", "x", "y", "value", "last")
-PIXEL_FORMAT = harness.StreamFormat("pixels", tuple((name,) for name in PIXEL_COLUMNS[1:]))
 PipelineHang = harness.HarnessHang  # the name the pipeline's callers catch
 
 
@@ -83,6 +85,27 @@ def expected_pixels(tile: TileConfig, commands: list[Command]) -> int:
     return tile.pixels * sum(c.op == CODE["flush"] for c in commands)
 
 
+def beat_columns(lanes: int) -> tuple[str, ...]:
+    """The payload fields of a pixel beat of `lanes` pixels, in row order
+    (`edgeaa.hdl.layouts.tile_pixel_layout`)."""
+    return ("x", "y", *pixel_value_fields(lanes), "last")
+
+
+def pixel_rows(beats: np.ndarray, lanes: int) -> np.ndarray:
+    """Beat rows (the clock, then `beat_columns`) as pixel rows (`PIXEL_COLUMNS`): lane k of a
+    beat is the pixel at column ``x + k``, ``last`` the beat's on its last lane only."""
+    beats = np.asarray(beats, dtype=np.int64).reshape(-1, lanes + 4)
+    if lanes == 1:
+        return beats
+    clock, x, y, last = beats[:, 0], beats[:, 1], beats[:, 2], beats[:, -1]
+    rows = np.zeros((len(beats), lanes, len(PIXEL_COLUMNS)), dtype=np.int64)
+    rows[..., 0], rows[..., 2] = clock[:, None], y[:, None]
+    rows[..., 1] = x[:, None] + np.arange(lanes)
+    rows[..., 3] = beats[:, 3 : 3 + lanes]
+    rows[:, -1, 4] = last
+    return rows.reshape(-1, len(PIXEL_COLUMNS))
+
+
 def pixel_drain_clocks(tile: TileConfig) -> int:
     """Quiet clocks after the last expected pixel: a whole tile's more would start by then."""
     return tile.pixels + 256
@@ -104,14 +127,17 @@ def command_format(tile: TileConfig) -> harness.StreamFormat:
 
 
 def pipeline_top(pipeline: PipelineConfig | TileConfig) -> harness.HarnessTop:
-    """The pipeline as the harness drives it: `command_format` in, `PIXEL_FORMAT` out."""
+    """The pipeline as the harness drives it: `command_format` in, its pixel beats
+    (`beat_columns`) out."""
     return _top(pipeline_config(pipeline))
 
 
 @functools.cache
 def _top(pipeline: PipelineConfig) -> harness.HarnessTop:
     tile = pipeline.tile
-    return harness.harness_top(EdgePipeline(pipeline), TOP, command_format(tile), PIXEL_FORMAT)
+    beats = tuple((name,) for name in beat_columns(pipeline.pixel_lanes))
+    pixels = harness.StreamFormat("pixels", beats)
+    return harness.harness_top(EdgePipeline(pipeline), TOP, command_format(tile), pixels)
 
 
 def build(pipeline: PipelineConfig | TileConfig, *, optimize: str = "-O2") -> Path:
@@ -155,13 +181,14 @@ def run(
         seed=seed,
         idle=idle,
         stall=stall,
-        expected=expected_pixels(tile, commands),
+        expected=expected_pixels(tile, commands) // pipeline.pixel_lanes,
         drain=pixel_drain_clocks(tile),
         max_quiet=stuck_limit(tile, idle, stall) if max_quiet is None else max_quiet,
     )
     counters = done.counters
     stats = {name: counters[f"stats__{name}"] for name in STATS}
     return PipelineRun(
-        done.rows, done.clocks, counters["errors"], counters["edge_errors"], stats,
+        pixel_rows(done.rows, pipeline.pixel_lanes), done.clocks, counters["errors"],
+        counters["edge_errors"], stats,
         done.seconds, commands=done.taken,
     )  # fmt: skip

@@ -15,7 +15,11 @@
     width. Asserted: a flush sends every pixel once, in raster order, ``last`` on the last,
     and pixel (X, Y) equals the shadow; no pixel is sent outside a flush. So the wrapping
     cells, the wrapping prefix sum and the ``h + 1``-step even-odd fold are exact in the
-    documented range (no overflow); outside it they are not (fault ``wide_range``).
+    documented range (no overflow); outside it they are not (fault ``wide_range``). With
+    pixel lanes (`TileResolve.lanes` > 1: the fast pipeline's two) a beat is the ``lanes``
+    pixels from its (x, y) on: the count goes by beats, ``last`` is on the tile's last beat,
+    and each lane's value is asserted where its pixel is (X, Y), so no pixel is lost,
+    doubled or sent in another lane's place (fault ``swap_lanes``).
 
 Invariants (`_resolve_invariants`): (X, Y) not in flight holds the shadow: its word in the
 pixel memory the resolve writes (``bank``) if its row was written since the tile started or
@@ -23,8 +27,9 @@ in the row's first pass ((X, Y) taken while the row is open, or the row's end in
 else the background; a row begun since the tile or flush op is written unless its first
 pass is open or its end in flight, and the last cell's row was begun; in a flush the frame
 equals what the flush side reads of (X, Y) (the other memory's word if the flushed tile
-wrote its row, else that tile's background) until (X, Y) is read, and the waiting pixel
-(X, Y) equals the frame; the row's prefix sum register is the exact prefix modulo
+wrote its row, else that tile's background; with lanes, the word of (X, Y)'s lane memory)
+until (X, Y) is read, the flush reads whole beats, and the waiting pixel (X, Y) equals the
+frame; the row's prefix sum register is the exact prefix modulo
 ``2**cell_bits``; the pipeline's cells in taken order, none after the last taken and none
 before a polygon's first cell (a cell's position as read from the resolve's delay memory at
 the address its stage names, the last stage's the delay line's read port data:
@@ -42,7 +47,7 @@ import types
 from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Assert, Assume, Cat, Const, Mux, Signal, signed
 
-from ....hdl.layouts import CELL_OP
+from ....hdl.layouts import CELL_OP, pixel_value_fields
 from ....model.accumulate import composite, fill_coverage, intensity_offset
 from ....model.tile import RESOLVE_OPS
 from .spec import HdlArith, all_, implies
@@ -51,11 +56,13 @@ from .tile_common import When, any_, follows, memory_reader, state_checks, track
 __all__ = ["check_pixels"]
 
 
-def check_pixels(m, tile, dut, payload, read, *, wide, invariants, covers):
+def check_pixels(m, tile, dut, payload, read, *, wide, invariants, covers, pixels=None):
     """The ``pixels`` group on `dut` (a `TileResolve`) given the source's `payload`; with
     `invariants`, also the invariants that make it inductive (`read`: the harness's reader of
-    the pixel memory). ``wide``: fault ``wide_range``."""
-    g = _resolve_pixels(m, tile, dut.cells, payload, dut.pixels, wide=wide)
+    the pixel memory). ``wide``: fault ``wide_range``; `pixels`: the output stream as the
+    group sees it (None: the resolve's; fault ``swap_lanes``)."""
+    pixels = dut.pixels if pixels is None else pixels
+    g = _resolve_pixels(m, tile, dut.cells, payload, pixels, wide=wide, lanes=dut.lanes)
     if invariants:
         _resolve_invariants(m, tile, dut, read, g, covers)
 
@@ -107,8 +114,9 @@ def _resolve_source(m, tile, cells, src, wide):
     return ghost, d, take & is_cell
 
 
-def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
-    """The ``pixels`` group (module docstring); `src` is the source's payload."""
+def _resolve_pixels(m, tile, cells, src, pixels, *, wide, lanes=1):
+    """The ``pixels`` group (module docstring); `src` is the source's payload; `lanes` the
+    pixels a beat carries (lane k the pixel after lane 0's k places in raster order)."""
     config, c = tile.config, src
     g, d, took = _resolve_source(m, tile, cells, src, wide)
     exact = g.exact
@@ -128,17 +136,18 @@ def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
     flushing = Signal(name="flushing_h")
     count = Signal(range(tile.pixels), name="pixel_count")
     p, sent = pixels.payload, pixels.valid & pixels.ready
-    mine = (p.x == X) & (p.y == Y)
     checks = [
         (implies(sent, flushing), "pixels: a pixel outside a flush"),
         (implies(sent, (p.x | (p.y << tile.x_bits)) == count), "pixels: raster order"),
-        (implies(sent, p.last == (count == tile.pixels - 1)), "pixels: last flag"),
-        (implies(sent & mine, p.value == frame), "pixels: value"),
+        (implies(sent, p.last == (count == tile.pixels - lanes)), "pixels: last flag"),
     ]
+    for k, name in enumerate(pixel_value_fields(lanes)):  # (X, Y) in lane k
+        mine = (p.x == X) & (p.y == Y) if lanes == 1 else Cat(p.x, p.y) + k == Cat(X, Y)
+        checks.append((implies(sent & mine, p[name] == frame), "pixels: value"))
     for condition, message in checks:
         m.d.comb += Assert(condition, message)
     with m.If(sent):
-        m.d.sync += count.eq(count + 1)
+        m.d.sync += count.eq(count + lanes)
         with m.If(p.last):
             m.d.sync += flushing.eq(0)
     # after the pixel: a flush may be taken in the clock its predecessor's last pixel goes
@@ -147,6 +156,7 @@ def _resolve_pixels(m, tile, cells, src, pixels, *, wide):
     g.__dict__.update(
         X=X, Y=Y, value=value, frame=frame, background=background, flushing=flushing, count=count
     )
+    g.lanes = lanes
     g.pixels = pixels
     return g
 
@@ -194,8 +204,18 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
     done = in_flight(row_end) | (row_open & (g.last[0] >= g.X))
     seen_y = g.seen.bit_select(g.Y, 1)
     n = tile.cell_bits
-    count = g.count
+    count, lanes = g.count, g.lanes
     p = obs.p
+    beat = Cat(p.x, p.y)
+    waiting = [  # (X, Y) in lane k of the waiting beat: its value is the frame
+        (
+            When(obs.p_valid & (beat + k == tracked), g.pixels.payload[name] == g.frame),
+            "frame waiting",
+        )
+        for k, name in enumerate(pixel_value_fields(lanes))
+    ]
+    if lanes > 1:  # the flush reads whole beats: a lane's memory word each
+        waiting.append((count[: lanes.bit_length() - 1] == 0, "whole beats"))
     checks = [
         (g.background == obs.background, "background"),
         (obs.acc[:n] == g.prev[:n], "row prefix sum"),
@@ -205,22 +225,19 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
         (When(~g.need_first, g.seen.bit_select(g.last[1], 1)), "last row seen"),
         (When(seen_y & ~row_open & ~in_flight(row_end), written_y), "seen row written"),
         (
-            When(obs.p_valid, (Cat(p.x, p.y) == count) & (p.last == (count == tile.pixels - 1))),
+            When(obs.p_valid, (beat == count) & (p.last == (count == tile.pixels - lanes))),
             "output position",
         ),
         (When(obs.p_valid, p.last == ~flush), "the last pixel waits after the flush"),
         (
-            When(flush, Cat(obs.fx, obs.fy) == (count + obs.p_valid)[: len(count)]),
+            When(flush, Cat(obs.fx, obs.fy) == (count + lanes * obs.p_valid)[: len(count)]),
             "flush position",
         ),
         (
             When(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == flushed),
             "frame not yet read",
         ),
-        (
-            When(obs.p_valid & (Cat(p.x, p.y) == tracked), g.pixels.payload.value == g.frame),
-            "frame waiting",
-        ),
+        *waiting,
         (When(~in_flight(tracked), g.value == Mux(done, pixel, shown)), "value"),
     ]
     for i, st in enumerate(stages):

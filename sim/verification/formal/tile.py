@@ -22,7 +22,9 @@ delta); ``stale_origin`` gives it every op with x0 zeroed (a stage that ignores 
 origin: cells land in the wrong columns); ``wide_range`` assumes the prefix sums within
 ``[-2 L, 2 L)``, twice the documented range; ``lost_first`` gives the resolve every cell
 with ``first`` cleared (a stage that takes a polygon's first cell while the previous
-polygon's cells are in flight, so its pixel read may miss their writes).
+polygon's cells are in flight, so its pixel read may miss their writes); ``swap_lanes``
+gives the ``pixels`` group the resolve's beats with lanes 0 and 1 swapped (a flush of two
+or more pixel lanes that sends a beat's pixels in each other's places).
 
 All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
 the memories and registers at their initial values, no reset; the accumulator's from
@@ -32,11 +34,12 @@ power-on under a free reset, so its clear pass after a reset mid-polygon is prov
 
 from __future__ import annotations
 
+import types
 from dataclasses import dataclass
 from pathlib import Path
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, Module, Mux, Value
+from amaranth.hdl import Array, Assert, Module, Mux, Signal, Value
 
 from ....hdl.accumulator import TileAccumulator
 from ....hdl.resolve import TileResolve
@@ -86,6 +89,7 @@ class TileHarness(ClockedHarness):
         fault=None,
         invariants=True,
         covers=False,
+        lanes=1,
     ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
@@ -102,7 +106,11 @@ class TileHarness(ClockedHarness):
         super().__init__(reset)
         self.fault, self.invariants = fault, invariants
         self.covers = covers and invariants
-        self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile)
+        if lanes != 1 and stage != "resolve":
+            raise ValueError(f"pixel lanes are the resolve's, not the {stage}'s")
+        if fault == "swap_lanes" and lanes == 1:
+            raise ValueError("fault swap_lanes needs two or more pixel lanes")
+        self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile, lanes)
 
     def elaborate(self, platform):
         m = Module()
@@ -116,10 +124,7 @@ class TileHarness(ClockedHarness):
             if "sums" in self.checks:
                 read = memory_reader(m, dut.observe.memory)
             elif "pixels" in self.checks:  # the resolve's two pixel memories, by bank
-                readers = [memory_reader(m, mem) for mem in dut.observe.memories]
-
-                def read(address, bank):
-                    return Mux(bank, readers[1](address), readers[0](address))
+                read = _pixel_reader(m, dut)
         else:
             m.submodules.dut = dut
         m.domains.sync = self.domain
@@ -145,11 +150,39 @@ class TileHarness(ClockedHarness):
                 invariants=self.invariants, covers=self.covers,
             )  # fmt: skip
         if "pixels" in self.checks:
+            pixels = _swapped_lanes(m, dut.pixels) if self.fault == "swap_lanes" else None
             check_pixels(
                 m, self.tile, dut, payload, read, wide=self.fault == "wide_range",
-                invariants=self.invariants, covers=self.covers,
+                invariants=self.invariants, covers=self.covers, pixels=pixels,
             )  # fmt: skip
         return m
+
+
+def _swapped_lanes(m, pixels):
+    """The ``pixels`` stream as fault ``swap_lanes`` shows it: lanes 0 and 1 swapped."""
+    payload = Signal(pixels.payload.shape(), name="pixels_swapped")
+    m.d.comb += payload.eq(pixels.payload)
+    m.d.comb += [payload.value.eq(pixels.payload.value1), payload.value1.eq(pixels.payload.value)]
+    return types.SimpleNamespace(valid=pixels.valid, ready=pixels.ready, payload=payload)
+
+
+def _pixel_reader(m, dut):
+    """``read(address, bank)``: pixel `address` of the resolve's pixel memory `bank`, from
+    the memory of its lane (the address's low bits) at its word (the rest)."""
+    lanes = dut.lanes
+    lane_bits = lanes.bit_length() - 1
+    readers = [[memory_reader(m, mem) for mem in bank] for bank in dut.observe.memories]
+
+    def read_bank(k, address):
+        if lanes == 1:
+            return readers[k][0](address)
+        words = [reader(address[lane_bits:]) for reader in readers[k]]
+        return Array(words)[address[:lane_bits]]
+
+    def read(address, bank):
+        return Mux(bank, read_bank(1, address), read_bank(0, address))
+
+    return read
 
 
 # -- running ---------------------------------------------------------------------------------
@@ -168,6 +201,7 @@ class TileProof:
     reset: bool = False
     memory_map: bool = True
     description: str = ""
+    lanes: int = 1  # the resolve's pixel lanes (`PipelineConfig.pixel_lanes`)
 
 
 TILE_PROOFS: dict[str, TileProof] = {
@@ -194,6 +228,19 @@ TILE_PROOFS: dict[str, TileProof] = {
             reset=True,
             memory_map=False,
             description="pixels hold rule, any reachable state (k-induction), default tile",
+        ),
+        TileProof(
+            "res_stream_lanes",
+            "resolve",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="pixels hold rule with two pixel lanes (the fast pipeline's), any "
+            "reachable state (k-induction), default tile",
+            lanes=2,
         ),
         TileProof(
             "acc_deltas",
@@ -232,6 +279,17 @@ TILE_PROOFS: dict[str, TileProof] = {
             "documented range (no overflow; k-induction with the pipeline's and the pixel "
             "memory's invariants)",
         ),
+        TileProof(
+            "res_pixels_lanes",
+            "resolve",
+            ("pixels",),
+            "prove",
+            resolve_latency(SMALL_TILE) + 1,
+            description="res_pixels with two pixel lanes (the fast pipeline's): a flush sends "
+            "two pixels a beat, each once, in raster order, from the pixel memories banked by "
+            "column parity",
+            lanes=2,
+        ),
         *(
             TileProof(
                 f"{name}_cover",
@@ -243,11 +301,13 @@ TILE_PROOFS: dict[str, TileProof] = {
                 description=f"each invariant of {name} (an implication) has its premise reached "
                 "with its conclusion (not vacuous; cover from power-on, with resets for the "
                 "accumulator)",
+                lanes=lanes,
             )
-            for name, stage, check, depth in (
-                ("acc_deltas", "accumulator", "deltas", 16),
-                ("acc_sums", "accumulator", "sums", 16),
-                ("res_pixels", "resolve", "pixels", 14),
+            for name, stage, check, depth, lanes in (
+                ("acc_deltas", "accumulator", "deltas", 16, 1),
+                ("acc_sums", "accumulator", "sums", 16, 1),
+                ("res_pixels", "resolve", "pixels", 14, 1),
+                ("res_pixels_lanes", "resolve", "pixels", 14, 2),
             )
         ),
     )
@@ -292,6 +352,7 @@ def run_tile_proof(
         fault=fault,
         invariants=invariants,
         covers=mode == "cover",
+        lanes=proof.lanes,
     )
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles

@@ -23,6 +23,7 @@ TILE_FAULTS = {
     "stall_pixel": "resolve",
     "wide_range": "resolve",
     "lost_first": "resolve",
+    "swap_lanes": "resolve",
 }
 
 # The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels, 18-bit
