@@ -85,11 +85,10 @@ def resvg_image(svg: str | None = None, path: str | None = None, size=None) -> n
     return np.asarray(Image.open(io.BytesIO(data)).convert("RGBA")).astype(np.int64)
 
 
-def outline_errors(scene, config: EdgeConfig) -> dict[str, np.ndarray]:
-    """Each method's |image - exact| (LSB) over the pixels an edge passes through, on the
-    scene's outlines' coverage (`coverage_scene`: one plan for every method)."""
+def outline_images(scene, config: EdgeConfig):
+    """The scene's outlines' coverage (`coverage_scene`: one plan for every method): the exact
+    image, the pixels an edge passes through (seg4's), and each method's image."""
     plan = plan_scene(coverage_scene(scene), config)
-    exact = exact_image(plan)
     seg4 = render_scene(plan_scene(plan.scene, config.with_(mode="seg4")))
     images = {
         "paper": render_scene(plan_scene(plan.scene, config.with_(mode="paper"))).image,
@@ -98,7 +97,12 @@ def outline_errors(scene, config: EdgeConfig) -> dict[str, np.ndarray]:
         "AGG": agg_scene(plan),
         "resvg": resvg_image(outline_svg(plan))[..., 0],
     }
-    edged = edges_per_pixel(seg4) > 0
+    return exact_image(plan), edges_per_pixel(seg4) > 0, images
+
+
+def outline_errors(scene, config: EdgeConfig) -> dict[str, np.ndarray]:
+    """Each method's |image - exact| (LSB) over the pixels an edge passes through."""
+    exact, edged, images = outline_images(scene, config)
     return {m: np.abs(image.astype(np.float64) - exact)[edged] for m, image in images.items()}
 
 
