@@ -86,8 +86,8 @@ def resvg_image(svg: str | None = None, path: str | None = None, size=None) -> n
 
 
 def outline_images(scene, config: EdgeConfig):
-    """The scene's outlines' coverage (`coverage_scene`: one plan for every method): the exact
-    image, the pixels an edge passes through (seg4's), and each method's image."""
+    """The scene's outlines' coverage (`coverage_scene`: one plan for every method): the plan,
+    the exact image, the pixels an edge passes through (seg4's), and each method's image."""
     plan = plan_scene(coverage_scene(scene), config)
     seg4 = render_scene(plan_scene(plan.scene, config.with_(mode="seg4")))
     images = {
@@ -97,12 +97,12 @@ def outline_images(scene, config: EdgeConfig):
         "AGG": agg_scene(plan),
         "resvg": resvg_image(outline_svg(plan))[..., 0],
     }
-    return exact_image(plan), edges_per_pixel(seg4) > 0, images
+    return plan, exact_image(plan), edges_per_pixel(seg4) > 0, images
 
 
 def outline_errors(scene, config: EdgeConfig) -> dict[str, np.ndarray]:
     """Each method's |image - exact| (LSB) over the pixels an edge passes through."""
-    exact, edged, images = outline_images(scene, config)
+    _, exact, edged, images = outline_images(scene, config)
     return {m: np.abs(image.astype(np.float64) - exact)[edged] for m, image in images.items()}
 
 

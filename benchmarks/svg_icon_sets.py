@@ -14,14 +14,17 @@ or a seeded sample of N per set (the seed is printed) is measured as `svg_accura
 measures a file (`outline_images`: paper, seg4, Skia, AGG and resvg on the same quantized
 outlines, |image - exact| in LSB over the pixels an edge passes through), and the worst icon
 for seg4 is named. `reading` compares how edgeaa and resvg read the SVG: resvg's own render of
-the file (its parser, stroker and flattening; its alpha channel) at 8 times the size, averaged
-over each 8 x 8 block, against the exact image of edgeaa's outlines. resvg's coverage comes in
-quarters of its pixel (1/32 px here: up to 8 LSB on a pixel an edge crosses), edgeaa's
-vertices are on its 1/16 px grid (up to 8 LSB) and its chords within the 1/16 px tolerance
-(up to 16 LSB), so the two agree within about 32 LSB where they read the same outline; a
-misread shape, stroke or cap gives more. It is taken on icons whose paints are all opaque
-(then the alpha is the outlines' union either way): the largest difference (LSB) and the
-largest ink difference in per cent of the icon's ink.
+the file (its parser, stroker and flattening; its alpha channel) against resvg's render of
+edgeaa's outlines (`outline_svg`, white on black), both at 8 times the size and averaged over
+each 8 x 8 block. Supersampled, neither counts twice the edge pixels where two elements
+overlap (a round cap on a round join; at 1 x, composited element by element, both do), and
+resvg's coverage in quarters of its pixel is 1/32 px here: up to 8 LSB where an edge
+crosses a pixel, 16 for the two renders. edgeaa's vertices on the 1/16 px grid move an edge
+by up to 1/32 px (8 LSB) and its chords lie within the 1/16 px tolerance where resvg's
+flattening has its own, so where the two read the same outline they agree within about
+40 LSB; a misread shape, stroke or cap gives more. It is taken on icons whose paints are all
+opaque (then the alpha is the outlines' union either way): the largest difference (LSB) and
+the largest ink difference in per cent of the icon's ink.
 `--write FILE` writes one CSV row per measured icon.
 """
 
@@ -44,7 +47,7 @@ from edgeaa.render.scene import SceneError
 from edgeaa.render.svg import load_svg
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from svg_accuracy import outline_images, resvg_image
+from svg_accuracy import outline_images, outline_svg, resvg_image
 
 # (set, kind, package, folder of its SVG files inside the package)
 SETS = (
@@ -84,23 +87,27 @@ def reason(error: SceneError, path: str) -> str:
 SUPERSAMPLE = 8  # resvg's render of the file, per pixel and axis
 
 
-def reading(scene, path: str, size: int, exact: np.ndarray) -> tuple[np.ndarray, float] | None:
-    """|resvg's alpha of the file (supersampled) - the exact image of the outlines| per pixel,
-    and the ink difference relative to the outlines' ink; None when a paint is translucent
-    (the two then differ by the paints, not the reading)."""
+def reading(scene, path: str, size: int, plan) -> tuple[np.ndarray, float] | None:
+    """|resvg's alpha of the file - resvg's render of the outlines| per pixel, both
+    supersampled, and the ink difference relative to the outlines' ink; None when a paint is
+    translucent (the two then differ by the paints, not the reading)."""
     if any(p.paint is not None and p.paint[3] < 1 for p in scene.polygons):
         return None
     k = SUPERSAMPLE
-    theirs = resvg_image(path=path, size=(size * k, size * k))[..., 3]
-    theirs = theirs.reshape(size, k, size, k).mean(axis=(1, 3))
-    return np.abs(theirs - exact).ravel(), float((theirs.sum() - exact.sum()) / exact.sum())
+
+    def down(image):
+        return image.reshape(size, k, size, k).mean(axis=(1, 3))
+
+    theirs = down(resvg_image(path=path, size=(size * k, size * k))[..., 3])
+    ours = down(resvg_image(outline_svg(plan), size=(size * k, size * k))[..., 0])
+    return np.abs(theirs - ours).ravel(), float((theirs.sum() - ours.sum()) / ours.sum())
 
 
 def measure(path: str, size: int, config: EdgeConfig) -> dict[str, np.ndarray]:
     scene = load_svg(path, size=(size, size))
-    exact, edged, images = outline_images(scene, config)
+    plan, exact, edged, images = outline_images(scene, config)
     errors = {m: np.abs(images[m].astype(np.float64) - exact)[edged] for m in METHODS}
-    apart = reading(scene, path, size, exact)
+    apart = reading(scene, path, size, plan)
     errors["reading"] = apart
     return errors
 
