@@ -195,13 +195,19 @@ def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
     """The paints of `plan` from `canvas` (`edgeaa.render.paint.Canvas`, a colour scene's,
     for a tile of 3 channels, or 4 with alpha: a translucent background), or grey (no canvas,
     1 channel). The hardware composites opaque paint only: a polygon's colour with alpha
-    below full scale is refused (SceneError, one line), and with 3 channels the background's."""
+    below full scale is refused (SceneError, one line), and with 3 channels the background's;
+    so is a scene with group opacity (layers)."""
     if (canvas is not None) != (tile.channels > 1):
         raise ValueError(
             f"a {'colour' if canvas else 'grey'} scene in a {tile.channels}-channel tile"
         )
     if canvas is None:
         return TilePaints(None, (None,) * len(plan.polygons))
+    if canvas.layered:
+        raise SceneError(
+            "the scene has group opacity (polygons composited as a layer): the hardware "
+            "pipeline draws no layers; use --engine model"
+        )
     full, channels = canvas.full, tile.channels
     background = [("the background", canvas.background[3])] if channels == 3 else []
     for what, alpha in background + [

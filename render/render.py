@@ -709,6 +709,8 @@ def render_scene(
             )
         else:
             _draw_disjoint(plan, run, deltas.take(np.concatenate(picks)), picks, image, counts)
+    if canvas is not None:
+        canvas.finish()  # the group layers still open
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t

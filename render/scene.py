@@ -66,6 +66,9 @@ class Polygon:
     # A colour instead of the intensity: red, green, blue and alpha in [0, 1] (sRGB values),
     # composited per channel (`edgeaa.render.paint`).
     paint: tuple[float, float, float, float] | None = None
+    # The groups (indices into `Scene.layers`, outermost first) this polygon is drawn inside:
+    # each composited as a layer with its opacity (SVG's group opacity, `edgeaa.render.paint`).
+    layers: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -79,6 +82,8 @@ class Scene:
     # A colour background (red, green, blue, alpha in [0, 1]) instead of `background`; SVG
     # files start transparent.
     background_paint: tuple[float, float, float, float] | None = None
+    # Each layer's opacity in [0, 1] (`Polygon.layers`); a colour scene's.
+    layers: tuple[float, ...] = ()
 
     @property
     def colour(self) -> bool:

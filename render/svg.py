@@ -22,7 +22,9 @@ from __future__ import annotations
 
 import io
 import math
+from collections import Counter
 from collections.abc import Callable
+from dataclasses import replace
 
 from .scene import (
     DEFAULT_TOLERANCE,
@@ -96,11 +98,88 @@ def load_svg(
     budget = [MAX_EDGES]
     said: set[str] = set()
     warn = _once(warn, said)
+    groups = _Groups(se, svg, path)
     for element in svg.elements():
-        polygons += _element(se, element, outer, tolerance, lenient, warn, path, budget)
+        chain = groups.chain(element)
+        if chain is not None:
+            found = _element(se, element, outer, tolerance, lenient, warn, path, budget)
+            polygons += groups.place(found, chain, element)
     name = path.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     transparent = (0.0, 0.0, 0.0, 0.0)  # SVG's canvas
-    return Scene(pixels[0], pixels[1], tuple(polygons), 0, name, tolerance, transparent)
+    polygons, layers = _fold_layers(polygons, groups.opacities)
+    return Scene(pixels[0], pixels[1], tuple(polygons), 0, name, tolerance, transparent, layers)
+
+
+class _Groups:
+    """SVG's `opacity` (not inherited: svgelements copies it down to the children, so each
+    element's own comes from its attributes) on a container (`g`, `use`, `svg`) or on a shape
+    with both a fill and a stroke: the content drawn into a transparent layer, composited with
+    the opacity (`edgeaa.render.paint`). `opacities` holds each layer's."""
+
+    def __init__(self, se, svg, source: str):
+        self.se, self.source = se, source
+        self.parents: dict[int, object] = {}
+        todo = [svg]
+        while todo:  # every container's children (svgelements: a container is a list)
+            node = todo.pop()
+            for child in node:
+                self.parents[id(child)] = node
+                if isinstance(child, list):
+                    todo.append(child)
+        self.ids: dict[int, int] = {}  # id(container) -> its layer
+        self.opacities: list[float] = []
+
+    def own(self, element) -> float:
+        attributes = element.values.get("attributes") or {}
+        where = f"{self.source}: <{_tag(element)}>"
+        return _fraction(attributes.get("opacity"), 1.0, where, "opacity")
+
+    def chain(self, element) -> tuple[int, ...] | None:
+        """The layers of the element's containers with opacity below 1, outermost first;
+        None when one's opacity is 0 (nothing inside is drawn)."""
+        out = []
+        node = self.parents.get(id(element))
+        while node is not None:
+            opacity = self.own(node)
+            if opacity == 0:
+                return None
+            if opacity < 1:
+                out.append(self._layer(node, opacity))
+            node = self.parents.get(id(node))
+        return tuple(out[::-1])
+
+    def _layer(self, key, opacity: float) -> int:
+        if id(key) not in self.ids:
+            self.ids[id(key)] = len(self.opacities)
+            self.opacities.append(opacity)
+        return self.ids[id(key)]
+
+    def place(self, polygons: list[Polygon], chain, element) -> list[Polygon]:
+        """The element's polygons inside its containers' layers; its own opacity on the
+        paints of one, or as a layer of the fill and the stroke together."""
+        opacity = self.own(element) if polygons else 1.0
+        if opacity == 0:
+            return []
+        if opacity < 1:
+            chain += (self._layer(element, opacity),)
+        return [replace(p, layers=chain) for p in polygons]
+
+
+def _fold_layers(polygons: list[Polygon], opacities: list[float]):
+    """A layer holding one polygon is that polygon with its alpha times the opacity (exact:
+    source-over of one paint scaled by the opacity); the others renumbered in order."""
+    counts = Counter(layer for p in polygons for layer in p.layers)
+    keep = sorted(layer for layer, n in counts.items() if n > 1)
+    number = {layer: i for i, layer in enumerate(keep)}
+    out = []
+    for p in polygons:
+        alpha = p.paint[3]
+        for layer in p.layers:
+            if layer not in number:
+                alpha *= opacities[layer]
+        layers = tuple(number[layer] for layer in p.layers if layer in number)
+        out.append(replace(p, paint=(*p.paint[:3], alpha), layers=layers))
+    return out, tuple(opacities[layer] for layer in keep)
 
 
 def _fitted(se, svg, size: tuple[int, int], width: float, height: float):
@@ -181,7 +260,6 @@ def _element(se, element, outer, tol, lenient, warn, source, budget) -> list[Pol
         paths = _subpaths(se, element, tol / stretch, budget[0], where)
     except (ValueError, ArithmeticError) as error:  # the library's on odd numbers
         raise SceneError(f"{where}: {error}") from None
-    opacity = _fraction(values.get("opacity"), 1.0, where, "opacity")
     out = []
     for kind, paint in (("fill", element.fill), ("stroke", element.stroke)):
         raw = str(values.get(kind) or "")
@@ -190,7 +268,7 @@ def _element(se, element, outer, tol, lenient, warn, source, budget) -> list[Pol
             continue
         if paint is None or paint.value is None or paint.alpha == 0:
             continue
-        rgba = (paint.red / 255, paint.green / 255, paint.blue / 255, paint.alpha / 255 * opacity)
+        rgba = (paint.red / 255, paint.green / 255, paint.blue / 255, paint.alpha / 255)
         if kind == "fill":
             contours = _fill_contours(paths, matrix, where)
             rule = "evenodd" if values.get("fill-rule") == "evenodd" else "nonzero"
