@@ -34,16 +34,18 @@ from .scene import (
     Polygon,
     Scene,
     SceneError,
+    centre_arc,
     check_pixels,
     close_subpath,
     cubic_pieces,
-    flatten_arc,
+    cubic_tangents,
     flatten_cubic,
     flatten_quadratic,
     quadratic_pieces,
+    quadratic_tangents,
     read_text,
 )
-from .stroke import CAPS, JOINS, StrokeStyle, Subpath, stroke_outline
+from .stroke import CAPS, JOINS, StrokeStyle, Subpath, stroke_outline, subpath_of
 
 Point = tuple[float, float]
 # Elements whose drawing needs more than filled and stroked outlines in flat colours.
@@ -315,34 +317,40 @@ def _fraction(value, default: float, where: str, name: str) -> float:
 
 def _subpaths(se, element, tol: float, limit: int, where: str) -> list[Subpath]:
     """The shape's path flattened in its own coordinates: every subpath's points, whether it
-    was closed (Z), which points are corners between segments."""
+    was closed (Z), which points are corners between segments, the curves' tangents."""
     out: list[Subpath] = []
     points: list[Point] = []
     corners: list[bool] = []
+    tangents: list[list] = []  # per point: [end tangent, start tangent] of the curves there
     closed = False
     count = 0
 
     def finish():
         if points:
-            out.append(_clean(points, corners, closed))
+            out.append(subpath_of(points, corners, tangents, closed, _same))
 
     for segment in se.Path(element).segments(transformed=False):
         if isinstance(segment, se.Move):
             finish()
             points, corners, closed = [_xy(segment.end)], [True], False
+            tangents = [[None, None]]
             continue
         if not points:  # a segment after Z without M starts at the subpath's start
             points, corners, closed = [_xy(segment.start)], [True], False
-        new = _flatten(se, segment, tol)
+            tangents = [[None, None]]
+        new, (start, end) = _flatten(se, segment, tol)
         count += len(new)
         if count > limit:
             raise SceneError(f"{where}: its path needs more than the limit of {limit:,} edges")
         points += new
         corners += [False] * (len(new) - 1) + [True]
+        tangents[-1][1] = start or tangents[-1][1]
+        tangents += [[None, None] for _ in new]
+        tangents[-1][0] = end
         if isinstance(segment, se.Close):
             closed = True
             finish()
-            points, corners = [], []
+            points, corners, tangents = [], [], []
     finish()
     return out
 
@@ -351,39 +359,30 @@ def _xy(point) -> Point:
     return (float(point[0]), float(point[1]))
 
 
-def _clean(points: list[Point], corners: list[bool], closed: bool) -> Subpath:
-    """Drop repeated points (and the closing point of a closed subpath): equal within
-    SAME px, the float noise of svgelements' shapes (a circle's last arc ends 2e-15 px off
-    its start)."""
-    keep = [i for i in range(len(points)) if i == 0 or not _same(points[i], points[i - 1])]
-    pts, flags = [points[i] for i in keep], [corners[i] for i in keep]
-    if closed and len(pts) > 1 and _same(pts[-1], pts[0]):
-        pts.pop()
-        flags.pop()
-    return Subpath(tuple(pts), closed, tuple(flags))
-
-
 SAME = 1e-9  # px: points this close are one (far below the 1/256 px finest grid)
 
 
 def _same(p: Point, q: Point) -> bool:
+    """Equal within SAME px, the float noise of svgelements' shapes (a circle's last arc ends
+    2e-15 px off its start)."""
     return abs(p[0] - q[0]) <= SAME and abs(p[1] - q[1]) <= SAME
 
 
-def _flatten(se, segment, tol: float) -> list[Point]:
-    """The segment's points after its start, chords within tol."""
+def _flatten(se, segment, tol: float):
+    """The segment's points after its start, chords within tol; its tangents at both ends
+    (None for a line)."""
     start, end = _xy(segment.start), _xy(segment.end)
     if isinstance(segment, se.CubicBezier):
         c1, c2 = _xy(segment.control1), _xy(segment.control2)
         _check_pieces(cubic_pieces(start, c1, c2, end, tol))
-        return flatten_cubic(start, c1, c2, end, tol)
+        return flatten_cubic(start, c1, c2, end, tol), cubic_tangents(start, c1, c2, end)
     if isinstance(segment, se.QuadraticBezier):
         c = _xy(segment.control)
         _check_pieces(quadratic_pieces(start, c, end, tol))
-        return flatten_quadratic(start, c, end, tol)
+        return flatten_quadratic(start, c, end, tol), quadratic_tangents(start, c, end)
     if isinstance(segment, se.Arc):
-        return _flatten_arc(segment, start, end, tol)
-    return [end]  # Line, Close
+        return centre_arc(segment, end, tol)
+    return [end], (None, None)  # Line, Close
 
 
 def _check_pieces(n: int) -> None:
@@ -392,13 +391,6 @@ def _check_pieces(n: int) -> None:
             f"a curve needs {n:,} pieces, more than the limit of "
             f"{MAX_POLYGON_EDGES:,} edges per polygon"
         )
-
-
-def _flatten_arc(arc, start: Point, end: Point, tol: float) -> list[Point]:
-    """svgelements' arc (centre, semi-axis end points, start angle, sweep) flattened."""
-    c, u, v = _xy(arc.center), _xy(arc.prx), _xy(arc.pry)
-    u, v = (u[0] - c[0], u[1] - c[1]), (v[0] - c[0], v[1] - c[1])
-    return flatten_arc(c, u, v, float(arc.get_start_t()), float(arc.sweep), end, tol)
 
 
 def _transform(matrix, points, where: str) -> tuple[Point, ...]:

@@ -135,10 +135,16 @@ def test_arcs_are_flattened_within_the_tolerance(rx, ry, turn, large, sweep, end
     arc = se.Path(d).segments()[-1]
     if not isinstance(arc, se.Arc) or math.dist((0, 0), end) < 1e-6:
         return
-    from edgeaa.render.svg import _flatten_arc
+    from edgeaa.render.scene import centre_arc
 
-    points = [(0.0, 0.0), *_flatten_arc(arc, (0.0, 0.0), end, DEFAULT_TOLERANCE)]
+    flat, tangents = centre_arc(arc, end, DEFAULT_TOLERANCE)
+    points = [(0.0, 0.0), *flat]
     t0, swept = arc.get_start_t(), arc.sweep
+    # the tangents (for strokes' caps and joins) point along the arc at both ends
+    for tangent, t, sign in ((tangents[0], t0, 1), (tangents[1], t0 + swept, -1)):
+        step = np.subtract(arc.point_at_t(t + sign * swept * 1e-7), arc.point_at_t(t)) * sign
+        unit = np.divide(tangent, math.hypot(*tangent))
+        assert np.dot(unit, step) > 0 and abs(np.cross(unit, step)) <= 1e-4 * math.hypot(*step)
     samples = [arc.point_at_t(t0 + swept * k / 400) for k in range(401)]
     speed = math.hypot(arc.rx, arc.ry)  # |P'| of the (radius-corrected) ellipse, at most
     for p in points[1:-1]:  # on the ellipse: near a sample (half their spacing)
@@ -385,6 +391,39 @@ def test_strokes_in_svg_have_the_stroked_area(tmp_path):
         (stroke,) = scene.polygons
         assert stroke.fill_rule == "nonzero" and stroke.name.endswith("stroke")
         assert abs(union_area(stroke) - exact) <= DEFAULT_TOLERANCE * round_length + 1e-6, element
+
+
+@pytest.mark.parametrize("cap", ["butt", "square"])
+@pytest.mark.parametrize(
+    ("d", "starts", "ends"),
+    [  # path data, the tangent at its start, at its end
+        ("M 30 20 A 10 10 0 0 1 20 30", (0, 1), (-1, 0)),  # a quarter circle
+        ("M 5 30 C 5 10 30 10 35 22", (0, -1), (5, 12)),
+        ("M 5 30 Q 20 0 35 30", (1, -2), (1, 2)),
+    ],
+)
+def test_caps_are_square_to_the_curve(tmp_path, d, starts, ends, cap):
+    """A cap ends the stroke at the line through the end square to the curve's tangent
+    (butt), or w/2 beyond it (square): nothing of the outline passes that line. With the
+    chords' directions the last chord's piece passed it by (w/2)^2 tan(theta) / 2 (theta
+    half the chord's turn), 0.2 to 0.7 px^2 on these curves."""
+    from shapely.geometry import Polygon as Shape
+    from shapely.ops import unary_union
+
+    body = f'<path d="{d}" fill="none" stroke="black" stroke-width="8" stroke-linecap="{cap}"/>'
+    (stroke,) = load_svg(write(tmp_path, body)).polygons
+    outline = unary_union([Shape(c).buffer(0) for c in stroke.contours])
+    numbers = [float(v) for v in d.replace("M", " ").replace("A", " ").split()[-2:]]
+    first = [float(v) for v in d.split()[1:3]]
+    beyond = 4.0 if cap == "square" else 0.0
+    for point, tangent in ((first, np.negative(starts)), (numbers, ends)):
+        unit = np.divide(tangent, math.hypot(*tangent))
+        end = np.subtract(point, 0.5) + unit * beyond  # the model's pixel centres: -1/2
+        # the half-plane past the end line: a large box turned to the tangent
+        far = [end + unit * a + np.array([-unit[1], unit[0]]) * b
+               for a, b in ((0, -100), (100, -100), (100, 100), (0, 100))]  # fmt: skip
+        past = outline.intersection(Shape(far)).area
+        assert past <= 1e-9, (point, past)
 
 
 def test_json_and_svg_give_the_same_polygons_for_arcs_transforms_strokes_colours(tmp_path):
