@@ -196,17 +196,19 @@ def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
     for a tile of 3 channels, or 4 with alpha: a translucent background), or grey (no canvas,
     1 channel). The hardware composites opaque paint only: a polygon's colour with alpha
     below full scale is refused (SceneError, one line), and with 3 channels the background's;
-    so is a scene with group opacity (layers)."""
+    so is a scene with group opacity (layers) or linear-light blending."""
     if (canvas is not None) != (tile.channels > 1):
         raise ValueError(
             f"a {'colour' if canvas else 'grey'} scene in a {tile.channels}-channel tile"
         )
     if canvas is None:
         return TilePaints(None, (None,) * len(plan.polygons))
-    if canvas.layered:
+    if canvas.layered or canvas.linear:
+        what = "group opacity (polygons composited as a layer)" if canvas.layered else (
+            "linear-light blending")  # fmt: skip
         raise SceneError(
-            "the scene has group opacity (polygons composited as a layer): the hardware "
-            "pipeline draws no layers; use --engine model"
+            f"the scene has {what}: the hardware pipeline composites sRGB values without "
+            "layers; use --engine model"
         )
     full, channels = canvas.full, tile.channels
     background = [("the background", canvas.background[3])] if channels == 3 else []

@@ -84,6 +84,8 @@ class Scene:
     background_paint: tuple[float, float, float, float] | None = None
     # Each layer's opacity in [0, 1] (`Polygon.layers`); a colour scene's.
     layers: tuple[float, ...] = ()
+    # Colours composited in linear light (sRGB decoded before, encoded after: `paint`).
+    linear_light: bool = False
 
     @property
     def colour(self) -> bool:

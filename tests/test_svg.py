@@ -283,6 +283,39 @@ def test_group_opacity_is_refused_by_the_hardware_engines(tmp_path, capsys):
     assert main(["render", path, "-o", str(out), "--quiet"]) == 0
 
 
+def test_linear_light_blends_decoded_colours(tmp_path, capsys):
+    """--linear-light: sRGB decoded before the composite, encoded after. White half over
+    black is round(255 encode(128 / 255)) = 188 (the model's half coverage is 128 of 255),
+    not 128; the image is within 1/2 LSB plus the 16-bit linear steps of the same composites
+    in real numbers; the hardware engines and grey scenes refuse it in one line."""
+    from dataclasses import replace
+
+    from edgeaa.render.paint import srgb_decode, srgb_encode
+
+    x = np.linspace(0, 1, 1001)
+    assert np.abs(srgb_decode(srgb_encode(x)) - x).max() < 1e-12
+    assert abs(srgb_decode(0.5) - 0.21404114) < 1e-8  # IEC 61966-2-1
+    body = (
+        '<rect y="9" width="4" height="1"/><rect x="0.5" y="9" width="2" height="1" fill="white"/>'
+    )
+    scene = load_svg(write(tmp_path, GROUPS[GROUPS.index("<g") :] + body, 'width="8" height="10"'))
+    for linear, half in ((False, 128), (True, 188)):
+        lit = replace(scene, linear_light=linear)
+        plan = render_scene(coverage_scene(lit), DEFAULT).plan
+        canvas = Canvas(lit, DEFAULT.full_scale)
+        render_scene(plan, canvas=canvas)
+        assert tuple(canvas.image[9, 0]) == (half, half, half, 255)  # row 9: only these
+        assert np.abs(canvas.image - exact_colour(plan, lit)).max() <= 1
+    assert half == round(255 * float(srgb_encode(128 / 255)))
+    path, out = write(tmp_path, body, 'width="4" height="10"'), str(tmp_path / "o.png")
+    assert main(["render", path, "-o", out, "--linear-light", "--engine", "amaranth"]) == 2
+    grey = tmp_path / "grey.json"
+    grey.write_text('{"width": 4, "height": 4, "polygons": [[[0, 0], [3, 0], [0, 3]]]}')
+    assert main(["render", str(grey), "-o", out, "--linear-light", "--quiet"]) == 2
+    errors = capsys.readouterr().err.splitlines()
+    assert len(errors) == 2 and "hardware" in errors[0] and "grey" in errors[1]
+
+
 BUILTIN_SHA256 = {  # the built-ins' images before colour came (commit 06d729e)
     ("paper", "starburst"): "a76c39b193755467", ("paper", "text"): "c0ae0af5c1f5a23f",
     ("paper", "hatch"): "25f067a7d62b0d05", ("seg4", "starburst"): "0e403839879cebfb",
