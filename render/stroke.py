@@ -112,11 +112,16 @@ def _normal(p: Point, q: Point, half: float) -> Point:
     return (-dy / length * half, dx / length * half)
 
 
+PARALLEL = 1e-9  # rad: directions this close to parallel are (a curve's tangent at a cusp)
+
+
 def _join(a: Point, b: Point, c: Point, join: str, style: StrokeStyle, tol: float):
     """The piece filling the outer side of the turn at b (segments a-b, b-c), or None."""
     half = style.width / 2
     n1, n2 = _normal(a, b, half), _normal(b, c, half)
     cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
+    if abs(cross) <= PARALLEL * math.dist(a, b) * math.dist(b, c):
+        cross = 0.0  # parallel: a tangent's float noise must not pick the side of a reversal
     if cross == 0 and n1[0] * n2[0] + n1[1] * n2[1] > 0:
         return None  # straight on: the rectangles meet edge to edge
     sign = -1.0 if cross > 0 else 1.0  # the outer side is away from the turn
