@@ -5,6 +5,7 @@ The sets come from the npm registry (they are not on PyPI; the project does not 
 
     npm install --prefix /tmp/icons bootstrap-icons heroicons @tabler/icons feather-icons
     python benchmarks/svg_icon_sets.py --root /tmp/icons [--size 48] [--sample 100] [--seed S]
+        [--jobs N] [--write FILE]
 
 Filled: Bootstrap Icons, Heroicons solid (24, 20 and 16 px), Tabler filled; outline (strokes):
 Heroicons outline, Tabler outline, Feather. Every icon is read by `load_svg` as `edgeaa
@@ -32,7 +33,9 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import json
+import multiprocessing
 import os
 import random
 import re
@@ -134,6 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sample", type=int, default=100, help="icons measured per set (0: all)")
     parser.add_argument("--seed", type=int, default=None, help="the sample's seed (default random)")
     parser.add_argument("--write", metavar="FILE", help="one CSV row per measured icon")
+    parser.add_argument("--jobs", type=int, default=1, help="processes measuring (default 1)")
     args = parser.parse_args(argv)
     seed = args.seed if args.seed is not None else random.randrange(1 << 32)
     print(f"size {args.size} px; sample {args.sample or 'all'} per set; seed {seed}")
@@ -158,12 +162,14 @@ def main(argv: list[str] | None = None) -> int:
         count = len(loaded[name]) if args.sample == 0 else min(args.sample, len(loaded[name]))
         samples[name] = sorted(rng.sample(loaded[name], count))
     bar = ProgressBar("measuring", sum(map(len, samples.values())), unit="icons")
-    results: dict[str, list[tuple[str, dict]]] = {}
-    for name, *_ in sets:
-        results[name] = []
-        for path in samples[name]:
+    results: dict[str, list[tuple[str, dict]]] = {name: [] for name, *_ in sets}
+    jobs = [(name, path) for name, *_ in sets for path in samples[name]]
+    with multiprocessing.Pool(args.jobs) as pool:
+        work = functools.partial(measure, size=args.size, config=config)
+        measured = pool.imap(work, [path for _, path in jobs], chunksize=4)
+        for (name, path), errors in zip(jobs, measured, strict=True):
             bar.step(name)
-            results[name].append((path, measure(path, args.size, config)))
+            results[name].append((path, errors))
     bar.close()
     report(sets, loaded, refusals, results)
     if args.write:
