@@ -24,6 +24,10 @@ with a' the alpha channel's c' (`composite_layer`): source-over of the layer sca
 opacity. Each of the two roundings is within 1/2 step, so a layer adds at most 1 step to
 each channel's error against the same composite in real numbers (`exact_colour`). Scenes
 without layers never come here: their images are unchanged bit for bit.
+
+Linear light (`Scene.linear_light`, `edgeaa render --linear-light`): the same composites on
+the paints decoded to linear light at 16 bits, the image encoded to sRGB at `finish`
+(docs/scenes.md section 9).
 """
 
 from __future__ import annotations
