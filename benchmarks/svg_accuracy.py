@@ -85,30 +85,48 @@ def resvg_image(svg: str | None = None, path: str | None = None, size=None) -> n
     return np.asarray(Image.open(io.BytesIO(data)).convert("RGBA")).astype(np.int64)
 
 
-def measure(name: str, path: str, size, config: EdgeConfig, totals: dict) -> list[str]:
-    scene = load_svg(path, size=size, lenient=True, warn=lambda message: None)
+def outline_images(scene, config: EdgeConfig):
+    """The scene's outlines' coverage (`coverage_scene`: one plan for every method): the plan,
+    the exact image, the pixels an edge passes through (seg4's), and each method's image."""
     plan = plan_scene(coverage_scene(scene), config)
-    exact = exact_image(plan)
+    seg4 = render_scene(plan_scene(plan.scene, config.with_(mode="seg4")))
     images = {
         "paper": render_scene(plan_scene(plan.scene, config.with_(mode="paper"))).image,
-        "seg4": render_scene(plan_scene(plan.scene, config.with_(mode="seg4"))).image,
+        "seg4": seg4.image,
         "Skia": skia_scene(plan),
         "AGG": agg_scene(plan),
         "resvg": resvg_image(outline_svg(plan))[..., 0],
     }
-    seg4 = render_scene(plan_scene(plan.scene, config.with_(mode="seg4")))
-    edged = edges_per_pixel(seg4) > 0
-    row = [f"{name:24} {scene.width:>4}x{scene.height:<4} {int(edged.sum()):>6}"]
-    for method, image in images.items():
-        err = np.abs(image.astype(np.float64) - exact)[edged]
-        totals.setdefault(method, []).append(err)
-        row.append(f"{err.max():7.2f} {np.sqrt(np.mean(err**2)):5.2f}")
+    return plan, exact_image(plan), edges_per_pixel(seg4) > 0, images
+
+
+def outline_errors(scene, config: EdgeConfig) -> dict[str, np.ndarray]:
+    """Each method's |image - exact| (LSB) over the pixels an edge passes through."""
+    _, exact, edged, images = outline_images(scene, config)
+    return {m: np.abs(image.astype(np.float64) - exact)[edged] for m, image in images.items()}
+
+
+def file_apart(scene, path: str, size, config: EdgeConfig) -> np.ndarray:
+    """Per pixel, the worst channel of |resvg's own render of the file - edgeaa seg4's colour
+    render| (premultiplied RGBA, LSB)."""
     canvas = Canvas(scene, config.full_scale)
-    render_scene(plan_scene(plan.scene, config.with_(mode="seg4")), canvas=canvas)
+    plan = plan_scene(coverage_scene(scene), config.with_(mode="seg4"))
+    render_scene(plan, canvas=canvas)
     theirs = resvg_image(path=path, size=size)
     alpha = theirs[..., 3:4]
     premultiplied = np.concatenate([(theirs[..., :3] * alpha + 127) // 255, alpha], axis=2)
-    apart = np.abs(premultiplied - canvas.image).max(axis=2)
+    return np.abs(premultiplied - canvas.image).max(axis=2)
+
+
+def measure(name: str, path: str, size, config: EdgeConfig, totals: dict) -> list[str]:
+    scene = load_svg(path, size=size, lenient=True, warn=lambda message: None)
+    errors = outline_errors(scene, config)
+    edged = len(next(iter(errors.values())))
+    row = [f"{name:24} {scene.width:>4}x{scene.height:<4} {edged:>6}"]
+    for method, err in errors.items():
+        totals.setdefault(method, []).append(err)
+        row.append(f"{err.max():7.2f} {np.sqrt(np.mean(err**2)):5.2f}")
+    apart = file_apart(scene, path, size, config)
     row.append(f"{apart.max():6d} {np.sqrt(np.mean(apart**2)):5.2f}")
     return [" ".join(row)]
 

@@ -242,6 +242,12 @@ class RenderCommand(Command):
             "by edges per pixel, with --stats the render without skipping and each rule's "
             "saving",
         )
+        parser.add_argument(
+            "--linear-light",
+            action="store_true",
+            help="composite a colour scene in linear light (sRGB decoded before the composite "
+            "and encoded after it; docs/scenes.md section 9) instead of on the sRGB values",
+        )
         parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
         add_config_options(parser)
 
@@ -256,6 +262,13 @@ class RenderCommand(Command):
         warnings: list[str] = []  # what --lenient skipped, said when the render succeeded
         try:
             scene = _load(args, config, warnings)
+            if args.linear_light:
+                if not scene.colour:
+                    raise SceneError(
+                        "--linear-light blends colours: this scene is grey (an SVG file, or "
+                        "colors in a JSON scene, make a colour scene)"
+                    )
+                scene = replace(scene, linear_light=True)
             if args.compare:
                 check_pixels("--compare", scene.width, scene.height, MAX_COMPARE_PIXELS)
             if args.error:
@@ -297,6 +310,7 @@ CONFLICTS = (
     ("compare", "no_skip", "--compare renders with the model in two modes, not one engine"),
     ("stats", "no_skip", "--stats renders both with and without skipping"),
     ("compare", "json", "--compare writes a figure and prints a table of every method"),
+    ("compare", "linear_light", "--compare draws the outlines' coverage, not their colours"),
 )
 
 
@@ -317,6 +331,10 @@ def _check_options(args: argparse.Namespace, config) -> None:
         )
     if args.engine == "verilator":
         require_verilator(PROG)
+    if args.linear_light and args.engine != "model":
+        raise usage_error(
+            PROG, "--linear-light composites in the model: the hardware pipeline blends sRGB values"
+        )
     if args.no_skip and args.engine != "model":
         raise usage_error(
             PROG, "--no-skip applies to the model: the pipeline always skips (docs/hardware.md)"

@@ -195,13 +195,21 @@ def tile_paints(plan: Plan, tile: TileConfig, canvas=None) -> TilePaints:
     """The paints of `plan` from `canvas` (`edgeaa.render.paint.Canvas`, a colour scene's,
     for a tile of 3 channels, or 4 with alpha: a translucent background), or grey (no canvas,
     1 channel): each polygon's red, green, blue and alpha (`PAINT`), the background's
-    channels. A translucent background in 3 channels is refused (SceneError, one line)."""
+    channels. A translucent background in 3 channels is refused (SceneError, one line), and so
+    is a scene with group opacity (layers) or linear-light blending."""
     if (canvas is not None) != (tile.channels > 1):
         raise ValueError(
             f"a {'colour' if canvas else 'grey'} scene in a {tile.channels}-channel tile"
         )
     if canvas is None:
         return TilePaints(None, (None,) * len(plan.polygons))
+    if canvas.layered or canvas.linear:
+        what = "group opacity (polygons composited as a layer)" if canvas.layered else (
+            "linear-light blending")  # fmt: skip
+        raise SceneError(
+            f"the scene has {what}: the hardware pipeline composites sRGB values without "
+            "layers; use --engine model"
+        )
     full, channels, alpha = canvas.full, tile.channels, int(canvas.background[3])
     if channels == 3 and alpha != full:
         raise SceneError(

@@ -806,6 +806,8 @@ def render_scene(
             _draw_polygon(plan, poly, deltas.take(picks), image, skip, counts, canvas)
         else:
             _draw_run(plan, run, deltas.take(picks), size, image, counts)
+    if canvas is not None:
+        canvas.finish()  # the group layers still open
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
     timings["accumulate"] = time.perf_counter() - t

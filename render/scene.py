@@ -66,6 +66,9 @@ class Polygon:
     # A colour instead of the intensity: red, green, blue and alpha in [0, 1] (sRGB values),
     # composited per channel (`edgeaa.render.paint`).
     paint: tuple[float, float, float, float] | None = None
+    # The groups (indices into `Scene.layers`, outermost first) this polygon is drawn inside:
+    # each composited as a layer with its opacity (SVG's group opacity, `edgeaa.render.paint`).
+    layers: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -79,6 +82,10 @@ class Scene:
     # A colour background (red, green, blue, alpha in [0, 1]) instead of `background`; SVG
     # files start transparent.
     background_paint: tuple[float, float, float, float] | None = None
+    # Each layer's opacity in [0, 1] (`Polygon.layers`); a colour scene's.
+    layers: tuple[float, ...] = ()
+    # Colours composited in linear light (sRGB decoded before, encoded after: `paint`).
+    linear_light: bool = False
 
     @property
     def colour(self) -> bool:
@@ -510,6 +517,44 @@ def cubic_pieces(p0: Point, p1: Point, p2: Point, p3: Point, tolerance: float) -
     return max(1, math.ceil(math.sqrt(3 * max(a, b) / (4 * tolerance))))
 
 
+Tangents = tuple["Point | None", "Point | None"]  # a curve's directions at its start and end
+
+
+def _first_direction(*vectors: Point) -> Point | None:
+    """The first non-zero vector (a curve's tangent where its derivative vanishes is the
+    direction to its next distinct control point)."""
+    return next((v for v in vectors if v != (0.0, 0.0) and v != (0, 0)), None)
+
+
+def _minus(p: Point, q: Point) -> Point:
+    return (p[0] - q[0], p[1] - q[1])
+
+
+def quadratic_tangents(p0: Point, p1: Point, p2: Point) -> Tangents:
+    return (
+        _first_direction(_minus(p1, p0), _minus(p2, p0)),
+        _first_direction(_minus(p2, p1), _minus(p2, p0)),
+    )
+
+
+def cubic_tangents(p0: Point, p1: Point, p2: Point, p3: Point) -> Tangents:
+    return (
+        _first_direction(_minus(p1, p0), _minus(p2, p0), _minus(p3, p0)),
+        _first_direction(_minus(p3, p2), _minus(p3, p1), _minus(p3, p0)),
+    )
+
+
+def arc_tangents(u: Point, v: Point, t0: float, sweep: float) -> Tangents:
+    """P'(t) = -u sin t + v cos t at both ends, in the direction of travel."""
+    sign = 1.0 if sweep > 0 else -1.0
+    ends = []
+    for t in (t0, t0 + sweep):
+        d = (sign * (v[0] * math.cos(t) - u[0] * math.sin(t)),
+             sign * (v[1] * math.cos(t) - u[1] * math.sin(t)))  # fmt: skip
+        ends.append(_first_direction(d))
+    return ends[0], ends[1]
+
+
 def flatten_quadratic(p0: Point, p1: Point, p2: Point, tolerance: float) -> list[Point]:
     """Points at t = 1/n .. 1 (the start point excluded)."""
     n = quadratic_pieces(p0, p1, p2, tolerance)
@@ -577,20 +622,28 @@ def flatten_arc(
 
 def arc_points(start: Point, params: list[float], end: Point, tolerance: float, limit: int):
     """SVG's arc from `start` (rx, ry, rotation in degrees, large-arc flag, sweep flag) to
-    `end`, flattened: svgelements converts the endpoints to the centre form with its radius
-    correction (the same reading as an SVG file's), `flatten_arc` cuts it."""
+    `end`, flattened, and its tangents at both ends (None, None for a line): svgelements
+    converts the endpoints to the centre form with its radius correction (the same reading as
+    an SVG file's), `flatten_arc` cuts it."""
     import svgelements as se
 
     rx, ry, rotation, large, sweep = params
     data = f"M {start[0]!r} {start[1]!r} A {rx!r} {ry!r} {rotation!r} {int(large)} {int(sweep)} "
     arc = se.Path(data + f"{end[0]!r} {end[1]!r}").segments()[-1]
     if not isinstance(arc, se.Arc):
-        return [end]
+        return [end], (None, None)
+    return centre_arc(arc, end, tolerance, limit)
+
+
+def centre_arc(arc, end: Point, tolerance: float, limit: int = MAX_POLYGON_EDGES):
+    """svgelements' arc (centre, semi-axis end points, start angle, sweep) flattened, and its
+    tangents (None, None where it is a line)."""
     c, u, v = arc.center, arc.prx, arc.pry
-    return flatten_arc(
-        (c[0], c[1]), (u[0] - c[0], u[1] - c[1]), (v[0] - c[0], v[1] - c[1]),
-        float(arc.get_start_t()), float(arc.sweep), end, tolerance, limit,
-    )  # fmt: skip
+    c, u, v = (c[0], c[1]), (u[0] - c[0], u[1] - c[1]), (v[0] - c[0], v[1] - c[1])
+    t0, sweep = float(arc.get_start_t()), float(arc.sweep)
+    points = flatten_arc(c, u, v, t0, sweep, end, tolerance, limit)
+    line = len(points) == 1 and (math.hypot(*u) == 0 or math.hypot(*v) == 0 or sweep == 0)
+    return points, (None, None) if line else arc_tangents(u, v, t0, sweep)
 
 
 def close_subpath(points: list[Point], contours: list[Contour]) -> None:
@@ -663,6 +716,7 @@ class _PathReader:
         self.contours: list[Contour] = []
         self.points: list[Point] = []
         self.corners: list[bool] = []  # per point: a corner between segments (not in a curve)
+        self.tangents: list[list] = []  # per point: a curve's [end, start] tangent there
         self.subpaths: list = []  # every subpath as written (`stroke.Subpath`), for strokes
         self.count = 0  # points so far, every subpath: the limit counts them
         self.cur = self.start = (0.0, 0.0)
@@ -681,7 +735,7 @@ class _PathReader:
         self.waiting = token not in "Zz"
         if not self.waiting:
             self._end(closed=True)
-            self.points, self.corners, self.cur = [], [], self.start
+            self.points, self.corners, self.tangents, self.cur = [], [], [], self.start
             self.last_cubic = self.last_quad = None
 
     def _check_waiting(self) -> None:
@@ -705,24 +759,28 @@ class _PathReader:
         if upper == "M":
             self._end(closed=False)
             self.cur = self.start = self._point(ox + args[0], oy + args[1])
-            self.points, self.corners = [self.cur], [True]
+            self.points, self.corners, self.tangents = [self.cur], [True], [[None, None]]
             self.name = "l" if relative else "L"  # further pairs are lines
             self.last_cubic = self.last_quad = None
             return
         if not self.points:  # drawing after Z without M starts at the subpath's start
-            self.points, self.corners = [self.cur], [True]
+            self.points, self.corners, self.tangents = [self.cur], [True], [[None, None]]
+        tangents = (None, None)
         if upper in "LHV":
             new = [self._line(upper, relative, args)]
         elif upper in "CS":
-            new = self._cubic(upper, (ox, oy), args)
+            new, tangents = self._cubic(upper, (ox, oy), args)
         elif upper == "A":
-            new = self._arc((ox, oy), args)
+            new, tangents = self._arc((ox, oy), args)
         else:
-            new = self._quadratic(upper, (ox, oy), args)
+            new, tangents = self._quadratic(upper, (ox, oy), args)
         if upper not in "CSQT":
             self.last_cubic = self.last_quad = None
         self.points.extend(new)
         self.corners += [False] * (len(new) - 1) + [True]
+        self.tangents[-1][1] = tangents[0] or self.tangents[-1][1]
+        self.tangents += [[None, None] for _ in new]
+        self.tangents[-1][0] = tangents[1]
         self.cur = new[-1]
 
     def _point(self, x: float, y: float, count: bool = True) -> Point:
@@ -766,7 +824,7 @@ class _PathReader:
         end = self._point(ox + rest[2], oy + rest[3], count=False)  # counted in the pieces
         self._count(cubic_pieces(cur, c1, c2, end, self.tolerance))
         self.last_cubic, self.last_quad = c2, None
-        return flatten_cubic(cur, c1, c2, end, self.tolerance)
+        return flatten_cubic(cur, c1, c2, end, self.tolerance), cubic_tangents(cur, c1, c2, end)
 
     def _quadratic(self, upper: str, origin: Point, args: list[float]) -> list[Point]:
         ox, oy = origin
@@ -779,7 +837,7 @@ class _PathReader:
             end = self._point(ox + args[0], oy + args[1], count=False)
         self._count(quadratic_pieces(cur, c1, end, self.tolerance))
         self.last_cubic, self.last_quad = None, c1
-        return flatten_quadratic(cur, c1, end, self.tolerance)
+        return flatten_quadratic(cur, c1, end, self.tolerance), quadratic_tangents(cur, c1, end)
 
     def _arc(self, origin: Point, args: list[float]) -> list[Point]:
         """An elliptical arc (rx ry rotation large-arc sweep x y), SVG's out-of-range radius
@@ -792,22 +850,17 @@ class _PathReader:
                     f"{self.name_pos}) must be 0 or 1"
                 )
         end = self._point(ox + args[5], oy + args[6], count=False)  # counted in the pieces
-        points = arc_points(self.cur, args[:5], end, self.tolerance, self.limit - self.count)
+        limit = self.limit - self.count
+        points, tangents = arc_points(self.cur, args[:5], end, self.tolerance, limit)
         self._count(len(points))
-        return points
+        return points, tangents
 
     def _end(self, closed: bool) -> None:
         """End a subpath: its contour for filling, and the subpath as written for strokes."""
-        from .stroke import Subpath
+        from .stroke import subpath_of
 
         if self.points:
-            keep = [i for i, p in enumerate(self.points) if i == 0 or p != self.points[i - 1]]
-            points = [self.points[i] for i in keep]
-            corners = [self.corners[i] for i in keep]
-            if closed and len(points) > 1 and points[-1] == points[0]:
-                points.pop()
-                corners.pop()
-            self.subpaths.append(Subpath(tuple(points), closed, tuple(corners)))
+            self.subpaths.append(subpath_of(self.points, self.corners, self.tangents, closed))
         close_subpath(self.points, self.contours)
 
     def finish(self) -> tuple[Contour, ...]:

@@ -18,6 +18,7 @@ array (lengths measured along the chords), each dash an open subpath with its ca
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass
 
 Point = tuple[float, float]
@@ -25,15 +26,40 @@ CAPS = ("butt", "round", "square")
 JOINS = ("miter", "round", "bevel")
 
 
+Tangent = Point | None  # a curve's direction where it ends or starts (None: the chord's)
+
+
 @dataclass(frozen=True)
 class Subpath:
     """Flattened points (no two consecutive equal), whether the subpath is closed, and per
     point whether it is a corner between two path segments (a join applies) rather than a
-    vertex inside a flattened curve (its offset is round)."""
+    vertex inside a flattened curve (its offset is round); and per point the true tangents
+    of the curves that end and start there (empty: the chords' directions everywhere)."""
 
     points: tuple[Point, ...]
     closed: bool
     corners: tuple[bool, ...]
+    tangents: tuple[tuple[Tangent, Tangent], ...] = ()
+
+
+def subpath_of(points, corners, tangents, closed: bool, same=operator.eq) -> Subpath:
+    """A subpath from a path's points as read (with their corners and [end, start] tangents):
+    a point the `same` as the one before merged into it (keeping its end tangent and taking
+    the start tangent that follows), and a closed subpath's closing point dropped (the
+    tangent arriving there moved to the start)."""
+    pts, flags, tans = [], [], []
+    for i, (p, corner, (tin, tout)) in enumerate(zip(points, corners, tangents, strict=True)):
+        if i and same(p, points[i - 1]):
+            tans[-1] = (tans[-1][0], tout or tans[-1][1])
+            continue
+        pts.append(p)
+        flags.append(corner)
+        tans.append((tin, tout))
+    if closed and len(pts) > 1 and same(pts[-1], pts[0]):
+        pts.pop()
+        flags.pop()
+        tans[0] = (tans.pop()[0], tans[0][1])
+    return Subpath(tuple(pts), closed, tuple(flags), tuple(tans))
 
 
 @dataclass(frozen=True)
@@ -86,11 +112,16 @@ def _normal(p: Point, q: Point, half: float) -> Point:
     return (-dy / length * half, dx / length * half)
 
 
+PARALLEL = 1e-9  # rad: directions this close to parallel are (a curve's tangent at a cusp)
+
+
 def _join(a: Point, b: Point, c: Point, join: str, style: StrokeStyle, tol: float):
     """The piece filling the outer side of the turn at b (segments a-b, b-c), or None."""
     half = style.width / 2
     n1, n2 = _normal(a, b, half), _normal(b, c, half)
     cross = (b[0] - a[0]) * (c[1] - b[1]) - (b[1] - a[1]) * (c[0] - b[0])
+    if abs(cross) <= PARALLEL * math.dist(a, b) * math.dist(b, c):
+        cross = 0.0  # parallel: a tangent's float noise must not pick the side of a reversal
     if cross == 0 and n1[0] * n2[0] + n1[1] * n2[1] > 0:
         return None  # straight on: the rectangles meet edge to edge
     sign = -1.0 if cross > 0 else 1.0  # the outer side is away from the turn
@@ -156,37 +187,80 @@ def _dot(p: Point, style: StrokeStyle, tol: float) -> list[tuple[Point, ...]]:
     return []
 
 
+def _convex(points: list[Point]) -> bool:
+    turns = [
+        (q[0] - p[0]) * (r[1] - q[1]) - (q[1] - p[1]) * (r[0] - q[0])
+        for p, q, r in zip(points, points[1:] + points[:1], points[2:] + points[:2], strict=True)
+    ]
+    return not (min(turns) < 0 < max(turns))
+
+
+def _chord(p: Point, q: Point, start: Tangent, end: Tangent, style: StrokeStyle, tol: float):
+    """The pieces of one chord: the chord swept by its normal; where a curve starts at p or
+    ends at q, the normal of its tangent there instead, so the cap or join beyond meets the
+    curve's true offset (a quadrilateral, convex unless the stroke is wider than the curve's
+    radius of curvature; then the rectangle and round wedges from the chord's normal to the
+    tangent's)."""
+    half = style.width / 2
+    chord = _normal(p, q, half)
+    n0 = _normal((0.0, 0.0), start, half) if start else chord
+    n1 = _normal((0.0, 0.0), end, half) if end else chord
+    quad = [
+        (p[0] + n0[0], p[1] + n0[1]),
+        (q[0] + n1[0], q[1] + n1[1]),
+        (q[0] - n1[0], q[1] - n1[1]),
+        (p[0] - n0[0], p[1] - n0[1]),
+    ]
+    if _convex(quad):
+        return [_ccw(quad)]
+    nx, ny = chord
+    pieces = [_ccw([(p[0] + nx, p[1] + ny), (q[0] + nx, q[1] + ny),
+                    (q[0] - nx, q[1] - ny), (p[0] - nx, p[1] - ny)])]  # fmt: skip
+    if start:
+        pieces.append(_join(_minus(p, start), p, q, "round", style, tol))
+    if end:
+        pieces.append(_join(p, q, _plus(q, end), "round", style, tol))
+    return [piece for piece in pieces if piece]
+
+
+def _plus(p: Point, d: Point) -> Point:
+    return (p[0] + d[0], p[1] + d[1])
+
+
+def _minus(p: Point, d: Point) -> Point:
+    return (p[0] - d[0], p[1] - d[1])
+
+
 def stroke_subpath(path: Subpath, style: StrokeStyle, tol: float) -> list[tuple[Point, ...]]:
-    """The pieces of one subpath's stroke (no dashes)."""
+    """The pieces of one subpath's stroke (no dashes). Joins and caps take the directions of
+    the curves' true tangents where they have them (`Subpath.tangents`), else the chords'."""
     pts, corners = list(path.points), list(path.corners)
+    tangents = list(path.tangents) or [(None, None)] * len(pts)
     if len(pts) == 1:
         return _dot(pts[0], style, tol)
     closed = path.closed and len(pts) > 2
     if closed:
         pts.append(pts[0])
         corners.append(corners[0])
+        tangents.append(tangents[0])
     pieces = []
-    for p, q in zip(pts, pts[1:], strict=False):
-        nx, ny = _normal(p, q, style.width / 2)
-        pieces.append(
-            _ccw(
-                [
-                    (p[0] + nx, p[1] + ny),
-                    (q[0] + nx, q[1] + ny),
-                    (q[0] - nx, q[1] - ny),
-                    (p[0] - nx, p[1] - ny),
-                ]
-            )
-        )
+    for k in range(len(pts) - 1):
+        pieces += _chord(pts[k], pts[k + 1], tangents[k][1], tangents[k + 1][0], style, tol)
     inner = range(len(pts) - 1) if closed else range(1, len(pts) - 1)
     for k in inner:
         a, b, c = pts[k - 1] if k else pts[-2], pts[k], pts[k + 1]
+        tin, tout = tangents[k]
         join = style.join if corners[k] else "round"
+        a, c = _minus(b, tin) if tin else a, _plus(b, tout) if tout else c
         piece = _join(a, b, c, join, style, tol)
         if piece:
             pieces.append(piece)
     if not closed:
-        for end, before in ((pts[-1], pts[-2]), (pts[0], pts[1])):
+        last, first = tangents[-1][0], tangents[0][1]
+        for end, before in (
+            (pts[-1], _minus(pts[-1], last) if last else pts[-2]),
+            (pts[0], _plus(pts[0], first) if first else pts[1]),
+        ):
             piece = _cap(end, before, style, tol)
             if piece:
                 pieces.append(piece)
@@ -196,24 +270,30 @@ def stroke_subpath(path: Subpath, style: StrokeStyle, tol: float) -> list[tuple[
 def dash(path: Subpath, dashes: tuple[float, ...], offset: float) -> list[Subpath]:
     """The dashes of a subpath: on for dashes[0], off for dashes[1], ... (an odd list is
     repeated once, as SVG says), starting `offset` into the pattern; lengths along the
-    chords. A dash of length zero is a one-point subpath (a dot with round or square caps)."""
+    chords. A dash of length zero is a one-point subpath (a dot with round or square caps).
+    A cut inside a curve's chord takes the direction between those at the chord's ends (the
+    curve's, `_direction`), so its cap is square to the curve."""
     if len(dashes) % 2:
         dashes = dashes * 2
     pts = list(path.points) + ([path.points[0]] if path.closed else [])
     corners = list(path.corners) + ([path.corners[0]] if path.closed else [])
+    tangents = list(path.tangents) or [(None, None)] * len(path.points)
+    tangents += [tangents[0]] if path.closed else []
     k, left = 0, offset % sum(dashes)
     while left > dashes[k] or 0 < left == dashes[k]:  # a zero-length dash at 0 stays
         left -= dashes[k]
         k = (k + 1) % len(dashes)
     left = dashes[k] - left  # what remains of dash or gap k
-    out, current = [], [(pts[0], False)] if k % 2 == 0 else []
+    out, current = [], [(pts[0], False, tangents[0])] if k % 2 == 0 else []
     for i in range(1, len(pts)):
         p, q = pts[i - 1], pts[i]
         length, done = math.hypot(q[0] - p[0], q[1] - p[1]), 0.0
         while length - done > left:
             done += left
             t = done / length
-            cut = ((p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t), False)
+            along = _blend(_direction(pts, corners, tangents, i - 1, True),
+                           _direction(pts, corners, tangents, i, False), t)  # fmt: skip
+            cut = ((p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t), False, (along, along))
             if k % 2 == 0:
                 out.append([*current, cut])
                 current = []
@@ -223,16 +303,43 @@ def dash(path: Subpath, dashes: tuple[float, ...], offset: float) -> list[Subpat
             left = dashes[k]
         left -= length - done
         if k % 2 == 0:
-            current.append((q, corners[i]))
+            current.append((q, corners[i], tangents[i]))
     if current:
         out.append(current)
     return [_subpath(part) for part in out]
 
 
-def _subpath(marked: list[tuple[Point, bool]]) -> Subpath:
-    """An open subpath from (point, corner) pairs, repeated points dropped."""
-    keep = [m for i, m in enumerate(marked) if i == 0 or m[0] != marked[i - 1][0]]
-    return Subpath(tuple(p for p, _ in keep), False, tuple(c for _, c in keep))
+def _unit(d: Point) -> Point:
+    length = math.hypot(*d)
+    return (d[0] / length, d[1] / length)
+
+
+def _direction(pts, corners, tangents, i: int, leaving: bool) -> Point:
+    """The path's direction at point i on the chord leaving it (or arriving): the curve's
+    tangent where one starts (ends) there, the bisector of the two chords at a vertex inside
+    a flattened curve (the tangent there of a circle's chords), else the chord's."""
+    j = i + 1 if leaving else i - 1
+    chord = _unit(_minus(pts[j], pts[i]) if leaving else _minus(pts[i], pts[j]))
+    given = tangents[i][1 if leaving else 0]
+    if given:
+        return _unit(given)
+    if not corners[i] and 0 < i < len(pts) - 1:
+        a, b = _unit(_minus(pts[i], pts[i - 1])), _unit(_minus(pts[i + 1], pts[i]))
+        if a[0] + b[0] or a[1] + b[1]:
+            return _unit((a[0] + b[0], a[1] + b[1]))
+    return chord
+
+
+def _blend(a: Point, b: Point, t: float) -> Point | None:
+    """The direction a fraction t of the way from direction a to b (None if they cancel)."""
+    d = (a[0] * (1 - t) + b[0] * t, a[1] * (1 - t) + b[1] * t)
+    return d if d != (0.0, 0.0) else None
+
+
+def _subpath(marked: list[tuple[Point, bool, tuple]]) -> Subpath:
+    """An open subpath from (point, corner, tangents) triples, repeated points merged."""
+    points, corners, tangents = zip(*marked, strict=True)
+    return subpath_of(points, corners, tangents, False)
 
 
 def stroke_outline(

@@ -22,7 +22,9 @@ from __future__ import annotations
 
 import io
 import math
+from collections import Counter
 from collections.abc import Callable
+from dataclasses import replace
 
 from .scene import (
     DEFAULT_TOLERANCE,
@@ -32,16 +34,18 @@ from .scene import (
     Polygon,
     Scene,
     SceneError,
+    centre_arc,
     check_pixels,
     close_subpath,
     cubic_pieces,
-    flatten_arc,
+    cubic_tangents,
     flatten_cubic,
     flatten_quadratic,
     quadratic_pieces,
+    quadratic_tangents,
     read_text,
 )
-from .stroke import CAPS, JOINS, StrokeStyle, Subpath, stroke_outline
+from .stroke import CAPS, JOINS, StrokeStyle, Subpath, stroke_outline, subpath_of
 
 Point = tuple[float, float]
 # Elements whose drawing needs more than filled and stroked outlines in flat colours.
@@ -96,11 +100,88 @@ def load_svg(
     budget = [MAX_EDGES]
     said: set[str] = set()
     warn = _once(warn, said)
+    groups = _Groups(se, svg, path)
     for element in svg.elements():
-        polygons += _element(se, element, outer, tolerance, lenient, warn, path, budget)
+        chain = groups.chain(element)
+        if chain is not None:
+            found = _element(se, element, outer, tolerance, lenient, warn, path, budget)
+            polygons += groups.place(found, chain, element)
     name = path.rsplit("/", 1)[-1].rsplit(".", 1)[0]
     transparent = (0.0, 0.0, 0.0, 0.0)  # SVG's canvas
-    return Scene(pixels[0], pixels[1], tuple(polygons), 0, name, tolerance, transparent)
+    polygons, layers = _fold_layers(polygons, groups.opacities)
+    return Scene(pixels[0], pixels[1], tuple(polygons), 0, name, tolerance, transparent, layers)
+
+
+class _Groups:
+    """SVG's `opacity` (not inherited: svgelements copies it down to the children, so each
+    element's own comes from its attributes) on a container (`g`, `use`, `svg`) or on a shape
+    with both a fill and a stroke: the content drawn into a transparent layer, composited with
+    the opacity (`edgeaa.render.paint`). `opacities` holds each layer's."""
+
+    def __init__(self, se, svg, source: str):
+        self.se, self.source = se, source
+        self.parents: dict[int, object] = {}
+        todo = [svg]
+        while todo:  # every container's children (svgelements: a container is a list)
+            node = todo.pop()
+            for child in node:
+                self.parents[id(child)] = node
+                if isinstance(child, list):
+                    todo.append(child)
+        self.ids: dict[int, int] = {}  # id(container) -> its layer
+        self.opacities: list[float] = []
+
+    def own(self, element) -> float:
+        attributes = element.values.get("attributes") or {}
+        where = f"{self.source}: <{_tag(element)}>"
+        return _fraction(attributes.get("opacity"), 1.0, where, "opacity")
+
+    def chain(self, element) -> tuple[int, ...] | None:
+        """The layers of the element's containers with opacity below 1, outermost first;
+        None when one's opacity is 0 (nothing inside is drawn)."""
+        out = []
+        node = self.parents.get(id(element))
+        while node is not None:
+            opacity = self.own(node)
+            if opacity == 0:
+                return None
+            if opacity < 1:
+                out.append(self._layer(node, opacity))
+            node = self.parents.get(id(node))
+        return tuple(out[::-1])
+
+    def _layer(self, key, opacity: float) -> int:
+        if id(key) not in self.ids:
+            self.ids[id(key)] = len(self.opacities)
+            self.opacities.append(opacity)
+        return self.ids[id(key)]
+
+    def place(self, polygons: list[Polygon], chain, element) -> list[Polygon]:
+        """The element's polygons inside its containers' layers; its own opacity on the
+        paints of one, or as a layer of the fill and the stroke together."""
+        opacity = self.own(element) if polygons else 1.0
+        if opacity == 0:
+            return []
+        if opacity < 1:
+            chain += (self._layer(element, opacity),)
+        return [replace(p, layers=chain) for p in polygons]
+
+
+def _fold_layers(polygons: list[Polygon], opacities: list[float]):
+    """A layer holding one polygon is that polygon with its alpha times the opacity (exact:
+    source-over of one paint scaled by the opacity); the others renumbered in order."""
+    counts = Counter(layer for p in polygons for layer in p.layers)
+    keep = sorted(layer for layer, n in counts.items() if n > 1)
+    number = {layer: i for i, layer in enumerate(keep)}
+    out = []
+    for p in polygons:
+        alpha = p.paint[3]
+        for layer in p.layers:
+            if layer not in number:
+                alpha *= opacities[layer]
+        layers = tuple(number[layer] for layer in p.layers if layer in number)
+        out.append(replace(p, paint=(*p.paint[:3], alpha), layers=layers))
+    return out, tuple(opacities[layer] for layer in keep)
 
 
 def _fitted(se, svg, size: tuple[int, int], width: float, height: float):
@@ -181,7 +262,6 @@ def _element(se, element, outer, tol, lenient, warn, source, budget) -> list[Pol
         paths = _subpaths(se, element, tol / stretch, budget[0], where)
     except (ValueError, ArithmeticError) as error:  # the library's on odd numbers
         raise SceneError(f"{where}: {error}") from None
-    opacity = _fraction(values.get("opacity"), 1.0, where, "opacity")
     out = []
     for kind, paint in (("fill", element.fill), ("stroke", element.stroke)):
         raw = str(values.get(kind) or "")
@@ -190,7 +270,7 @@ def _element(se, element, outer, tol, lenient, warn, source, budget) -> list[Pol
             continue
         if paint is None or paint.value is None or paint.alpha == 0:
             continue
-        rgba = (paint.red / 255, paint.green / 255, paint.blue / 255, paint.alpha / 255 * opacity)
+        rgba = (paint.red / 255, paint.green / 255, paint.blue / 255, paint.alpha / 255)
         if kind == "fill":
             contours = _fill_contours(paths, matrix, where)
             rule = "evenodd" if values.get("fill-rule") == "evenodd" else "nonzero"
@@ -237,34 +317,40 @@ def _fraction(value, default: float, where: str, name: str) -> float:
 
 def _subpaths(se, element, tol: float, limit: int, where: str) -> list[Subpath]:
     """The shape's path flattened in its own coordinates: every subpath's points, whether it
-    was closed (Z), which points are corners between segments."""
+    was closed (Z), which points are corners between segments, the curves' tangents."""
     out: list[Subpath] = []
     points: list[Point] = []
     corners: list[bool] = []
+    tangents: list[list] = []  # per point: [end tangent, start tangent] of the curves there
     closed = False
     count = 0
 
     def finish():
         if points:
-            out.append(_clean(points, corners, closed))
+            out.append(subpath_of(points, corners, tangents, closed, _same))
 
     for segment in se.Path(element).segments(transformed=False):
         if isinstance(segment, se.Move):
             finish()
             points, corners, closed = [_xy(segment.end)], [True], False
+            tangents = [[None, None]]
             continue
         if not points:  # a segment after Z without M starts at the subpath's start
             points, corners, closed = [_xy(segment.start)], [True], False
-        new = _flatten(se, segment, tol)
+            tangents = [[None, None]]
+        new, (start, end) = _flatten(se, segment, tol)
         count += len(new)
         if count > limit:
             raise SceneError(f"{where}: its path needs more than the limit of {limit:,} edges")
         points += new
         corners += [False] * (len(new) - 1) + [True]
+        tangents[-1][1] = start or tangents[-1][1]
+        tangents += [[None, None] for _ in new]
+        tangents[-1][0] = end
         if isinstance(segment, se.Close):
             closed = True
             finish()
-            points, corners = [], []
+            points, corners, tangents = [], [], []
     finish()
     return out
 
@@ -273,39 +359,30 @@ def _xy(point) -> Point:
     return (float(point[0]), float(point[1]))
 
 
-def _clean(points: list[Point], corners: list[bool], closed: bool) -> Subpath:
-    """Drop repeated points (and the closing point of a closed subpath): equal within
-    SAME px, the float noise of svgelements' shapes (a circle's last arc ends 2e-15 px off
-    its start)."""
-    keep = [i for i in range(len(points)) if i == 0 or not _same(points[i], points[i - 1])]
-    pts, flags = [points[i] for i in keep], [corners[i] for i in keep]
-    if closed and len(pts) > 1 and _same(pts[-1], pts[0]):
-        pts.pop()
-        flags.pop()
-    return Subpath(tuple(pts), closed, tuple(flags))
-
-
 SAME = 1e-9  # px: points this close are one (far below the 1/256 px finest grid)
 
 
 def _same(p: Point, q: Point) -> bool:
+    """Equal within SAME px, the float noise of svgelements' shapes (a circle's last arc ends
+    2e-15 px off its start)."""
     return abs(p[0] - q[0]) <= SAME and abs(p[1] - q[1]) <= SAME
 
 
-def _flatten(se, segment, tol: float) -> list[Point]:
-    """The segment's points after its start, chords within tol."""
+def _flatten(se, segment, tol: float):
+    """The segment's points after its start, chords within tol; its tangents at both ends
+    (None for a line)."""
     start, end = _xy(segment.start), _xy(segment.end)
     if isinstance(segment, se.CubicBezier):
         c1, c2 = _xy(segment.control1), _xy(segment.control2)
         _check_pieces(cubic_pieces(start, c1, c2, end, tol))
-        return flatten_cubic(start, c1, c2, end, tol)
+        return flatten_cubic(start, c1, c2, end, tol), cubic_tangents(start, c1, c2, end)
     if isinstance(segment, se.QuadraticBezier):
         c = _xy(segment.control)
         _check_pieces(quadratic_pieces(start, c, end, tol))
-        return flatten_quadratic(start, c, end, tol)
+        return flatten_quadratic(start, c, end, tol), quadratic_tangents(start, c, end)
     if isinstance(segment, se.Arc):
-        return _flatten_arc(segment, start, end, tol)
-    return [end]  # Line, Close
+        return centre_arc(segment, end, tol)
+    return [end], (None, None)  # Line, Close
 
 
 def _check_pieces(n: int) -> None:
@@ -314,13 +391,6 @@ def _check_pieces(n: int) -> None:
             f"a curve needs {n:,} pieces, more than the limit of "
             f"{MAX_POLYGON_EDGES:,} edges per polygon"
         )
-
-
-def _flatten_arc(arc, start: Point, end: Point, tol: float) -> list[Point]:
-    """svgelements' arc (centre, semi-axis end points, start angle, sweep) flattened."""
-    c, u, v = _xy(arc.center), _xy(arc.prx), _xy(arc.pry)
-    u, v = (u[0] - c[0], u[1] - c[1]), (v[0] - c[0], v[1] - c[1])
-    return flatten_arc(c, u, v, float(arc.get_start_t()), float(arc.sweep), end, tol)
 
 
 def _transform(matrix, points, where: str) -> tuple[Point, ...]:

@@ -189,3 +189,24 @@ def test_a_self_overlapping_stroke_counts_its_overlaps_once(mode):
     assert abs(ink - area) < 0.01 * area
     rows = error_rows(result, exact_image(plan_scene(scene, config)))
     assert rows[0].max_abs <= (2.0 if mode == "seg4" else 255 / 16), rows[0]
+
+
+@pytest.mark.parametrize("join", JOINS)
+def test_a_cusp_between_curves_reverses_beyond_the_point(join):
+    """A cubic arriving straight up at (3, 11) and an arc leaving straight down: their true
+    tangents are opposite up to float noise (the arc's cos(pi) is 1e-16 off), which must not
+    pick the side of the reversal. Round: the half disc beyond the cusp (above y = 11), area
+    pi r^2 / 2 less its chords' lenses (<= tol * pi r); miter and bevel: nothing there (SVG's
+    miter at a full reversal passes every limit and bevels to nothing). Tabler's `pepper`
+    icon lost that half disc (255 LSB against resvg) when the side was picked by the noise."""
+    from shapely.geometry import box
+
+    from edgeaa.render.scene import read_path
+
+    path = read_path("M3 15 C3 14 3 12 3 11 A8 8 0 1 0 19 11", TOL)
+    pieces = stroke_outline(path.subpaths, StrokeStyle(2.0, "butt", join), TOL, 10**6)
+    above = union(pieces).intersection(box(-10, -10, 30, 11)).area
+    if join == "round":
+        assert math.pi / 2 - TOL * math.pi <= above <= math.pi / 2
+    else:
+        assert above <= 1e-9
