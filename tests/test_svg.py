@@ -144,7 +144,8 @@ def test_arcs_are_flattened_within_the_tolerance(rx, ry, turn, large, sweep, end
     for tangent, t, sign in ((tangents[0], t0, 1), (tangents[1], t0 + swept, -1)):
         step = np.subtract(arc.point_at_t(t + sign * swept * 1e-7), arc.point_at_t(t)) * sign
         unit = np.divide(tangent, math.hypot(*tangent))
-        assert np.dot(unit, step) > 0 and abs(np.cross(unit, step)) <= 1e-4 * math.hypot(*step)
+        cross = unit[0] * step[1] - unit[1] * step[0]
+        assert np.dot(unit, step) > 0 and abs(cross) <= 1e-4 * math.hypot(*step)
     samples = [arc.point_at_t(t0 + swept * k / 400) for k in range(401)]
     speed = math.hypot(arc.rx, arc.ry)  # |P'| of the (radius-corrected) ellipse, at most
     for p in points[1:-1]:  # on the ellipse: near a sample (half their spacing)
