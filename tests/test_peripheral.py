@@ -22,9 +22,18 @@ from edgeaa.hdl.peripheral import (
 )
 from edgeaa.hdl.pipeline import command_layout
 from edgeaa.model import EdgeConfig
+from edgeaa.model.framebuffer import (
+    FORMATS,
+    default_format,
+    format_codes,
+    framebuffer_bytes,
+    scale_channel,
+    scale_steps,
+)
 from edgeaa.model.pipeline import Command, command_ops
 from edgeaa.model.tile import TileConfig
 from edgeaa.render import parse_scene, plan_scene, render_scene
+from edgeaa.render.paint import Canvas, coverage_scene
 from edgeaa.render.pipeline import scene_commands
 from edgeaa.sim.simulators.wishbone import Framebuffer, run_peripheral
 
@@ -107,10 +116,11 @@ def test_bad_commands_are_counted_in_the_errors_register():
     assert np.array_equal(np.array(fb.image(run.memory)), np.zeros((4, 8)))
 
 
-def test_the_peripheral_verilog_is_lint_clean():
+@pytest.mark.parametrize("channels", [1, 3])
+def test_the_peripheral_verilog_is_lint_clean(channels):
     from edgeaa.sim.simulators.verilator import lint
 
-    source = peripheral_verilog(TileConfig(EdgeConfig(7, 2, 4), 8, 4))
+    source = peripheral_verilog(TileConfig(EdgeConfig(7, 2, 4), 8, 4, channels=channels))
     header = re.search(r"module edgeaa_peripheral\((.*?)\);", source, re.S).group(1)
     names = ("cyc", "stb", "we", "adr", "dat_w", "sel", "dat_r", "ack", "stall", "err")
     want = {"clk", "rst", "irq"} | {f"{bus}__{n}" for bus in ("bus", "fb") for n in names}
@@ -161,7 +171,7 @@ def test_edgeaa_verilog_top_peripheral(tmp_path, capsys):
     capsys.readouterr()
     assert main(["verilog", "--top", "peripheral", "--intensity-bits", "10"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "8-bit grey" in err and "Traceback" not in err
+    assert err.count("\n") == 1 and "8-bit channels" in err and "Traceback" not in err
     assert main(["verilog", "--top", "peripheral", "--core", "deltas"]) == 2
     assert "--top peripheral has its own" in capsys.readouterr().err
 
@@ -178,3 +188,111 @@ def test_the_framebuffer_writer_keeps_the_wishbone_initiator_rules(fault):
         assert result.status == "FAIL" and "stream: a held request stays valid" in " ".join(
             result.failed
         )
+
+
+def test_a_channels_rounding_to_565_is_exact_and_needs_no_divider():
+    """`scale_channel` is round(c (2**n - 1) / (2**I - 1)) half up for every c at I = 1 to
+    8 (by fractions), and `scale_steps` (the hardware's, no divider) equals it for every c
+    at every I from n to 16."""
+    from fractions import Fraction
+
+    for n in (5, 6):
+        for bits in range(1, 9):
+            full = (1 << bits) - 1
+            for c in range(full + 1):
+                want = int(Fraction(c * ((1 << n) - 1), full) + Fraction(1, 2))
+                assert scale_channel(c, bits, n) == want, (c, bits, n)
+        for bits in range(n, 17):
+            c = np.arange(1 << bits, dtype=np.int64)
+            assert np.array_equal(scale_steps(c, bits, n), scale_channel(c, bits, n)), bits
+    assert scale_channel(128, 8, 6) == 32 and scale_channel(9, 4, 5) == 19
+    with pytest.raises(ValueError, match="narrows"):
+        scale_steps(3, 4, 5)
+
+
+def test_framebuffer_bytes_lay_out_each_format():
+    pixel = np.array([[[255, 128, 0, 200]]])  # red 255, green 128, blue 0, alpha 200
+    rgb = pixel[..., :3]
+    assert framebuffer_bytes(rgb, FORMATS["rgb565"], 8).tolist() == [[[0x00, 0xFC]]]
+    assert framebuffer_bytes(rgb, FORMATS["rgb888"], 8).tolist() == [[[255, 128, 0]]]
+    assert framebuffer_bytes(rgb, FORMATS["rgba8888"], 8).tolist() == [[[255, 128, 0, 255]]]
+    assert framebuffer_bytes(pixel, FORMATS["rgba8888"], 8).tolist() == [[[255, 128, 0, 200]]]
+    grey = np.array([[7]])
+    assert framebuffer_bytes(grey, FORMATS["grey8"], 4).tolist() == [[[7]]]
+    assert framebuffer_bytes(grey, FORMATS["rgb888"], 4).tolist() == [[[7, 7, 7]]]
+    assert framebuffer_bytes(grey, FORMATS["rgb565"], 4).tolist() == [[[0xAE, 0x73]]]
+    with pytest.raises(ValueError, match="no grey8"):
+        framebuffer_bytes(rgb, FORMATS["grey8"], 8)
+
+
+COLOURS = ["#ff800099", [0.1, 0.9, 0.5, 0.3], "#0000ff", "#c0c0c001"]  # with alpha
+
+
+def _colour_plan(config: EdgeConfig, background: str):
+    polygons = [
+        {**{k: v for k, v in p.items() if k != "intensity"}, "color": c}
+        for p, c in zip(TINY_SCENE["polygons"], COLOURS, strict=False)
+    ]
+    size = {k: TINY_SCENE[k] for k in ("width", "height")}
+    scene = parse_scene({**size, "background_color": background, "polygons": polygons})
+    return plan_scene(coverage_scene(scene), config), Canvas(scene, config.full_scale)
+
+
+@pytest.mark.parametrize(
+    "channels, fmt, bits, seed, idle, stall, latency",
+    [
+        (3, "rgb565", 8, 11, 0.3, 0.5, 3),
+        (3, "rgb888", 8, 23, 0.1, 0.8, 6),
+        (4, "rgba8888", 8, 5, 0.2, 0.6, 4),
+        (4, "rgb565", 4, 7, 0.2, 0.5, 2),  # fields wider than the channels: the table
+        (1, "rgb565", 8, 13, 0.1, 0.5, 3),  # grey in a colour format
+    ],
+)
+def test_a_colour_scene_lands_in_the_framebuffer_in_its_format_bit_for_bit(
+    channels, fmt, bits, seed, idle, stall, latency
+):
+    """A scene written as a CPU would, the framebuffer in `fmt` at an odd base and stride (so
+    pixels of 2 or 3 bytes cross words): its bytes are the model's image converted
+    (`framebuffer_bytes`), every byte written once, none outside, under random idle clocks,
+    stalls and ack latencies."""
+    config = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4) if bits == 4 else DEFAULT
+    tile = TileConfig(config, 16, 8, channels=channels)
+    if channels == 1:
+        plan, canvas = plan_scene(parse_scene(TINY_SCENE), config), None
+        want = render_scene(plan, engine="model").image
+    else:
+        plan, canvas = _colour_plan(config, "#203040" if channels == 3 else "#20304080")
+        want = render_scene(plan, canvas=canvas).image[..., :channels]
+    commands = scene_commands(plan, tile, canvas)
+    ox, oy = plan.offset
+    width, height, fmt = plan.scene.width, plan.scene.height, FORMATS[fmt]
+    stride = width * fmt.bytes + 5
+    fb = Framebuffer(0x1000 + 3, stride, width, height, x0=ox, y0=oy, format=fmt)
+    run = run_peripheral(tile, commands, fb, seed=seed, idle=idle, stall=stall, latency=latency)
+    tag = f"seed {seed}"
+    image = fb.image(run.memory)
+    expected = framebuffer_bytes(want, fmt, bits)
+    assert np.array_equal(image, expected), f"{tag}\n{image}\nmodel:\n{expected}"
+    inside = {a for y in range(height) for x in range(width) for a in fb.addresses(y, x)}
+    assert set(run.writes) == inside, f"{tag}: a write outside the framebuffer"
+    assert set(run.writes.values()) == {1}, f"{tag}: a byte written twice"
+    assert len({tuple(p) for p in expected.reshape(-1, fmt.bytes).tolist()}) > 4, tag
+    assert run.registers["fb_format"] & 3 == fmt.code and run.aborted == 0, tag
+
+
+@pytest.mark.parametrize("channels", [1, 3, 4])
+def test_the_format_register_keeps_only_formats_the_build_writes(channels):
+    """Writing grey8 into a colour peripheral's ``fb_format`` is ignored (it keeps its reset
+    format, and writes in it); bits 7:4 read the codes it writes."""
+    tile = TileConfig(SMALL, 8, 4, channels=channels)
+    commands, grey = _empty_tiles(tile, 1, 1) if channels == 1 else ([], None)
+    if channels > 1:
+        commands = [Command.tile(0, 0, 0, paint=3 | 5 << 4 | 9 << 8 | 15 << 12), Command.flush()]
+    asked = Framebuffer(0, 32, 8, 4, format=FORMATS["grey8"])
+    run = run_peripheral(tile, commands, asked, seed=1, stall=0.3, latency=2)
+    kept = default_format(channels)
+    mask = sum(1 << f.code for f in format_codes(channels))
+    assert run.registers["fb_format"] == kept.code | mask << 4
+    got = Framebuffer(0, 32, 8, 4, format=kept).image(run.memory)
+    want = grey if channels == 1 else np.tile([3, 5, 9, 15][:channels], (4, 8, 1))
+    assert np.array_equal(got, framebuffer_bytes(want, kept, 4).reshape(got.shape))

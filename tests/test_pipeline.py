@@ -288,7 +288,7 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
             assert re.search(r"input \[15:0\] commands__payload__paint", text)
     capsys.readouterr()
     for argv, message in [
-        (["--top", "peripheral", "--channels", "3"], "--top peripheral writes grey pixels"),
+        (["--top", "peripheral", "--intensity-bits", "9"], "--top peripheral writes 8-bit"),
         (["--channels", "3"], "--channels sets the polygon pipeline's pixel"),
         (["--top", "pipeline", "--channels", "2"], "invalid choice: 2 (choose from 1, 3, 4)"),
     ]:
