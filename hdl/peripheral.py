@@ -177,10 +177,13 @@ class FramebufferWriter(wiring.Component):
         s1_inside, s1_last = Signal(), Signal()
         s2_valid, draining = Signal(), Signal()
         s2_hi_sel, s2_hi_dat = Signal(4), Signal(WORD_BITS)
+        sel = Signal(4, init=1)  # a run of lanes from reset on (the formal proof's invariant)
+        self.hi_sel = s2_hi_sel  # observed by the formal harness
         outstanding = Signal(range(MAX_OUTSTANDING + 1))
         self.outstanding = outstanding  # observed by the formal harness
         issued = Signal()
         m.d.comb += [
+            bus.sel.eq(sel),
             bus.cyc.eq(s2_valid | (outstanding != 0)),
             bus.stb.eq(s2_valid & (outstanding != MAX_OUTSTANDING)),
             bus.we.eq(1),
@@ -203,7 +206,7 @@ class FramebufferWriter(wiring.Component):
             m.d.sync += [
                 s2_valid.eq(1),
                 bus.adr.eq(byte[2:]),
-                bus.sel.eq(wide_sel[:4]),
+                sel.eq(wide_sel[:4]),
                 bus.dat_w.eq(wide_dat[:WORD_BITS]),
                 s2_hi_sel.eq(wide_sel[4:]),
                 s2_hi_dat.eq(wide_dat[WORD_BITS:]),
@@ -211,7 +214,7 @@ class FramebufferWriter(wiring.Component):
         with m.Elif(issued & (s2_hi_sel != 0)):  # the pixel's bytes in the next word
             m.d.sync += [
                 bus.adr.eq(bus.adr + 1),
-                bus.sel.eq(s2_hi_sel),
+                sel.eq(s2_hi_sel),
                 bus.dat_w.eq(s2_hi_dat),
                 s2_hi_sel.eq(0),
             ]

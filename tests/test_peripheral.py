@@ -177,11 +177,12 @@ def test_edgeaa_verilog_top_peripheral(tmp_path, capsys):
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("fault", [None, "drop_stb"])
-def test_the_framebuffer_writer_keeps_the_wishbone_initiator_rules(fault):
+@pytest.mark.parametrize("channels, fault", [(1, None), (3, None), (3, "drop_stb")])
+def test_the_framebuffer_writer_keeps_the_wishbone_initiator_rules(channels, fault):
+    """In every format (``fb_format`` free), a pixel's two writes across a word included."""
     from edgeaa.sim.verification.formal.wishbone import run_writer_proof
 
-    result = run_writer_proof(fault=fault, timeout=300)
+    result = run_writer_proof(fault=fault, channels=channels, timeout=300)
     if fault is None:
         assert result.status == "PASS", result.log_tail
     else:  # the check can fail: a request dropped under stall is caught

@@ -7,7 +7,10 @@ or err, not both) only requests it has taken:
 * ``stb`` only within ``cyc``; ``cyc`` stays high while a taken request is unanswered;
 * a request not taken (``stb & stall``) is offered again in the next clock with the same
   ``adr``, ``sel``, ``dat_w`` and ``we`` (unless the reset comes between);
-* at most `MAX_OUTSTANDING` requests unanswered; ``sel`` one byte lane, ``we`` high.
+* at most `MAX_OUTSTANDING` requests unanswered; ``we`` high; ``sel`` a run of byte lanes
+  (a pixel of 1 to 4 bytes, or its part in one word, in any ``fb_format``: free too).
+
+The proof runs on a grey and a 3-channel writer (`run_writer_proof`'s ``channels``).
 
 Fault ``drop_stb`` (the harness sees ``stb`` low in the clock after a stall) shows the hold
 check can fail. `run_writer_proof` runs it (`tests/test_peripheral.py`, marked formal; about 1 s).
@@ -15,19 +18,22 @@ check can fail. `run_writer_proof` runs it (`tests/test_peripheral.py`, marked f
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from amaranth.asserts import AnySeq
 from amaranth.hdl import Assert, Assume, Cat, ClockDomain, Elaboratable, Module, Signal, Value
 
 from ....hdl.peripheral import MAX_OUTSTANDING, FramebufferWriter
 from ....model.config import EdgeConfig
 from ....model.tile import TileConfig
-from .run import FormalResult, find_tools, harness_rtlil, run_harness, sby_script
+from .run import FormalResult, find_tools, run_harness, sby_script
 from .stream import held, hold_rule
 
 __all__ = ["WRITER_FAULTS", "WriterHarness", "run_writer_proof"]
 
 WRITER_FAULTS = ("drop_stb",)
 SMALL = TileConfig(EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4), 8, 4)
+LANE_RUNS = tuple((1 << n) - 1 << k for n in range(1, 5) for k in range(5 - n))
 
 
 class WriterHarness(Elaboratable):
@@ -49,7 +55,7 @@ class WriterHarness(Elaboratable):
         m.d.comb += self.domain.rst.eq(AnySeq(1))
         bus = dut.bus
         free = [dut.pixels.valid, dut.pixels.payload, dut.origins.valid, dut.origins.payload]
-        free += [dut.fb_base, dut.fb_stride, dut.fb_size, dut.fb_origin]
+        free += [dut.fb_base, dut.fb_stride, dut.fb_size, dut.fb_origin, dut.fb_format]
         free += [bus.stall, bus.ack, bus.err, bus.dat_r]
         for port in map(Value.cast, free):
             m.d.comb += port.eq(AnySeq(len(port)))
@@ -73,8 +79,10 @@ class WriterHarness(Elaboratable):
         check(unanswered <= MAX_OUTSTANDING, "wishbone: at most MAX_OUTSTANDING in flight")
         check(unanswered == dut.outstanding, "writer: its count of writes in flight")
         check(~bus.stb | bus.we, "wishbone: the writer only writes")
-        one_hot = Cat(*(bus.sel == 1 << k for k in range(4))).any()
-        check(one_hot, "wishbone: one byte lane a pixel")
+        run = Cat(*(bus.sel == lanes for lanes in LANE_RUNS)).any()
+        check(run, "wishbone: sel a run of byte lanes")
+        rest = Cat(*(dut.hi_sel == lanes for lanes in (0, 1, 3, 7))).any()
+        check(rest, "writer: a pixel's part in the next word starts at lane 0")
         hold_rule(m, stb, Cat(bus.adr, bus.sel, bus.dat_w, bus.we), was_held, check, "request")
         return m
 
@@ -87,18 +95,15 @@ class _Request:
 
 
 def run_writer_proof(
-    *, fault: str | None = None, depth: int = 4, timeout: float | None = None
+    *,
+    fault: str | None = None,
+    channels: int = 1,
+    depth: int = 4,
+    timeout: float | None = None,
 ) -> FormalResult:
-    """k-induction of `WriterHarness` (``depth`` clocks) with SymbiYosys."""
-    harness = WriterHarness(fault=fault)
-    name = "writer_wishbone" + (f"+{fault}" if fault else "")
+    """k-induction of `WriterHarness` (``depth`` clocks; a writer of `channels`) with
+    SymbiYosys."""
+    harness = WriterHarness(replace(SMALL, channels=channels), fault=fault)
     script = sby_script("prove", depth)
-    return run_harness(
-        name,
-        harness_rtlil(harness),
-        script,
-        find_tools(),
-        mode="prove",
-        depth=depth,
-        timeout=timeout,
-    )
+    proof = f"writer_wishbone_c{channels}"
+    return run_harness(proof, fault, harness, script, find_tools(), "prove", depth, timeout=timeout)
