@@ -22,7 +22,6 @@ from amaranth.lib.wiring import In, Out
 
 from ..model.framebuffer import (
     FORMAT_BITS,
-    FORMATS,
     default_format,
     format_codes,
     scale_channel,
@@ -129,14 +128,14 @@ def info_word(tile: TileConfig) -> int:
 
 class FramebufferWriter(wiring.Component):
     """Each tile's pixels (``pixels``, raster order of one flush, ``last`` on the last) to
-    ``base + Y * stride + X * bytes``, in the format ``fb_format`` (a code of
-    `edgeaa.model.framebuffer.FORMATS`; its bytes per pixel), where (X, Y) is the pixel's
-    engine position (the tile's origin from ``origins``, one per tile, plus its x, y) less
-    ``fb_origin``; pixels outside ``fb_size`` are not written. A pixel is one write with
-    its byte lanes in ``sel``, or two when its bytes cross a 32-bit word (the second to the
-    next word). ``done`` pulses when every write of a tile is acknowledged (the next tile's
-    writes start after it); ``bus_error`` pulses on an ``err`` (the write counts as
-    answered)."""
+    ``base + Y * stride + X * bytes`` in the format ``fb_format`` (a code of
+    `edgeaa.model.framebuffer.format_codes`, else the default format; ``bytes`` its bytes per
+    pixel), where (X, Y) is the pixel's engine position (the tile's origin from ``origins``,
+    one per tile, plus its x, y) less ``fb_origin``; pixels outside ``fb_size`` are not
+    written. A pixel is one write with its byte lanes in ``sel``, or two when its bytes cross
+    a 32-bit word (the second to the next word). ``done`` pulses when every write of a tile
+    is acknowledged (the next tile's writes start after it); ``bus_error`` pulses on an
+    ``err`` (the write counts as answered)."""
 
     def __init__(self, tile: TileConfig):
         if tile.config.intensity_bits > FB_PIXEL_BITS:
@@ -247,27 +246,29 @@ class FramebufferWriter(wiring.Component):
         tile = self._tile
         bits = tile.config.intensity_bits
         channels = [value[k * bits : (k + 1) * bits] for k in range(tile.channels)]
-        rgb = channels[:3] if tile.channels > 1 else channels * 3
-        alpha = channels[3] if tile.channels == 4 else Const((1 << bits) - 1, bits)
-        r5, g6, b5 = (_scaled(m, c, bits, n) for c, n in zip(rgb, (5, 6, 5), strict=True))
         packed, lanes, step = Signal(WORD_BITS), Signal(4), Signal(FB_BITS + 2)
         byte = Signal(WORD_BITS)
 
         def byte8(c):
             return Cat(c, Const(0, FB_PIXEL_BITS - bits))
 
-        with m.Switch(self.fb_format):
-            for fmt in FORMATS.values():
-                with m.Case(fmt.code):
-                    if fmt.name == "grey8":
-                        fields = [byte8(rgb[0])]
-                    elif fmt.name == "rgb565":
-                        fields = [Cat(b5, g6, r5)]
-                    else:
-                        fields = [byte8(c) for c in rgb]
-                        fields += [byte8(alpha)] * (fmt.name == "rgba8888")
+        def fields(fmt):
+            if fmt.name == "grey8":
+                return [byte8(channels[0])]
+            if fmt.name == "rgb565":
+                widths = zip(channels[:3], (5, 6, 5), strict=True)
+                r5, g6, b5 = (_scaled(m, c, bits, n) for c, n in widths)
+                return [Cat(b5, g6, r5)]
+            alpha = channels[3] if tile.channels == 4 else Const((1 << bits) - 1, bits)
+            return [byte8(c) for c in channels[:3]] + [byte8(alpha)] * (fmt.name == "rgba8888")
+
+        default = default_format(tile.channels)
+        others = [f for f in format_codes(tile.channels) if f != default]
+        with m.Switch(self.fb_format):  # a code this pipeline does not write: its default
+            for fmt in [*others, default]:
+                with m.Case(fmt.code) if fmt != default else m.Default():
                     m.d.comb += [
-                        packed.eq(Cat(*fields)),
+                        packed.eq(Cat(*fields(fmt))),
                         lanes.eq((1 << fmt.bytes) - 1),
                         step.eq(x * fmt.bytes),
                     ]

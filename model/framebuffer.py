@@ -2,15 +2,15 @@
 (`edgeaa.hdl.peripheral.FramebufferWriter`, its ``fb_format`` register) lays a pixel of
 I-bit channels out as bytes in memory (docs/hardware.md, "Integrating edgeaa").
 
-* ``grey8``: one byte, the grey value (1 channel only);
+* ``grey8``: one byte, the grey value (the one format of a grey pipeline);
 * ``rgb565``: a 16-bit little-endian word, red 15:11, green 10:5, blue 4:0, each channel
   rounded from I bits to 5 or 6 (`scale_channel`);
 * ``rgb888``: three bytes, red, green, blue in memory order;
 * ``rgba8888``: four bytes, red, green, blue, alpha (premultiplied, as the pixel is; full
   scale for an opaque 3-channel or grey pixel).
 
-The 8-bit fields hold the channel's value as it is (I <= 8 bits: a framebuffer byte). A grey
-pixel in a colour format is its value in red, green and blue.
+The others are a colour pipeline's (3 or 4 channels). The 8-bit fields hold the channel's
+value as it is (I <= 8 bits: a framebuffer byte).
 """
 
 from __future__ import annotations
@@ -51,12 +51,14 @@ FORMAT_BITS = 2  # the register's format field
 
 
 def format_codes(channels: int) -> tuple[PixelFormat, ...]:
-    """The formats a pipeline of `channels` writes (grey8 only from grey: no luminance)."""
-    return tuple(f for f in FORMATS.values() if channels == 1 or f.name != "grey8")
+    """The formats a pipeline of `channels` writes: grey8 from grey (the writer stays the
+    grey one), the colour formats from colour (no luminance)."""
+    return tuple(f for f in FORMATS.values() if (channels == 1) == (f.name == "grey8"))
 
 
 def default_format(channels: int) -> PixelFormat:
-    """The format after reset: grey8 for grey, rgb888 for 3 channels, rgba8888 for 4."""
+    """The format after reset (and for a code the pipeline does not write): grey8 for grey,
+    rgb888 for 3 channels, rgba8888 for 4."""
     return FORMATS[{1: "grey8", 3: "rgb888", 4: "rgba8888"}[channels]]
 
 
@@ -85,11 +87,11 @@ def framebuffer_bytes(image: np.ndarray, fmt: PixelFormat, bits: int) -> np.ndar
         raise ValueError(f"a {channels}-channel image has no {fmt.name} pixels")
     if bits > 8:
         raise ValueError(f"the framebuffer's bytes hold at most 8 intensity bits, not {bits}")
-    rgb = [image] * 3 if channels == 1 else [image[..., k] for k in range(3)]
-    alpha = image[..., 3] if channels == 4 else np.full(image.shape[:2], (1 << bits) - 1)
     if fmt.name == "grey8":
-        planes = [image]
-    elif fmt.name == "rgb565":
+        return image[..., None]
+    rgb = [image[..., k] for k in range(3)]
+    alpha = image[..., 3] if channels == 4 else np.full(image.shape[:2], (1 << bits) - 1)
+    if fmt.name == "rgb565":
         r, g, b = (scale_channel(c, bits, n) for c, n in zip(rgb, (5, 6, 5), strict=True))
         word = r << 11 | g << 5 | b
         planes = [word & 0xFF, word >> 8]

@@ -168,6 +168,25 @@ def test_edgeaa_verilog_top_peripheral(tmp_path, capsys):
     small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
     assert main(["verilog", "--top", "peripheral", "--tile", "8x4", *small, "-o", str(out)]) == 0
     assert "module edgeaa_peripheral" in out.read_text() and out.with_suffix(".vlt").exists()
+    colour = tmp_path / "c.v"
+    assert (
+        main(
+            [
+                "verilog",
+                "--top",
+                "peripheral",
+                "--tile",
+                "8x4",
+                *small,
+                "--channels",
+                "3",
+                "-o",
+                str(colour),
+            ]
+        )
+        == 0
+    )
+    assert "tile 8x4, 3 channels" in colour.read_text() and "fb_format" in colour.read_text()
     capsys.readouterr()
     assert main(["verilog", "--top", "peripheral", "--intensity-bits", "10"]) == 2
     err = capsys.readouterr().err
@@ -218,12 +237,13 @@ def test_framebuffer_bytes_lay_out_each_format():
     assert framebuffer_bytes(rgb, FORMATS["rgb888"], 8).tolist() == [[[255, 128, 0]]]
     assert framebuffer_bytes(rgb, FORMATS["rgba8888"], 8).tolist() == [[[255, 128, 0, 255]]]
     assert framebuffer_bytes(pixel, FORMATS["rgba8888"], 8).tolist() == [[[255, 128, 0, 200]]]
-    grey = np.array([[7]])
-    assert framebuffer_bytes(grey, FORMATS["grey8"], 4).tolist() == [[[7]]]
-    assert framebuffer_bytes(grey, FORMATS["rgb888"], 4).tolist() == [[[7, 7, 7]]]
-    assert framebuffer_bytes(grey, FORMATS["rgb565"], 4).tolist() == [[[0xAE, 0x73]]]
+    small = np.array([[[7, 15, 0]]])  # 4-bit channels: 565 widens them (14, 63, 0)
+    assert framebuffer_bytes(small, FORMATS["rgb565"], 4).tolist() == [[[0xE0, 0x77]]]
+    assert framebuffer_bytes(np.array([[7]]), FORMATS["grey8"], 4).tolist() == [[[7]]]
     with pytest.raises(ValueError, match="no grey8"):
         framebuffer_bytes(rgb, FORMATS["grey8"], 8)
+    with pytest.raises(ValueError, match="no rgb565"):
+        framebuffer_bytes(np.array([[7]]), FORMATS["rgb565"], 8)
 
 
 COLOURS = ["#ff800099", [0.1, 0.9, 0.5, 0.3], "#0000ff", "#c0c0c001"]  # with alpha
@@ -246,7 +266,7 @@ def _colour_plan(config: EdgeConfig, background: str):
         (3, "rgb888", 8, 23, 0.1, 0.8, 6),
         (4, "rgba8888", 8, 5, 0.2, 0.6, 4),
         (4, "rgb565", 4, 7, 0.2, 0.5, 2),  # fields wider than the channels: the table
-        (1, "rgb565", 8, 13, 0.1, 0.5, 3),  # grey in a colour format
+        (3, "rgba8888", 8, 13, 0.1, 0.5, 3),  # opaque: alpha full scale
     ],
 )
 def test_a_colour_scene_lands_in_the_framebuffer_in_its_format_bit_for_bit(
@@ -258,12 +278,8 @@ def test_a_colour_scene_lands_in_the_framebuffer_in_its_format_bit_for_bit(
     stalls and ack latencies."""
     config = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4) if bits == 4 else DEFAULT
     tile = TileConfig(config, 16, 8, channels=channels)
-    if channels == 1:
-        plan, canvas = plan_scene(parse_scene(TINY_SCENE), config), None
-        want = render_scene(plan, engine="model").image
-    else:
-        plan, canvas = _colour_plan(config, "#203040" if channels == 3 else "#20304080")
-        want = render_scene(plan, canvas=canvas).image[..., :channels]
+    plan, canvas = _colour_plan(config, "#203040" if channels == 3 else "#20304080")
+    want = render_scene(plan, canvas=canvas).image[..., :channels]
     commands = scene_commands(plan, tile, canvas)
     ox, oy = plan.offset
     width, height, fmt = plan.scene.width, plan.scene.height, FORMATS[fmt]
@@ -283,13 +299,15 @@ def test_a_colour_scene_lands_in_the_framebuffer_in_its_format_bit_for_bit(
 
 @pytest.mark.parametrize("channels", [1, 3, 4])
 def test_the_format_register_keeps_only_formats_the_build_writes(channels):
-    """Writing grey8 into a colour peripheral's ``fb_format`` is ignored (it keeps its reset
-    format, and writes in it); bits 7:4 read the codes it writes."""
+    """Writing a format the build does not write into ``fb_format`` (grey8 into a colour
+    peripheral, RGB565 into a grey one) is ignored: it keeps its reset format and writes in
+    it; bits 7:4 read the codes it writes."""
     tile = TileConfig(SMALL, 8, 4, channels=channels)
     commands, grey = _empty_tiles(tile, 1, 1) if channels == 1 else ([], None)
     if channels > 1:
         commands = [Command.tile(0, 0, 0, paint=3 | 5 << 4 | 9 << 8 | 15 << 12), Command.flush()]
-    asked = Framebuffer(0, 32, 8, 4, format=FORMATS["grey8"])
+    other = FORMATS["rgb565" if channels == 1 else "grey8"]
+    asked = Framebuffer(0, 32, 8, 4, format=other)
     run = run_peripheral(tile, commands, asked, seed=1, stall=0.3, latency=2)
     kept = default_format(channels)
     mask = sum(1 << f.code for f in format_codes(channels))
