@@ -1,5 +1,7 @@
 # amaranth: UnusedElaboratable=no
-"""The Wishbone B4 pipelined initiator rules of the framebuffer writer
+"""The Wishbone B4 pipelined rules of the peripheral's two buses.
+
+**The framebuffer writer** (initiator rules)
 (`edgeaa.hdl.peripheral.FramebufferWriter`), proven by k-induction for any pixels, tile
 origins, framebuffer registers, reset, and any target that stalls at will and answers (ack
 or err, not both) only requests it has taken:
@@ -21,17 +23,44 @@ from __future__ import annotations
 from dataclasses import replace
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Assert, Assume, Cat, ClockDomain, Elaboratable, Module, Signal, Value
+from amaranth.hdl import (
+    Assert,
+    Assume,
+    Cat,
+    ClockDomain,
+    ClockSignal,
+    Elaboratable,
+    Module,
+    Signal,
+    Value,
+)
+from amaranth.lib import wiring
 
-from ....hdl.peripheral import MAX_OUTSTANDING, FramebufferWriter
+from ....hdl.peripheral import (
+    MAX_OUTSTANDING,
+    REGISTERS,
+    EdgePeripheral,
+    FramebufferWriter,
+    _Datapath,
+    command_words,
+    info_word,
+)
 from ....model.config import EdgeConfig
 from ....model.tile import TileConfig
 from .run import FormalResult, find_tools, run_harness, sby_script
 from .stream import held, hold_rule
 
-__all__ = ["WRITER_FAULTS", "WriterHarness", "run_writer_proof"]
+__all__ = [
+    "WINDOW_FAULTS",
+    "WRITER_FAULTS",
+    "WindowHarness",
+    "WriterHarness",
+    "run_window_proof",
+    "run_writer_proof",
+]
 
 WRITER_FAULTS = ("drop_stb",)
+WINDOW_FAULTS = ("ack_stalled",)
 SMALL = TileConfig(EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4), 8, 4)
 LANE_RUNS = tuple((1 << n) - 1 << k for n in range(1, 5) for k in range(5 - n))
 
@@ -107,3 +136,91 @@ def run_writer_proof(
     script = sby_script("prove", depth)
     proof = f"writer_wishbone_c{channels}"
     return run_harness(proof, fault, harness, script, find_tools(), "prove", depth, timeout=timeout)
+
+
+class _FreeDatapath(_Datapath):
+    """The window's datapath with every output free (the FIFO's ready and level, busy,
+    counters, the framebuffer bus): the window's rules hold whatever it does."""
+
+    def elaborate(self, platform):
+        m = Module()
+        for _, member, value in self.signature.flatten(self):
+            if member.flow == wiring.Out:
+                m.d.comb += value.eq(AnySeq(len(Value.cast(value))))
+        return m
+
+
+class WindowHarness(Elaboratable):
+    def __init__(self, tile: TileConfig = SMALL, fault: str | None = None):
+        if fault is not None and fault not in WINDOW_FAULTS:
+            raise ValueError(f"fault must be one of {', '.join(WINDOW_FAULTS)} or None")
+        self.dut, self.tile, self.fault = EdgePeripheral(tile, fifo_depth=4), tile, fault
+        self.dut.datapath = _FreeDatapath(tile, 4)
+        self.domain = ClockDomain("sync")
+
+    @property
+    def clk(self) -> Signal:
+        return self.domain.clk
+
+    def elaborate(self, platform):
+        m = Module()
+        dut, rst = self.dut, self.domain.rst
+        m.submodules.dut = dut
+        m.domains.sync = self.domain
+        # The harness's own registers: not cleared by the reset they observe.
+        m.domains.past = ClockDomain("past", reset_less=True)
+        m.d.comb += [ClockSignal("past").eq(self.domain.clk), rst.eq(AnySeq(1))]
+        bus, fb = dut.bus, dut.fb
+        free = [bus.cyc, bus.stb, bus.we, bus.adr, bus.dat_w, bus.sel]
+        free += [fb.ack, fb.stall, fb.err, fb.dat_r]
+        for port in map(Value.cast, free):
+            m.d.comb += port.eq(AnySeq(len(port)))
+        # The initiator: stb within cyc; a stalled request offered again unchanged.
+        m.d.comb += Assume(~bus.stb | bus.cyc)
+        was_held = Signal()
+        m.d.past += was_held.eq(bus.cyc & bus.stb & bus.stall & ~rst)
+        request = Cat(bus.adr, bus.we, bus.dat_w, bus.sel)
+        prev = Signal(len(request))
+        m.d.past += prev.eq(request)
+        with m.If(was_held & bus.cyc):
+            m.d.comb += Assume(bus.stb & (request == prev))
+        taken = bus.cyc & bus.stb & ~bus.stall
+        ack = bus.ack
+        stalled = Signal()  # the fault: an ack for the request the target stalled
+        m.d.past += stalled.eq(bus.cyc & bus.stb & bus.stall)
+        if self.fault == "ack_stalled":
+            ack = bus.ack | stalled
+        # Requests taken and not yet answered (a reset drops them).
+        waiting, was_reset = Signal(2), Signal()
+        m.d.past += was_reset.eq(rst)
+        with m.If(rst):
+            m.d.past += waiting.eq(0)
+        with m.Else():
+            m.d.past += waiting.eq(waiting + taken - ack)
+        info_read = Signal()
+        m.d.past += info_read.eq(taken & ~bus.we & (bus.adr == REGISTERS["info"]) & ~rst)
+
+        def check(condition, message):
+            m.d.comb += Assert(condition, message)
+
+        check(~bus.err, "wishbone: err never")
+        check(ack == (waiting == 1), "wishbone: one ack a taken request, the next clock")
+        check(waiting <= 1, "wishbone: no ack without a request")
+        last = REGISTERS["cmd"] + command_words(self.tile) - 1
+        push = bus.cyc & bus.stb & bus.we & (bus.adr == last)
+        check(~bus.stall | (push & ~dut.datapath.push.ready), "window: stall only on a full FIFO")
+        check(~was_reset | ~ack, "reset: no ack after it")
+        check(~was_reset | ~dut.irq, "reset: irq low after it")
+        check(~info_read | (bus.dat_r == info_word(self.tile)), "window: info reads its word")
+        return m
+
+
+def run_window_proof(
+    *, fault: str | None = None, depth: int = 3, timeout: float | None = None
+) -> FormalResult:
+    """k-induction of `WindowHarness` (``depth`` clocks) with SymbiYosys."""
+    harness = WindowHarness(fault=fault)
+    script = sby_script("prove", depth)
+    return run_harness(
+        "window_wishbone", fault, harness, script, find_tools(), "prove", depth, timeout=timeout
+    )
