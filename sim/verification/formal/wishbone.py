@@ -16,6 +16,21 @@ The proof runs on a grey and a 3-channel writer (`run_writer_proof`'s ``channels
 
 Fault ``drop_stb`` (the harness sees ``stb`` low in the clock after a stall) shows the hold
 check can fail. `run_writer_proof` runs it (`tests/test_peripheral.py`, marked formal; about 1 s).
+
+**The register window** (`edgeaa.hdl.peripheral.EdgePeripheral`'s target rules), proven by
+k-induction for any initiator that keeps the B4 rules (``stb`` only within ``cyc``, a
+stalled request held unchanged), any reset and any datapath behind the window (its FIFO's
+``ready``, level, counters and framebuffer bus free: `_FreeDatapath`):
+
+* one ``ack`` per taken request, in the clock after it; no ``ack`` without one (a reset
+  drops the one in flight), none while ``cyc`` is and was low (wb2axip's ``fwb_slave.v``
+  rules, for a target that answers in one clock); ``err`` never;
+* ``stall`` only for a write of the last command word while the FIFO is not ready (reads
+  and every other write never wait);
+* after ``rst``: no ``ack``, ``irq`` low; a read of ``info`` answers `info_word`.
+
+Fault ``ack_stalled`` (the harness sees an ``ack`` for a request the target stalled) shows
+the one-ack check can fail. `run_window_proof` runs it (in the default run; about 1 s).
 """
 
 from __future__ import annotations
@@ -197,6 +212,8 @@ class WindowHarness(Elaboratable):
             m.d.past += waiting.eq(0)
         with m.Else():
             m.d.past += waiting.eq(waiting + taken - ack)
+        was_cyc = Signal()
+        m.d.past += was_cyc.eq(bus.cyc)
         info_read = Signal()
         m.d.past += info_read.eq(taken & ~bus.we & (bus.adr == REGISTERS["info"]) & ~rst)
 
@@ -206,6 +223,7 @@ class WindowHarness(Elaboratable):
         check(~bus.err, "wishbone: err never")
         check(ack == (waiting == 1), "wishbone: one ack a taken request, the next clock")
         check(waiting <= 1, "wishbone: no ack without a request")
+        check(was_cyc | bus.cyc | ~ack, "wishbone: no ack a clock after cyc was low")
         last = REGISTERS["cmd"] + command_words(self.tile) - 1
         push = bus.cyc & bus.stb & bus.we & (bus.adr == last)
         check(~bus.stall | (push & ~dut.datapath.push.ready), "window: stall only on a full FIFO")
