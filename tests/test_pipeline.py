@@ -272,8 +272,8 @@ def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
 
 def test_edgeaa_verilog_channels(tmp_path, capsys):
     """`--channels 1|3|4` on `edgeaa verilog --top pipeline`: the colour pipeline's paint
-    port (red, green, blue and alpha) and pixel value; refused for the core and the
-    peripheral (grey), each in one line; the help says it."""
+    port (red, green, blue and alpha) and pixel value; refused for the core (and the
+    peripheral's intensities above 8 bits), each in one line; the help says it."""
     from edgeaa.cli import main
 
     small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
