@@ -287,10 +287,10 @@ def _add_channels_option(parser: argparse.ArgumentParser) -> None:
         type=int,
         choices=CHANNELS,
         default=None,
-        help="with --top pipeline: the pixel's channels, 1 grey (default), 3 red, green and "
-        "blue, 4 and alpha (premultiplied); in colour each command carries red, green, blue "
-        "and alpha (command format version 2; docs/hardware.md, 'Colour'). --top peripheral "
-        "is grey only",
+        help="with --top pipeline or peripheral: the pixel's channels, 1 grey (default), 3 "
+        "red, green and blue, 4 and alpha (premultiplied); in colour each command carries red, "
+        "green, blue and alpha (command format version 2; docs/hardware.md, 'Colour'); the "
+        "peripheral's framebuffer format is its fb_format register",
     )
 
 
@@ -300,12 +300,6 @@ def _check_top(prog: str, args: argparse.Namespace) -> None:
         raise usage_error(prog, "--tile sizes the polygon pipeline: add --top pipeline")
     if args.top == "core" and args.channels is not None:
         raise usage_error(prog, "--channels sets the polygon pipeline's pixel: add --top pipeline")
-    if args.top == "peripheral" and args.channels not in (None, 1):
-        raise usage_error(
-            prog,
-            f"--top peripheral writes grey pixels (its framebuffer writer): --channels "
-            f"{args.channels} needs --top pipeline",
-        )
     args.channels = args.channels or 1
     if args.top != "pipeline" and args.pipeline is not None:
         raise usage_error(prog, "--pipeline configures the polygon pipeline: add --top pipeline")
@@ -321,13 +315,13 @@ def _check_top(prog: str, args: argparse.Namespace) -> None:
 
 
 def _check_peripheral(prog: str, args: argparse.Namespace, config) -> None:
-    """The peripheral's framebuffer is 8-bit grey: refuse wider intensities."""
+    """The peripheral's framebuffer holds a byte a channel: refuse wider intensities."""
     from .hdl.peripheral import FB_PIXEL_BITS
 
     if args.top == "peripheral" and config.intensity_bits > FB_PIXEL_BITS:
         raise usage_error(
             prog,
-            f"--top peripheral writes {FB_PIXEL_BITS}-bit grey pixels: --intensity-bits "
+            f"--top peripheral writes {FB_PIXEL_BITS}-bit channels: --intensity-bits "
             f"{config.intensity_bits} is too wide (at most {FB_PIXEL_BITS})",
         )
 
@@ -542,8 +536,9 @@ class SynthCommand(Command):
         if args.top == "peripheral":
             from .hdl.peripheral import EdgePeripheral
 
-            tile = pipeline_from_args(None, args.tile, config).tile
-            heading = f"peripheral, tile {tile.width}x{tile.height}, {config}"
+            tile = pipeline_from_args(None, args.tile, config, args.channels).tile
+            heading = f"peripheral, tile {tile.width}x{tile.height}, {tile.channels} channel"
+            heading += f"{'s' * (tile.channels > 1)}, {config}"
             return heading, {"peripheral": lambda: EdgePeripheral(tile), **baseline}
         heading = f"{args.core} core, {args.setup_units} setup units, {config}"
 

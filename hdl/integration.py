@@ -383,6 +383,7 @@ def annotate(source: str, component, name: str, signed: list[tuple[str, int]]) -
     if tile is not None:
         kind, config, stream = getattr(component, "top_kind", "pipeline"), tile.config, ""
         what = f"the edgeaa polygon {kind}, tile {tile.width}x{tile.height}"
+        what += f", {tile.channels} channels" * (tile.channels > 1)  # grey: as it was
     else:
         kind, config, stream = "core", component.config, component.format.stream
         what = f"the edgeaa {stream} core"

@@ -1,8 +1,9 @@
 # amaranth: UnusedElaboratable=no
 """The pipeline as a bus peripheral (`EdgePeripheral`): a Wishbone B4 pipelined slave with a
 register window (commands in through a FIFO, status, counters, interrupt) and a Wishbone B4
-pipelined master that writes each flushed tile's pixels into a linear 8-bit grey framebuffer
-(`FramebufferWriter`). docs/hardware.md, "Integrating edgeaa", has the register map.
+pipelined master that writes each flushed tile's pixels into a linear framebuffer
+(`FramebufferWriter`: grey 8, RGB565, RGB888 or RGBA8888, the ``fb_format`` register).
+docs/hardware.md, "Integrating edgeaa", has the register map.
 
 Amaranth 0.5 has no Wishbone library, so the bus is declared here (`bus_signature`): 32-bit
 data, byte granularity, word addresses, the B4 pipelined handshake (a request is taken on a
@@ -19,6 +20,13 @@ from amaranth.hdl import Cat, Const, Module, ResetInserter, Signal, unsigned
 from amaranth.lib import data, fifo, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..model.framebuffer import (
+    FORMAT_BITS,
+    default_format,
+    format_codes,
+    scale_channel,
+    scale_steps,
+)
 from ..model.pipeline import CODE, COMMAND_VERSION, Command
 from ..model.tile import TileConfig
 from .core import ERRORS_BITS, flat_verilog
@@ -40,7 +48,7 @@ WORD_BITS = 32
 SLAVE_ADDR_BITS = 6  # 64 words of register window
 MASTER_ADDR_BITS = 30  # word address: a 4 GiB byte space
 FB_BITS = 16  # stride, size and origin fields
-FB_PIXEL_BITS = 8  # grey
+FB_PIXEL_BITS = 8  # a channel is at most a byte
 INFO_MAGIC = 0xEA
 MAX_OUTSTANDING = 7  # framebuffer writes in flight (acks not yet in)
 # Flushed tiles between the command stage and the writer; a flush waits for room (at 2, the
@@ -61,6 +69,7 @@ REGISTERS = {
     "fb_origin": 8,  # RW: the engine pixel at framebuffer (0, 0): x 15:0, y 31:16
     "errors": 9,  # RO: bad commands 15:0, bad edges 31:16 (saturating)
     "tiles": 10,  # RO: tiles written to the framebuffer (wrapping)
+    "fb_format": 11,  # RW 1:0: the pixel format's code; RO 7:4: the codes this build writes
     "stats": 16,  # RO: the pipeline's counters, in `STATS` order
     "cmd": 32,  # WO: command words
 }
@@ -119,18 +128,20 @@ def info_word(tile: TileConfig) -> int:
 
 class FramebufferWriter(wiring.Component):
     """Each tile's pixels (``pixels``, raster order of one flush, ``last`` on the last) to
-    ``base + Y * stride + X``, one byte write each, where (X, Y) is the pixel's engine
-    position (the tile's origin from ``origins``, one per tile, plus its x, y) less
-    ``fb_origin``; pixels outside ``fb_size`` are not written. ``done`` pulses when every
-    write of a tile is acknowledged (the next tile's writes start after it);
-    ``bus_error`` pulses on an ``err`` (the write counts as answered)."""
+    ``base + Y * stride + X * bytes`` in the format ``fb_format`` (a code of
+    `edgeaa.model.framebuffer.format_codes`, else the default format; ``bytes`` its bytes per
+    pixel), where (X, Y) is the pixel's engine position (the tile's origin from ``origins``,
+    one per tile, plus its x, y) less ``fb_origin``; pixels outside ``fb_size`` are not
+    written. A pixel is one write with its byte lanes in ``sel``, or two when its bytes cross
+    a 32-bit word (the second to the next word). ``done`` pulses when every write of a tile
+    is acknowledged (the next tile's writes start after it); ``bus_error`` pulses on an
+    ``err`` (the write counts as answered)."""
 
     def __init__(self, tile: TileConfig):
-        if tile.config.intensity_bits > FB_PIXEL_BITS or tile.channels != 1:
+        if tile.config.intensity_bits > FB_PIXEL_BITS:
             raise ValueError(
-                f"the framebuffer is {FB_PIXEL_BITS}-bit grey: one channel of at most "
-                f"{FB_PIXEL_BITS} intensity bits, not {tile.channels} of "
-                f"{tile.config.intensity_bits}"
+                f"the framebuffer's channels are bytes: at most {FB_PIXEL_BITS} intensity "
+                f"bits, not {tile.config.intensity_bits}"
             )
         self._tile = tile
         origin = data.StructLayout({"x": unsigned(FB_BITS), "y": unsigned(FB_BITS)})
@@ -142,6 +153,7 @@ class FramebufferWriter(wiring.Component):
                 "fb_stride": In(FB_BITS),
                 "fb_size": In(origin),
                 "fb_origin": In(origin),
+                "fb_format": In(FORMAT_BITS),
                 "bus": Out(bus_signature(MASTER_ADDR_BITS)),
                 "done": Out(1),
                 "bus_error": Out(1),
@@ -157,17 +169,20 @@ class FramebufferWriter(wiring.Component):
             X.eq(origin.x + px.x - self.fb_origin.x),
             Y.eq(origin.y + px.y - self.fb_origin.y),
         ]
-        # stage 1: the pixel's framebuffer position; stage 2: the bus request
+        # stage 1: the pixel's framebuffer position; stage 2: the bus request (and the
+        # second word's part of a pixel that crosses a word, `s2_hi_*`)
         s1 = {n: Signal(w, name=f"s1_{n}") for n, w in (("x", FB_BITS), ("y", FB_BITS))}
-        s1_value, s1_valid = Signal(FB_PIXEL_BITS), Signal()
+        s1_value, s1_valid = Signal(len(px.value)), Signal()
         s1_inside, s1_last = Signal(), Signal()
         s2_valid, draining = Signal(), Signal()
+        s2_hi_sel, s2_hi_dat = Signal(4), Signal(WORD_BITS)
+        sel = Signal(4, init=1)  # a run of lanes from reset on (the formal proof's invariant)
+        self.hi_sel = s2_hi_sel  # observed by the formal harness
         outstanding = Signal(range(MAX_OUTSTANDING + 1))
         self.outstanding = outstanding  # observed by the formal harness
         issued = Signal()
-        lane = Signal(4, init=1)  # one-hot from reset on (the formal proof's invariant)
         m.d.comb += [
-            bus.sel.eq(lane),
+            bus.sel.eq(sel),
             bus.cyc.eq(s2_valid | (outstanding != 0)),
             bus.stb.eq(s2_valid & (outstanding != MAX_OUTSTANDING)),
             bus.we.eq(1),
@@ -176,16 +191,31 @@ class FramebufferWriter(wiring.Component):
         answered = bus.cyc & (bus.ack | bus.err)
         m.d.sync += outstanding.eq(outstanding + issued - answered)
         m.d.comb += self.bus_error.eq(bus.cyc & bus.err)
-        s2_free = ~s2_valid | issued
+        s2_free = ~s2_valid | (issued & (s2_hi_sel == 0))
         s1_move = s1_valid & (~s1_inside | s2_free)
         with m.If(s1_move & s1_inside):
-            byte = Signal(WORD_BITS)
-            m.d.comb += byte.eq(self.fb_base + s1["y"] * self.fb_stride + s1["x"])
+            byte, lanes, packed = self._pixel_bytes(m, s1["x"], s1["y"], s1_value)
+            shift = byte[:2]
+            wide_sel, wide_dat = Signal(8), Signal(2 * WORD_BITS)
+            with m.Switch(shift):  # the bytes moved to their lanes
+                for k in range(4):
+                    with m.Case(k):
+                        m.d.comb += wide_sel.eq(Cat(Const(0, k), lanes))
+                        m.d.comb += wide_dat.eq(Cat(Const(0, 8 * k), packed))
             m.d.sync += [
                 s2_valid.eq(1),
                 bus.adr.eq(byte[2:]),
-                lane.eq(Const(1, 4) << byte[:2]),
-                bus.dat_w.eq(Cat(s1_value, s1_value, s1_value, s1_value)),
+                sel.eq(wide_sel[:4]),
+                bus.dat_w.eq(wide_dat[:WORD_BITS]),
+                s2_hi_sel.eq(wide_sel[4:]),
+                s2_hi_dat.eq(wide_dat[WORD_BITS:]),
+            ]
+        with m.Elif(issued & (s2_hi_sel != 0)):  # the pixel's bytes in the next word
+            m.d.sync += [
+                bus.adr.eq(bus.adr + 1),
+                sel.eq(s2_hi_sel),
+                bus.dat_w.eq(s2_hi_dat),
+                s2_hi_sel.eq(0),
             ]
         with m.Elif(issued):
             m.d.sync += s2_valid.eq(0)
@@ -209,6 +239,55 @@ class FramebufferWriter(wiring.Component):
         with m.If(finished):
             m.d.sync += draining.eq(0)
         return m
+
+    def _pixel_bytes(self, m, x, y, value):
+        """The pixel's byte address, its byte lanes from bit 0 and its bytes (format
+        ``fb_format``, `edgeaa.model.framebuffer.framebuffer_bytes`)."""
+        tile = self._tile
+        bits = tile.config.intensity_bits
+        channels = [value[k * bits : (k + 1) * bits] for k in range(tile.channels)]
+        packed, lanes, step = Signal(WORD_BITS), Signal(4), Signal(FB_BITS + 2)
+        byte = Signal(WORD_BITS)
+
+        def byte8(c):
+            return Cat(c, Const(0, FB_PIXEL_BITS - bits))
+
+        def fields(fmt):
+            if fmt.name == "grey8":
+                return [byte8(channels[0])]
+            if fmt.name == "rgb565":
+                widths = zip(channels[:3], (5, 6, 5), strict=True)
+                r5, g6, b5 = (_scaled(m, c, bits, n) for c, n in widths)
+                return [Cat(b5, g6, r5)]
+            alpha = channels[3] if tile.channels == 4 else Const((1 << bits) - 1, bits)
+            return [byte8(c) for c in channels[:3]] + [byte8(alpha)] * (fmt.name == "rgba8888")
+
+        default = default_format(tile.channels)
+        others = [f for f in format_codes(tile.channels) if f != default]
+        with m.Switch(self.fb_format):  # a code this pipeline does not write: its default
+            for fmt in [*others, default]:
+                with m.Case(fmt.code) if fmt != default else m.Default():
+                    m.d.comb += [
+                        packed.eq(Cat(*fields(fmt))),
+                        lanes.eq((1 << fmt.bytes) - 1),
+                        step.eq(x * fmt.bytes),
+                    ]
+        m.d.comb += byte.eq(self.fb_base + y * self.fb_stride + step)
+        return byte, lanes, packed
+
+
+def _scaled(m, c, bits: int, n: int):
+    """`edgeaa.model.framebuffer.scale_channel` in hardware: without a divider when the
+    field is no wider than the channel (`scale_steps`), else a table of its 2**bits values."""
+    out = Signal(n)
+    if n <= bits:
+        m.d.comb += out.eq(scale_steps(c, bits, n))
+        return out
+    with m.Switch(c):
+        for v in range(1 << bits):
+            with m.Case(v):
+                m.d.comb += out.eq(scale_channel(v, bits, n))
+    return out
 
 
 class _Datapath(wiring.Component):
@@ -282,7 +361,7 @@ class _Datapath(wiring.Component):
         with m.If(writer.done):
             m.d.sync += self.tiles.eq(self.tiles + 1)
         m.d.comb += [
-            self.busy.eq(q.r_rdy | (pending != 0)),
+            self.busy.eq((q.level != 0) | (pending != 0)),  # level: from the push clock on
             self.errors.eq(pipe.errors),
             self.edge_errors.eq(pipe.edge_errors),
             self.stats.eq(pipe.stats),
@@ -292,7 +371,7 @@ class _Datapath(wiring.Component):
         return m
 
 
-_FB_REGS = ("fb_base", "fb_stride", "fb_size", "fb_origin")
+_FB_REGS = ("fb_base", "fb_stride", "fb_size", "fb_origin", "fb_format")
 
 
 class EdgePeripheral(wiring.Component):
@@ -331,6 +410,10 @@ class EdgePeripheral(wiring.Component):
         fb = {
             name: Signal(dp.fb_regs.signature.members[name].shape, name=name) for name in _FB_REGS
         }
+        formats = format_codes(tile.channels)
+        fb["fb_format"] = Signal(
+            FORMAT_BITS, name="fb_format", init=default_format(tile.channels).code
+        )
         for name in _FB_REGS:
             m.d.comb += getattr(dp.fb_regs, name).eq(fb[name])
         irq_enable, irq_status, bus_error = Signal(2), Signal(2), Signal()
@@ -359,9 +442,13 @@ class EdgePeripheral(wiring.Component):
             for k, stage in enumerate(staged):
                 with m.Case(REGISTERS["cmd"] + k):
                     m.d.sync += stage.eq(bus.dat_w)
-            for name in _FB_REGS:
+            for name in _FB_REGS[:-1]:
                 with m.Case(REGISTERS[name]):
                     m.d.sync += fb[name].eq(bus.dat_w)
+            with m.Case(REGISTERS["fb_format"]):  # a format this build does not write: ignored
+                code = bus.dat_w[:FORMAT_BITS]
+                with m.If(Cat(code == f.code for f in formats).any()):
+                    m.d.sync += fb["fb_format"].eq(code)
             with m.Case(REGISTERS["irq_enable"]):
                 m.d.sync += irq_enable.eq(bus.dat_w)
             with m.Case(REGISTERS["irq_status"]):
@@ -387,6 +474,10 @@ class EdgePeripheral(wiring.Component):
             REGISTERS["tiles"]: dp.tiles,
         }
         values |= {REGISTERS[name]: fb[name] for name in _FB_REGS}
+        mask = sum(1 << f.code for f in format_codes(tile.channels))
+        values[REGISTERS["fb_format"]] = Cat(
+            fb["fb_format"], Const(0, 4 - FORMAT_BITS), Const(mask, 4)
+        )
         for i, name in enumerate(STATS):
             values[REGISTERS["stats"] + i] = dp.stats[name]
         return values

@@ -22,9 +22,18 @@ from edgeaa.hdl.peripheral import (
 )
 from edgeaa.hdl.pipeline import command_layout
 from edgeaa.model import EdgeConfig
+from edgeaa.model.framebuffer import (
+    FORMATS,
+    default_format,
+    format_codes,
+    framebuffer_bytes,
+    scale_channel,
+    scale_steps,
+)
 from edgeaa.model.pipeline import Command, command_ops
 from edgeaa.model.tile import TileConfig
 from edgeaa.render import parse_scene, plan_scene, render_scene
+from edgeaa.render.paint import Canvas, coverage_scene
 from edgeaa.render.pipeline import scene_commands
 from edgeaa.sim.simulators.wishbone import Framebuffer, run_peripheral
 
@@ -107,10 +116,11 @@ def test_bad_commands_are_counted_in_the_errors_register():
     assert np.array_equal(np.array(fb.image(run.memory)), np.zeros((4, 8)))
 
 
-def test_the_peripheral_verilog_is_lint_clean():
+@pytest.mark.parametrize("channels", [1, 3])
+def test_the_peripheral_verilog_is_lint_clean(channels):
     from edgeaa.sim.simulators.verilator import lint
 
-    source = peripheral_verilog(TileConfig(EdgeConfig(7, 2, 4), 8, 4))
+    source = peripheral_verilog(TileConfig(EdgeConfig(7, 2, 4), 8, 4, channels=channels))
     header = re.search(r"module edgeaa_peripheral\((.*?)\);", source, re.S).group(1)
     names = ("cyc", "stb", "we", "adr", "dat_w", "sel", "dat_r", "ack", "stall", "err")
     want = {"clk", "rst", "irq"} | {f"{bus}__{n}" for bus in ("bus", "fb") for n in names}
@@ -158,23 +168,165 @@ def test_edgeaa_verilog_top_peripheral(tmp_path, capsys):
     small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
     assert main(["verilog", "--top", "peripheral", "--tile", "8x4", *small, "-o", str(out)]) == 0
     assert "module edgeaa_peripheral" in out.read_text() and out.with_suffix(".vlt").exists()
+    colour = tmp_path / "c.v"
+    assert (
+        main(
+            [
+                "verilog",
+                "--top",
+                "peripheral",
+                "--tile",
+                "8x4",
+                *small,
+                "--channels",
+                "3",
+                "-o",
+                str(colour),
+            ]
+        )
+        == 0
+    )
+    assert "tile 8x4, 3 channels" in colour.read_text() and "fb_format" in colour.read_text()
     capsys.readouterr()
     assert main(["verilog", "--top", "peripheral", "--intensity-bits", "10"]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "8-bit grey" in err and "Traceback" not in err
+    assert err.count("\n") == 1 and "8-bit channels" in err and "Traceback" not in err
     assert main(["verilog", "--top", "peripheral", "--core", "deltas"]) == 2
     assert "--top peripheral has its own" in capsys.readouterr().err
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("fault", [None, "drop_stb"])
-def test_the_framebuffer_writer_keeps_the_wishbone_initiator_rules(fault):
+@pytest.mark.parametrize("channels, fault", [(1, None), (3, None), (3, "drop_stb")])
+def test_the_framebuffer_writer_keeps_the_wishbone_initiator_rules(channels, fault):
+    """In every format (``fb_format`` free), a pixel's two writes across a word included."""
     from edgeaa.sim.verification.formal.wishbone import run_writer_proof
 
-    result = run_writer_proof(fault=fault, timeout=300)
+    result = run_writer_proof(fault=fault, channels=channels, timeout=300)
     if fault is None:
         assert result.status == "PASS", result.log_tail
     else:  # the check can fail: a request dropped under stall is caught
         assert result.status == "FAIL" and "stream: a held request stays valid" in " ".join(
             result.failed
         )
+
+
+def test_a_channels_rounding_to_565_is_exact_and_needs_no_divider():
+    """`scale_channel` is round(c (2**n - 1) / (2**I - 1)) half up for every c at I = 1 to
+    8 (by fractions), and `scale_steps` (the hardware's, no divider) equals it for every c
+    at every I from n to 16."""
+    from fractions import Fraction
+
+    for n in (5, 6):
+        for bits in range(1, 9):
+            full = (1 << bits) - 1
+            for c in range(full + 1):
+                want = int(Fraction(c * ((1 << n) - 1), full) + Fraction(1, 2))
+                assert scale_channel(c, bits, n) == want, (c, bits, n)
+        for bits in range(n, 17):
+            c = np.arange(1 << bits, dtype=np.int64)
+            assert np.array_equal(scale_steps(c, bits, n), scale_channel(c, bits, n)), bits
+    assert scale_channel(128, 8, 6) == 32 and scale_channel(9, 4, 5) == 19
+    with pytest.raises(ValueError, match="narrows"):
+        scale_steps(3, 4, 5)
+
+
+def test_framebuffer_bytes_lay_out_each_format():
+    pixel = np.array([[[255, 128, 0, 200]]])  # red 255, green 128, blue 0, alpha 200
+    rgb = pixel[..., :3]
+    assert framebuffer_bytes(rgb, FORMATS["rgb565"], 8).tolist() == [[[0x00, 0xFC]]]
+    assert framebuffer_bytes(rgb, FORMATS["rgb888"], 8).tolist() == [[[255, 128, 0]]]
+    assert framebuffer_bytes(rgb, FORMATS["rgba8888"], 8).tolist() == [[[255, 128, 0, 255]]]
+    assert framebuffer_bytes(pixel, FORMATS["rgba8888"], 8).tolist() == [[[255, 128, 0, 200]]]
+    small = np.array([[[7, 15, 0]]])  # 4-bit channels: 565 widens them (14, 63, 0)
+    assert framebuffer_bytes(small, FORMATS["rgb565"], 4).tolist() == [[[0xE0, 0x77]]]
+    assert framebuffer_bytes(np.array([[7]]), FORMATS["grey8"], 4).tolist() == [[[7]]]
+    with pytest.raises(ValueError, match="no grey8"):
+        framebuffer_bytes(rgb, FORMATS["grey8"], 8)
+    with pytest.raises(ValueError, match="no rgb565"):
+        framebuffer_bytes(np.array([[7]]), FORMATS["rgb565"], 8)
+
+
+COLOURS = ["#ff800099", [0.1, 0.9, 0.5, 0.3], "#0000ff", "#c0c0c001"]  # with alpha
+
+
+def _colour_plan(config: EdgeConfig, background: str):
+    polygons = [
+        {**{k: v for k, v in p.items() if k != "intensity"}, "color": c}
+        for p, c in zip(TINY_SCENE["polygons"], COLOURS, strict=False)
+    ]
+    size = {k: TINY_SCENE[k] for k in ("width", "height")}
+    scene = parse_scene({**size, "background_color": background, "polygons": polygons})
+    return plan_scene(coverage_scene(scene), config), Canvas(scene, config.full_scale)
+
+
+@pytest.mark.parametrize(
+    "channels, fmt, bits, seed, idle, stall, latency",
+    [
+        (3, "rgb565", 8, 11, 0.3, 0.5, 3),
+        (3, "rgb888", 8, 23, 0.1, 0.8, 6),
+        (4, "rgba8888", 8, 5, 0.2, 0.6, 4),
+        (4, "rgb565", 4, 7, 0.2, 0.5, 2),  # fields wider than the channels: the table
+        (3, "rgba8888", 8, 13, 0.1, 0.5, 3),  # opaque: alpha full scale
+    ],
+)
+def test_a_colour_scene_lands_in_the_framebuffer_in_its_format_bit_for_bit(
+    channels, fmt, bits, seed, idle, stall, latency
+):
+    """A scene written as a CPU would, the framebuffer in `fmt` at an odd base and stride (so
+    pixels of 2 or 3 bytes cross words): its bytes are the model's image converted
+    (`framebuffer_bytes`), every byte written once, none outside, under random idle clocks,
+    stalls and ack latencies."""
+    config = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4) if bits == 4 else DEFAULT
+    tile = TileConfig(config, 16, 8, channels=channels)
+    plan, canvas = _colour_plan(config, "#203040" if channels == 3 else "#20304080")
+    want = render_scene(plan, canvas=canvas).image[..., :channels]
+    commands = scene_commands(plan, tile, canvas)
+    ox, oy = plan.offset
+    width, height, fmt = plan.scene.width, plan.scene.height, FORMATS[fmt]
+    stride = width * fmt.bytes + 5
+    fb = Framebuffer(0x1000 + 3, stride, width, height, x0=ox, y0=oy, format=fmt)
+    run = run_peripheral(tile, commands, fb, seed=seed, idle=idle, stall=stall, latency=latency)
+    tag = f"seed {seed}"
+    image = fb.image(run.memory)
+    expected = framebuffer_bytes(want, fmt, bits)
+    assert np.array_equal(image, expected), f"{tag}\n{image}\nmodel:\n{expected}"
+    inside = {a for y in range(height) for x in range(width) for a in fb.addresses(y, x)}
+    assert set(run.writes) == inside, f"{tag}: a write outside the framebuffer"
+    assert set(run.writes.values()) == {1}, f"{tag}: a byte written twice"
+    assert len({tuple(p) for p in expected.reshape(-1, fmt.bytes).tolist()}) > 4, tag
+    assert run.registers["fb_format"] & 3 == fmt.code and run.aborted == 0, tag
+
+
+@pytest.mark.parametrize("channels", [1, 3, 4])
+def test_the_format_register_keeps_only_formats_the_build_writes(channels):
+    """Writing a format the build does not write into ``fb_format`` (grey8 into a colour
+    peripheral, RGB565 into a grey one) is ignored: it keeps its reset format and writes in
+    it; bits 7:4 read the codes it writes."""
+    tile = TileConfig(SMALL, 8, 4, channels=channels)
+    commands, grey = _empty_tiles(tile, 1, 1) if channels == 1 else ([], None)
+    if channels > 1:
+        commands = [Command.tile(0, 0, 0, paint=3 | 5 << 4 | 9 << 8 | 15 << 12), Command.flush()]
+    other = FORMATS["rgb565" if channels == 1 else "grey8"]
+    asked = Framebuffer(0, 32, 8, 4, format=other)
+    run = run_peripheral(tile, commands, asked, seed=1, stall=0.3, latency=2)
+    kept = default_format(channels)
+    mask = sum(1 << f.code for f in format_codes(channels))
+    assert run.registers["fb_format"] == kept.code | mask << 4
+    got = Framebuffer(0, 32, 8, 4, format=kept).image(run.memory)
+    want = grey if channels == 1 else np.tile([3, 5, 9, 15][:channels], (4, 8, 1))
+    assert np.array_equal(got, framebuffer_bytes(want, kept, 4).reshape(got.shape))
+
+
+@pytest.mark.parametrize("fault", [None, "ack_stalled"])
+def test_the_register_window_keeps_the_wishbone_target_rules(fault):
+    """k-induction, about 1 s: one ack a taken request the next clock, none without one, err
+    never, stall only for the last command word on a full FIFO, no ack and irq low after a
+    reset, info reads its word; for any initiator keeping the B4 rules and any datapath."""
+    from edgeaa.sim.verification.formal.wishbone import run_window_proof
+
+    result = run_window_proof(fault=fault, timeout=300)
+    if fault is None:
+        assert result.status == "PASS", result.log_tail
+    else:  # an ack for a stalled request is caught
+        failed = " ".join(result.failed)
+        assert result.status == "FAIL" and "one ack a taken request" in failed, failed

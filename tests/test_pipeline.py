@@ -281,8 +281,8 @@ def test_edgeaa_verilog_top_pipeline(tmp_path, capsys):
 
 def test_edgeaa_verilog_channels(tmp_path, capsys):
     """`--channels 1|3|4` on `edgeaa verilog --top pipeline`: the colour pipeline's paint
-    port (red, green, blue and alpha) and pixel value; refused for the core and the
-    peripheral (grey), each in one line; the help says it."""
+    port (red, green, blue and alpha) and pixel value; refused for the core (and the
+    peripheral's intensities above 8 bits), each in one line; the help says it."""
     from edgeaa.cli import main
 
     small = ["--coord-bits", "7", "--subpixel-bits", "2", "--intensity-bits", "4"]
@@ -297,7 +297,7 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
             assert re.search(r"input \[15:0\] commands__payload__paint", text)
     capsys.readouterr()
     for argv, message in [
-        (["--top", "peripheral", "--channels", "3"], "--top peripheral writes grey pixels"),
+        (["--top", "peripheral", "--intensity-bits", "9"], "--top peripheral writes 8-bit"),
         (["--channels", "3"], "--channels sets the polygon pipeline's pixel"),
         (["--top", "pipeline", "--channels", "2"], "invalid choice: 2 (choose from 1, 3, 4)"),
     ]:

@@ -14,10 +14,12 @@ import random
 from collections import Counter, deque
 from dataclasses import dataclass
 
+import numpy as np
 from amaranth.sim import Simulator
 
 from ...hdl.peripheral import REGISTERS, EdgePeripheral, pack_command
 from ...hdl.pipeline import STATS
+from ...model.framebuffer import FORMATS, PixelFormat
 from ...model.tile import TileConfig
 
 __all__ = ["BusProtocolError", "PeripheralRun", "run_peripheral"]
@@ -46,6 +48,7 @@ class Framebuffer:
     height: int
     x0: int = 0
     y0: int = 0
+    format: PixelFormat = FORMATS["grey8"]
 
     def setup(self) -> list[tuple[str, int]]:
         return [
@@ -53,18 +56,30 @@ class Framebuffer:
             ("fb_stride", self.stride),
             ("fb_size", self.width | self.height << 16),
             ("fb_origin", self.x0 | self.y0 << 16),
+            ("fb_format", self.format.code),
         ]
 
-    def image(self, memory: dict, missing: int = -1):
-        return [
-            [memory.get(self.base + y * self.stride + x, missing) for x in range(self.width)]
-            for y in range(self.height)
-        ]
+    def addresses(self, y: int, x: int) -> list[int]:
+        """The byte addresses of framebuffer pixel (x, y), lowest first."""
+        first = self.base + y * self.stride + x * self.format.bytes
+        return list(range(first, first + self.format.bytes))
+
+    def image(self, memory: dict, missing: int = -1) -> np.ndarray:
+        """The framebuffer's bytes: (height, width) for one byte a pixel, else (height,
+        width, bytes) as `edgeaa.model.framebuffer.framebuffer_bytes` has them."""
+        image = np.array(
+            [
+                [[memory.get(a, missing) for a in self.addresses(y, x)] for x in range(self.width)]
+                for y in range(self.height)
+            ]
+        )
+        return image[..., 0] if self.format.bytes == 1 else image
 
 
 class _Memory:
     """The framebuffer's target: stalls with probability `stall`, acks each taken write
-    after 0 to `latency` clocks (in order, at most one a clock)."""
+    after 0 to `latency` clocks (in order, at most one a clock), writes the bytes of its
+    lanes (any ``sel`` but none)."""
 
     def __init__(
         self, dut, rng: random.Random, stall: float, latency: int, tag: str, errors=frozenset()
@@ -72,8 +87,8 @@ class _Memory:
         self.bus, self.irq, self.rng, self.tag = dut.fb, dut.irq, rng, tag
         self.done = dut.datapath.writer.done  # a probe: no tile is done before its acks
         self.stall, self.latency = stall, latency
-        self.errors = errors  # byte addresses answered with err (the write is not done)
-        self.queue: deque = deque()  # (clock due, byte address, byte)
+        self.errors = frozenset(errors)  # a write to one of these bytes gets err (not done)
+        self.queue: deque = deque()  # (clock due, {byte address: byte})
         self.writes: Counter = Counter()
         self.memory: dict = {}
         self.clock = self.irqs = self.aborted = 0
@@ -85,7 +100,7 @@ class _Memory:
             irq = ctx.get(self.irq)
             head = self.queue[0] if self.queue else None
             ack = head is not None and head[0] <= self.clock
-            err = ack and head[1] in self.errors
+            err = ack and not self.errors.isdisjoint(head[1])
             ctx.set(bus.ack, ack and not err)
             ctx.set(bus.err, err)
             ctx.set(bus.stall, self.rng.random() < self.stall)
@@ -98,10 +113,10 @@ class _Memory:
             if ctx.get(self.done) and self.queue:
                 self._fail("a tile done with its writes unanswered")
             if ack:
-                _, address, byte = self.queue.popleft()
-                if address not in self.errors:
-                    self.memory[address] = byte
-                    self.writes[address] += 1
+                _, data = self.queue.popleft()
+                if self.errors.isdisjoint(data):
+                    self.memory |= data
+                    self.writes.update(data.keys())
             if cyc and stb and not ctx.get(bus.stall):
                 self._take(ctx)
             await ctx.tick()
@@ -112,12 +127,12 @@ class _Memory:
         if not ctx.get(bus.we):
             self._fail("a read on the framebuffer bus")
         sel, word = ctx.get(bus.sel), ctx.get(bus.dat_w)
-        if sel not in (1, 2, 4, 8):
-            self._fail(f"sel {sel:04b}: one byte lane per pixel")
-        lane = sel.bit_length() - 1
-        address = ctx.get(bus.adr) * 4 + lane
+        if sel == 0:
+            self._fail("a write with no byte lane")
+        lanes = [k for k in range(4) if sel >> k & 1]
+        data = {ctx.get(bus.adr) * 4 + k: (word >> 8 * k) & 0xFF for k in lanes}
         due = max(self.clock + 1 + self.rng.randint(0, self.latency), self._last_due() + 1)
-        self.queue.append((due, address, (word >> 8 * lane) & 0xFF))
+        self.queue.append((due, data))
 
     def _last_due(self) -> int:
         return self.queue[-1][0] if self.queue else 0
@@ -234,7 +249,7 @@ def run_peripheral(
         await cpu.finish(ctx)
         while (await cpu.read(ctx, REGISTERS["status"])) & 1:
             pass
-        names = ["status", "errors", "tiles", "irq_status"]
+        names = ["status", "errors", "tiles", "irq_status", "fb_format"]
         for name in names:
             result[name] = await cpu.read(ctx, REGISTERS[name])
         for i, name in enumerate(STATS):
