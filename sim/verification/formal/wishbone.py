@@ -44,7 +44,6 @@ from amaranth.hdl import (
     Cat,
     ClockDomain,
     ClockSignal,
-    Elaboratable,
     Module,
     Signal,
     Value,
@@ -62,6 +61,7 @@ from ....hdl.peripheral import (
 )
 from ....model.config import EdgeConfig
 from ....model.tile import TileConfig
+from .harness import ClockedHarness
 from .run import FormalResult, find_tools, run_harness, sby_script
 from .stream import held, hold_rule
 
@@ -80,16 +80,12 @@ SMALL = TileConfig(EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4), 
 LANE_RUNS = tuple((1 << n) - 1 << k for n in range(1, 5) for k in range(5 - n))
 
 
-class WriterHarness(Elaboratable):
+class WriterHarness(ClockedHarness):
     def __init__(self, tile: TileConfig = SMALL, fault: str | None = None):
         if fault is not None and fault not in WRITER_FAULTS:
             raise ValueError(f"fault must be one of {', '.join(WRITER_FAULTS)} or None")
+        super().__init__(reset=True)
         self.dut, self.fault = FramebufferWriter(tile), fault
-        self.domain = ClockDomain("sync")
-
-    @property
-    def clk(self) -> Signal:
-        return self.domain.clk
 
     def elaborate(self, platform):
         m = Module()
@@ -165,17 +161,13 @@ class _FreeDatapath(_Datapath):
         return m
 
 
-class WindowHarness(Elaboratable):
+class WindowHarness(ClockedHarness):
     def __init__(self, tile: TileConfig = SMALL, fault: str | None = None):
         if fault is not None and fault not in WINDOW_FAULTS:
             raise ValueError(f"fault must be one of {', '.join(WINDOW_FAULTS)} or None")
+        super().__init__(reset=True)
         self.dut, self.tile, self.fault = EdgePeripheral(tile, fifo_depth=4), tile, fault
         self.dut.datapath = _FreeDatapath(tile, 4)
-        self.domain = ClockDomain("sync")
-
-    @property
-    def clk(self) -> Signal:
-        return self.domain.clk
 
     def elaborate(self, platform):
         m = Module()
