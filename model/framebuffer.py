@@ -19,6 +19,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .accumulate import alpha_coverage
 from .tile import alpha_steps
 
 __all__ = [
@@ -65,8 +66,7 @@ def default_format(channels: int) -> PixelFormat:
 def scale_channel(c, bits: int, n: int):
     """round(c (2**n - 1) / (2**bits - 1)) half up: an I-bit channel as an n-bit field, exact
     (ints or numpy arrays)."""
-    full = (1 << bits) - 1
-    return (2 * c * ((1 << n) - 1) + full) // (2 * full)
+    return alpha_coverage(c, (1 << n) - 1, (1 << bits) - 1)  # the same rounding as alpha
 
 
 def scale_steps(c, bits: int, n: int):
