@@ -64,6 +64,7 @@ SETS = (
     ("Feather", "outline", "feather-icons", "dist/icons"),
 )
 METHODS = ("paper", "seg4", "Skia", "AGG", "resvg")
+PACKAGES = ("bootstrap-icons", "heroicons", "@tabler/icons", "feather-icons")
 
 
 def find_sets(root: str) -> list[tuple[str, str, str, list[str]]]:
@@ -73,6 +74,11 @@ def find_sets(root: str) -> list[tuple[str, str, str, list[str]]]:
     out = []
     for name, kind, package, folder in SETS:
         where = os.path.join(modules, package)
+        if not os.path.isfile(os.path.join(where, "package.json")):
+            raise ValueError(
+                f"--root {root}: no {package} there; install the sets "
+                f"with npm install --prefix {root} {' '.join(PACKAGES)}"
+            )
         with open(os.path.join(where, "package.json")) as meta:
             version = json.load(meta)["version"]
         folder = os.path.join(where, folder)
@@ -139,10 +145,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--write", metavar="FILE", help="one CSV row per measured icon")
     parser.add_argument("--jobs", type=int, default=1, help="processes measuring (default 1)")
     args = parser.parse_args(argv)
+    for name, least in (("size", 1), ("sample", 0), ("jobs", 1)):
+        if getattr(args, name) < least:
+            parser.error(f"--{name} must be at least {least}, not {getattr(args, name)}")
+    try:
+        sets = find_sets(args.root)
+    except ValueError as error:
+        parser.error(str(error))
     seed = args.seed if args.seed is not None else random.randrange(1 << 32)
     print(f"size {args.size} px; sample {args.sample or 'all'} per set; seed {seed}")
     config, rng, start = EdgeConfig(), random.Random(seed), time.perf_counter()
-    sets = find_sets(args.root)
     refusals: dict[str, list[str]] = {}
     loaded = {}
     bar = ProgressBar("loading", sum(len(files) for *_, files in sets), unit="icons")
