@@ -275,10 +275,11 @@ def main() -> int:
     pages = [lambda g=g: page(g) for g in glyphs]
     maps = [lambda c=c: map_scene(c) for c in cells]
     if args.only:
-        for make in makers + pages + maps:
-            if args.only in make().name:
-                row = run_scene(make, config, args.repeats)
-                print(stage_table([row]), flush=True)
+        chosen = [make for make in makers + pages + maps if args.only in make().name]
+        if not chosen:
+            parser.error(f"--only {args.only!r}: no scene's name holds it")
+        for make in chosen:
+            print(stage_table([run_scene(make, config, args.repeats)]), flush=True)
         return 0
     rows = []
     for make in makers + pages + maps:
