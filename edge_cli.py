@@ -294,8 +294,33 @@ def _add_channels_option(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_bus_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--bus",
+        choices=("wishbone", "axi-lite"),
+        default=None,
+        help="with --top peripheral: the register window's bus, Wishbone B4 pipelined "
+        "(default) or AXI4-Lite (a one-transaction bridge in front of the same window, byte "
+        "addresses); the framebuffer writer is Wishbone in both (docs/hardware.md, "
+        "'Integrating edgeaa')",
+    )
+
+
+def _peripheral_type(args: argparse.Namespace) -> type:
+    """The peripheral `--bus` asks for (its class: it takes the compact pipeline's tile)."""
+    if args.bus == "axi-lite":
+        from .hdl.axi_lite import AxiLitePeripheral
+
+        return AxiLitePeripheral
+    from .hdl.peripheral import EdgePeripheral
+
+    return EdgePeripheral
+
+
 def _check_top(prog: str, args: argparse.Namespace) -> None:
     """Refuse the options that do nothing for --top, then fill in the core's default."""
+    if args.top != "peripheral" and args.bus is not None:
+        raise usage_error(prog, "--bus chooses the peripheral's register bus: add --top peripheral")
     if args.top == "core" and args.tile is not None:
         raise usage_error(prog, "--tile sizes the polygon pipeline: add --top pipeline")
     if args.top == "core" and args.channels is not None:
@@ -357,6 +382,7 @@ class VerilogCommand(Command):
         )
         _add_tile_option(parser)
         _add_channels_option(parser)
+        _add_bus_option(parser)
         add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         add_config_options(parser)
@@ -368,9 +394,9 @@ class VerilogCommand(Command):
             return core_verilog(args.core_top(config), name=args.name)
         pipeline = pipeline_from_args(args.pipeline, args.tile, config, args.channels)
         if args.top == "peripheral":  # around the compact pipeline (`--pipeline` refused)
-            from .hdl.peripheral import peripheral_verilog
+            from .hdl.core import flat_verilog
 
-            return peripheral_verilog(pipeline.tile, name=args.name)
+            return flat_verilog(_peripheral_type(args)(pipeline.tile), args.name)
         from .hdl.pipeline import pipeline_verilog
 
         return pipeline_verilog(pipeline, name=args.name)
@@ -421,7 +447,8 @@ class VerilogCommand(Command):
         from .hdl.integration import must_drive
 
         stream = "" if args.core_top is None else args.core_top.format.stream
-        items = must_drive(args.top, config, stream)
+        kind = _peripheral_type(args).top_kind if args.top == "peripheral" else args.top
+        items = must_drive(kind, config, stream)
         note = f"{self.prog}: note: drive every input: " + "; ".join(items)
         if args.output in (None, "-"):
             note += " (-o FILE.v also writes the lint waiver file FILE.vlt)"
@@ -509,6 +536,7 @@ class SynthCommand(Command):
         )
         _add_tile_option(parser)
         _add_channels_option(parser)
+        _add_bus_option(parser)
         add_pipeline_option(parser, "with --top pipeline")
         _add_core_option(parser)
         parser.add_argument(
@@ -534,12 +562,11 @@ class SynthCommand(Command):
             heading += f"{'s' * (tile.channels > 1)}, {config}"
             return heading, {"pipeline": lambda: EdgePipeline(pipeline), **baseline}
         if args.top == "peripheral":
-            from .hdl.peripheral import EdgePeripheral
-
             tile = pipeline_from_args(None, args.tile, config, args.channels).tile
-            heading = f"peripheral, tile {tile.width}x{tile.height}, {tile.channels} channel"
+            heading = f"peripheral ({args.bus or 'wishbone'} register window), tile "
+            heading += f"{tile.width}x{tile.height}, {tile.channels} channel"
             heading += f"{'s' * (tile.channels > 1)}, {config}"
-            return heading, {"peripheral": lambda: EdgePeripheral(tile), **baseline}
+            return heading, {"peripheral": lambda: _peripheral_type(args)(tile), **baseline}
         heading = f"{args.core} core, {args.setup_units} setup units, {config}"
 
         def core():

@@ -312,9 +312,25 @@ def _assigns(line: str, name: str) -> bool:
 # -- what a user must drive, and the header -----------------------------------------------------
 
 
+# The peripherals' register windows by top kind: what must be driven, and the header's lines.
+WINDOWS = {
+    "peripheral": (
+        "bus__cyc, bus__stb (0 when idle) and the other bus__* inputs",
+        ["bus__* (the register window, a target) is Wishbone B4 pipelined, 32-bit data, word",
+         "  addresses, byte lanes."],
+    ),
+    "axi-lite peripheral": (
+        "axi__awvalid, axi__wvalid, axi__arvalid (0 when idle), axi__bready, axi__rready and "
+        "the other axi__* inputs",
+        ["axi__* (the register window, a subordinate) is AXI4-Lite, 32-bit data, byte",
+         "  addresses (4 times the word offset), write strobes; one transaction at a time."],
+    ),
+}  # fmt: skip
+
+
 def must_drive(top_kind: str, config, stream: str = "") -> list[str]:
-    """The inputs that must be driven, one line each (`top_kind`: "core", "pipeline" or
-    "peripheral";
+    """The inputs that must be driven, one line each (`top_kind`: "core", "pipeline" or a
+    peripheral's, `WINDOWS`;
     `stream`: the core's output stream, `edgeaa.model.beat.BeatFormat.stream`)."""
     if top_kind == "core":
         full = 1 << config.coord_bits
@@ -325,10 +341,10 @@ def must_drive(top_kind: str, config, stream: str = "") -> list[str]:
             "(0, 0, 0, 0) steps only column 0 or row 0, most edges give no beat; a 4-state "
             "simulator reads X and the core's state goes X)",
         ]
-    if top_kind == "peripheral":
+    if top_kind in WINDOWS:
         return [
-            "clk, rst (synchronous, active high); bus__cyc, bus__stb (0 when idle) and the "
-            "other bus__* inputs; fb__ack, fb__stall, fb__err (0 when unused)"
+            f"clk, rst (synchronous, active high); {WINDOWS[top_kind][0]}; fb__ack, fb__stall, "
+            "fb__err (0 when unused)"
         ]
     return ["clk, rst (synchronous, active high), commands__valid and pixels__ready"]
 
@@ -350,11 +366,12 @@ def header(
         lines.append("Every port is unsigned.")
     lines.append("Must be driven (a Verilog input has no default):")
     lines += [f"  {item}" for item in must_drive(top_kind, config, stream)]
-    if top_kind == "peripheral":
+    if top_kind in WINDOWS:
         lines += [
-            "bus__* (the register window, a target) and fb__* (the framebuffer writes, an",
-            "  initiator) are Wishbone B4 pipelined, 32-bit data, word addresses, byte lanes;",
-            "  docs/hardware.md, 'Integrating edgeaa', has the register map.",
+            *WINDOWS[top_kind][1],
+            "fb__* (the framebuffer writes, an initiator) is Wishbone B4 pipelined, 32-bit data,",
+            "  word addresses, byte lanes; docs/hardware.md, 'Integrating edgeaa', has the",
+            "  register map.",
             "Reset: one clock of rst clears every register, the FIFO, the pipeline and the",
             "  counters; the pipeline then clears its tile (one clock a pixel) before pixels.",
         ]
