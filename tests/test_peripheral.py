@@ -123,7 +123,7 @@ def test_the_peripheral_verilog_is_lint_clean(channels):
     source = peripheral_verilog(TileConfig(EdgeConfig(7, 2, 4), 8, 4, channels=channels))
     header = re.search(r"module edgeaa_peripheral\((.*?)\);", source, re.S).group(1)
     names = ("cyc", "stb", "we", "adr", "dat_w", "sel", "dat_r", "ack", "stall", "err")
-    want = {"clk", "rst", "irq"} | {f"{bus}__{n}" for bus in ("bus", "fb") for n in names}
+    want = {"clk", "rst", "irq"} | {f"{bus}__{n}" for bus in ("bus", "fb", "dl") for n in names}
     assert {port.strip() for port in header.split(",")} == want
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
