@@ -328,7 +328,8 @@ def must_drive(top_kind: str, config, stream: str = "") -> list[str]:
     if top_kind == "peripheral":
         return [
             "clk, rst (synchronous, active high); bus__cyc, bus__stb (0 when idle) and the "
-            "other bus__* inputs; fb__ack, fb__stall, fb__err (0 when unused)"
+            "other bus__* inputs; fb__ack, fb__stall, fb__err and dl__ack, dl__stall, dl__err "
+            "(0 when unused)"
         ]
     return ["clk, rst (synchronous, active high), commands__valid and pixels__ready"]
 
@@ -352,8 +353,9 @@ def header(
     lines += [f"  {item}" for item in must_drive(top_kind, config, stream)]
     if top_kind == "peripheral":
         lines += [
-            "bus__* (the register window, a target) and fb__* (the framebuffer writes, an",
-            "  initiator) are Wishbone B4 pipelined, 32-bit data, word addresses, byte lanes;",
+            "bus__* (the register window, a target), fb__* (the framebuffer writes, an",
+            "  initiator) and dl__* (the display-list reads, an initiator) are Wishbone B4",
+            "  pipelined, 32-bit data, word addresses, byte lanes;",
             "  docs/hardware.md, 'Integrating edgeaa', has the register map.",
             "Reset: one clock of rst clears every register, the FIFO, the pipeline and the",
             "  counters; the pipeline then clears its tile (one clock a pixel) before pixels.",

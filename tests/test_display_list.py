@@ -100,7 +100,7 @@ def test_a_start_while_the_list_runs_is_ignored():
 def test_a_zero_length_list_reads_nothing_and_is_done():
     commands = (Command.tile(0, 0, 9), Command.flush())  # in memory, but not in the list
     fb = Framebuffer(base=0, stride=8, width=8, height=4)
-    dl = DisplayList(commands, length=0, stall=0.5, latency=3)
+    dl = DisplayList(commands, length=0, latency=3)  # no stall: a first read would be taken
     run = run_peripheral(SMALL, [], fb, seed=2, stall=0.3, latency=2, display_list=dl)
     assert not run.reads and not run.writes
     regs = run.registers
@@ -143,18 +143,19 @@ def test_a_bus_error_reading_the_list_ends_it_and_the_window_still_works():
 
 def test_a_list_between_window_commands_keeps_their_order():
     """The first tile written through the window (still in the FIFO when the list starts),
-    the next two from the list, the last through the window once the list is done."""
+    the next two from the list, the last through the window once the list is done; while
+    the list runs the window pushes bad commands (dropped and counted, whichever tile they
+    land in), so both push into the FIFO in the same clocks: none is lost or doubled."""
     plan, commands, fb = _tiny()
     runs = _tile_runs(commands)
     assert len(runs) == 4
     middle = tuple(runs[1] + runs[2])
-    dl = DisplayList(middle, stall=0.5, latency=4, after=tuple(runs[3]))
-    run = run_peripheral(
-        TILE, runs[0], fb, seed=13, idle=0.2, stall=0.6, latency=3, display_list=dl
-    )
+    bad = (Command(6),) * 12
+    dl = DisplayList(middle, stall=0.3, latency=2, during=bad, after=tuple(runs[3]))
+    run = run_peripheral(TILE, runs[0], fb, seed=13, stall=0.6, latency=3, display_list=dl)
     _check_image(run, fb, render_scene(plan, engine="model").image, "seed 13")
     _check_list_read_once(run, dl, TILE, "seed 13")
-    assert run.registers["tiles"] == 4
+    assert run.registers["tiles"] == 4 and run.registers["errors"] == len(bad), "seed 13"
 
 
 def test_the_reader_takes_a_command_every_words_plus_two_clocks():

@@ -49,7 +49,8 @@ class DisplayList:
     of them); its memory stalls with probability `stall`, acks after 0 to `latency` clocks
     and answers a read of a byte in `errors` with err. `restart`: once running, `dl_base`
     is moved past the list and the start bit written again (it must be ignored: a read past
-    the list fails the run). `after`: commands written through the window once the list is
+    the list fails the run). `during`: commands written through the window right after the
+    start (they go between the list's at command boundaries); `after`: once the list is
     done."""
 
     commands: tuple
@@ -59,6 +60,7 @@ class DisplayList:
     latency: int = 0
     errors: frozenset = frozenset()
     restart: bool = False
+    during: tuple = ()
     after: tuple = ()
 
     def words(self, tile: TileConfig) -> dict[int, int]:
@@ -305,6 +307,7 @@ def run_peripheral(
             result["status_at_restart"] = await cpu.read(ctx, REGISTERS["status"])
             await cpu.request(ctx, REGISTERS["dl_base"], dl.base + 4 * len(dl.words(tile)))
             await cpu.request(ctx, REGISTERS["ctrl"], 0b10)
+        await write_commands(ctx, dl.during)
         await cpu.finish(ctx)
         while (await cpu.read(ctx, REGISTERS["status"])) & 0b1000:
             pass

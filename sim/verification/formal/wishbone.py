@@ -20,7 +20,7 @@ check can fail. `run_writer_proof` runs it (`tests/test_peripheral.py`, marked f
 **The register window** (`edgeaa.hdl.peripheral.EdgePeripheral`'s target rules), proven by
 k-induction for any initiator that keeps the B4 rules (``stb`` only within ``cyc``, a
 stalled request held unchanged), any reset and any datapath behind the window (its FIFO's
-``ready``, level, counters and framebuffer bus free: `_FreeDatapath`):
+``ready``, level, counters, framebuffer and display-list buses free: `_FreeDatapath`):
 
 * one ``ack`` per taken request, in the clock after it; no ``ack`` without one (a reset
   drops the one in flight), none while ``cyc`` is and was low (wb2axip's ``fwb_slave.v``
@@ -177,9 +177,9 @@ class WindowHarness(ClockedHarness):
         # The harness's own registers: not cleared by the reset they observe.
         m.domains.past = ClockDomain("past", reset_less=True)
         m.d.comb += [ClockSignal("past").eq(self.domain.clk), rst.eq(AnySeq(1))]
-        bus, fb = dut.bus, dut.fb
+        bus, fb, dl = dut.bus, dut.fb, dut.dl
         free = [bus.cyc, bus.stb, bus.we, bus.adr, bus.dat_w, bus.sel]
-        free += [fb.ack, fb.stall, fb.err, fb.dat_r]
+        free += [fb.ack, fb.stall, fb.err, fb.dat_r, dl.ack, dl.stall, dl.err, dl.dat_r]
         for port in map(Value.cast, free):
             m.d.comb += port.eq(AnySeq(len(port)))
         # The initiator: stb within cyc; a stalled request offered again unchanged.
