@@ -14,6 +14,7 @@ import pytest
 from fixtures import TINY_SCENE
 
 from edgeaa.hdl.peripheral import (
+    REGISTERS,
     EdgePeripheral,
     command_words,
     pack_command,
@@ -58,6 +59,18 @@ def test_the_register_map_has_no_overlap():
     regs = register_map(TILE)
     assert len(set(regs.values())) == len(regs)
     assert max(regs.values()) < 1 << len(EdgePeripheral(TILE).bus.adr)
+
+
+def test_the_docs_register_map_is_registers():
+    """docs/hardware.md's register map table names every register of `REGISTERS` at its
+    offset, and no other (``stats.*`` and ``cmd0`` .. stand for the first of their range)."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "hardware.md").read_text()
+    table = text.split("**Register map**", 1)[1].split("\n\n", 2)[1]
+    rows = re.findall(r"^\| (\d+)(?: to [^|]*)? \| `([a-z_]+)", table, re.M)
+    documented = {name: int(word) for word, name in rows}
+    assert documented == REGISTERS
 
 
 @pytest.mark.parametrize(
