@@ -140,17 +140,19 @@ class FramebufferWriter(wiring.Component):
     pixel), where (X, Y) is the pixel's engine position (the tile's origin from ``origins``,
     one per tile, plus its x, y) less ``fb_origin``; pixels outside ``fb_size`` are not
     written. A pixel is one write with its byte lanes in ``sel``, or two when its bytes cross
-    a 32-bit word (the second to the next word). ``done`` pulses when every write of a tile
-    is acknowledged (the next tile's writes start after it); ``bus_error`` pulses on an
-    ``err`` (the write counts as answered)."""
+    a 32-bit word (the second to the next word); in a grey build the next pixel of a row
+    that comes before the write is offered joins it (`_join_grey`: up to 4 a write), unless
+    ``pack_grey`` is False (one lane a write, for a target that takes no more).
+    ``done`` pulses when every write of a tile is acknowledged (the next tile's writes start
+    after it); ``bus_error`` pulses on an ``err`` (the write counts as answered)."""
 
-    def __init__(self, tile: TileConfig):
+    def __init__(self, tile: TileConfig, pack_grey: bool = True):
         if tile.config.intensity_bits > FB_PIXEL_BITS:
             raise ValueError(
                 f"the framebuffer's channels are bytes: at most {FB_PIXEL_BITS} intensity "
                 f"bits, not {tile.config.intensity_bits}"
             )
-        self._tile = tile
+        self._tile, self._pack = tile, pack_grey and tile.channels == 1
         origin = data.StructLayout({"x": unsigned(FB_BITS), "y": unsigned(FB_BITS)})
         super().__init__(
             {
@@ -187,28 +189,29 @@ class FramebufferWriter(wiring.Component):
         self.hi_sel = s2_hi_sel  # observed by the formal harness
         outstanding = Signal(range(MAX_OUTSTANDING + 1))
         self.outstanding = outstanding  # observed by the formal harness
-        issued = Signal()
+        issued, joins = Signal(), Signal()  # joins: grey only (`_join_grey`)
         m.d.comb += [
             bus.sel.eq(sel),
             bus.cyc.eq(s2_valid | (outstanding != 0)),
-            bus.stb.eq(s2_valid & (outstanding != MAX_OUTSTANDING)),
+            bus.stb.eq(s2_valid & ~joins & (outstanding != MAX_OUTSTANDING)),
             bus.we.eq(1),
             issued.eq(bus.stb & ~bus.stall),
         ]
         answered = bus.cyc & (bus.ack | bus.err)
         m.d.sync += outstanding.eq(outstanding + issued - answered)
         m.d.comb += self.bus_error.eq(bus.cyc & bus.err)
+        byte, lanes, packed = self._pixel_bytes(m, s1["x"], s1["y"], s1_value)
+        wide_sel, wide_dat = Signal(8), Signal(2 * WORD_BITS)
+        with m.Switch(byte[:2]):  # the bytes moved to their lanes
+            for k in range(4):
+                with m.Case(k):
+                    m.d.comb += wide_sel.eq(Cat(Const(0, k), lanes))
+                    m.d.comb += wide_dat.eq(Cat(Const(0, 8 * k), packed))
         s2_free = ~s2_valid | (issued & (s2_hi_sel == 0))
-        s1_move = s1_valid & (~s1_inside | s2_free)
-        with m.If(s1_move & s1_inside):
-            byte, lanes, packed = self._pixel_bytes(m, s1["x"], s1["y"], s1_value)
-            shift = byte[:2]
-            wide_sel, wide_dat = Signal(8), Signal(2 * WORD_BITS)
-            with m.Switch(shift):  # the bytes moved to their lanes
-                for k in range(4):
-                    with m.Case(k):
-                        m.d.comb += wide_sel.eq(Cat(Const(0, k), lanes))
-                        m.d.comb += wide_dat.eq(Cat(Const(0, 8 * k), packed))
+        if self._pack:
+            self._join_grey(m, s1, s1_valid & s1_inside, s2_valid, s2_free, packed, sel, joins)
+        s1_move = s1_valid & (~s1_inside | s2_free | joins)
+        with m.If(s1_move & s1_inside & ~joins):
             m.d.sync += [
                 s2_valid.eq(1),
                 bus.adr.eq(byte[2:]),
@@ -246,6 +249,31 @@ class FramebufferWriter(wiring.Component):
         with m.If(finished):
             m.d.sync += draining.eq(0)
         return m
+
+    def _join_grey(self, m, s1, inside, s2_valid, s2_free, packed, sel, joins):
+        """A grey 8 pixel is one byte, so a row's pixels are neighbouring bytes: the pixel in
+        stage 1 ``joins`` the write waiting in stage 2 (its byte in the lane above the
+        write's last) when it is the next pixel of the same row and that lane is in the
+        word (the last is not lane 3), and the write has not been offered under a stall (a
+        stalled request is offered again unchanged): up to 4 pixels a write when they come
+        back to back. The lane follows from the last, not from the address, so ``sel``
+        stays a run of lanes whatever the ``fb_*`` registers do, and ``stb`` waits on no
+        multiplier (only this compare)."""
+        last_x, last_y, offered = Signal(FB_BITS), Signal(FB_BITS), Signal()
+        bus = self.bus
+        m.d.comb += joins.eq(
+            inside & s2_valid & ~offered & ~sel[3] & (s1["y"] == last_y) & (s1["x"] == last_x + 1)
+        )
+        with m.If(inside & (joins | s2_free)):  # the pixel joins or loads
+            m.d.sync += [last_x.eq(s1["x"]), last_y.eq(s1["y"])]
+        with m.If(bus.stb & bus.stall):
+            m.d.sync += offered.eq(1)
+        with m.If(bus.stb & ~bus.stall):
+            m.d.sync += offered.eq(0)
+        above = (sel << 1)[:4] & ~sel  # the lane above the last (sel is a run of lanes)
+        with m.If(joins):
+            lanes = (Mux(above[k], packed[:8], bus.dat_w[8 * k : 8 * k + 8]) for k in range(4))
+            m.d.sync += [sel.eq(sel | above), bus.dat_w.eq(Cat(*lanes))]
 
     def _pixel_bytes(self, m, x, y, value):
         """The pixel's byte address, its byte lanes from bit 0 and its bytes (format
@@ -368,11 +396,11 @@ class _Datapath(wiring.Component):
     first and the reader's when the window pushes none (the window's stall rule stays "only
     on a full FIFO")."""
 
-    def __init__(self, tile: TileConfig, fifo_depth: int):
+    def __init__(self, tile: TileConfig, fifo_depth: int, pack_grey: bool):
         self._tile = tile
         self.fifo = fifo.SyncFIFOBuffered(width=command_layout(tile).size, depth=fifo_depth)
         self.pipeline = EdgePipeline(tile)
-        self.writer = FramebufferWriter(tile)
+        self.writer = FramebufferWriter(tile, pack_grey)
         self.reader = DisplayListReader(tile)
         stats = data.StructLayout({name: unsigned(32) for name in STATS})
         super().__init__(
@@ -471,15 +499,15 @@ class EdgePeripheral(wiring.Component):
     """The pipeline behind a register window (``bus``, a Wishbone B4 pipelined target,
     `REGISTERS`), writing its tiles into a framebuffer through ``fb`` (an initiator) and
     reading display lists through ``dl`` (another); ``irq`` is high while an enabled
-    interrupt is pending."""
+    interrupt is pending. ``pack_grey``: `FramebufferWriter`'s."""
 
     top_kind = "peripheral"  # `edgeaa verilog`'s header (`edgeaa.hdl.integration`)
 
-    def __init__(self, tile: TileConfig, fifo_depth: int = 16):
+    def __init__(self, tile: TileConfig, fifo_depth: int = 16, pack_grey: bool = True):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
         self._tile = tile
-        self.datapath = _Datapath(tile, fifo_depth)
+        self.datapath = _Datapath(tile, fifo_depth, pack_grey)
         super().__init__(
             {
                 "bus": In(bus_signature(SLAVE_ADDR_BITS)),

@@ -4,7 +4,8 @@ register window as a driver would (random idle clocks between requests, back to 
 otherwise, each write held while the target stalls), a memory that takes the framebuffer
 writes and one that holds a display list (`DisplayList`) and answers its reads, each with
 random stalls and random ack latencies, in order. All check the handshake: an ack only for
-a request taken, one each, in order; no ack or err while ``cyc`` is low; requests not
+a request taken, one each, in order; no ack or err while ``cyc`` is low; the memories that a
+request they stalled is offered again unchanged (while ``cyc`` stays high); requests not
 answered when the initiator drops ``cyc`` are counted as aborted (the peripheral does it
 only on a reset).
 """
@@ -40,6 +41,7 @@ class PeripheralRun:
     cpu_stalls: int  # clocks the CPU's requests waited (the command FIFO full)
     aborted: int  # framebuffer writes taken, then cyc dropped before their ack (a reset)
     reads: Counter = field(default_factory=Counter)  # display-list word address -> reads
+    requests: int = 0  # framebuffer write requests taken
 
 
 @dataclass(frozen=True)
@@ -134,10 +136,10 @@ class _Memory:
         self.writes: Counter = Counter()
         self.reads: Counter = Counter()
         self.memory: dict = {}
-        self.clock = self.irqs = self.aborted = 0
+        self.clock = self.irqs = self.aborted = self.requests = 0
 
     async def run(self, ctx):
-        bus, irq = self.bus, 0
+        bus, irq, held = self.bus, 0, None
         while True:
             self.irqs += ctx.get(self.irq) and not irq  # rising edges of the interrupt
             irq = ctx.get(self.irq)
@@ -149,6 +151,10 @@ class _Memory:
             ctx.set(bus.dat_r, head[2] if ack and not err else 0)
             ctx.set(bus.stall, self.rng.random() < self.stall)
             cyc, stb = ctx.get(bus.cyc), ctx.get(bus.stb)
+            request = [ctx.get(s) for s in (bus.adr, bus.sel, bus.dat_w, bus.we)]
+            if held is not None and cyc and (not stb or request != held):
+                self._fail("a stalled request not offered again unchanged")
+            held = request if cyc and stb and ctx.get(bus.stall) else None
             if self.queue and not cyc:  # the initiator aborts the cycle: no ack comes
                 self.aborted += len(self.queue)
                 self.queue.clear()
@@ -185,6 +191,7 @@ class _Memory:
             data = {adr * 4 + k: (ctx.get(bus.dat_w) >> 8 * k) & 0xFF for k in lanes}
         due = max(self.clock + 1 + self.rng.randint(0, self.latency), self._last_due() + 1)
         self.queue.append((due, data, word))
+        self.requests += 1
 
     def _last_due(self) -> int:
         return self.queue[-1][0] if self.queue else 0
@@ -357,4 +364,5 @@ def run_peripheral(
         cpu.stalls,
         memory.aborted,
         reads,
+        memory.requests,
     )

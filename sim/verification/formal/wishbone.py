@@ -167,7 +167,7 @@ class WindowHarness(ClockedHarness):
             raise ValueError(f"fault must be one of {', '.join(WINDOW_FAULTS)} or None")
         super().__init__(reset=True)
         self.dut, self.tile, self.fault = EdgePeripheral(tile, fifo_depth=4), tile, fault
-        self.dut.datapath = _FreeDatapath(tile, 4)
+        self.dut.datapath = _FreeDatapath(tile, 4, pack_grey=True)
 
     def elaborate(self, platform):
         m = Module()
