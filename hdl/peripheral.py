@@ -359,6 +359,7 @@ class DisplayListReader(wiring.Component):
         issued, answered = Signal(range(words + 1)), Signal(range(words + 1))
         staged = Signal(words * WORD_BITS)  # word 0 ends lowest: each new word enters on top
         failed = Signal()
+        self.issued, self.answered = issued, answered  # observed by the formal harness
         m.d.comb += [
             bus.stb.eq(self.running & (left != 0) & (issued != words)),
             bus.cyc.eq(bus.stb | (issued != answered)),

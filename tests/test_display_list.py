@@ -231,3 +231,19 @@ def test_a_bigger_scene_from_a_display_list_under_heavy_wait_states(seed):
     )  # fmt: skip
     _check_image(run, fb, render_scene(plan, engine="model").image, f"seed {seed}")
     _check_list_read_once(run, dl, TILE, f"seed {seed}")
+
+
+@pytest.mark.parametrize("fault", [None, "drop_stb"])
+def test_the_reader_keeps_the_wishbone_initiator_rules(fault):
+    """k-induction, a few seconds: ``stb`` within ``cyc``, ``cyc`` held while a read is
+    unanswered, a stalled read offered again unchanged, at most a command's words in flight,
+    reads of whole words, a command not taken held; for any start, length, FIFO, reset and
+    target."""
+    from edgeaa.sim.verification.formal.wishbone import run_reader_proof
+
+    result = run_reader_proof(fault=fault, timeout=300)
+    if fault is None:
+        assert result.status == "PASS", result.log_tail
+    else:  # a request dropped under stall is caught
+        failed = " ".join(result.failed)
+        assert result.status == "FAIL" and "a held request stays valid" in failed, failed
