@@ -288,7 +288,8 @@ class BoardCore(wiring.Component):
     def __init__(self, tile: TileConfig, pages, origin=(0, 0), timing: VideoTiming = VGA):
         self._tile, self._timing, self._origin = tile, timing, tuple(origin)
         self.player = DisplayListPlayer(tile, pages, board_setup(timing, origin))
-        self.peripheral = EdgePeripheral(tile)
+        # Its RAM writes one byte lane a clock: grey pixels one a write.
+        self.peripheral = EdgePeripheral(tile, pack_grey=False)
         self.framebuffer = FramebufferRAM(timing.width * timing.height)
         self.timer = VideoTimer(timing)
         super().__init__(

@@ -344,7 +344,7 @@ def must_drive(top_kind: str, config, stream: str = "") -> list[str]:
     if top_kind in WINDOWS:
         return [
             f"clk, rst (synchronous, active high); {WINDOWS[top_kind][0]}; fb__ack, fb__stall, "
-            "fb__err (0 when unused)"
+            "fb__err and dl__ack, dl__stall, dl__err (0 when unused)"
         ]
     return ["clk, rst (synchronous, active high), commands__valid and pixels__ready"]
 
@@ -369,9 +369,9 @@ def header(
     if top_kind in WINDOWS:
         lines += [
             *WINDOWS[top_kind][1],
-            "fb__* (the framebuffer writes, an initiator) is Wishbone B4 pipelined, 32-bit data,",
-            "  word addresses, byte lanes; docs/hardware.md, 'Integrating edgeaa', has the",
-            "  register map.",
+            "fb__* (the framebuffer writes, an initiator) and dl__* (the display-list reads, an",
+            "  initiator) are Wishbone B4 pipelined, 32-bit data, word addresses, byte lanes;",
+            "  docs/hardware.md, 'Integrating edgeaa', has the register map.",
             "Reset: one clock of rst clears every register, the FIFO, the pipeline and the",
             "  counters; the pipeline then clears its tile (one clock a pixel) before pixels.",
         ]

@@ -7,6 +7,7 @@ errors and interrupt as the model says; the Verilog lint-clean."""
 
 from __future__ import annotations
 
+import random
 import re
 
 import numpy as np
@@ -14,6 +15,7 @@ import pytest
 from fixtures import TINY_SCENE
 
 from edgeaa.hdl.peripheral import (
+    REGISTERS,
     EdgePeripheral,
     command_words,
     pack_command,
@@ -60,6 +62,18 @@ def test_the_register_map_has_no_overlap():
     assert max(regs.values()) < 1 << len(EdgePeripheral(TILE).bus.adr)
 
 
+def test_the_docs_register_map_is_registers():
+    """docs/hardware.md's register map table names every register of `REGISTERS` at its
+    offset, and no other (``stats.*`` and ``cmd0`` .. stand for the first of their range)."""
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "hardware.md").read_text()
+    table = text.split("**Register map**", 1)[1].split("\n\n", 2)[1]
+    rows = re.findall(r"^\| (\d+)(?: to [^|]*)? \| `([a-z_]+)", table, re.M)
+    documented = {name: int(word) for word, name in rows}
+    assert documented == REGISTERS
+
+
 @pytest.mark.parametrize(
     "seed, idle, stall, latency", [(0, 0.0, 0.0, 0), (11, 0.3, 0.5, 3), (23, 0.1, 0.8, 6)]
 )
@@ -95,11 +109,11 @@ def test_the_reset_bit_drops_what_was_running_and_the_next_scene_is_whole():
     commands = scene_commands(plan, TILE)
     fb = Framebuffer(base=64, stride=20, width=20, height=14)
     first = commands[: len(commands) // 2]  # a tile's flush in flight when the reset comes
-    run = run_peripheral(TILE, commands, fb, seed=3, stall=0.5, latency=4, before_reset=first)
+    run = run_peripheral(TILE, commands, fb, seed=3, stall=0.7, latency=6, before_reset=first)
     assert run.aborted > 0, "no framebuffer write was in flight at the reset"
     image = np.array(fb.image(run.memory))
     assert np.array_equal(image, render_scene(plan, engine="model").image), "seed 3"
-    clean = run_peripheral(TILE, commands, fb, seed=3, stall=0.5, latency=4)
+    clean = run_peripheral(TILE, commands, fb, seed=3, stall=0.7, latency=6)
     for name in ("tiles", "errors", "stats.core_busy", "stats.acc_busy"):
         assert run.registers[name] == clean.registers[name], f"the reset left {name}"
 
@@ -123,7 +137,7 @@ def test_the_peripheral_verilog_is_lint_clean(channels):
     source = peripheral_verilog(TileConfig(EdgeConfig(7, 2, 4), 8, 4, channels=channels))
     header = re.search(r"module edgeaa_peripheral\((.*?)\);", source, re.S).group(1)
     names = ("cyc", "stb", "we", "adr", "dat_w", "sel", "dat_r", "ack", "stall", "err")
-    want = {"clk", "rst", "irq"} | {f"{bus}__{n}" for bus in ("bus", "fb") for n in names}
+    want = {"clk", "rst", "irq"} | {f"{bus}__{n}" for bus in ("bus", "fb", "dl") for n in names}
     assert {port.strip() for port in header.split(",")} == want
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -158,7 +172,82 @@ def test_a_bus_error_is_reported_in_status_and_interrupt():
     run = run_peripheral(tile, commands, fb, seed=4, stall=0.3, latency=2, errors={5})
     regs = run.registers
     assert regs["status"] & 0b10 and regs["irq_status"] == 0b11 and regs["tiles"] == 2
-    assert 5 not in run.memory and len(run.writes) == 16 * 4 - 1
+    # The err answers the write of byte 5 and of the grey pixels joined to it (its word).
+    lost = {y * 16 + x for y in range(4) for x in range(16)} - set(run.writes)
+    assert 5 in lost and lost <= {4, 5, 6, 7} and set(run.writes.values()) == {1}
+    assert not lost & set(run.memory)
+
+
+@pytest.mark.parametrize("seed, stall, latency", [(0, 0.0, 0), (6, 0.5, 3)])
+def test_grey_pixels_of_one_word_go_in_one_write(seed, stall, latency):
+    """Back-to-back grey 8 pixels of one word are one write with their byte lanes: a whole
+    tile at an aligned base and stride is a write a word when the memory never stalls (4
+    pixels a write), fewer than a write a pixel under stalls (a write offered under a
+    stall takes no more pixels), and bit for bit either way."""
+    tile = TileConfig(SMALL, 8, 4)
+    commands, want = _empty_tiles(tile, 2, 2)
+    fb = Framebuffer(base=0x100, stride=16, width=16, height=8)
+    run = run_peripheral(tile, commands, fb, seed=seed, stall=stall, latency=latency)
+    assert np.array_equal(np.array(fb.image(run.memory)), want), f"seed {seed}"
+    assert set(run.writes.values()) == {1}, f"seed {seed}: a pixel written twice"
+    pixels = 16 * 8
+    if stall:
+        assert run.requests < pixels, f"seed {seed}: {run.requests} writes"
+    else:
+        assert run.requests == pixels // 4, f"seed {seed}: {run.requests} writes"
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_the_writer_joins_grey_pixels_that_come_with_gaps_and_stalls(seed):
+    """The writer alone, its pixels with random gaps (a pixel may arrive while a write waits
+    under a stall: it must not join it, the memory model checks that a stalled request is
+    offered again unchanged), the memory stalling and waiting at random: every byte once,
+    the tile's values, fewer writes than pixels."""
+    from types import SimpleNamespace
+
+    from amaranth.sim import Simulator
+
+    from edgeaa.hdl.peripheral import FramebufferWriter
+    from edgeaa.sim.simulators.wishbone import _Memory
+
+    tile = TileConfig(SMALL, 8, 4)
+    dut = FramebufferWriter(tile)
+    rng = random.Random(seed)
+    values = [rng.randrange(16) for _ in range(tile.pixels)]
+    shim = SimpleNamespace(fb=dut.bus, irq=dut.done, datapath=SimpleNamespace(writer=dut))
+    memory = _Memory(shim, random.Random(seed + 100), 0.5, 3, f"seed {seed}")
+    finished = []
+
+    async def feed(ctx):
+        ctx.set(dut.fb_base, 0x203)
+        ctx.set(dut.fb_stride, 11)
+        ctx.set(dut.fb_size, {"x": 8, "y": 4})
+        ctx.set(dut.origins.valid, 1)
+        for k, value in enumerate(values):
+            while rng.random() < 0.4:  # a gap
+                ctx.set(dut.pixels.valid, 0)
+                await ctx.tick()
+            pixel = {"x": k % 8, "y": k // 8, "value": value, "last": k == len(values) - 1}
+            ctx.set(dut.pixels.payload, pixel)
+            ctx.set(dut.pixels.valid, 1)
+            await ctx.tick().until(dut.pixels.ready)
+        ctx.set(dut.pixels.valid, 0)
+        for _ in range(500):
+            if ctx.get(dut.done):
+                finished.append(True)
+                break
+            await ctx.tick()
+
+    sim = Simulator(dut)
+    sim.add_clock(1e-6)
+    sim.add_testbench(memory.run, background=True)
+    sim.add_testbench(feed)
+    sim.run()
+    assert finished, f"seed {seed}: the tile never done"
+    fb = Framebuffer(base=0x203, stride=11, width=8, height=4)
+    assert fb.image(memory.memory).ravel().tolist() == values, f"seed {seed}"
+    assert set(memory.writes.values()) == {1}, f"seed {seed}: a byte written twice"
+    assert memory.requests < len(values), f"seed {seed}: {memory.requests} writes"
 
 
 def test_edgeaa_verilog_top_peripheral(tmp_path, capsys):

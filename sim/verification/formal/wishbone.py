@@ -17,10 +17,18 @@ The proof runs on a grey and a 3-channel writer (`run_writer_proof`'s ``channels
 Fault ``drop_stb`` (the harness sees ``stb`` low in the clock after a stall) shows the hold
 check can fail. `run_writer_proof` runs it (`tests/test_peripheral.py`, marked formal; about 1 s).
 
+**The display-list reader** (initiator rules) (`edgeaa.hdl.peripheral.DisplayListReader`),
+proven the same way for any start, base, length, idle, FIFO ready and reset and any target
+as above: ``stb`` only within ``cyc``, ``cyc`` held while a read is unanswered, a stalled
+request offered again unchanged, at most `command_words` in flight (its count is the
+harness's), ``we`` low and ``sel`` all four lanes; and its command stream's hold rule (a
+command not taken stays valid, unchanged). Fault ``drop_stb`` as the writer's.
+`run_reader_proof` runs it (in the default run; about 3 s).
+
 **The register window** (`edgeaa.hdl.peripheral.EdgePeripheral`'s target rules), proven by
 k-induction for any initiator that keeps the B4 rules (``stb`` only within ``cyc``, a
 stalled request held unchanged), any reset and any datapath behind the window (its FIFO's
-``ready``, level, counters and framebuffer bus free: `_FreeDatapath`):
+``ready``, level, counters, framebuffer and display-list buses free: `_FreeDatapath`):
 
 * one ``ack`` per taken request, in the clock after it; no ``ack`` without one (a reset
   drops the one in flight), none while ``cyc`` is and was low (wb2axip's ``fwb_slave.v``
@@ -53,6 +61,7 @@ from amaranth.lib import wiring
 from ....hdl.peripheral import (
     MAX_OUTSTANDING,
     REGISTERS,
+    DisplayListReader,
     EdgePeripheral,
     FramebufferWriter,
     _Datapath,
@@ -66,16 +75,20 @@ from .run import FormalResult, find_tools, run_harness, sby_script
 from .stream import held, hold_rule
 
 __all__ = [
+    "READER_FAULTS",
     "WINDOW_FAULTS",
     "WRITER_FAULTS",
+    "ReaderHarness",
     "WindowHarness",
     "WriterHarness",
+    "run_reader_proof",
     "run_window_proof",
     "run_writer_proof",
 ]
 
 WRITER_FAULTS = ("drop_stb",)
 WINDOW_FAULTS = ("ack_stalled",)
+READER_FAULTS = ("drop_stb",)
 SMALL = TileConfig(EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4), 8, 4)
 LANE_RUNS = tuple((1 << n) - 1 << k for n in range(1, 5) for k in range(5 - n))
 
@@ -149,6 +162,63 @@ def run_writer_proof(
     return run_harness(proof, fault, harness, script, find_tools(), "prove", depth, timeout=timeout)
 
 
+class ReaderHarness(ClockedHarness):
+    def __init__(self, tile: TileConfig = SMALL, fault: str | None = None):
+        if fault is not None and fault not in READER_FAULTS:
+            raise ValueError(f"fault must be one of {', '.join(READER_FAULTS)} or None")
+        super().__init__(reset=True)
+        self.dut, self.tile, self.fault = DisplayListReader(tile), tile, fault
+
+    def elaborate(self, platform):
+        m = Module()
+        dut = self.dut
+        m.submodules.dut = dut.elaborate(platform)  # here: the harness reads its counts
+        m.domains.sync = self.domain
+        m.d.comb += self.domain.rst.eq(AnySeq(1))
+        bus, out = dut.bus, dut.commands
+        free = [dut.start, dut.base, dut.length, dut.idle, out.ready]
+        free += [bus.stall, bus.ack, bus.err, bus.dat_r]
+        for port in map(Value.cast, free):
+            m.d.comb += port.eq(AnySeq(len(port)))
+        words = command_words(self.tile)
+        unanswered = Signal(range(words + 2))
+        taken = bus.cyc & bus.stb & ~bus.stall
+        answer = bus.ack | bus.err
+        m.d.comb += Assume(~(bus.ack & bus.err))
+        m.d.comb += Assume(~answer | (unanswered != 0))
+        m.d.sync += unanswered.eq(unanswered + taken - answer)
+        stb = bus.stb
+        was_held = held(m, _Request(bus), "request_held")
+        if self.fault == "drop_stb":
+            stb = bus.stb & ~was_held
+
+        def check(condition, message):
+            m.d.comb += Assert(condition, message)
+
+        check(~bus.stb | bus.cyc, "wishbone: stb only within cyc")
+        check((unanswered == 0) | bus.cyc, "wishbone: cyc held while a request is unanswered")
+        check(unanswered <= words, "wishbone: at most a command's words in flight")
+        check(dut.issued <= words, "reader: at most a command's reads issued")
+        check(dut.answered <= dut.issued, "reader: no more answers than reads")
+        check(unanswered == dut.issued - dut.answered, "reader: its count of reads in flight")
+        check(~bus.we & (bus.sel == 0xF), "wishbone: the reader reads whole words")
+        hold_rule(m, stb, Cat(bus.adr, bus.sel, bus.dat_w, bus.we), was_held, check, "request")
+        command_held = held(m, out, "command_held")
+        hold_rule(m, out.valid, out.payload, command_held, check, "command")
+        return m
+
+
+def run_reader_proof(
+    *, fault: str | None = None, depth: int = 4, timeout: float | None = None
+) -> FormalResult:
+    """k-induction of `ReaderHarness` (``depth`` clocks) with SymbiYosys."""
+    harness = ReaderHarness(fault=fault)
+    script = sby_script("prove", depth)
+    return run_harness(
+        "reader_wishbone", fault, harness, script, find_tools(), "prove", depth, timeout=timeout
+    )
+
+
 class _FreeDatapath(_Datapath):
     """The window's datapath with every output free (the FIFO's ready and level, busy,
     counters, the framebuffer bus): the window's rules hold whatever it does."""
@@ -167,7 +237,7 @@ class WindowHarness(ClockedHarness):
             raise ValueError(f"fault must be one of {', '.join(WINDOW_FAULTS)} or None")
         super().__init__(reset=True)
         self.dut, self.tile, self.fault = EdgePeripheral(tile, fifo_depth=4), tile, fault
-        self.dut.datapath = _FreeDatapath(tile, 4)
+        self.dut.datapath = _FreeDatapath(tile, 4, pack_grey=True)
 
     def elaborate(self, platform):
         m = Module()
@@ -177,9 +247,9 @@ class WindowHarness(ClockedHarness):
         # The harness's own registers: not cleared by the reset they observe.
         m.domains.past = ClockDomain("past", reset_less=True)
         m.d.comb += [ClockSignal("past").eq(self.domain.clk), rst.eq(AnySeq(1))]
-        bus, fb = dut.bus, dut.fb
+        bus, fb, dl = dut.bus, dut.fb, dut.dl
         free = [bus.cyc, bus.stb, bus.we, bus.adr, bus.dat_w, bus.sel]
-        free += [fb.ack, fb.stall, fb.err, fb.dat_r]
+        free += [fb.ack, fb.stall, fb.err, fb.dat_r, dl.ack, dl.stall, dl.err, dl.dat_r]
         for port in map(Value.cast, free):
             m.d.comb += port.eq(AnySeq(len(port)))
         # The initiator: stb within cyc; a stalled request offered again unchanged.
