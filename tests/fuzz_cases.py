@@ -324,6 +324,10 @@ def top_options(d: Draft, p_top: float, p_tile: float, p_core: float) -> None:
         d.choice("--channels", ["1", "3", "4"])
         if top == "core":  # the pipeline and the peripheral take 1, 3 or 4
             d.bad("--channels with --top core")
+    if d.chance(p_tile / 4):
+        d.choice("--bus", ["wishbone", "axi-lite"])
+        if top != "peripheral":  # the peripheral's register window
+            d.bad("--bus without --top peripheral")
 
 
 def verilog_case(d: Draft, quick: bool) -> None:
