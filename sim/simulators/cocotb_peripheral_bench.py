@@ -98,8 +98,8 @@ class PipelinedSlave(WishboneSlave):
 
 
 def _geometric(rng: random.Random, p: float) -> int:
-    """Clocks of a run each taken with probability `p`: a run of them is a stall or an idle
-    wait, and its clocks are `p` of all clocks on average (then one clock without)."""
+    """A run of clocks, each drawn with probability `p` (a stall, an idle wait). Runs of
+    stalls with one clock without between them are a share `p` of the clocks."""
     n = 0
     while rng.random() < p:
         n += 1
