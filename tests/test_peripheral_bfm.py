@@ -49,7 +49,6 @@ def _check(tile, commands, fb, want, *, seed, idle, stall, latency):
     assert run.cpu_stalls > 0, f"{tag}: the command FIFO never stalled the CPU"
     assert run.fb_stalls > 0 or not stall, f"{tag}: the memory never stalled the writer"
     assert run.aborted == 0, f"{tag}: cyc dropped with writes unanswered"
-    return run
 
 
 def _grey(scene: dict, seed: int, idle: float, stall: float, latency: int):

@@ -14,6 +14,7 @@ minutes to compile).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import random
 import shutil
@@ -23,8 +24,9 @@ from collections import Counter
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
+from xml.etree import ElementTree
 
-from cocotb_tools.runner import Verilator, get_results
+from cocotb_tools.runner import Verilator
 
 from ...hdl.peripheral import REGISTERS, pack_command, peripheral_verilog
 from ...model.tile import TileConfig
@@ -112,6 +114,18 @@ def build(tile: TileConfig) -> Path:
         return publish(build_dir, final)
 
 
+def _failure(results: Path) -> str | None:
+    """Why the bench's one test failed (its results file, JUnit XML), or None if it passed."""
+    if not results.exists():
+        return "the simulator stopped with no results"
+    tests = ElementTree.parse(results).getroot().findall(".//testcase")
+    if len(tests) != 1:
+        return f"{len(tests)} tests ran, not the bench's one"
+    for bad in [*tests[0].iter("failure"), *tests[0].iter("error")]:
+        return bad.get("message") or bad.text or "failed"
+    return None
+
+
 def run_bfm(
     tile: TileConfig,
     commands,
@@ -145,21 +159,23 @@ def run_bfm(
     with tempfile.TemporaryDirectory(prefix="edgeaa-bfm-") as tmp:
         path = Path(tmp) / "run.json"
         path.write_text(json.dumps(run))
+        results = Path(tmp) / "results.xml"
         start = time.perf_counter()
-        results = _Verilator().test(
-            test_module=BENCH,
-            hdl_toplevel=TOP,
-            hdl_toplevel_lang="verilog",
-            build_dir=build_dir,
-            test_dir=tmp,
-            results_xml=str(Path(tmp) / "results.xml"),
-            extra_env={RUN_ENV: str(path)},
-            seed=random.Random(seed).randrange(1 << 31),
-        )
+        with contextlib.suppress(SystemExit):  # the runner's exit on a failure, under pytest
+            _Verilator().test(
+                test_module=BENCH,
+                hdl_toplevel=TOP,
+                hdl_toplevel_lang="verilog",
+                build_dir=build_dir,
+                test_dir=tmp,
+                results_xml=str(results),
+                extra_env={RUN_ENV: str(path)},
+                seed=random.Random(seed).randrange(1 << 31),
+            )
         seconds = time.perf_counter() - start
-        tests, failed = get_results(results)
-        if tests != 1 or failed:
-            raise BfmError(f"seed {seed}: the cocotb bench failed (its log is above)")
+        failure = _failure(results)
+        if failure is not None:
+            raise BfmError(f"seed {seed}: {failure} (the simulator's log is above)")
         done = json.loads(path.with_suffix(".result.json").read_text())
     return BfmRun(
         memory=dict(done["memory"]),
