@@ -353,26 +353,27 @@ def test_the_fast_pipeline_renders_every_builtin_to_the_renderers_image(name):
     assert np.array_equal(result.image, render_scene(plan).image)
 
 
+# Each configuration is a Verilator build (about 15 s of CPU): the tests below share them.
+# Four units are tested with two pixel lanes (fast), one unit with four.
+LANE_BUILDS = [(4, 2), (1, 4)]  # (setup units, pixel lanes)
+
+
 @settings(max_examples=15, deadline=None, database=None)
-@given(data=st.data(), seed=st.integers(0, 2**31), units=st.sampled_from([2, 4]))
-def test_several_setup_units_under_back_pressure_give_the_renderers_image(data, seed, units):
+@given(data=st.data(), seed=st.integers(0, 2**31))
+def test_two_setup_units_under_back_pressure_give_the_renderers_image(data, seed):
     scene = data.draw(small_scenes(DEFAULT))
-    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units)
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), 2)
     plan = plan_scene(scene, DEFAULT)
     result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4)
-    assert result.mismatches == 0, f"seed {seed}, {units} units"
+    assert result.mismatches == 0, f"seed {seed}"
 
 
 @settings(max_examples=12, deadline=None, database=None)
-@given(
-    data=st.data(),
-    seed=st.integers(0, 2**31),
-    units=st.sampled_from([1, 4]),
-    lanes=st.sampled_from([2, 4]),
-)
-def test_pixel_lanes_under_back_pressure_give_the_renderers_image(data, seed, units, lanes):
+@given(data=st.data(), seed=st.integers(0, 2**31), build=st.sampled_from(LANE_BUILDS))
+def test_pixel_lanes_under_back_pressure_give_the_renderers_image(data, seed, build):
     """A flush of two or four pixels a clock, the sink stalling at random: every pixel in its
     place, the renderer's image."""
+    units, lanes = build
     scene = data.draw(small_scenes(DEFAULT))
     pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units, lanes)
     plan = plan_scene(scene, DEFAULT)
@@ -395,14 +396,15 @@ def test_two_lanes_of_four_channels_under_back_pressure_are_the_canvas(data, see
     assert result.mismatches == 0 and np.array_equal(result.image, want), f"seed {seed}"
 
 
-@pytest.mark.parametrize(("lanes", "seed"), [(2, 1), (4, 2)])
-def test_pixel_lanes_drop_bad_commands_as_the_model_does(lanes, seed):
+@pytest.mark.parametrize(("build", "seed"), zip(LANE_BUILDS, [1, 2], strict=True))
+def test_pixel_lanes_drop_bad_commands_as_the_model_does(build, seed):
     from edgeaa.sim.simulators import pipeline_harness
 
     tile = TileConfig(SMALL, 8, 8)
     commands = bad_commands(SMALL.subpixel_scale)
     want, result = model_frames(tile, commands)
-    pipeline = PipelineConfig(tile, 1, lanes)
+    pipeline = PipelineConfig(tile, *build)
+    lanes = pipeline.pixel_lanes
     run = pipeline_harness.run(pipeline, commands, seed=seed, idle=0.3, stall=0.3)
     assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors)
     for frame, model in zip(run.frames(tile), want, strict=True):
@@ -433,7 +435,8 @@ def test_the_fast_pipeline_drops_bad_commands_as_the_model_does(seed):
     tile = TileConfig(SMALL, 8, 8)
     commands = bad_commands(SMALL.subpixel_scale)
     want, result = model_frames(tile, commands)
-    run = pipeline_harness.run(PipelineConfig(tile, 4), commands, seed=seed, idle=0.3, stall=0.3)
+    fast = PipelineConfig.named("fast", tile)  # the lanes test's build
+    run = pipeline_harness.run(fast, commands, seed=seed, idle=0.3, stall=0.3)
     assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors), f"seed {seed}"
     for frame, model in zip(run.frames(tile), want, strict=True):
         assert np.array_equal(frame, model), f"seed {seed}"
@@ -493,15 +496,17 @@ def test_a_cached_pipeline_build_is_found_without_generating_the_verilog(monkeyp
 
     monkeypatch.setattr(pipeline_harness, "pipeline_verilog", refuse)
     assert pipeline_harness.build(tile) == exe
-    key = harness.sources_key(("pipeline", tile), "-O2")
+    key = harness.sources_key(("pipeline", tile), harness.OPTIMIZE)
     assert harness.sources_key(("pipeline", tile), "-O3") != key
-    assert harness.sources_key(("pipeline", TileConfig(EdgeConfig(), 32, 32)), "-O2") != key
+    assert (
+        harness.sources_key(("pipeline", TileConfig(EdgeConfig(), 32, 32)), harness.OPTIMIZE) != key
+    )
     source = tmp_path / "source.py"  # one more source folder, then a change in it
     source.write_text("A = 1\n")
     monkeypatch.setattr(harness, "SOURCE_DIRS", (*harness.SOURCE_DIRS, tmp_path))
-    before = harness.sources_key(("pipeline", tile), "-O2")
+    before = harness.sources_key(("pipeline", tile), harness.OPTIMIZE)
     source.write_text("A = 2\n")
-    assert harness.sources_key(("pipeline", tile), "-O2") != before
+    assert harness.sources_key(("pipeline", tile), harness.OPTIMIZE) != before
 
 
 @pytest.mark.parametrize("channels", [3, 4])

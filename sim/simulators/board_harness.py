@@ -150,7 +150,7 @@ def _top(core: BoardCore) -> harness.HarnessTop:
     return harness.harness_top(core, TOP, PAGE_FORMAT, VIDEO_FORMAT)
 
 
-def build(core: BoardCore, pages, *, optimize: str = "-O2") -> Path:
+def build(core: BoardCore, pages, *, optimize: str = harness.OPTIMIZE) -> Path:
     """Compile `core` (made from `pages`) and the harness, cached by the sources and the
     pages; returns the executable."""
 

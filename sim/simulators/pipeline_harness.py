@@ -140,7 +140,7 @@ def _top(pipeline: PipelineConfig) -> harness.HarnessTop:
     return harness.harness_top(EdgePipeline(pipeline), TOP, command_format(tile), pixels)
 
 
-def build(pipeline: PipelineConfig | TileConfig, *, optimize: str = "-O2") -> Path:
+def build(pipeline: PipelineConfig | TileConfig, *, optimize: str = harness.OPTIMIZE) -> Path:
     """Compile the pipeline (a `PipelineConfig`, or a `TileConfig`: the compact one) and the
     harness (cached by their text); returns the executable."""
     pipeline = pipeline_config(pipeline)
@@ -149,7 +149,9 @@ def build(pipeline: PipelineConfig | TileConfig, *, optimize: str = "-O2") -> Pa
     return harness.build(key, pipeline_top(pipeline), verilog, optimize)
 
 
-def use_executable(pipeline: PipelineConfig | TileConfig, exe: Path, *, optimize="-O2") -> None:
+def use_executable(
+    pipeline: PipelineConfig | TileConfig, exe: Path, *, optimize=harness.OPTIMIZE
+) -> None:
     """Run `pipeline`'s pipeline from `exe`, a build the caller already has (`edgeaa verify`'s
     workers are handed the driver's), instead of generating and hashing the Verilog again."""
     harness.use_executable(("pipeline", pipeline_config(pipeline), optimize), exe)

@@ -53,7 +53,7 @@ class FastRun:
         return self.fmt.from_array(self.beats)
 
 
-def build(config: EdgeConfig, *, optimize: str = "-O2", top=LineCore) -> Path:
+def build(config: EdgeConfig, *, optimize: str = harness.OPTIMIZE, top=LineCore) -> Path:
     """Compile the core `top` + harness once per (Verilog, harness, flags); returns the
     executable."""
     return harness.build(
