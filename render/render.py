@@ -30,7 +30,8 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from dataclasses import dataclass, field
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -46,6 +47,7 @@ from ..model.accumulate import (
 )
 from ..model.beat import DELTAS
 from ..model.column import ArrayArith
+from .bands import Band, band_rows, split_bands
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
     SAFE,
@@ -107,6 +109,12 @@ class Plan:
     @property
     def boundary(self) -> np.ndarray:
         return self.inside != ""
+
+    @cached_property
+    def intensities(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each polygon's I_in and I_out, as arrays."""
+        intensity = np.array([p.intensity for p in self.polygons], dtype=np.int64)
+        return intensity, np.array([p.i_out for p in self.polygons], dtype=np.int64)
 
     @property
     def edge_count(self) -> int:
@@ -201,8 +209,7 @@ def edge_arrays(plan: Plan, ids: np.ndarray, clip: bool) -> EdgeArrays:
         left = plan.left[ids]
         x0[left] = x1[left] = (plan.offset[0] - 1) * plan.config.subpixel_scale
     owner = plan.polygon[ids]
-    intensity = np.array([p.intensity for p in plan.polygons], dtype=np.int64)
-    i_out = np.array([p.i_out for p in plan.polygons], dtype=np.int64)
+    intensity, i_out = plan.intensities
     return EdgeArrays(
         x0, c[:, 1], x1, c[:, 3], plan.inside[ids] == "left",
         intensity[owner] if len(owner) else np.zeros(0, np.int64),
@@ -707,13 +714,17 @@ class Render:
     culled: np.ndarray  # edges culled: wholly above, below or right of the viewport
     projected: np.ndarray  # edges wholly left, sent as their projection
     horizontal: np.ndarray  # horizontal boundary edges not sent (they add nothing)
-    deltas: DeltaRun  # every nonzero delta the engine produced, in image pixels
-    shapes: tuple[np.ndarray, np.ndarray]  # the sent edges' columns and clipped_start
+    # every nonzero delta the engine produced, in image pixels (in several bands: those in
+    # the image's rows, band by band)
+    deltas: DeltaRun
     rows_scanned: int  # buffer rows prefix-summed
     cells_scanned: int  # buffer cells prefix-summed and resolved
     pixel_stores: int  # image pixels written
     seconds: float = 0.0  # whole render
-    timings: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)  # wall seconds per stage
+    cpu: dict = field(default_factory=dict)  # this process's CPU seconds per stage
+    bands: int = 1  # bands of rows rendered (`render.bands`)
+    workers: int = 1  # threads that rendered them
     # Rendered by the hardware pipeline (`edgeaa.render.pipeline.render_pipeline`): its run
     # (clocks, counters; `edgeaa.sim.simulators.pipeline_harness.PipelineRun`) and the pixels
     # where its image differs from the model's.
@@ -723,9 +734,13 @@ class Render:
 
     @cached_property
     def cycles(self) -> int:
-        """The timing model's clocks from the first command to the last beat: computed when
-        asked (--stats), not on every render."""
-        return cycles_of(self.plan.config, self.shapes, DELTAS)
+        """The timing model's clocks from the first command to the last beat, the edges sent
+        as one stream to the image (not band by band): computed when asked (--stats)."""
+        from ..model.edge import setup_batch
+
+        arrays = edge_arrays(self.plan, self.sent, clip=self.skip)
+        setups = setup_batch(self.plan.config, *arrays.args(), arrays.clip)
+        return cycles_of(self.plan.config, (setups.columns, setups.clipped_start), DELTAS)
 
 
 def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:
@@ -758,59 +773,40 @@ def render_scene(
     skip: bool = True,
     progress=None,
     canvas=None,
+    rows: int | None = None,
 ) -> Render:
     """Render a scene (or a plan of one): the deltas from `engine` (the model, or the
     stepper core alone in a simulator), accumulated and resolved by the model. The whole
     pipeline in hardware is `edgeaa.render.pipeline.render_pipeline`. progress(done, total,
     stage). A `canvas` (`edgeaa.render.paint.Canvas`, for a colour scene planned as its
-    coverage) composites instead, and its image is the render's."""
+    coverage) composites instead, and its image is the render's. The model's render with
+    skipping goes in bands of `rows` rows (`render.bands`; None: about BAND_COLUMNS columns
+    a band), the others in one; the image is the same either way."""
     start = time.perf_counter()
     plan = scene if isinstance(scene, Plan) else plan_scene(scene, config or EdgeConfig())
-    config = plan.config
     chosen = edges_to_send(plan, skip)
     sent = chosen["sent"]
-    timings = {"plan": time.perf_counter() - start}
-
-    t = time.perf_counter()
-    arrays = edge_arrays(plan, sent, clip=skip)
-    setups = _check_columns(config, arrays)
-    report = None if progress is None else (lambda done, total: progress(done, total, engine))
-    run, shapes = run_deltas(config, arrays, engine, progress=report, setups=setups)
-    deltas = run.in_image(sent, plan.offset)
-    timings["engine"] = time.perf_counter() - t
-
-    t = time.perf_counter()
+    timings = {"plan": time.perf_counter() - start, "engine": 0.0, "accumulate": 0.0}
+    cpu = {"engine": 0.0, "accumulate": 0.0}
     # The narrowest unsigned type that holds full scale: a 16384 x 16384 image is 256 MiB.
-    dtype = np.min_scalar_type(config.full_scale)
+    dtype = np.min_scalar_type(plan.config.full_scale)
     image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, dtype=dtype)
-    if canvas is not None:
-        image = canvas.image
-    counts = {"rows": 0, "cells": 0, "stores": 0}
-    polygon_of = plan.polygon[deltas.edge]
-    # the engine keeps the edges' order, and a polygon's edges are consecutive: no sort then
-    order = None if (np.diff(polygon_of) >= 0).all() else np.argsort(polygon_of, kind="stable")
-    by_poly = np.searchsorted(
-        polygon_of if order is None else polygon_of[order], np.arange(len(plan.polygons) + 1)
-    )
-    drawn = [i for i in range(len(plan.polygons)) if by_poly[i + 1] > by_poly[i]]
-    batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
-    for run in _accumulation_runs(plan, drawn) if batch else [[[i]] for i in drawn]:
-        if progress is not None:
-            progress(run[0][0], len(plan.polygons), "accumulate")
-        polys = np.array([i for wave in run for i in wave])
-        lo, size = by_poly[polys], by_poly[polys + 1] - by_poly[polys]
-        picks = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(size.sum())
-        picks = picks if order is None else order[picks]  # the polygons' deltas, in order
-        if len(polys) == 1:
-            poly = plan.polygons[polys[0]]
-            _draw_polygon(plan, poly, deltas.take(picks), image, skip, counts, canvas)
-        else:
-            _draw_run(plan, run, deltas.take(picks), size, image, counts)
+    image = image if canvas is None else canvas.image
+    counts = {"rows": 0, "cells": 0, "stores": 0, "columns": 0}
+    bands = _bands(plan, sent, rows if engine == "model" and skip and canvas is None else 0)
+    windows = np.array([p.window for p in plan.polygons], dtype=np.int64).reshape(-1, 4)
+    runs = []
+    for band in bands:
+        with _stage(timings, cpu, "engine"):
+            deltas = _band_deltas(plan, band, engine, skip, progress, counts, len(bands) > 1)
+        with _stage(timings, cpu, "accumulate"):
+            cut = _band_windows(windows, band) if skip else None
+            _accumulate(plan, deltas, cut, image, skip, counts, canvas, progress)
+        runs.append(deltas)
     if canvas is not None:
         canvas.finish()  # the group layers still open
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
-    timings["accumulate"] = time.perf_counter() - t
     return Render(
         image=image,
         plan=plan,
@@ -821,31 +817,119 @@ def render_scene(
         culled=np.flatnonzero(chosen["culled"]),
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
-        deltas=deltas,
-        shapes=shapes,
+        deltas=DeltaRun.concatenate(runs),
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],
         seconds=time.perf_counter() - start,
         timings=timings,
+        cpu=cpu,
+        bands=len(bands),
     )
 
 
-def _check_columns(config: EdgeConfig, arrays: EdgeArrays):
-    """Refuse edges that step more than MAX_STEPPED_COLUMNS columns in all (the engines hold
-    every column's four cells: about 300 bytes a column at its peak); their setups (a
-    `SetupBatch`, which the engine takes on)."""
+@contextmanager
+def _stage(timings: dict, cpu: dict, name: str):
+    """Add the wall and CPU seconds of the block to the stage's."""
+    wall, used = time.perf_counter(), time.process_time()
+    yield
+    timings[name] += time.perf_counter() - wall
+    cpu[name] += time.process_time() - used
+
+
+def _bands(plan: Plan, sent: np.ndarray, rows: int | None) -> list[Band]:
+    """The bands of `rows` rows the image is rendered in (`render.bands`): None chooses by
+    the edges' size, 0 is one band (the whole image, every edge sent, the deltas not cut to
+    its rows); one band also with the truncated accumulator, whose clipped start may round
+    differently (docs/model.md 5.1)."""
+    height = plan.scene.height
+    if rows == 0 or plan.config.accumulator != "exact":
+        return [Band(0, height, sent, np.ones(len(sent), dtype=bool))]
+    S = plan.config.subpixel_scale
+    coords = plan.coords[sent]
+    if rows is None:  # columns along each edge's major axis, about
+        extent = np.maximum(abs(coords[:, 2] - coords[:, 0]), abs(coords[:, 3] - coords[:, 1]))
+        rows = band_rows(height, int((extent // S + 1).sum()))
+    _, lo_y, _, hi_y = _write_boxes(coords, plan.offset, S)
+    return split_bands(height, rows, sent, lo_y, hi_y)
+
+
+def _band_windows(windows: np.ndarray, band: Band) -> np.ndarray:
+    """The polygons' windows cut to the band's rows."""
+    cut = windows.copy()
+    cut[:, 1] = np.maximum(cut[:, 1], band.y0)
+    cut[:, 3] = np.minimum(cut[:, 3], band.y1)
+    return cut
+
+
+def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, counts, cut: bool):
+    """The nonzero deltas of the band's edges (clipped to the band's rows when `cut`, and
+    only those in its rows kept), in image pixels, in the narrowest integer types."""
+    arrays = edge_arrays(plan, band.edges, clip=skip)
+    if cut:
+        top = 1 << plan.config.coord_bits
+        oy = plan.offset[1]
+        y_min, y_max = min(oy + band.y0, top), min(oy + band.y1 - 1, top)
+        arrays = replace(arrays, clip=arrays.clip._replace(y_min=y_min, y_max=y_max))
+    setups = _check_columns(plan.config, arrays, band.new, counts, cut)
+    report = None if progress is None else (lambda done, total: progress(done, total, engine))
+    run, _ = run_deltas(plan.config, arrays, engine, progress=report, setups=setups)
+    rows = (band.y0, band.y1) if cut else None
+    return run.in_image(band.edges, plan.offset, rows, _delta_range(plan.config))
+
+
+def _delta_range(config: EdgeConfig) -> tuple[int, ...]:
+    """The bounds of a delta's image x and y and its value (`DeltaRun.in_image`)."""
+    reach = 4 << config.coord_bits  # image pixels: 2**W and the offset, with margins
+    delta = config.register_widths()["delta"]
+    return (-reach, reach, delta.min, delta.max)
+
+
+def _check_columns(config: EdgeConfig, arrays: EdgeArrays, new, counts, cut: bool):
+    """Count the columns the band's edges step, an x-major edge's in its first band only
+    (`new`: it steps the same columns in every band it meets; a y-major edge its rows in the
+    band), so that over the bands the count is the whole image's; refuse past
+    MAX_STEPPED_COLUMNS (the simulators hold every column's four cells: about 300 bytes a
+    column at its peak). Returns their setups (a `SetupBatch`, which the engine takes on)."""
     from ..model.edge import setup_batch
 
     setups = setup_batch(config, *arrays.args(), arrays.clip)
-    columns = int(setups.columns.sum())
-    if columns > MAX_STEPPED_COLUMNS:
+    counts["columns"] += int(setups.columns[new | ~setups.x_major].sum())
+    if counts["columns"] > MAX_STEPPED_COLUMNS:
+        so_far = " in the bands rendered so far" if cut else ""
         raise SceneError(
-            f"the scene's {len(arrays):,} edges step {columns:,} columns (pixels along each "
-            f"edge's major axis, within the image's rows and left of its right side), more "
-            f"than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
+            f"the scene's edges step {counts['columns']:,} columns{so_far} (pixels along "
+            f"each edge's major axis, within the image's rows and left of its right side), "
+            f"more than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
         )
     return setups
+
+
+def _accumulate(plan: Plan, deltas: DeltaRun, windows, image, skip: bool, counts, canvas, progress):
+    """Accumulate, resolve and composite the deltas polygon by polygon in order, many
+    polygons to a buffer (`_accumulation_runs`) without a canvas, over `windows` (each
+    polygon's, cut to a band; None: the whole image, without skipping)."""
+    polygon_of = plan.polygon[deltas.edge]
+    # the engine keeps the edges' order, and a polygon's edges are consecutive: no sort then
+    order = None if (np.diff(polygon_of) >= 0).all() else np.argsort(polygon_of, kind="stable")
+    by_poly = np.searchsorted(
+        polygon_of if order is None else polygon_of[order], np.arange(len(plan.polygons) + 1)
+    )
+    drawn = np.flatnonzero(by_poly[1:] > by_poly[:-1]).tolist()
+    batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
+    for run in _accumulation_runs(plan, drawn, windows) if batch else [[[i]] for i in drawn]:
+        if progress is not None:
+            progress(run[0][0], len(plan.polygons), "accumulate")
+        polys = np.array([i for wave in run for i in wave])
+        lo, size = by_poly[polys], by_poly[polys + 1] - by_poly[polys]
+        picks = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(size.sum())
+        picks = picks if order is None else order[picks]  # the polygons' deltas, in order
+        if len(polys) == 1:
+            poly = plan.polygons[polys[0]]
+            window = None if windows is None else windows[polys[0]]
+            _draw_polygon(plan, poly, deltas.take(picks), image, window, counts, canvas)
+        else:
+            _draw_run(plan, run, deltas.take(picks), size, image, counts, windows)
 
 
 RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_accumulation_runs`)
@@ -853,7 +937,7 @@ RUN_CELLS = 1 << 18  # and its cells (2 MiB of int64)
 RUN_PAIRS = 1 << 22  # candidate window pairs past which runs are not looked for
 
 
-def _accumulation_runs(plan: Plan, drawn: list[int]) -> list[list[list[int]]]:
+def _accumulation_runs(plan: Plan, drawn: list[int], windows=None) -> list[list[list[int]]]:
     """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_run`), each run
     a list of waves: no two windows of a wave share a pixel, and a polygon's wave comes after
     the wave of every earlier polygon whose window meets its own (one more than theirs), so
@@ -861,8 +945,10 @@ def _accumulation_runs(plan: Plan, drawn: list[int]) -> list[list[list[int]]]:
     RUN_POLYGONS polygons and RUN_CELLS cells of buffer (its windows' areas at most); a
     polygon with an empty window draws nothing and is a run of its own. Past RUN_PAIRS
     candidate pairs (windows heaped on each other), every polygon is a run of its own, in
-    order."""
-    boxes = np.array([plan.polygons[i].window for i in drawn], dtype=np.int64).reshape(-1, 4)
+    order. `windows`: every polygon's (default the plan's)."""
+    if windows is None:
+        windows = np.array([p.window for p in plan.polygons], dtype=np.int64).reshape(-1, 4)
+    boxes = windows[np.asarray(drawn, dtype=np.int64)]
     live = (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
     ids = np.flatnonzero(live)
     pairs = _meeting_windows(boxes[ids])
@@ -920,16 +1006,18 @@ class _InPlace(ArrayArith):
         return np.minimum(a, b, out=a)
 
 
-def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, counts):
+def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, counts, windows):
     """`_draw_polygon` on every polygon of a run (`_accumulation_runs`) at once: each
     polygon's touched rows, each as wide as its window, laid end to end in one flat buffer
     whose first cell of a row takes away the previous row's total, so that one prefix sum
     gives every row's own. The coverage is composited wave by wave (the windows of a wave
     share no pixel). Every pixel gets exactly what `_draw_polygon` gives it, in the same
-    order, with the numpy calls paid once per run, and once per wave to composite."""
+    order, with the numpy calls paid once per run, and once per wave to composite.
+    `windows`: every polygon's."""
     config = plan.config
-    polys = [plan.polygons[i] for wave in run for i in wave]
-    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).reshape(-1, 4).T
+    ids = [i for wave in run for i in wave]
+    polys = [plan.polygons[i] for i in ids]
+    x0, y0, x1, y1 = windows[ids].T
     d = np.array([abs(p.intensity - p.i_out) for p in polys], dtype=np.int64)
     value = np.array([p.intensity for p in polys], dtype=np.int64)
     odd = np.array([p.rule == "evenodd" for p in polys], dtype=bool)
@@ -999,14 +1087,14 @@ def _composite_into(flat, pixel, q, value, d, counts) -> None:
 
 
 def _draw_polygon(
-    plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts, canvas=None
+    plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, window, counts, canvas=None
 ):
-    """Accumulate one polygon's deltas over its window, resolve, composite over the image
-    (or over the canvas's channels)."""
+    """Accumulate one polygon's deltas over `window` (x0, y0, x1, y1; None: the whole
+    image), resolve, composite over the image (or over the canvas's channels)."""
 
     config, scene = plan.config, plan.scene
     d = abs(poly.intensity - poly.i_out)
-    x0, y0, x1, y1 = poly.window if skip else (0, 0, scene.width, scene.height)
+    x0, y0, x1, y1 = (0, 0, scene.width, scene.height) if window is None else map(int, window)
     window = Window(x0, y0, x1, y1)
     ifix = d << config.F
     for block in resolve_rows(window, deltas.x, deltas.y, deltas.delta, poly.rule, ifix):

@@ -1190,7 +1190,9 @@ def test_polygons_accumulated_in_runs_give_the_polygon_by_polygon_image(seed, mo
         p = plan(scene, DEFAULT)
         together = render_scene(p)
         with monkeypatch.context() as m:
-            m.setattr(renderer, "_accumulation_runs", lambda plan, drawn: [[[i]] for i in drawn])
+            m.setattr(
+                renderer, "_accumulation_runs", lambda plan, drawn, *_: [[[i]] for i in drawn]
+            )
             alone = render_scene(p)
         note = f"{scene.name}, seed {seed}"
         assert np.array_equal(together.image, alone.image), note
