@@ -172,7 +172,7 @@ print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"""
 def peak_rss(argv: list[str]) -> int:
     """Peak resident memory (bytes) of a process running `argv` (ru_maxrss, KiB on Linux, of
     the launcher's only child). Raises if it fails."""
-    env = dict(os.environ, PYTHONPATH=str(Path(edgeaa.__file__).resolve().parents[1]))
+    env = dict(os.environ, PYTHONPATH=str(Path(edgeaa.__file__).parents[1]))
     done = subprocess.run(
         [sys.executable, "-c", LAUNCHER, *argv], env=env, capture_output=True, text=True
     )

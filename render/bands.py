@@ -30,15 +30,18 @@ BAND_COLUMNS = 1 << 16
 MIN_BAND_ROWS = 32
 
 
+# Pixels around a band in which an edge's columns are still stepped: a column writes within
+# two rows of its line (docs/model.md section 6), and a pixel more for the rounding.
+CLIP_MARGIN = 4
+
+
 @dataclass(frozen=True)
 class Band:
-    """Image rows y0 .. y1 - 1, the scene edges (sent ones, in order) that can write there,
-    and which of them meet no band above (`new`)."""
+    """Image rows y0 .. y1 - 1 and the scene edges (sent ones, in order) that can write there."""
 
     y0: int
     y1: int
     edges: np.ndarray
-    new: np.ndarray
 
 
 def band_rows(height: int, columns: int) -> int:
@@ -57,16 +60,35 @@ def split_bands(height: int, rows: int, edges: np.ndarray, lo_y, hi_y) -> list[B
     first = np.clip(lo_y, 0, height - 1) // rows
     last = np.clip(hi_y, 0, height - 1) // rows
     spans = np.maximum(last - first + 1, 0)
-    step = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)  # 0 in the first
+    step = np.arange(spans.sum()) - np.repeat(np.cumsum(spans) - spans, spans)
     which = np.repeat(first, spans) + step
     order = np.argsort(which, kind="stable")  # by band, in the given order within one
-    ids, new = np.repeat(np.asarray(edges), spans)[order], (step == 0)[order]
+    ids = np.repeat(np.asarray(edges), spans)[order]
     count = math.ceil(height / rows)
     bounds = np.searchsorted(which[order], np.arange(count + 1)).tolist()
     return [
-        Band(k * rows, min((k + 1) * rows, height), ids[a:b], new[a:b])
+        Band(k * rows, min((k + 1) * rows, height), ids[a:b])
         for k, (a, b) in enumerate(itertools.pairwise(bounds))
     ]
+
+
+def band_columns(coords: np.ndarray, S: int, y_min: int, y_max: int):
+    """Per edge (x0, y0, x1, y1 in sub-pixel units), the pixel columns lo .. hi (inclusive)
+    where its line lies within rows y_min .. y_max (engine pixels) grown by CLIP_MARGIN, grown
+    by CLIP_MARGIN too: an x-major edge clipped to them writes every delta it writes in those
+    rows, so it is not stepped whole in every band it crosses. (The clip window cuts only
+    the major axis: a y-major edge ignores these and is cut to the band's rows.)"""
+    ax, ay, bx, by = (coords[:, k] for k in range(4))
+    lo_y, hi_y = (y_min - CLIP_MARGIN) * S, (y_max + 1 + CLIP_MARGIN) * S
+    dy = by - ay
+    flat = dy == 0
+    safe = np.where(flat, 1, dy)
+    # x where the line meets y = lo_y and y = hi_y, floored (exact integers: no rounding)
+    at = [ax + np.floor_divide((y - ay) * (bx - ax), safe) for y in (lo_y, hi_y)]
+    left, right = np.minimum(ax, bx), np.maximum(ax, bx)
+    lo = np.where(flat, left, np.clip(np.minimum(*at), left, right))
+    hi = np.where(flat, right, np.clip(np.maximum(*at) + 1, left, right))
+    return lo // S - CLIP_MARGIN, -(-hi // S) + CLIP_MARGIN
 
 
 def narrow(values: np.ndarray, lo: int, hi: int) -> np.ndarray:

@@ -425,11 +425,10 @@ def _run_engine(args: argparse.Namespace, scene, plan, bar: ProgressBar):
 def _engine_line(result, stats: bool, units: int) -> str:
     """What the engine did; the stepper's cycles (the timing model, work of its own) only
     with --stats; the pipeline's `units` setup units."""
-    run = result.deltas
     cycles = f"{result.cycles:,} stepper cycles (timing model), " if stats else ""
     line = (
         f"engine: {len(result.sent)} edges, {cycles}"
-        f"{len(run):,} nonzero deltas; accumulation: {result.rows_scanned:,} rows, "
+        f"{result.delta_count:,} nonzero deltas; accumulation: {result.rows_scanned:,} rows, "
         f"{result.cells_scanned:,} cells scanned; {result.seconds:.3f} s"
     )
     hw = result.pipeline

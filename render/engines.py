@@ -144,16 +144,6 @@ class DeltaRun:
             delta = narrow(delta, delta_lo, delta_hi)
         return DeltaRun(self.engine, edge, x, y, delta, self.seconds, self.clocks, self.beat_clocks)
 
-    @classmethod
-    def concatenate(cls, runs: list[DeltaRun]) -> DeltaRun:
-        """Runs of one engine (bands) as one: their deltas in order, their seconds added."""
-        if len(runs) == 1:
-            return runs[0]
-        columns = [
-            np.concatenate([getattr(r, f) for r in runs]) for f in ("edge", "x", "y", "delta")
-        ]
-        return cls(runs[0].engine, *columns, sum(r.seconds for r in runs))
-
 
 def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None, setups=None):
     """The accumulation deltas of the edges `arrays` (a `render.render.EdgeArrays`, all

@@ -47,7 +47,7 @@ from ..model.accumulate import (
 )
 from ..model.beat import DELTAS
 from ..model.column import ArrayArith
-from .bands import Band, band_rows, split_bands
+from .bands import Band, band_columns, band_rows, split_bands
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
     SAFE,
@@ -714,9 +714,11 @@ class Render:
     culled: np.ndarray  # edges culled: wholly above, below or right of the viewport
     projected: np.ndarray  # edges wholly left, sent as their projection
     horizontal: np.ndarray  # horizontal boundary edges not sent (they add nothing)
-    # every nonzero delta the engine produced, in image pixels (in several bands: those in
-    # the image's rows, band by band)
-    deltas: DeltaRun
+    # every nonzero delta the engine produced, in image pixels; None in several bands, whose
+    # deltas are dropped once composited (what a band touches is all a render holds)
+    deltas: DeltaRun | None
+    delta_count: int  # nonzero deltas (in bands: those in the image's rows)
+    engine_seconds: float  # the engine's own time (`DeltaRun.seconds`, over the bands)
     rows_scanned: int  # buffer rows prefix-summed
     cells_scanned: int  # buffer cells prefix-summed and resolved
     pixel_stores: int  # image pixels written
@@ -795,14 +797,15 @@ def render_scene(
     counts = {"rows": 0, "cells": 0, "stores": 0, "columns": 0}
     bands = _bands(plan, sent, rows if engine == "model" and skip and canvas is None else 0)
     windows = np.array([p.window for p in plan.polygons], dtype=np.int64).reshape(-1, 4)
-    runs = []
+    made = {"deltas": 0, "seconds": 0.0}
     for band in bands:
         with _stage(timings, cpu, "engine"):
             deltas = _band_deltas(plan, band, engine, skip, progress, counts, len(bands) > 1)
         with _stage(timings, cpu, "accumulate"):
             cut = _band_windows(windows, band) if skip else None
             _accumulate(plan, deltas, cut, image, skip, counts, canvas, progress)
-        runs.append(deltas)
+        made["deltas"] += len(deltas)
+        made["seconds"] += deltas.seconds
     if canvas is not None:
         canvas.finish()  # the group layers still open
     if progress is not None:
@@ -817,7 +820,9 @@ def render_scene(
         culled=np.flatnonzero(chosen["culled"]),
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
-        deltas=DeltaRun.concatenate(runs),
+        deltas=deltas if len(bands) == 1 else None,
+        delta_count=made["deltas"],
+        engine_seconds=made["seconds"],
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],
@@ -844,7 +849,7 @@ def _bands(plan: Plan, sent: np.ndarray, rows: int | None) -> list[Band]:
     differently (docs/model.md 5.1)."""
     height = plan.scene.height
     if rows == 0 or plan.config.accumulator != "exact":
-        return [Band(0, height, sent, np.ones(len(sent), dtype=bool))]
+        return [Band(0, height, sent)]
     S = plan.config.subpixel_scale
     coords = plan.coords[sent]
     if rows is None:  # columns along each edge's major axis, about
@@ -867,15 +872,25 @@ def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, coun
     only those in its rows kept), in image pixels, in the narrowest integer types."""
     arrays = edge_arrays(plan, band.edges, clip=skip)
     if cut:
-        top = 1 << plan.config.coord_bits
-        oy = plan.offset[1]
-        y_min, y_max = min(oy + band.y0, top), min(oy + band.y1 - 1, top)
-        arrays = replace(arrays, clip=arrays.clip._replace(y_min=y_min, y_max=y_max))
-    setups = _check_columns(plan.config, arrays, band.new, counts, cut)
+        arrays = replace(arrays, clip=_band_clip(plan, band, arrays))
+    setups = _check_columns(plan.config, arrays, counts, cut)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
     run, _ = run_deltas(plan.config, arrays, engine, progress=report, setups=setups)
     rows = (band.y0, band.y1) if cut else None
     return run.in_image(band.edges, plan.offset, rows, _delta_range(plan.config))
+
+
+def _band_clip(plan: Plan, band: Band, arrays: EdgeArrays) -> tuple[np.ndarray, ...]:
+    """Each edge's clip window in the band: the accumulation clip cut to the band's rows and
+    to the columns where the edge's line is near them (`bands.band_columns`)."""
+    top = 1 << plan.config.coord_bits
+    oy = plan.offset[1]
+    y_min, y_max = min(oy + band.y0, top), min(oy + band.y1 - 1, top)
+    coords = np.stack([arrays.x0, arrays.y0, arrays.x1, arrays.y1], axis=1)
+    lo, hi = band_columns(coords, plan.config.subpixel_scale, y_min, y_max)
+    whole = plan.accumulation_clip
+    x_min, x_max = np.clip(lo, whole.x_min, whole.x_max), np.clip(hi, whole.x_min, whole.x_max)
+    return x_min, np.full_like(x_min, y_min), x_max, np.full_like(x_min, y_max)
 
 
 def _delta_range(config: EdgeConfig) -> tuple[int, ...]:
@@ -885,16 +900,15 @@ def _delta_range(config: EdgeConfig) -> tuple[int, ...]:
     return (-reach, reach, delta.min, delta.max)
 
 
-def _check_columns(config: EdgeConfig, arrays: EdgeArrays, new, counts, cut: bool):
-    """Count the columns the band's edges step, an x-major edge's in its first band only
-    (`new`: it steps the same columns in every band it meets; a y-major edge its rows in the
-    band), so that over the bands the count is the whole image's; refuse past
-    MAX_STEPPED_COLUMNS (the simulators hold every column's four cells: about 300 bytes a
-    column at its peak). Returns their setups (a `SetupBatch`, which the engine takes on)."""
+def _check_columns(config: EdgeConfig, arrays: EdgeArrays, counts, cut: bool):
+    """Count the columns the edges step (in bands, each band's: a column near two bands' rows
+    is stepped in both); refuse past MAX_STEPPED_COLUMNS (the simulators hold every
+    column's four cells: about 300 bytes a column at its peak). Returns their setups (a
+    `SetupBatch`, which the engine takes on)."""
     from ..model.edge import setup_batch
 
     setups = setup_batch(config, *arrays.args(), arrays.clip)
-    counts["columns"] += int(setups.columns[new | ~setups.x_major].sum())
+    counts["columns"] += int(setups.columns.sum())
     if counts["columns"] > MAX_STEPPED_COLUMNS:
         so_far = " in the bands rendered so far" if cut else ""
         raise SceneError(
