@@ -5,7 +5,7 @@ Scenes: the built-ins; DejaVu Sans, STIX and cmr10 (the fonts matplotlib ships) 
 (`render.corpus.font_scene`); an icon sheet (matplotlib's eight toolbar icons at 48 px, side by
 side); a page of 10 px text (DejaVu Sans, 500 to 4,000 glyphs); a map of Voronoi cells (1,250
 to 5,000 polygons, one intensity each). For each, in one process, per stage, the CPU seconds
-(`time.process_time`, the minimum over `--repeats`: the cores are shared) and, in a run of
+(`time.process_time`, the median over `--repeats`: the cores are shared) and, in a run of
 its own, the peak memory the stage allocates as tracemalloc sees it (Python objects and numpy
 arrays; the render's engine and accumulation together; AGG's and Skia's C++ buffers are not
 seen, only what their drivers allocate in Python and numpy):
@@ -14,9 +14,9 @@ seen, only what their drivers allocate in Python and numpy):
   cells from shapely; the built-ins as `edgeaa render --builtin` makes them);
 - parse: the scene as a JSON scene file (its polygons' contours): `json.loads`, `parse_scene`;
 - plan: `plan_scene`; engine and accumulate: `render_scene`'s stages on that plan (the
-  deltas; then buffers, prefix sums, fill rule and compositing, the resolve included): the
-  CPU time of the fastest render, split by its stages' wall times (both from that one
-  render: a minimum per stage over different repeats would add up to less than any render);
+  edges chosen, cut into bands and stepped into deltas; then buffers, prefix sums, fill rule
+  and compositing, the resolve included), each the process CPU time the render measures
+  around it (`Render.cpu`, summed over the bands);
 - write: the PNG (`render.cli.write_png`);
 - AGG (`analysis.compare.agg_scene`) and Skia (`skia_scene`) on the same plan: their paths
   built from the quantized vertices, rasterized, their 8-bit image read back.
@@ -196,10 +196,9 @@ def process_peaks(scene: Scene) -> dict[str, int]:
 
 
 def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
-    """Every stage of one scene: CPU seconds, the minimum over `repeats`, then one run for
+    """Every stage of one scene: CPU seconds, the median over `repeats`, then one run for
     the peak memory each stage allocates."""
-    cpu = {s: math.inf for s in STAGES}
-    best_render = math.inf
+    times: dict[str, list[float]] = {s: [] for s in STAGES}
     for memory in [False] * repeats + [True]:
         got = {}
         got["flatten"], scene = measure(make, memory)
@@ -207,9 +206,9 @@ def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
         got["parse"], _ = measure(lambda: parse_scene(json.loads(text)), memory)  # noqa: B023
         got["plan"], plan = measure(lambda: plan_scene(scene, config), memory)  # noqa: B023
         value, result = measure(lambda: render_scene(plan), memory)  # noqa: B023
-        share = 1.0 if memory else result.timings["engine"] / sum(result.timings.values())
-        got["engine"] = value * share  # render_scene's CPU split by its stages' wall times
-        got["accumulate"] = value * (1 - share) if not memory else value
+        # the render's own CPU per stage; choosing the edges and the bands counts as engine
+        got["accumulate"] = value if memory else result.cpu["accumulate"]
+        got["engine"] = value if memory else value - result.cpu["accumulate"]
         full, bits, sink = config.full_scale, config.intensity_bits, io.BytesIO()
         got["write"], _ = measure(lambda: write_png(result.image, full, bits, sink), memory)  # noqa: B023
         got["agg"], _ = measure(lambda: agg_scene(plan), memory)  # noqa: B023
@@ -217,15 +216,13 @@ def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
         if memory:
             mem = got
             continue
-        split = ("engine", "accumulate")  # from the repeat whose render was fastest
-        if value < best_render:
-            best_render = value
-            cpu.update({stage: got[stage] for stage in split})
-        cpu.update({s: min(cpu[s], got[s]) for s in STAGES if s not in split})
+        for stage in STAGES:
+            times[stage].append(got[stage])
     return {
         "scene": scene.name, "edges": plan.edge_count, "polygons": len(scene.polygons),
-        "pixels": scene.width * scene.height, "cpu": cpu, "mem": mem,
-        "rss": process_peaks(scene),
+        "pixels": scene.width * scene.height, "bands": result.bands,
+        "cpu": {stage: float(np.median(values)) for stage, values in times.items()},
+        "mem": mem, "rss": process_peaks(scene),
     }  # fmt: skip
 
 
@@ -290,7 +287,7 @@ def report(rows: list[dict], series: dict) -> str:
     return "\n\n".join(
         [
             machine_line(),
-            "CPU milliseconds per stage (minimum over the repeats):\n\n" + stage_table(rows),
+            "CPU milliseconds per stage (median over the repeats):\n\n" + stage_table(rows),
             "Peak memory each stage allocates (tracemalloc), MiB:\n\n" + memory_table(rows),
             "Peak RSS of each program in a process of its own, end to end (ru_maxrss):\n\n"
             + rss_table(rows),

@@ -426,10 +426,12 @@ def _engine_line(result, stats: bool, units: int) -> str:
     """What the engine did; the stepper's cycles (the timing model, work of its own) only
     with --stats; the pipeline's `units` setup units."""
     cycles = f"{result.cycles:,} stepper cycles (timing model), " if stats else ""
+    # one worker: bands in threads or processes did not pay (docs/results.md section 7)
+    bands = f"; {result.bands} band{'s' * (result.bands > 1)} of rows, 1 worker" if stats else ""
     line = (
         f"engine: {len(result.sent)} edges, {cycles}"
         f"{result.delta_count:,} nonzero deltas; accumulation: {result.rows_scanned:,} rows, "
-        f"{result.cells_scanned:,} cells scanned; {result.seconds:.3f} s"
+        f"{result.cells_scanned:,} cells scanned; {result.seconds:.3f} s{bands}"
     )
     hw = result.pipeline
     if hw is None:

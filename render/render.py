@@ -629,14 +629,20 @@ def _meets_earlier(windows: np.ndarray, width: int, height: int) -> np.ndarray:
     live = (x0 < x1) & (y0 < y1)
     out = np.zeros(len(windows), dtype=bool)
     cover = np.zeros((height + 1, width + 1), dtype=np.int32)  # 2-D difference array
+    # int32 throughout (counts of windows, of pixels: at most MAX_PIXELS), in place: numpy's
+    # cumsum of int32 is int64 unless told, twice the image's memory per temporary
+    table = np.zeros((height + 1, width + 1), dtype=np.int32)
     block = int(np.clip(4 * math.isqrt(width * height), 64, 8192))  # image passes cost most
     for s in range(0, len(windows), block):
         k = np.arange(s, min(s + block, len(windows)))
         k = k[live[k]]
         if s and len(k):
-            filled = np.cumsum(np.cumsum(cover, axis=0), axis=1)[:height, :width] > 0
-            table = np.zeros((height + 1, width + 1), dtype=np.int32)
-            table[1:, 1:] = np.cumsum(np.cumsum(filled, axis=0, dtype=np.int32), axis=1)
+            np.cumsum(cover, axis=0, dtype=np.int32, out=table)
+            np.cumsum(table, axis=1, dtype=np.int32, out=table)
+            filled = table[:height, :width] > 0
+            np.cumsum(filled, axis=0, dtype=np.int32, out=table[1:, 1:])
+            np.cumsum(table[1:, 1:], axis=1, dtype=np.int32, out=table[1:, 1:])
+            table[0, :], table[:, 0] = 0, 0
             hits = table[y1[k], x1[k]] - table[y0[k], x1[k]] - table[y1[k], x0[k]]
             out[k] = hits + table[y0[k], x0[k]] > 0
         for r in range(0, len(k), 1024):  # rows of the block's pairs, 1024 at a time
@@ -725,8 +731,7 @@ class Render:
     seconds: float = 0.0  # whole render
     timings: dict = field(default_factory=dict)  # wall seconds per stage
     cpu: dict = field(default_factory=dict)  # this process's CPU seconds per stage
-    bands: int = 1  # bands of rows rendered (`render.bands`)
-    workers: int = 1  # threads that rendered them
+    bands: int = 1  # bands of rows rendered, one after the other (`render.bands`)
     # Rendered by the hardware pipeline (`edgeaa.render.pipeline.render_pipeline`): its run
     # (clocks, counters; `edgeaa.sim.simulators.pipeline_harness.PipelineRun`) and the pixels
     # where its image differs from the model's.
