@@ -169,6 +169,7 @@ def side_fills(
     right = np.zeros(len(edges), dtype=np.int64)
     swept = _swept(edges, group)  # polygons whose banded pairs would be too many
     band = ~swept  # the polygons' y ranges are disjoint: each part counts its own edges
+    band = slice(None) if band.all() else band  # all of them: views, not five copies
     left[band], right[band] = _windings(
         doubled[band], mid[band], [(normal[band], d[band]), (-normal[band], d[band])]
     )

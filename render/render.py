@@ -1060,7 +1060,7 @@ def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, 
     # int32 when these, 2 ifix (even-odd's period) and ifix + 2**F fit (half the memory)
     shift = d << config.F
     size = np.zeros(len(rows), dtype=np.int64)
-    np.add.at(size, row_of, np.abs(delta))
+    np.add.at(size, row_of, np.abs(delta.astype(np.int64)))  # alike types: add.at's fast loop
     bound = max(int(size.max(initial=0)), int(shift.max(initial=0)) + (1 << config.F))
     dtype = np.int32 if 2 * bound < 1 << 31 else np.int64
     delta = delta.astype(dtype)
