@@ -27,12 +27,14 @@ the difference is the work, which `edgeaa render --stats` reports.
 
 from __future__ import annotations
 
+import builtins
 import itertools
 import math
 import time
-from contextlib import contextmanager
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field, replace
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -730,8 +732,9 @@ class Render:
     pixel_stores: int  # image pixels written
     seconds: float = 0.0  # whole render
     timings: dict = field(default_factory=dict)  # wall seconds per stage
-    cpu: dict = field(default_factory=dict)  # this process's CPU seconds per stage
-    bands: int = 1  # bands of rows rendered, one after the other (`render.bands`)
+    cpu: dict = field(default_factory=dict)  # CPU seconds per stage, every thread's
+    bands: int = 1  # bands of rows rendered (`render.bands`)
+    workers: int = 1  # threads that rendered them
     # Rendered by the hardware pipeline (`edgeaa.render.pipeline.render_pipeline`): its run
     # (clocks, counters; `edgeaa.sim.simulators.pipeline_harness.PipelineRun`) and the pixels
     # where its image differs from the model's.
@@ -781,6 +784,7 @@ def render_scene(
     progress=None,
     canvas=None,
     rows: int | None = None,
+    workers: int = 1,
 ) -> Render:
     """Render a scene (or a plan of one): the deltas from `engine` (the model, or the
     stepper core alone in a simulator), accumulated and resolved by the model. The whole
@@ -788,7 +792,9 @@ def render_scene(
     stage). A `canvas` (`edgeaa.render.paint.Canvas`, for a colour scene planned as its
     coverage) composites instead, and its image is the render's. The model's render with
     skipping goes in bands of `rows` rows (`render.bands`; None: about BAND_COLUMNS columns
-    a band), the others in one; the image is the same either way."""
+    a band), the others in one; the image is the same either way. `workers` threads render
+    the bands (numpy releases the GIL in its loops): less wall time, more CPU and memory
+    (docs/results.md section 7)."""
     start = time.perf_counter()
     plan = scene if isinstance(scene, Plan) else plan_scene(scene, config or EdgeConfig())
     chosen = edges_to_send(plan, skip)
@@ -802,15 +808,20 @@ def render_scene(
     counts = {"rows": 0, "cells": 0, "stores": 0, "columns": 0}
     bands = _bands(plan, sent, rows if engine == "model" and skip and canvas is None else 0)
     windows = np.array([p.window for p in plan.polygons], dtype=np.int64).reshape(-1, 4)
+    work = partial(_render_band, plan, windows, image, engine, skip, canvas, progress, len(bands))
+    workers = min(workers, len(bands))
     made = {"deltas": 0, "seconds": 0.0}
-    for band in bands:
-        with _stage(timings, cpu, "engine"):
-            deltas = _band_deltas(plan, band, engine, skip, progress, counts, len(bands) > 1)
-        with _stage(timings, cpu, "accumulate"):
-            cut = _band_windows(windows, band) if skip else None
-            _accumulate(plan, deltas, cut, image, skip, counts, canvas, progress)
-        made["deltas"] += len(deltas)
-        made["seconds"] += deltas.seconds
+    with ThreadPoolExecutor(workers) if workers > 1 else nullcontext() as pool:
+        for done, deltas in (pool or builtins).map(work, bands):  # in order, as they finish
+            for name in counts:
+                counts[name] += done.counts[name]
+            for name in cpu:
+                timings[name] += done.wall[name]
+                cpu[name] += done.cpu[name]
+            made["deltas"] += len(deltas)
+            made["seconds"] += deltas.seconds
+            if counts["columns"] > MAX_STEPPED_COLUMNS:
+                _refuse_columns(counts["columns"], len(bands) > 1)
     if canvas is not None:
         canvas.finish()  # the group layers still open
     if progress is not None:
@@ -835,16 +846,40 @@ def render_scene(
         timings=timings,
         cpu=cpu,
         bands=len(bands),
+        workers=workers,
     )
 
 
-@contextmanager
-def _stage(timings: dict, cpu: dict, name: str):
-    """Add the wall and CPU seconds of the block to the stage's."""
-    wall, used = time.perf_counter(), time.process_time()
-    yield
-    timings[name] += time.perf_counter() - wall
-    cpu[name] += time.process_time() - used
+@dataclass
+class _BandWork:
+    """What one band's render did: its counts, and wall and CPU seconds per stage."""
+
+    counts: dict = field(
+        default_factory=lambda: dict.fromkeys(("rows", "cells", "stores", "columns"), 0)
+    )
+    wall: dict = field(default_factory=lambda: {"engine": 0.0, "accumulate": 0.0})
+    cpu: dict = field(default_factory=lambda: {"engine": 0.0, "accumulate": 0.0})
+
+    @contextmanager
+    def stage(self, name: str):
+        """Add the block's wall seconds and this thread's CPU seconds to the stage's."""
+        wall, used = time.perf_counter(), time.thread_time()
+        yield
+        self.wall[name] += time.perf_counter() - wall
+        self.cpu[name] += time.thread_time() - used
+
+
+def _render_band(plan, windows, image, engine, skip, canvas, progress, bands: int, band: Band):
+    """One band: its deltas from the engine, accumulated, resolved and composited into its
+    rows of `image` (bands share no pixel, so they may run in threads). Returns what it did
+    and its deltas."""
+    done = _BandWork()
+    with done.stage("engine"):
+        deltas = _band_deltas(plan, band, engine, skip, progress, done.counts, bands > 1)
+    with done.stage("accumulate"):
+        cut = _band_windows(windows, band) if skip else None
+        _accumulate(plan, deltas, cut, image, skip, done.counts, canvas, progress)
+    return done, deltas
 
 
 def _bands(plan: Plan, sent: np.ndarray, rows: int | None) -> list[Band]:
@@ -915,13 +950,17 @@ def _check_columns(config: EdgeConfig, arrays: EdgeArrays, counts, cut: bool):
     setups = setup_batch(config, *arrays.args(), arrays.clip)
     counts["columns"] += int(setups.columns.sum())
     if counts["columns"] > MAX_STEPPED_COLUMNS:
-        so_far = " in the bands rendered so far" if cut else ""
-        raise SceneError(
-            f"the scene's edges step {counts['columns']:,} columns{so_far} (pixels along "
-            f"each edge's major axis, within the image's rows and left of its right side), "
-            f"more than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
-        )
+        _refuse_columns(counts["columns"], cut)
     return setups
+
+
+def _refuse_columns(columns: int, banded: bool):
+    so_far = " in the bands rendered so far" if banded else ""
+    raise SceneError(
+        f"the scene's edges step {columns:,} columns{so_far} (pixels along each edge's major "
+        f"axis, within the image's rows and left of its right side), more than the limit of "
+        f"{MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
+    )
 
 
 def _accumulate(plan: Plan, deltas: DeltaRun, windows, image, skip: bool, counts, canvas, progress):

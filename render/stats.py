@@ -110,7 +110,8 @@ def stats_numbers(result: Render) -> dict:
         "cells_scanned": result.cells_scanned,
         "pixel_stores": result.pixel_stores,
         "seconds": round(result.seconds, 6),
-        "bands": result.bands,  # of rows, rendered one after the other (one worker)
+        "bands": result.bands,  # of rows (`render.bands`)
+        "workers": result.workers,  # threads that rendered them
     }
 
 

@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import edgeaa
+from edgeaa.cli import main
 from edgeaa.model import EdgeConfig
 from edgeaa.render import plan_scene, render_scene
 from edgeaa.render.bands import band_rows, split_bands
@@ -47,10 +48,15 @@ def test_a_banded_render_is_the_whole_buffer_render(scene, rows, config):
     plan = plan_scene(scene, config)
     whole = render_scene(plan, rows=0)
     banded = render_scene(plan, rows=min(rows, scene.height))
+    threads = render_scene(plan, rows=min(rows, scene.height), workers=3)
     assert whole.bands == 1 and banded.bands == -(-scene.height // min(rows, scene.height))
-    assert np.array_equal(whole.image, banded.image)
-    for name in ("rows_scanned", "cells_scanned", "pixel_stores"):
-        assert getattr(whole, name) == getattr(banded, name), name
+    assert threads.workers == min(3, banded.bands)
+    for render in (banded, threads):
+        assert np.array_equal(whole.image, render.image)
+        for name in ("rows_scanned", "cells_scanned", "pixel_stores"):
+            assert getattr(whole, name) == getattr(render, name), name
+    # the deltas in the image's rows (whole, also those just above or below it)
+    assert threads.delta_count == banded.delta_count <= whole.delta_count
 
 
 def test_bands_hold_each_edge_in_every_band_its_rows_meet():
@@ -62,6 +68,20 @@ def test_bands_hold_each_edge_in_every_band_its_rows_meet():
         (8, 10, [7]),
     ]
     assert band_rows(1000, 1) == 1000 and band_rows(1000, 10**9) == 32
+
+
+def test_workers_apply_to_the_model_bands_only(tmp_path, capsys):
+    out = tmp_path / "out.png"
+    for extra in (["--engine", "amaranth"], ["--no-skip"], ["--workers", "0"]):
+        argv = ["render", "--builtin", "starburst", "--workers", "2", *extra, "-o", str(out)]
+        try:
+            code = main(argv)
+        except SystemExit as exit_:  # argparse's refusal
+            code = exit_.code
+        assert code == 2 and not out.exists(), extra
+        assert capsys.readouterr().err.count("\n") == 1
+    assert main(["render", "--builtin", "starburst", "--workers", "2", "--stats", "--quiet"]) == 0
+    assert "1 band of rows, 1 worker" in capsys.readouterr().out  # 256 rows: one band
 
 
 def stripes(count: int, width: int) -> dict:
