@@ -1,8 +1,8 @@
 """Whether rendering the bands of rows (`render/bands.py`) in parallel pays: the bands of a
 model render one after the other, in threads, and in forked processes writing into a shared
 image, wall and CPU seconds (the processes' own included), the median over `--repeats`, the
-images checked equal. `edgeaa render` renders them one after the other (docs/results.md
-section 7 says why).
+images checked equal (`edgeaa render --workers N` renders them in threads; one by default,
+docs/results.md section 7 says why).
 
     python benchmarks/bench_bands.py SCENE.json [...] [--workers 2] [--repeats 5]
 """
@@ -15,7 +15,6 @@ import os
 import resource
 import statistics
 import time
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -25,8 +24,12 @@ from edgeaa.render.scene import load_scene
 
 
 def render_bands(plan, workers: int, how: str) -> tuple[np.ndarray, int]:
-    """The image of `plan` with its bands rendered by `how` ("serial", "threads" or
-    "processes") over `workers`, and the number of bands."""
+    """The image of `plan` with its bands rendered by `how`: "serial" and "threads" are
+    `render_scene` with one and `workers` threads; "processes" forks `workers` children
+    that render every workers-th band into a shared image. And the number of bands."""
+    if how != "processes":
+        result = renderer.render_scene(plan, workers=workers if how == "threads" else 1)
+        return result.image, result.bands
     sent = renderer.edges_to_send(plan, True)["sent"]
     height, width = plan.scene.height, plan.scene.width
     shared = mmap.mmap(-1, height * width)  # anonymous and shared: forked children write here
@@ -34,30 +37,16 @@ def render_bands(plan, workers: int, how: str) -> tuple[np.ndarray, int]:
     image[:] = plan.scene.background
     bands = renderer._bands(plan, sent, None)
     windows = np.array([p.window for p in plan.polygons], dtype=np.int64).reshape(-1, 4)
-
-    def one(band):
-        counts = {"rows": 0, "cells": 0, "stores": 0, "columns": 0}
-        deltas = renderer._band_deltas(plan, band, "model", True, None, counts, True)
-        cut = renderer._band_windows(windows, band)
-        renderer._accumulate(plan, deltas, cut, image, True, counts, None, None)
-
-    if how == "serial":
-        for band in bands:
-            one(band)
-    elif how == "threads":
-        with ThreadPoolExecutor(workers) as pool:
-            list(pool.map(one, bands))
-    else:
-        children = []
-        for k in range(workers):
-            pid = os.fork()
-            if pid == 0:  # the child: every workers-th band, then out without cleanup
-                for band in bands[k::workers]:
-                    one(band)
-                os._exit(0)
-            children.append(pid)
-        for pid in children:
-            os.waitpid(pid, 0)
+    children = []
+    for k in range(workers):
+        pid = os.fork()
+        if pid == 0:  # the child: every workers-th band, then out without cleanup
+            for band in bands[k::workers]:
+                renderer._render_band(plan, windows, image, "model", True, None, None, 2, band)
+            os._exit(0)
+        children.append(pid)
+    for pid in children:
+        os.waitpid(pid, 0)
     return image.copy(), len(bands)
 
 
