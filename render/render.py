@@ -16,6 +16,8 @@
    (`_accumulation_runs`) and composited in waves of windows that share no pixel, each
    polygon after every earlier polygon whose window meets its own: the same image, with
    numpy's per-call cost paid once per run (and once per wave to composite).
+   The model's render with skipping does this band of rows by band (`render.bands`): only
+   one band's deltas and buffers exist at a time, and the image is the same.
 
 The boundary edges alone bound the filled region, each with its inside on one side, so the
 sums are the region's exact area (up to the estimate) even where subpaths overlap or cross.
