@@ -143,7 +143,7 @@ def time_scene(scene: Scene, config: EdgeConfig, repeats: int, parts: bool = Fal
         height=scene.height,
         scene_edges=int(plan.edge_count),
         sent=int(len(result.sent)),
-        deltas=int(len(result.deltas)),
+        deltas=result.delta_count,
         cells=int(result.cells_scanned),
         rows=int(result.rows_scanned),
     )

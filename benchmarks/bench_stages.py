@@ -5,7 +5,7 @@ Scenes: the built-ins; DejaVu Sans, STIX and cmr10 (the fonts matplotlib ships) 
 (`render.corpus.font_scene`); an icon sheet (matplotlib's eight toolbar icons at 48 px, side by
 side); a page of 10 px text (DejaVu Sans, 500 to 4,000 glyphs); a map of Voronoi cells (1,250
 to 5,000 polygons, one intensity each). For each, in one process, per stage, the CPU seconds
-(`time.process_time`, the minimum over `--repeats`: the cores are shared) and, in a run of
+(`time.process_time`, the median over `--repeats`: the cores are shared) and, in a run of
 its own, the peak memory the stage allocates as tracemalloc sees it (Python objects and numpy
 arrays; the render's engine and accumulation together; AGG's and Skia's C++ buffers are not
 seen, only what their drivers allocate in Python and numpy):
@@ -14,12 +14,17 @@ seen, only what their drivers allocate in Python and numpy):
   cells from shapely; the built-ins as `edgeaa render --builtin` makes them);
 - parse: the scene as a JSON scene file (its polygons' contours): `json.loads`, `parse_scene`;
 - plan: `plan_scene`; engine and accumulate: `render_scene`'s stages on that plan (the
-  deltas; then buffers, prefix sums, fill rule and compositing, the resolve included): the
-  CPU time of the fastest render, split by its stages' wall times (both from that one
-  render: a minimum per stage over different repeats would add up to less than any render);
+  edges chosen, cut into bands and stepped into deltas; then buffers, prefix sums, fill rule
+  and compositing, the resolve included), each the process CPU time the render measures
+  around it (`Render.cpu`, summed over the bands);
 - write: the PNG (`render.cli.write_png`);
 - AGG (`analysis.compare.agg_scene`) and Skia (`skia_scene`) on the same plan: their paths
   built from the quantized vertices, rasterized, their 8-bit image read back.
+
+And the peak resident memory (ru_maxrss) of `edgeaa render SCENE.json -o OUT.png` and of AGG
+and Skia drawing the same polygons from the same file (`benchmarks/peer_draw.py`, which imports
+only json, the peer and PIL), each in a process of its own, end to end: the figure the issue's
+target (at most twice AGG's) is about.
 
 edgeaa's end to end is plan + engine + accumulate + write (what `edgeaa render` does after
 loading the scene), its rasterizing engine + accumulate; both against AGG's time, as
@@ -44,12 +49,17 @@ import io
 import json
 import logging
 import math
+import os
+import subprocess
+import sys
+import tempfile
 import time
 import tracemalloc
 from pathlib import Path
 
 import numpy as np
 
+import edgeaa
 from edgeaa.analysis.compare import agg_scene, skia_scene
 from edgeaa.analysis.report import machine_line, table
 from edgeaa.model import EdgeConfig
@@ -68,6 +78,8 @@ MAP_CELLS = (1250, 2500, 5000)
 PAGE_TEXT = "The quick brown fox jumps over the lazy dog; SPHINX OF BLACK QUARTZ, 0123456789. "
 BEGIN, END = "<!-- bench_stages: begin -->", "<!-- bench_stages: end -->"
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "results.md"
+PEERS = ("agg", "skia")  # `peer_draw.py`'s drawers
+PEER_DRAW = Path(__file__).resolve().with_name("peer_draw.py")
 
 
 def icon_sheet(size: int = 48) -> Scene:
@@ -150,11 +162,43 @@ def measure(fn, memory: bool):
     return time.process_time() - c, result
 
 
+# Runs argv and prints its peak RSS: a small process of its own starts it, since a child
+# forked from this one (hundreds of MB by now) would count this one's pages as its own peak.
+LAUNCHER = """import resource, subprocess, sys
+subprocess.run(sys.argv[1:], check=True, stdout=subprocess.DEVNULL)
+print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)"""
+
+
+def peak_rss(argv: list[str]) -> int:
+    """Peak resident memory (bytes) of a process running `argv` (ru_maxrss, KiB on Linux, of
+    the launcher's only child). Raises if it fails."""
+    env = dict(os.environ, PYTHONPATH=str(Path(edgeaa.__file__).parents[1]))
+    done = subprocess.run(
+        [sys.executable, "-c", LAUNCHER, *argv], env=env, capture_output=True, text=True
+    )
+    if done.returncode:
+        raise RuntimeError(f"{' '.join(argv)} failed: {done.stderr[-500:]}")
+    return int(done.stdout) * 1024
+
+
+def process_peaks(scene: Scene) -> dict[str, int]:
+    """Peak RSS of `edgeaa render SCENE.json -o OUT.png` and of AGG and Skia drawing the same
+    polygons from the same file (`peer_draw.py`), each a process of its own, end to end:
+    Python, its imports, reading the scene, rasterizing, writing the PNG."""
+    with tempfile.TemporaryDirectory() as folder:
+        source, out = Path(folder) / "scene.json", str(Path(folder) / "out.png")
+        source.write_text(scene_json(scene))
+        render = [sys.executable, "-m", "edgeaa", "render", str(source), "-o", out, "--quiet"]
+        peaks = {"edgeaa": peak_rss(render)}
+        for peer in PEERS:
+            peaks[peer] = peak_rss([sys.executable, str(PEER_DRAW), peer, str(source), out])
+    return peaks
+
+
 def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
-    """Every stage of one scene: CPU seconds, the minimum over `repeats`, then one run for
+    """Every stage of one scene: CPU seconds, the median over `repeats`, then one run for
     the peak memory each stage allocates."""
-    cpu = {s: math.inf for s in STAGES}
-    best_render = math.inf
+    times: dict[str, list[float]] = {s: [] for s in STAGES}
     for memory in [False] * repeats + [True]:
         got = {}
         got["flatten"], scene = measure(make, memory)
@@ -162,9 +206,9 @@ def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
         got["parse"], _ = measure(lambda: parse_scene(json.loads(text)), memory)  # noqa: B023
         got["plan"], plan = measure(lambda: plan_scene(scene, config), memory)  # noqa: B023
         value, result = measure(lambda: render_scene(plan), memory)  # noqa: B023
-        share = 1.0 if memory else result.timings["engine"] / sum(result.timings.values())
-        got["engine"] = value * share  # render_scene's CPU split by its stages' wall times
-        got["accumulate"] = value * (1 - share) if not memory else value
+        # the render's own CPU per stage; choosing the edges and the bands counts as engine
+        got["accumulate"] = value if memory else result.cpu["accumulate"]
+        got["engine"] = value if memory else value - result.cpu["accumulate"]
         full, bits, sink = config.full_scale, config.intensity_bits, io.BytesIO()
         got["write"], _ = measure(lambda: write_png(result.image, full, bits, sink), memory)  # noqa: B023
         got["agg"], _ = measure(lambda: agg_scene(plan), memory)  # noqa: B023
@@ -172,14 +216,13 @@ def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
         if memory:
             mem = got
             continue
-        split = ("engine", "accumulate")  # from the repeat whose render was fastest
-        if value < best_render:
-            best_render = value
-            cpu.update({stage: got[stage] for stage in split})
-        cpu.update({s: min(cpu[s], got[s]) for s in STAGES if s not in split})
+        for stage in STAGES:
+            times[stage].append(got[stage])
     return {
         "scene": scene.name, "edges": plan.edge_count, "polygons": len(scene.polygons),
-        "pixels": scene.width * scene.height, "cpu": cpu, "mem": mem,
+        "pixels": scene.width * scene.height, "bands": result.bands,
+        "cpu": {stage: float(np.median(values)) for stage, values in times.items()},
+        "mem": mem, "rss": process_peaks(scene),
     }  # fmt: skip
 
 
@@ -217,6 +260,17 @@ def memory_table(rows: list[dict]) -> str:
     return table(headers, body)
 
 
+def rss_table(rows: list[dict]) -> str:
+    headers = ["scene", "edgeaa render MiB", "AGG MiB", "Skia MiB", "edgeaa / AGG"]
+    body = [
+        [r["scene"]]
+        + [f"{r['rss'][k] / 2**20:.1f}" for k in ("edgeaa", *PEERS)]
+        + [f"{r['rss']['edgeaa'] / r['rss']['agg']:.2f}"]
+        for r in rows
+    ]
+    return table(headers, body)
+
+
 def slope_table(series: dict[str, tuple[str, list[dict]]]) -> str:
     headers = ["series", "against", *STAGES]
     body = []
@@ -229,14 +283,18 @@ def slope_table(series: dict[str, tuple[str, list[dict]]]) -> str:
 def report(rows: list[dict], series: dict) -> str:
     ends = [edgeaa_total(r) / r["cpu"]["agg"] for r in rows]
     rasters = [raster(r) / r["cpu"]["agg"] for r in rows]
+    memory = [r["rss"]["edgeaa"] / r["rss"]["agg"] for r in rows]
     return "\n\n".join(
         [
             machine_line(),
-            "CPU milliseconds per stage (minimum over the repeats):\n\n" + stage_table(rows),
+            "CPU milliseconds per stage (median over the repeats):\n\n" + stage_table(rows),
             "Peak memory each stage allocates (tracemalloc), MiB:\n\n" + memory_table(rows),
+            "Peak RSS of each program in a process of its own, end to end (ru_maxrss):\n\n"
+            + rss_table(rows),
             "Log-log slopes of CPU time:\n\n" + slope_table(series),
             f"Geometric means over the {len(rows)} scenes: end to end {geomean(ends):.1f} x "
-            f"AGG (target 3), rasterizing {geomean(rasters):.1f} x AGG (target 1.5).",
+            f"AGG (target 3), rasterizing {geomean(rasters):.1f} x AGG (target 1.5); peak RSS "
+            f"{geomean(memory):.2f} x AGG's (the most {max(memory):.2f}; target 2).",
         ]
     )
 
@@ -279,7 +337,8 @@ def main() -> int:
         if not chosen:
             parser.error(f"--only {args.only!r}: no scene's name holds it")
         for make in chosen:
-            print(stage_table([run_scene(make, config, args.repeats)]), flush=True)
+            row = run_scene(make, config, args.repeats)
+            print(stage_table([row]), rss_table([row]), sep="\n\n", flush=True)
         return 0
     rows = []
     for make in makers + pages + maps:

@@ -39,6 +39,7 @@ from ..model.beat import (
     edge_columns,
 )
 from ..model.timing import beat_cycles, stream_cycles
+from .bands import narrow
 
 ENGINES = ("model", "amaranth", "verilator")
 MODEL_CHUNK = 512  # edges per run_edges call
@@ -124,14 +125,24 @@ class DeltaRun:
             self.seconds, self.clocks, self.beat_clocks,
         )  # fmt: skip
 
-    def in_image(self, sent: np.ndarray, offset: tuple[int, int]) -> DeltaRun:
-        """The nonzero deltas, with scene edge ids and image pixel coordinates."""
-        rows = np.flatnonzero(self.delta != 0)
-        run = self.take(rows)
-        return DeltaRun(
-            run.engine, np.asarray(sent, dtype=np.int64)[run.edge], run.x - offset[0],
-            run.y - offset[1], run.delta, run.seconds, run.clocks, run.beat_clocks,
-        )  # fmt: skip
+    def in_image(self, sent: np.ndarray, offset: tuple[int, int], rows=None, bounds=None):
+        """The nonzero deltas, with scene edge ids and image pixel coordinates; with `rows`
+        (y0, y1) only those in image rows y0 .. y1 - 1; with `bounds` (x and y's least and
+        greatest, the delta's) in the narrowest integer types that hold them
+        (`render.bands.narrow`)."""
+        x, y = self.x - offset[0], self.y - offset[1]
+        keep = self.delta != 0
+        if rows is not None:
+            keep &= (y >= rows[0]) & (y < rows[1])
+        keep = np.flatnonzero(keep)
+        edge = np.asarray(sent, dtype=np.int64)[self.edge[keep]]
+        x, y, delta = x[keep], y[keep], self.delta[keep]
+        if bounds is not None:
+            lo, hi, delta_lo, delta_hi = bounds
+            edge = narrow(edge, 0, int(edge.max(initial=0)))
+            x, y = narrow(x, lo, hi), narrow(y, lo, hi)
+            delta = narrow(delta, delta_lo, delta_hi)
+        return DeltaRun(self.engine, edge, x, y, delta, self.seconds, self.clocks, self.beat_clocks)
 
 
 def run_deltas(config: EdgeConfig, arrays, engine: str, progress=None, setups=None):

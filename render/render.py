@@ -16,6 +16,8 @@
    (`_accumulation_runs`) and composited in waves of windows that share no pixel, each
    polygon after every earlier polygon whose window meets its own: the same image, with
    numpy's per-call cost paid once per run (and once per wave to composite).
+   The model's render with skipping does this band of rows by band (`render.bands`): only
+   one band's deltas and buffers exist at a time, and the image is the same.
 
 The boundary edges alone bound the filled region, each with its inside on one side, so the
 sums are the region's exact area (up to the estimate) even where subpaths overlap or cross.
@@ -27,11 +29,14 @@ the difference is the work, which `edgeaa render --stats` reports.
 
 from __future__ import annotations
 
+import builtins
 import itertools
 import math
 import time
-from dataclasses import dataclass, field
-from functools import cached_property
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager, nullcontext
+from dataclasses import dataclass, field, replace
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -46,6 +51,7 @@ from ..model.accumulate import (
 )
 from ..model.beat import DELTAS
 from ..model.column import ArrayArith
+from .bands import Band, band_columns, band_rows, split_bands
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
     SAFE,
@@ -107,6 +113,12 @@ class Plan:
     @property
     def boundary(self) -> np.ndarray:
         return self.inside != ""
+
+    @cached_property
+    def intensities(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each polygon's I_in and I_out, as arrays."""
+        intensity = np.array([p.intensity for p in self.polygons], dtype=np.int64)
+        return intensity, np.array([p.i_out for p in self.polygons], dtype=np.int64)
 
     @property
     def edge_count(self) -> int:
@@ -201,8 +213,7 @@ def edge_arrays(plan: Plan, ids: np.ndarray, clip: bool) -> EdgeArrays:
         left = plan.left[ids]
         x0[left] = x1[left] = (plan.offset[0] - 1) * plan.config.subpixel_scale
     owner = plan.polygon[ids]
-    intensity = np.array([p.intensity for p in plan.polygons], dtype=np.int64)
-    i_out = np.array([p.i_out for p in plan.polygons], dtype=np.int64)
+    intensity, i_out = plan.intensities
     return EdgeArrays(
         x0, c[:, 1], x1, c[:, 3], plan.inside[ids] == "left",
         intensity[owner] if len(owner) else np.zeros(0, np.int64),
@@ -622,14 +633,20 @@ def _meets_earlier(windows: np.ndarray, width: int, height: int) -> np.ndarray:
     live = (x0 < x1) & (y0 < y1)
     out = np.zeros(len(windows), dtype=bool)
     cover = np.zeros((height + 1, width + 1), dtype=np.int32)  # 2-D difference array
+    # int32 throughout (counts of windows, of pixels: at most MAX_PIXELS), in place: numpy's
+    # cumsum of int32 is int64 unless told, twice the image's memory per temporary
+    table = np.zeros((height + 1, width + 1), dtype=np.int32)
     block = int(np.clip(4 * math.isqrt(width * height), 64, 8192))  # image passes cost most
     for s in range(0, len(windows), block):
         k = np.arange(s, min(s + block, len(windows)))
         k = k[live[k]]
         if s and len(k):
-            filled = np.cumsum(np.cumsum(cover, axis=0), axis=1)[:height, :width] > 0
-            table = np.zeros((height + 1, width + 1), dtype=np.int32)
-            table[1:, 1:] = np.cumsum(np.cumsum(filled, axis=0, dtype=np.int32), axis=1)
+            np.cumsum(cover, axis=0, dtype=np.int32, out=table)
+            np.cumsum(table, axis=1, dtype=np.int32, out=table)
+            filled = table[:height, :width] > 0
+            np.cumsum(filled, axis=0, dtype=np.int32, out=table[1:, 1:])
+            np.cumsum(table[1:, 1:], axis=1, dtype=np.int32, out=table[1:, 1:])
+            table[0, :], table[:, 0] = 0, 0
             hits = table[y1[k], x1[k]] - table[y0[k], x1[k]] - table[y1[k], x0[k]]
             out[k] = hits + table[y0[k], x0[k]] > 0
         for r in range(0, len(k), 1024):  # rows of the block's pairs, 1024 at a time
@@ -707,13 +724,19 @@ class Render:
     culled: np.ndarray  # edges culled: wholly above, below or right of the viewport
     projected: np.ndarray  # edges wholly left, sent as their projection
     horizontal: np.ndarray  # horizontal boundary edges not sent (they add nothing)
-    deltas: DeltaRun  # every nonzero delta the engine produced, in image pixels
-    shapes: tuple[np.ndarray, np.ndarray]  # the sent edges' columns and clipped_start
+    # every nonzero delta the engine produced, in image pixels; None in several bands, whose
+    # deltas are dropped once composited (what a band touches is all a render holds)
+    deltas: DeltaRun | None
+    delta_count: int  # nonzero deltas (in bands: those in the image's rows)
+    engine_seconds: float  # the engine's own time (`DeltaRun.seconds`, over the bands)
     rows_scanned: int  # buffer rows prefix-summed
     cells_scanned: int  # buffer cells prefix-summed and resolved
     pixel_stores: int  # image pixels written
     seconds: float = 0.0  # whole render
-    timings: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)  # wall seconds per stage
+    cpu: dict = field(default_factory=dict)  # CPU seconds per stage, every thread's
+    bands: int = 1  # bands of rows rendered (`render.bands`)
+    workers: int = 1  # threads that rendered them
     # Rendered by the hardware pipeline (`edgeaa.render.pipeline.render_pipeline`): its run
     # (clocks, counters; `edgeaa.sim.simulators.pipeline_harness.PipelineRun`) and the pixels
     # where its image differs from the model's.
@@ -723,9 +746,13 @@ class Render:
 
     @cached_property
     def cycles(self) -> int:
-        """The timing model's clocks from the first command to the last beat: computed when
-        asked (--stats), not on every render."""
-        return cycles_of(self.plan.config, self.shapes, DELTAS)
+        """The timing model's clocks from the first command to the last beat, the edges sent
+        as one stream to the image (not band by band): computed when asked (--stats)."""
+        from ..model.edge import setup_batch
+
+        arrays = edge_arrays(self.plan, self.sent, clip=self.skip)
+        setups = setup_batch(self.plan.config, *arrays.args(), arrays.clip)
+        return cycles_of(self.plan.config, (setups.columns, setups.clipped_start), DELTAS)
 
 
 def edges_to_send(plan: Plan, skip: bool) -> dict[str, np.ndarray]:
@@ -758,59 +785,49 @@ def render_scene(
     skip: bool = True,
     progress=None,
     canvas=None,
+    rows: int | None = None,
+    workers: int = 1,
 ) -> Render:
     """Render a scene (or a plan of one): the deltas from `engine` (the model, or the
     stepper core alone in a simulator), accumulated and resolved by the model. The whole
     pipeline in hardware is `edgeaa.render.pipeline.render_pipeline`. progress(done, total,
     stage). A `canvas` (`edgeaa.render.paint.Canvas`, for a colour scene planned as its
-    coverage) composites instead, and its image is the render's."""
+    coverage) composites instead, and its image is the render's. The model's render with
+    skipping goes in bands of `rows` rows (`render.bands`; None: about BAND_COLUMNS columns
+    a band), the others in one; the image is the same either way. `workers` threads render
+    the bands (numpy releases the GIL in its loops): less wall time, more CPU and memory
+    (docs/results.md section 7)."""
     start = time.perf_counter()
     plan = scene if isinstance(scene, Plan) else plan_scene(scene, config or EdgeConfig())
-    config = plan.config
     chosen = edges_to_send(plan, skip)
     sent = chosen["sent"]
-    timings = {"plan": time.perf_counter() - start}
-
-    t = time.perf_counter()
-    arrays = edge_arrays(plan, sent, clip=skip)
-    setups = _check_columns(config, arrays)
-    report = None if progress is None else (lambda done, total: progress(done, total, engine))
-    run, shapes = run_deltas(config, arrays, engine, progress=report, setups=setups)
-    deltas = run.in_image(sent, plan.offset)
-    timings["engine"] = time.perf_counter() - t
-
-    t = time.perf_counter()
+    timings = {"plan": time.perf_counter() - start, "engine": 0.0, "accumulate": 0.0}
+    cpu = {"engine": 0.0, "accumulate": 0.0}
     # The narrowest unsigned type that holds full scale: a 16384 x 16384 image is 256 MiB.
-    dtype = np.min_scalar_type(config.full_scale)
+    dtype = np.min_scalar_type(plan.config.full_scale)
     image = np.full((plan.scene.height, plan.scene.width), plan.scene.background, dtype=dtype)
-    if canvas is not None:
-        image = canvas.image
-    counts = {"rows": 0, "cells": 0, "stores": 0}
-    polygon_of = plan.polygon[deltas.edge]
-    # the engine keeps the edges' order, and a polygon's edges are consecutive: no sort then
-    order = None if (np.diff(polygon_of) >= 0).all() else np.argsort(polygon_of, kind="stable")
-    by_poly = np.searchsorted(
-        polygon_of if order is None else polygon_of[order], np.arange(len(plan.polygons) + 1)
-    )
-    drawn = [i for i in range(len(plan.polygons)) if by_poly[i + 1] > by_poly[i]]
-    batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
-    for run in _accumulation_runs(plan, drawn) if batch else [[[i]] for i in drawn]:
-        if progress is not None:
-            progress(run[0][0], len(plan.polygons), "accumulate")
-        polys = np.array([i for wave in run for i in wave])
-        lo, size = by_poly[polys], by_poly[polys + 1] - by_poly[polys]
-        picks = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(size.sum())
-        picks = picks if order is None else order[picks]  # the polygons' deltas, in order
-        if len(polys) == 1:
-            poly = plan.polygons[polys[0]]
-            _draw_polygon(plan, poly, deltas.take(picks), image, skip, counts, canvas)
-        else:
-            _draw_run(plan, run, deltas.take(picks), size, image, counts)
+    image = image if canvas is None else canvas.image
+    counts = {"rows": 0, "cells": 0, "stores": 0, "columns": 0}
+    bands = _bands(plan, sent, rows if engine == "model" and skip and canvas is None else 0)
+    windows = np.array([p.window for p in plan.polygons], dtype=np.int64).reshape(-1, 4)
+    work = partial(_render_band, plan, windows, image, engine, skip, canvas, progress, len(bands))
+    workers = min(workers, len(bands))
+    made = {"deltas": 0, "seconds": 0.0}
+    with ThreadPoolExecutor(workers) if workers > 1 else nullcontext() as pool:
+        for done, deltas in (pool or builtins).map(work, bands):  # in order, as they finish
+            for name in counts:
+                counts[name] += done.counts[name]
+            for name in cpu:
+                timings[name] += done.wall[name]
+                cpu[name] += done.cpu[name]
+            made["deltas"] += len(deltas)
+            made["seconds"] += deltas.seconds
+            if counts["columns"] > MAX_STEPPED_COLUMNS:
+                _refuse_columns(counts["columns"], len(bands) > 1)
     if canvas is not None:
         canvas.finish()  # the group layers still open
     if progress is not None:
         progress(len(plan.polygons), len(plan.polygons), "accumulate")
-    timings["accumulate"] = time.perf_counter() - t
     return Render(
         image=image,
         plan=plan,
@@ -821,31 +838,158 @@ def render_scene(
         culled=np.flatnonzero(chosen["culled"]),
         projected=np.flatnonzero(chosen["left"]),
         horizontal=np.flatnonzero(chosen["flat"]),
-        deltas=deltas,
-        shapes=shapes,
+        deltas=deltas if len(bands) == 1 else None,
+        delta_count=made["deltas"],
+        engine_seconds=made["seconds"],
         rows_scanned=counts["rows"],
         cells_scanned=counts["cells"],
         pixel_stores=counts["stores"],
         seconds=time.perf_counter() - start,
         timings=timings,
+        cpu=cpu,
+        bands=len(bands),
+        workers=workers,
     )
 
 
-def _check_columns(config: EdgeConfig, arrays: EdgeArrays):
-    """Refuse edges that step more than MAX_STEPPED_COLUMNS columns in all (the engines hold
-    every column's four cells: about 300 bytes a column at its peak); their setups (a
+@dataclass
+class _BandWork:
+    """What one band's render did: its counts, and wall and CPU seconds per stage."""
+
+    counts: dict = field(
+        default_factory=lambda: dict.fromkeys(("rows", "cells", "stores", "columns"), 0)
+    )
+    wall: dict = field(default_factory=lambda: {"engine": 0.0, "accumulate": 0.0})
+    cpu: dict = field(default_factory=lambda: {"engine": 0.0, "accumulate": 0.0})
+
+    @contextmanager
+    def stage(self, name: str):
+        """Add the block's wall seconds and this thread's CPU seconds to the stage's."""
+        wall, used = time.perf_counter(), time.thread_time()
+        yield
+        self.wall[name] += time.perf_counter() - wall
+        self.cpu[name] += time.thread_time() - used
+
+
+def _render_band(plan, windows, image, engine, skip, canvas, progress, bands: int, band: Band):
+    """One band: its deltas from the engine, accumulated, resolved and composited into its
+    rows of `image` (bands share no pixel, so they may run in threads). Returns what it did
+    and its deltas."""
+    done = _BandWork()
+    with done.stage("engine"):
+        deltas = _band_deltas(plan, band, engine, skip, progress, done.counts, bands > 1)
+    with done.stage("accumulate"):
+        cut = _band_windows(windows, band) if skip else None
+        _accumulate(plan, deltas, cut, image, skip, done.counts, canvas, progress)
+    return done, deltas
+
+
+def _bands(plan: Plan, sent: np.ndarray, rows: int | None) -> list[Band]:
+    """The bands of `rows` rows the image is rendered in (`render.bands`): None chooses by
+    the edges' size, 0 is one band (the whole image, every edge sent, the deltas not cut to
+    its rows); one band also with the truncated accumulator, whose clipped start may round
+    differently (docs/model.md 5.1)."""
+    height = plan.scene.height
+    if rows == 0 or plan.config.accumulator != "exact":
+        return [Band(0, height, sent)]
+    S = plan.config.subpixel_scale
+    coords = plan.coords[sent]
+    if rows is None:  # columns along each edge's major axis, about
+        extent = np.maximum(abs(coords[:, 2] - coords[:, 0]), abs(coords[:, 3] - coords[:, 1]))
+        rows = band_rows(height, int((extent // S + 1).sum()))
+    _, lo_y, _, hi_y = _write_boxes(coords, plan.offset, S)
+    return split_bands(height, rows, sent, lo_y, hi_y)
+
+
+def _band_windows(windows: np.ndarray, band: Band) -> np.ndarray:
+    """The polygons' windows cut to the band's rows."""
+    cut = windows.copy()
+    cut[:, 1] = np.maximum(cut[:, 1], band.y0)
+    cut[:, 3] = np.minimum(cut[:, 3], band.y1)
+    return cut
+
+
+def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, counts, cut: bool):
+    """The nonzero deltas of the band's edges (clipped to the band's rows when `cut`, and
+    only those in its rows kept), in image pixels, in the narrowest integer types."""
+    arrays = edge_arrays(plan, band.edges, clip=skip)
+    if cut:
+        arrays = replace(arrays, clip=_band_clip(plan, band, arrays))
+    setups = _check_columns(plan.config, arrays, counts, cut)
+    report = None if progress is None else (lambda done, total: progress(done, total, engine))
+    run, _ = run_deltas(plan.config, arrays, engine, progress=report, setups=setups)
+    rows = (band.y0, band.y1) if cut else None
+    return run.in_image(band.edges, plan.offset, rows, _delta_range(plan.config))
+
+
+def _band_clip(plan: Plan, band: Band, arrays: EdgeArrays) -> tuple[np.ndarray, ...]:
+    """Each edge's clip window in the band: the accumulation clip cut to the band's rows and
+    to the columns where the edge's line is near them (`bands.band_columns`)."""
+    top = 1 << plan.config.coord_bits
+    oy = plan.offset[1]
+    y_min, y_max = min(oy + band.y0, top), min(oy + band.y1 - 1, top)
+    coords = np.stack([arrays.x0, arrays.y0, arrays.x1, arrays.y1], axis=1)
+    lo, hi = band_columns(coords, plan.config.subpixel_scale, y_min, y_max)
+    whole = plan.accumulation_clip
+    x_min, x_max = np.clip(lo, whole.x_min, whole.x_max), np.clip(hi, whole.x_min, whole.x_max)
+    return x_min, np.full_like(x_min, y_min), x_max, np.full_like(x_min, y_max)
+
+
+def _delta_range(config: EdgeConfig) -> tuple[int, ...]:
+    """The bounds of a delta's image x and y and its value (`DeltaRun.in_image`)."""
+    reach = 4 << config.coord_bits  # image pixels: 2**W and the offset, with margins
+    delta = config.register_widths()["delta"]
+    return (-reach, reach, delta.min, delta.max)
+
+
+def _check_columns(config: EdgeConfig, arrays: EdgeArrays, counts, cut: bool):
+    """Count the columns the edges step (in bands, each band's: a column near two bands' rows
+    is stepped in both); refuse past MAX_STEPPED_COLUMNS (the simulators hold every
+    column's four cells: about 300 bytes a column at its peak). Returns their setups (a
     `SetupBatch`, which the engine takes on)."""
     from ..model.edge import setup_batch
 
     setups = setup_batch(config, *arrays.args(), arrays.clip)
-    columns = int(setups.columns.sum())
-    if columns > MAX_STEPPED_COLUMNS:
-        raise SceneError(
-            f"the scene's {len(arrays):,} edges step {columns:,} columns (pixels along each "
-            f"edge's major axis, within the image's rows and left of its right side), more "
-            f"than the limit of {MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
-        )
+    counts["columns"] += int(setups.columns.sum())
+    if counts["columns"] > MAX_STEPPED_COLUMNS:
+        _refuse_columns(counts["columns"], cut)
     return setups
+
+
+def _refuse_columns(columns: int, banded: bool):
+    so_far = " in the bands rendered so far" if banded else ""
+    raise SceneError(
+        f"the scene's edges step {columns:,} columns{so_far} (pixels along each edge's major "
+        f"axis, within the image's rows and left of its right side), more than the limit of "
+        f"{MAX_STEPPED_COLUMNS:,}; use fewer or shorter edges"
+    )
+
+
+def _accumulate(plan: Plan, deltas: DeltaRun, windows, image, skip: bool, counts, canvas, progress):
+    """Accumulate, resolve and composite the deltas polygon by polygon in order, many
+    polygons to a buffer (`_accumulation_runs`) without a canvas, over `windows` (each
+    polygon's, cut to a band; None: the whole image, without skipping)."""
+    polygon_of = plan.polygon[deltas.edge]
+    # the engine keeps the edges' order, and a polygon's edges are consecutive: no sort then
+    order = None if (np.diff(polygon_of) >= 0).all() else np.argsort(polygon_of, kind="stable")
+    by_poly = np.searchsorted(
+        polygon_of if order is None else polygon_of[order], np.arange(len(plan.polygons) + 1)
+    )
+    drawn = np.flatnonzero(by_poly[1:] > by_poly[:-1]).tolist()
+    batch = skip and canvas is None and deltas.delta.dtype != object  # a canvas: one by one
+    for run in _accumulation_runs(plan, drawn, windows) if batch else [[[i]] for i in drawn]:
+        if progress is not None:
+            progress(run[0][0], len(plan.polygons), "accumulate")
+        polys = np.array([i for wave in run for i in wave])
+        lo, size = by_poly[polys], by_poly[polys + 1] - by_poly[polys]
+        picks = np.repeat(lo - (np.cumsum(size) - size), size) + np.arange(size.sum())
+        picks = picks if order is None else order[picks]  # the polygons' deltas, in order
+        if len(polys) == 1:
+            poly = plan.polygons[polys[0]]
+            window = None if windows is None else windows[polys[0]]
+            _draw_polygon(plan, poly, deltas.take(picks), image, window, counts, canvas)
+        else:
+            _draw_run(plan, run, deltas.take(picks), size, image, counts, windows)
 
 
 RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_accumulation_runs`)
@@ -853,7 +997,7 @@ RUN_CELLS = 1 << 18  # and its cells (2 MiB of int64)
 RUN_PAIRS = 1 << 22  # candidate window pairs past which runs are not looked for
 
 
-def _accumulation_runs(plan: Plan, drawn: list[int]) -> list[list[list[int]]]:
+def _accumulation_runs(plan: Plan, drawn: list[int], windows=None) -> list[list[list[int]]]:
     """The polygons `drawn` in runs to accumulate in one buffer each (`_draw_run`), each run
     a list of waves: no two windows of a wave share a pixel, and a polygon's wave comes after
     the wave of every earlier polygon whose window meets its own (one more than theirs), so
@@ -861,8 +1005,10 @@ def _accumulation_runs(plan: Plan, drawn: list[int]) -> list[list[list[int]]]:
     RUN_POLYGONS polygons and RUN_CELLS cells of buffer (its windows' areas at most); a
     polygon with an empty window draws nothing and is a run of its own. Past RUN_PAIRS
     candidate pairs (windows heaped on each other), every polygon is a run of its own, in
-    order."""
-    boxes = np.array([plan.polygons[i].window for i in drawn], dtype=np.int64).reshape(-1, 4)
+    order. `windows`: every polygon's (default the plan's)."""
+    if windows is None:
+        windows = np.array([p.window for p in plan.polygons], dtype=np.int64).reshape(-1, 4)
+    boxes = windows[np.asarray(drawn, dtype=np.int64)]
     live = (boxes[:, 2] > boxes[:, 0]) & (boxes[:, 3] > boxes[:, 1])
     ids = np.flatnonzero(live)
     pairs = _meeting_windows(boxes[ids])
@@ -920,16 +1066,18 @@ class _InPlace(ArrayArith):
         return np.minimum(a, b, out=a)
 
 
-def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, counts):
+def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, counts, windows):
     """`_draw_polygon` on every polygon of a run (`_accumulation_runs`) at once: each
     polygon's touched rows, each as wide as its window, laid end to end in one flat buffer
     whose first cell of a row takes away the previous row's total, so that one prefix sum
     gives every row's own. The coverage is composited wave by wave (the windows of a wave
     share no pixel). Every pixel gets exactly what `_draw_polygon` gives it, in the same
-    order, with the numpy calls paid once per run, and once per wave to composite."""
+    order, with the numpy calls paid once per run, and once per wave to composite.
+    `windows`: every polygon's."""
     config = plan.config
-    polys = [plan.polygons[i] for wave in run for i in wave]
-    x0, y0, x1, y1 = np.array([p.window for p in polys], dtype=np.int64).reshape(-1, 4).T
+    ids = [i for wave in run for i in wave]
+    polys = [plan.polygons[i] for i in ids]
+    x0, y0, x1, y1 = windows[ids].T
     d = np.array([abs(p.intensity - p.i_out) for p in polys], dtype=np.int64)
     value = np.array([p.intensity for p in polys], dtype=np.int64)
     odd = np.array([p.rule == "evenodd" for p in polys], dtype=bool)
@@ -953,7 +1101,7 @@ def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, 
     # int32 when these, 2 ifix (even-odd's period) and ifix + 2**F fit (half the memory)
     shift = d << config.F
     size = np.zeros(len(rows), dtype=np.int64)
-    np.add.at(size, row_of, np.abs(delta))
+    np.add.at(size, row_of, np.abs(delta.astype(np.int64)))  # alike types: add.at's fast loop
     bound = max(int(size.max(initial=0)), int(shift.max(initial=0)) + (1 << config.F))
     dtype = np.int32 if 2 * bound < 1 << 31 else np.int64
     delta = delta.astype(dtype)
@@ -999,14 +1147,14 @@ def _composite_into(flat, pixel, q, value, d, counts) -> None:
 
 
 def _draw_polygon(
-    plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, skip: bool, counts, canvas=None
+    plan: Plan, poly: PolygonPlan, deltas: DeltaRun, image, window, counts, canvas=None
 ):
-    """Accumulate one polygon's deltas over its window, resolve, composite over the image
-    (or over the canvas's channels)."""
+    """Accumulate one polygon's deltas over `window` (x0, y0, x1, y1; None: the whole
+    image), resolve, composite over the image (or over the canvas's channels)."""
 
     config, scene = plan.config, plan.scene
     d = abs(poly.intensity - poly.i_out)
-    x0, y0, x1, y1 = poly.window if skip else (0, 0, scene.width, scene.height)
+    x0, y0, x1, y1 = (0, 0, scene.width, scene.height) if window is None else map(int, window)
     window = Window(x0, y0, x1, y1)
     ifix = d << config.F
     for block in resolve_rows(window, deltas.x, deltas.y, deltas.delta, poly.rule, ifix):

@@ -105,11 +105,13 @@ def stats_numbers(result: Render) -> dict:
         "clocks_setup_bound": split.setup_bound,
         "clocks_latency": split.latency,
         "clocks_stalled": split.stalls,
-        "deltas": len(result.deltas),
+        "deltas": result.delta_count,
         "rows_scanned": result.rows_scanned,
         "cells_scanned": result.cells_scanned,
         "pixel_stores": result.pixel_stores,
         "seconds": round(result.seconds, 6),
+        "bands": result.bands,  # of rows (`render.bands`)
+        "workers": result.workers,  # threads that rendered them
     }
 
 
@@ -162,7 +164,7 @@ def stats_report(baseline: Render, skipping: Render) -> str:
     row("buffer rows scanned", without["rows_scanned"], with_["rows_scanned"])
     row("buffer cells scanned", without["cells_scanned"], with_["cells_scanned"])
     row("pixel stores", without["pixel_stores"], with_["pixel_stores"])
-    row("engine time (s)", baseline.deltas.seconds, skipping.deltas.seconds, "{:11.3f}")
+    row("engine time (s)", baseline.engine_seconds, skipping.engine_seconds, "{:11.3f}")
     row("render time (s)", baseline.seconds, skipping.seconds, "{:11.3f}")
     lines.append(f"images identical: {'yes' if same else 'NO'}")
     lines.append("")

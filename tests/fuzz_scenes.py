@@ -441,6 +441,12 @@ def _render_engine(d: Draft, quick: bool, config: bool, size: tuple[int, int]) -
         d.bad("--compare with a hardware engine")
     if hardware and "--no-skip" in argv:
         d.bad("--no-skip with a hardware engine")
+    if d.chance(0.06):  # threads for the model's bands
+        d.integer("--workers", 1, 64, [1, 2, 3])
+        value = argv[-1].strip().lstrip("+")
+        several = value.isascii() and value.isdigit() and len(value) < 4 and 1 < int(value) <= 64
+        if several and (hardware or "--compare" in argv or "--no-skip" in argv):
+            d.bad("--workers with a hardware engine, --compare or --no-skip")
     if engine == "verilator" and d.chance(0.1):  # the build cache is not a folder
         d.case.files["cachefile"] = b"not a folder"
         d.case.env["XDG_CACHE_HOME"] = "{folder}/cachefile"
