@@ -1,10 +1,11 @@
-"""The Verilated peripheral driven by PyPI bus-functional models (cocotbext-wishbone under
-cocotb, `edgeaa.sim.simulators.cocotb_peripheral`): a scene's commands written into the
-register window as a CPU would, the framebuffer collected from a memory model, random wait
-states on the CPU's bus and random stalls and ack latencies on the framebuffer's; the image
-equals the model's bit for bit, every byte written once and none outside. One small scene in
-the default run (the build is cached); more scenes, seeds and the colour formats under
-``-m slow``."""
+"""The Verilated peripheral driven by PyPI bus-functional models (cocotbext-wishbone and
+cocotbext-axi under cocotb, `edgeaa.sim.simulators.cocotb_peripheral`): a scene's commands
+written into the register window as a CPU would, or put in a display list's memory and
+started, the framebuffer collected from a memory model, random wait states on the CPU's bus
+and random stalls and ack latencies on the memories'; the image equals the model's bit for
+bit, every byte written once and none outside. The default run has one small scene through
+the Wishbone window and the same scene as a display list (one build, cached); the AXI4-Lite
+top (its own build), more scenes, seeds and the colour formats under ``-m slow``."""
 
 from __future__ import annotations
 
