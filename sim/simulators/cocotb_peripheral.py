@@ -1,10 +1,12 @@
-"""The peripheral's Verilog (`peripheral_verilog`) under Verilator and cocotb, driven by
-PyPI bus-functional models (cocotbext-wishbone; the bench is
+"""The peripheral's Verilog under Verilator and cocotb, driven by PyPI bus-functional
+models (cocotbext-wishbone, cocotbext-axi; the bench is
 `edgeaa.sim.simulators.cocotb_peripheral_bench`): a scene's commands written into the
-register window as a CPU would, the framebuffer collected from a memory model, random wait
-states and stalls on both buses (`run_bfm`).
+register window as a CPU would, or put in a display list's memory and started, the
+framebuffer collected from a memory model, random wait states and stalls on every bus
+(`run_bfm`). A `Top` is the Verilog and the bench's CPU: `WISHBONE` (`peripheral_verilog`,
+cocotbext-wishbone's master) or `AXI_LITE` (`axi_lite_verilog`, cocotbext-axi's).
 
-`build` compiles the Verilog with cocotb's Verilator runner once per sources key (as the
+`build` compiles a top's Verilog with cocotb's Verilator runner once per sources key (as the
 other Verilator builds, `edgeaa.sim.simulators.harness.sources_key`, with cocotb's and
 Verilator's versions), into the Verilator cache (`cache_dir`): a second run finds it with no
 Verilog generated. Only the top's ports are visible to cocotb (the runner's
@@ -21,6 +23,7 @@ import shutil
 import tempfile
 import time
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -28,6 +31,7 @@ from xml.etree import ElementTree
 
 from cocotb_tools.runner import Verilator
 
+from ...hdl.axi_lite import axi_lite_verilog
 from ...hdl.peripheral import REGISTERS, pack_command, peripheral_verilog
 from ...model.tile import TileConfig
 from .cocotb_peripheral_bench import RUN_ENV
@@ -39,9 +43,9 @@ from .verilator import (
     publish,
     verilator_root,
 )
-from .wishbone import Framebuffer
+from .wishbone import DisplayList, Framebuffer
 
-__all__ = ["BfmError", "BfmRun", "build", "run_bfm"]
+__all__ = ["AXI_LITE", "WISHBONE", "BfmError", "BfmRun", "Top", "build", "run_bfm"]
 
 TOP = "edgeaa_peripheral"
 BENCH = "edgeaa.sim.simulators.cocotb_peripheral_bench"
@@ -64,8 +68,25 @@ class BfmRun:
     clocks: int  # from reset to the last read
     cpu_stalls: int  # clocks the CPU's writes waited (the command FIFO full)
     fb_stalls: int  # clocks the framebuffer writer's requests waited
-    aborted: int  # framebuffer writes taken, cyc dropped before their ack
+    aborted: int  # requests taken (both memories), cyc dropped before their ack
     seconds: float  # the simulator's wall time (the build excluded)
+    list_reads: Counter  # display-list word address -> reads (empty with no list)
+    list_writes: int  # writes to the display list's memory
+    list_stalls: int  # clocks the list's reads waited on stall
+    list_irq: int | None  # the irq pin once the list is done (None: no list)
+
+
+@dataclass(frozen=True)
+class Top:
+    """A Verilated top for the bench: its Verilog, ``verilog(tile, name=...)``, and the
+    bench's cocotb test whose CPU model drives its register window."""
+
+    verilog: Callable[..., str]
+    test: str
+
+
+WISHBONE = Top(peripheral_verilog, "wishbone_cpu")
+AXI_LITE = Top(axi_lite_verilog, "axi_lite_cpu")
 
 
 class _Verilator(Verilator):
@@ -84,12 +105,12 @@ def _versions() -> str:
     return " ".join(f"{name} {metadata.version(name)}" for name in ("cocotb", "verilator"))
 
 
-def build(tile: TileConfig) -> Path:
-    """The Verilated peripheral of `tile` with cocotb's simulator main, built once per
-    sources key; returns its build directory."""
+def build(tile: TileConfig, top: Top = WISHBONE) -> Path:
+    """`top` for `tile`, Verilated with cocotb's simulator main, built once per sources key;
+    returns its build directory."""
     from ...hdl.integration import lint_waivers
 
-    key = sources_key(("cocotb-peripheral", tile, _versions()), "")
+    key = sources_key(("cocotb-peripheral", tile, top.test, _versions()), "")
     final = cache_dir() / f"cocotb-peripheral-{key}"
     if (final / TOP).exists():
         return final
@@ -97,7 +118,7 @@ def build(tile: TileConfig) -> Path:
         if (final / TOP).exists():  # built by another process while this one waited
             return final
         build_dir = private_build_dir(final)
-        source = peripheral_verilog(tile, name=TOP)
+        source = top.verilog(tile, name=TOP)
         verilog, waivers = build_dir / f"{TOP}.v", build_dir / f"{TOP}.vlt"
         verilog.write_text(source)
         ports = f'public_flat_rw -module "{TOP}" -var "*"\n'  # the ports, nothing inside
@@ -126,6 +147,25 @@ def _failure(results: Path) -> str | None:
     return None
 
 
+def _list_run(tile: TileConfig, dl: DisplayList | None) -> dict | None:
+    """The bench's part of `dl`: its words, base, length, stalls and latency."""
+    if dl is None:
+        return None
+    if not 0 <= dl.stall < 1:
+        raise ValueError(f"the list's stall must be in [0, 1), not {dl.stall}")
+    if dl.errors or dl.restart or dl.during or dl.after:
+        raise ValueError("errors, restart, during and after are run in Amaranth's simulator only")
+    length = len(dl.commands) if dl.length is None else dl.length
+    words = sorted(dl.words(tile).items())
+    return {
+        "base": dl.base,
+        "length": length,
+        "words": words,
+        "stall": dl.stall,
+        "latency": dl.latency,
+    }
+
+
 def run_bfm(
     tile: TileConfig,
     commands,
@@ -136,16 +176,19 @@ def run_bfm(
     stall: float = 0.0,
     latency: int = 0,
     max_clocks: int = 200_000,
+    display_list: DisplayList | None = None,
+    top: Top = WISHBONE,
 ) -> BfmRun:
-    """`commands` written into the Verilated peripheral by the CPU model (`fb`'s set-up
-    registers first), ``status`` polled until not busy, the framebuffer's writes collected.
-    `idle`: the CPU's chance of an idle clock before a request (again after each one);
-    `stall`: the share of clocks the memory stalls; `latency`: its ack latency, 0 to this
-    many clocks; a run past `max_clocks` is a hang."""
+    """`commands` written into the Verilated `top` by its CPU model (`fb`'s set-up
+    registers first), then `display_list` (if any) put in its memory, started and polled
+    until done, then ``status`` polled until not busy; the framebuffer's writes collected.
+    `idle`: the CPU's chance of an idle clock before a request (again after each one; on
+    AXI4-Lite, of a pause on each channel each clock); `stall`: the share of clocks the
+    framebuffer's memory stalls; `latency`: its ack latency, 0 to this many clocks (the
+    list's memory: the list's `stall` and `latency`); a run past `max_clocks` is a hang."""
     for name, p in (("idle", idle), ("stall", stall)):
         if not 0 <= p < 1:
             raise ValueError(f"{name} must be in [0, 1), not {p}")
-    build_dir = build(tile)
     run = {
         "seed": seed,
         "idle": idle,
@@ -155,7 +198,9 @@ def run_bfm(
         "registers": REGISTERS,
         "setup": [(REGISTERS[name], value) for name, value in fb.setup()],
         "commands": [pack_command(tile, command) for command in commands],
+        "display_list": _list_run(tile, display_list),
     }
+    build_dir = build(tile, top)
     with tempfile.TemporaryDirectory(prefix="edgeaa-bfm-") as tmp:
         path = Path(tmp) / "run.json"
         path.write_text(json.dumps(run))
@@ -166,6 +211,7 @@ def run_bfm(
                 test_module=BENCH,
                 hdl_toplevel=TOP,
                 hdl_toplevel_lang="verilog",
+                testcase=top.test,
                 build_dir=build_dir,
                 test_dir=tmp,
                 results_xml=str(results),
@@ -186,4 +232,8 @@ def run_bfm(
         fb_stalls=done["fb_stalls"],
         aborted=done["aborted"],
         seconds=seconds,
+        list_reads=Counter(dict(done["list_reads"])),
+        list_writes=done["list_writes"],
+        list_stalls=done["list_stalls"],
+        list_irq=done["list_irq"],
     )
