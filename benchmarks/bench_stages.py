@@ -12,7 +12,8 @@ seen, only what their drivers allocate in Python and numpy):
 
 - flatten: the scene from its source (font outlines and SVG paths flattened; the map's
   cells from shapely; the built-ins as `edgeaa render --builtin` makes them);
-- parse: the scene as a JSON scene file (its polygons' contours): `json.loads`, `parse_scene`;
+- parse: the scene as a JSON scene file (its polygons' contours): `scene_from_json`, as `edgeaa
+  render` reads a file;
 - plan: `plan_scene`; engine and accumulate: `render_scene`'s stages on that plan (the
   edges chosen, cut into bands and stepped into deltas; then buffers, prefix sums, fill rule
   and compositing, the resolve included), each the process CPU time the render measures
@@ -63,12 +64,12 @@ import edgeaa
 from edgeaa.analysis.compare import agg_scene, skia_scene
 from edgeaa.analysis.report import machine_line, table
 from edgeaa.model import EdgeConfig
-from edgeaa.render import builtin, parse_scene, plan_scene, render_scene
+from edgeaa.render import builtin, plan_scene, render_scene
 from edgeaa.render.builtin import glyph_polygons
 from edgeaa.render.cli import write_png
 from edgeaa.render.corpus import ICONS, font_file, font_scene, icon_scene
 from edgeaa.render.render import keep_freed_memory
-from edgeaa.render.scene import Polygon, Scene
+from edgeaa.render.scene import Polygon, Scene, scene_from_json
 
 STAGES = ("flatten", "parse", "plan", "engine", "accumulate", "write", "agg", "skia")
 FONTS = ("DejaVuSans", "STIXGeneral", "cmr10")
@@ -203,7 +204,7 @@ def run_scene(make, config: EdgeConfig, repeats: int) -> dict:
         got = {}
         got["flatten"], scene = measure(make, memory)
         text = scene_json(scene)
-        got["parse"], _ = measure(lambda: parse_scene(json.loads(text)), memory)  # noqa: B023
+        got["parse"], _ = measure(lambda: scene_from_json(text), memory)  # noqa: B023
         got["plan"], plan = measure(lambda: plan_scene(scene, config), memory)  # noqa: B023
         value, result = measure(lambda: render_scene(plan), memory)  # noqa: B023
         # the render's own CPU per stage; choosing the edges and the bands counts as engine

@@ -67,6 +67,34 @@ def star(rule: str, intensity: int = 255) -> Scene:
 # -- the scene format ---------------------------------------------------------------------------
 
 
+def test_a_scene_from_json_text_pauses_the_garbage_collector_and_restores_it(monkeypatch):
+    """The parse runs with Python's cyclic collector off (it made the parse superlinear) and
+    leaves it as it found it, an error included."""
+    import gc
+
+    from edgeaa.render import scene as scene_module
+    from edgeaa.render.scene import scene_from_json
+
+    seen, real = [], scene_module.parse_scene
+
+    def parse(*args, **kwargs):
+        seen.append(gc.isenabled())
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(scene_module, "parse_scene", parse)
+    text = json.dumps({"width": 4, "height": 4, "polygons": [{"points": [[0, 0], [4, 0], [0, 4]]}]})
+    assert gc.isenabled() and len(scene_from_json(text).polygons) == 1 and gc.isenabled()
+    with pytest.raises(SceneError):
+        scene_from_json('{"width": 4}')
+    assert gc.isenabled() and seen == [False, False]
+    gc.disable()
+    try:
+        scene_from_json(text)
+        assert not gc.isenabled()  # a caller's choice kept
+    finally:
+        gc.enable()
+
+
 def test_a_json_scene_with_points_contours_and_path_parses():
     data = {
         "width": 40,
