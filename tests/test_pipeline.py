@@ -311,10 +311,10 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 def test_the_named_configurations():
     assert PIPELINES == {
-        "compact": {"setup_units": 1, "pixel_lanes": 1},
-        "fast": {"setup_units": 4, "pixel_lanes": 2},
+        "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1},
+        "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2},
     }
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2)
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
@@ -326,6 +326,15 @@ def test_the_named_configurations():
     for bad, error in [(0, ValueError), (3, ValueError), (8, ValueError), (True, TypeError)]:
         with pytest.raises(error):
             PipelineConfig(TILE, 1, bad)
+    fast = EdgePipeline(PipelineConfig.named("fast", TILE))
+    assert (fast.acc.lanes, fast.res.scan_lanes) == (2, 2)
+    assert (EdgePipeline(TILE).acc.lanes, EdgePipeline(TILE).res.scan_lanes) == (1, 1)
+    for bad, error in [(0, ValueError), (4, ValueError), (True, TypeError), (2.0, TypeError)]:
+        with pytest.raises(error, match="scan_lanes"):
+            PipelineConfig(TILE, 1, 2, bad)
+    for lanes in (1, 4):  # two scan lanes read and write two pixel lanes
+        with pytest.raises(ValueError, match=f"scan_lanes 2 needs pixel_lanes 2, not {lanes}"):
+            PipelineConfig(TILE, 1, lanes, 2)
     with pytest.raises(ValueError, match="no pipeline named"):
         PipelineConfig.named("quick")
 
@@ -371,23 +380,26 @@ def test_several_setup_units_under_back_pressure_give_the_renderers_image(data, 
     lanes=st.sampled_from([2, 4]),
 )
 def test_pixel_lanes_under_back_pressure_give_the_renderers_image(data, seed, units, lanes):
-    """A flush of two or four pixels a clock, the sink stalling at random: every pixel in its
-    place, the renderer's image."""
+    """A flush of two or four pixels a clock (with two, a scan of one or two cells a clock),
+    the sink stalling at random: every pixel in its place, the renderer's image."""
     scene = data.draw(small_scenes(DEFAULT))
-    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units, lanes)
+    scan = data.draw(st.sampled_from([1, 2])) if lanes == 2 else 1
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units, lanes, scan)
     plan = plan_scene(scene, DEFAULT)
     result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4)
-    assert result.mismatches == 0, f"seed {seed}, {units} units, {lanes} lanes"
+    assert result.mismatches == 0, f"seed {seed}, {units} units, {lanes} lanes, {scan} scan"
     assert result.pipeline.stats["resolve_stall"] > 0
 
 
 @settings(max_examples=4, deadline=None, database=None)
 @given(data=st.data(), seed=st.integers(0, 2**31))
 def test_two_lanes_of_four_channels_under_back_pressure_are_the_canvas(data, seed):
-    """Two pixels of red, green, blue and alpha a beat (64 bits of values)."""
+    """Two pixels of red, green, blue and alpha a beat (64 bits of values), scanned one or two
+    cells a clock."""
     scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
     plan = plan_scene(coverage_scene(scene), DEFAULT)
-    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8, channels=4), 1, 2)
+    scan = data.draw(st.sampled_from([1, 2]))
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8, channels=4), 1, 2, scan)
     canvas = Canvas(scene, DEFAULT.full_scale)
     result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4,
                              canvas=canvas)  # fmt: skip
@@ -395,14 +407,14 @@ def test_two_lanes_of_four_channels_under_back_pressure_are_the_canvas(data, see
     assert result.mismatches == 0 and np.array_equal(result.image, want), f"seed {seed}"
 
 
-@pytest.mark.parametrize(("lanes", "seed"), [(2, 1), (4, 2)])
-def test_pixel_lanes_drop_bad_commands_as_the_model_does(lanes, seed):
+@pytest.mark.parametrize(("lanes", "scan", "seed"), [(2, 1, 1), (4, 1, 2), (2, 2, 3)])
+def test_pixel_lanes_drop_bad_commands_as_the_model_does(lanes, scan, seed):
     from edgeaa.sim.simulators import pipeline_harness
 
     tile = TileConfig(SMALL, 8, 8)
     commands = bad_commands(SMALL.subpixel_scale)
     want, result = model_frames(tile, commands)
-    pipeline = PipelineConfig(tile, 1, lanes)
+    pipeline = PipelineConfig(tile, 1, lanes, scan)
     run = pipeline_harness.run(pipeline, commands, seed=seed, idle=0.3, stall=0.3)
     assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors)
     for frame, model in zip(run.frames(tile), want, strict=True):
