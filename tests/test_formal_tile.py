@@ -39,7 +39,9 @@ def _explain(result) -> str:
 
 
 @pytest.mark.parametrize(
-    "name", ["acc_stream", "res_stream", "res_stream_lanes", "acc_deltas", "acc_sums"]
+    "name",
+    ["acc_stream", "res_stream", "res_stream_lanes", "acc_stream_scan", "res_stream_scan"]
+    + ["acc_deltas", "acc_sums"],
 )
 def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
@@ -72,6 +74,8 @@ def test_slow_proofs(tools, name):
         ("acc_stream", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
         ("res_stream", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
         ("res_stream_lanes", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
+        ("acc_stream_scan", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
+        ("res_stream_scan", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
         ("acc_sums", "lost_delta", 6, "cells: a beat taken with its last cell (bmc)"),
         ("acc_deltas", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         ("acc_sums", "stale_origin", 8, "sums: cell sum (bmc)"),
@@ -126,6 +130,8 @@ def test_harness_rejects_unknown_options():
         TileHarness(SMALL_TILE, "resolve", ("pixels",), fault="swap_lanes")
     with pytest.raises(ValueError, match="pixel lanes are the resolve's"):
         TileHarness(SMALL_TILE, "accumulator", ("stream",), lanes=2)
+    with pytest.raises(ValueError, match="with scan lanes the accumulator's checks are stream"):
+        TileHarness(SMALL_TILE, "accumulator", ("deltas",), scan_lanes=2)
     with pytest.raises(TypeError, match="TileConfig"):
         TileHarness(None, "resolve", ())
     with pytest.raises(ValueError, match="proof must be one of"):

@@ -69,6 +69,11 @@ __all__ = [
 ]
 
 
+# The groups that cover two scan lanes (`PipelineConfig.scan_lanes`): the ghosts of the
+# ``deltas``, ``sums`` and ``pixels`` groups take a cell a clock.
+SCAN_LANE_CHECKS = {"accumulator": ("stream",), "resolve": ("stream",)}
+
+
 class TileHarness(ClockedHarness):
     """One tile stage (``"accumulator"`` or ``"resolve"``) with a free input stream and the
     check groups of `TILE_CHECKS` (the module docstring). ``reset``: the reset is a free
@@ -90,6 +95,7 @@ class TileHarness(ClockedHarness):
         invariants=True,
         covers=False,
         lanes=1,
+        scan_lanes=1,
     ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
@@ -110,7 +116,14 @@ class TileHarness(ClockedHarness):
             raise ValueError(f"pixel lanes are the resolve's, not the {stage}'s")
         if fault == "swap_lanes" and lanes == 1:
             raise ValueError("fault swap_lanes needs two or more pixel lanes")
-        self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile, lanes)
+        if scan_lanes != 1 and set(checks) - set(SCAN_LANE_CHECKS[stage]):
+            raise ValueError(
+                f"with scan lanes the {stage}'s checks are {', '.join(SCAN_LANE_CHECKS[stage])}"
+            )
+        if stage == "accumulator":
+            self.dut = TileAccumulator(tile, scan_lanes)
+        else:
+            self.dut = TileResolve(tile, lanes, scan_lanes)
 
     def elaborate(self, platform):
         m = Module()
@@ -202,6 +215,7 @@ class TileProof:
     memory_map: bool = True
     description: str = ""
     lanes: int = 1  # the resolve's pixel lanes (`PipelineConfig.pixel_lanes`)
+    scan_lanes: int = 1  # both stages' scan lanes (`PipelineConfig.scan_lanes`)
 
 
 TILE_PROOFS: dict[str, TileProof] = {
@@ -241,6 +255,34 @@ TILE_PROOFS: dict[str, TileProof] = {
             description="pixels hold rule with two pixel lanes (the fast pipeline's), any "
             "reachable state (k-induction), default tile",
             lanes=2,
+        ),
+        TileProof(
+            "acc_stream_scan",
+            "accumulator",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="cells hold rule with two scan lanes (the fast pipeline's: a beat of "
+            "two cells from the memories banked by column parity, both sums), any reachable "
+            "state (k-induction), default tile",
+            scan_lanes=2,
+        ),
+        TileProof(
+            "res_stream_scan",
+            "resolve",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="pixels hold rule with two scan lanes and two pixel lanes (the fast "
+            "pipeline's resolve), any reachable state (k-induction), default tile",
+            lanes=2,
+            scan_lanes=2,
         ),
         TileProof(
             "acc_deltas",
@@ -353,6 +395,7 @@ def run_tile_proof(
         invariants=invariants,
         covers=mode == "cover",
         lanes=proof.lanes,
+        scan_lanes=proof.scan_lanes,
     )
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
