@@ -24,7 +24,14 @@ origin: cells land in the wrong columns); ``wide_range`` assumes the prefix sums
 with ``first`` cleared (a stage that takes a polygon's first cell while the previous
 polygon's cells are in flight, so its pixel read may miss their writes); ``swap_lanes``
 gives the ``pixels`` group the resolve's beats with lanes 0 and 1 swapped (a flush of two
-or more pixel lanes that sends a beat's pixels in each other's places).
+or more pixel lanes that sends a beat's pixels in each other's places); ``swap_sums`` gives
+the resolve of two scan lanes each beat of cells with its two sums swapped (a resolve that
+composites a beat's cells in each other's columns).
+
+Scan lanes (``scan_lanes`` 2, `PipelineConfig.scan_lanes`): the ``stream`` groups of both
+stages and the resolve's ``pixels`` group cover them (`SCAN_LANE_CHECKS`); the
+accumulator's ``deltas`` and ``sums`` ghosts take a cell a clock and are not written for
+beats of two, so the harness refuses them with scan lanes.
 
 All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
 the memories and registers at their initial values, no reset; the accumulator's from
@@ -58,6 +65,7 @@ from .tile_common import (
 )
 
 __all__ = [
+    "SCAN_LANE_CHECKS",
     "SMALL_TILE",
     "TILE_CHECKS",
     "TILE_FAULTS",
@@ -70,8 +78,8 @@ __all__ = [
 
 
 # The groups that cover two scan lanes (`PipelineConfig.scan_lanes`): the ghosts of the
-# ``deltas``, ``sums`` and ``pixels`` groups take a cell a clock.
-SCAN_LANE_CHECKS = {"accumulator": ("stream",), "resolve": ("stream",)}
+# accumulator's ``deltas`` and ``sums`` groups take a cell a clock.
+SCAN_LANE_CHECKS = {"accumulator": ("stream",), "resolve": ("stream", "pixels")}
 
 
 class TileHarness(ClockedHarness):
@@ -116,6 +124,8 @@ class TileHarness(ClockedHarness):
             raise ValueError(f"pixel lanes are the resolve's, not the {stage}'s")
         if fault == "swap_lanes" and lanes == 1:
             raise ValueError("fault swap_lanes needs two or more pixel lanes")
+        if fault == "swap_sums" and scan_lanes == 1:
+            raise ValueError("fault swap_sums needs two scan lanes")
         if scan_lanes != 1 and set(checks) - set(SCAN_LANE_CHECKS[stage]):
             raise ValueError(
                 f"with scan lanes the {stage}'s checks are {', '.join(SCAN_LANE_CHECKS[stage])}"
@@ -332,6 +342,18 @@ TILE_PROOFS: dict[str, TileProof] = {
             "column parity",
             lanes=2,
         ),
+        TileProof(
+            "res_pixels_scan",
+            "resolve",
+            ("pixels",),
+            "prove",
+            resolve_latency(SMALL_TILE) + 1,
+            description="res_pixels_lanes with two scan lanes (the fast pipeline's): the "
+            "resolve takes a beat of two cells a clock, each composited in its lane and "
+            "written to its pixel lane's memory",
+            lanes=2,
+            scan_lanes=2,
+        ),
         *(
             TileProof(
                 f"{name}_cover",
@@ -344,12 +366,14 @@ TILE_PROOFS: dict[str, TileProof] = {
                 "with its conclusion (not vacuous; cover from power-on, with resets for the "
                 "accumulator)",
                 lanes=lanes,
+                scan_lanes=scan,
             )
-            for name, stage, check, depth, lanes in (
-                ("acc_deltas", "accumulator", "deltas", 16, 1),
-                ("acc_sums", "accumulator", "sums", 16, 1),
-                ("res_pixels", "resolve", "pixels", 14, 1),
-                ("res_pixels_lanes", "resolve", "pixels", 14, 2),
+            for name, stage, check, depth, lanes, scan in (
+                ("acc_deltas", "accumulator", "deltas", 16, 1, 1),
+                ("acc_sums", "accumulator", "sums", 16, 1, 1),
+                ("res_pixels", "resolve", "pixels", 14, 1, 1),
+                ("res_pixels_lanes", "resolve", "pixels", 14, 2, 1),
+                ("res_pixels_scan", "resolve", "pixels", 14, 2, 2),
             )
         ),
     )
