@@ -109,6 +109,7 @@ def read_modify_write(m, unit, rd, wr, cell):
     else:
         lane_bits = log2(len(lanes))
         read = Array(port.data for port in lanes)[b_addr[:lane_bits]]  # the lane B read
+        unit.observe.read = types.SimpleNamespace(data=read)  # as one memory's read port
         for port in lanes:
             m.d.comb += [
                 port.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)[lane_bits:]),

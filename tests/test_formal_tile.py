@@ -42,7 +42,7 @@ def _explain(result) -> str:
 @pytest.mark.parametrize(
     "name",
     ["acc_stream", "res_stream", "res_stream_lanes", "acc_stream_scan", "res_stream_scan"]
-    + ["acc_deltas", "acc_sums"],
+    + ["acc_deltas", "acc_sums", "acc_deltas_scan", "acc_sums_scan"],
 )
 def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
@@ -52,7 +52,7 @@ def test_fast_proofs(tools, name):
 @pytest.mark.parametrize(
     "name",
     ["acc_deltas_cover", "acc_sums_cover", "res_pixels_cover", "res_pixels_lanes_cover"]
-    + ["res_pixels_scan_cover"],
+    + ["res_pixels_scan_cover", "acc_deltas_scan_cover", "acc_sums_scan_cover"],
 )
 def test_invariants_not_vacuous(tools, name):
     """Each invariant's premise is reached with its conclusion from power-on on `SMALL_TILE`
@@ -86,6 +86,9 @@ def test_slow_proofs(tools, name):
         ("res_pixels_lanes", "wide_range", 16, "pixels: value (bmc)"),
         ("res_pixels_lanes", "swap_lanes", 16, "pixels: value (bmc)"),
         ("res_pixels_scan", "swap_sums", 16, "pixels: value (bmc)"),
+        ("acc_sums_scan", "swap_cells", 8, "sums: cell sum (bmc)"),
+        ("acc_sums_scan", "stale_origin", 8, "sums: cell sum (bmc)"),
+        ("acc_deltas_scan", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         ("res_pixels_scan", "wide_range", 16, "pixels: value (bmc)"),
     ],
 )
@@ -109,6 +112,8 @@ def test_fault_is_caught(tools, name, fault, depth, message):
         ("res_pixels", "lost_first", None, "state: stage 0 order (basecase)"),
         ("res_pixels_lanes", "lost_first", None, "state: stage 0 order (basecase)"),
         ("res_pixels_scan", "lost_first", None, "state: stage 0 order (basecase)"),
+        ("acc_deltas_scan", "stale_origin", None, "state: origin (basecase)"),
+        ("acc_sums_scan", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
         # the wrong pixel is written 8 clocks from power-on: one past the proof's k
         ("res_pixels", "wide_range", 9, "state: value (basecase)"),
     ],
@@ -138,8 +143,8 @@ def test_harness_rejects_unknown_options():
         TileHarness(SMALL_TILE, "resolve", ("pixels",), lanes=2, fault="swap_sums")
     with pytest.raises(ValueError, match="pixel lanes are the resolve's"):
         TileHarness(SMALL_TILE, "accumulator", ("stream",), lanes=2)
-    with pytest.raises(ValueError, match="with scan lanes the accumulator's checks are stream"):
-        TileHarness(SMALL_TILE, "accumulator", ("deltas",), scan_lanes=2)
+    with pytest.raises(ValueError, match="swap_cells needs two scan lanes"):
+        TileHarness(SMALL_TILE, "accumulator", ("sums",), fault="swap_cells")
     with pytest.raises(TypeError, match="TileConfig"):
         TileHarness(None, "resolve", ())
     with pytest.raises(ValueError, match="proof must be one of"):

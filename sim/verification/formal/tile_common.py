@@ -18,6 +18,7 @@ from .stream import held, hold_rule
 TILE_CHECKS = {"accumulator": ("stream", "deltas", "sums"), "resolve": ("stream", "pixels")}
 TILE_FAULTS = {
     "stall_cell": "accumulator",
+    "swap_cells": "accumulator",
     "lost_delta": "accumulator",
     "stale_origin": "accumulator",
     "stall_pixel": "resolve",
