@@ -234,11 +234,14 @@ def test_the_pipeline_verilog_is_lint_clean(channels):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def test_the_pipeline_verilog_of_two_pixel_lanes_is_lint_clean():
+@pytest.mark.parametrize("scan", [1, 2])
+def test_the_pipeline_verilog_of_two_pixel_lanes_is_lint_clean(scan):
+    """Two pixel lanes, and one or two scan lanes (the banked accumulation memories)."""
     from edgeaa.sim.simulators.verilator import lint
 
-    source = pipeline_verilog(PipelineConfig(TileConfig(SMALL, 8, 4), 1, 2))
+    source = pipeline_verilog(PipelineConfig(TileConfig(SMALL, 8, 4), 1, 2, scan))
     assert "pixels__payload__value1" in source and "pixels__payload__value2" not in source
+    assert ("cells_memory_lane1" in source) == (scan == 2)
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
