@@ -63,7 +63,8 @@ writes, ``fwritten`` and ``fbackground`` the flushed tile's written rows and bac
 of registers, each with ``valid``; the values a stage carries are in the delay lines,
 ``delays`` (their `Memory` by name, ``"xy"`` and ``"carry"``), at the address its
 ``delayed`` names per line (a value, no logic); the last stage's are its fields ``x``,
-``y``, ``below``, ``zero`` and ``neg``, the read ports' data), ``acc`` the row's prefix
+``y``, ``below``, ``zero`` and ``neg``, with two scan lanes lane 1's ``below_l1``,
+``zero_l1`` and ``neg_l1`` too, the read ports' data), ``acc`` the row's prefix
 sum, ``d2``, ``written``, ``background``, ``p_valid`` and ``p`` the output register (``x``,
 ``y``, ``last``, ``written``), ``fx`` and ``fy`` the flush position (the flush side reads
 while ``flushing``).
