@@ -451,8 +451,9 @@ def add_pipeline_option(parser: argparse.ArgumentParser, applies: str) -> None:
     from .model.pipeline import PIPELINES
 
     units = ", ".join(
-        f"{name} {p['setup_units']} setup unit{'s' * (p['setup_units'] > 1)} and "
-        f"{p['pixel_lanes']} pixel lane{'s' * (p['pixel_lanes'] > 1)}"
+        f"{name} {p['setup_units']} setup unit{'s' * (p['setup_units'] > 1)}, "
+        f"{p['pixel_lanes']} pixel lane{'s' * (p['pixel_lanes'] > 1)} and "
+        f"{p['scan_lanes']} scan lane{'s' * (p['scan_lanes'] > 1)}"
         for name, p in PIPELINES.items()
     )
     parser.add_argument(

@@ -2,8 +2,9 @@
 simulation speed (issue 26).
 
 Scenes (default configuration, tile 64 x 32 unless --tile), each through every named pipeline
-configuration (`edgeaa.model.pipeline.PIPELINES`: compact, one setup unit; fast, four and
-a flush of two pixels a clock; or --pipelines): the built-ins; a 640 x 480 HUD
+configuration (`edgeaa.model.pipeline.PIPELINES`: compact, one setup unit; fast, four, a
+flush of two pixels a clock and a scan of two cells a clock; or --pipelines): the built-ins;
+a 640 x 480 HUD
 page (`hud_scene`: 20 lines of 12 px DejaVu Sans Mono, a frame, a ring and a pitch ladder);
 one line of serif text (`edgeaa.render.corpus.font_scene`) in STIX, DejaVu Serif and cmr10
 (fonts matplotlib ships) at 9 to 32 px; and 1920 x 1080 with 40 large polygons
@@ -15,18 +16,20 @@ build excluded, sink always ready), whose image is compared with the renderer's 
 clocks with the model's plus the harness's drain (equal, or the model is wrong).
 
 The rate table: clocks (the cycle model's), pixels per clock, the floor (the flush's beats,
-the pixels flushed over the pixel lanes, `PipelineConfig.pixel_lanes`, or the cells the
-resolve scans, `TileTiming.cells_scanned`, one a clock, whichever is more: each beat and each
-cell takes a clock, and with the resolve's second pixel memory a flush runs beside the next
-tile's scan) and the clocks' ratio to it, frames per second at the configuration's measured
-Fmax on its device (`FMAX`: compact on the iCE40 HX8K, fast on the ECP5 25F;
-docs/hardware.md), and AGG's and Skia's time on one CPU core for the same polygons in the
-same run (aggdraw, and skia-python's raster surface with analytic antialiasing: the scene
-drawn into an 8-bit image, paths and paints built beforehand, the fastest of --repeats
-draws) and the FPGA's time over AGG's. The stage table: each stage's busy and stall
-counters as shares of the clocks, the stepper alone's clocks on the edges the renderer sends
-once (`edgeaa.model.timing`), and simulated clocks per second beside the stepper-only
-harness's on the same edges (the ratio is the steadier figure on a shared machine).
+the pixels flushed over the pixel lanes, `PipelineConfig.pixel_lanes`, or the scan's beats,
+the cells the resolve scans, `TileTiming.cells_scanned`, over the scan lanes,
+`PipelineConfig.scan_lanes`: `TileTiming.beats_scanned`, whichever is more: each beat of
+pixels and each beat of cells takes a clock, and with the resolve's second pixel memory a
+flush runs beside the next tile's scan) and the clocks' ratio to it, frames per second at
+the configuration's measured Fmax on its device (`FMAX`: compact on the iCE40 HX8K, fast on
+the ECP5 25F; docs/hardware.md), and AGG's and Skia's time on one CPU core for the same
+polygons in the same run (aggdraw, and skia-python's raster surface with analytic
+antialiasing: the scene drawn into an 8-bit image, paths and paints built beforehand, the
+fastest of --repeats draws) and the FPGA's time over AGG's. The stage table: each stage's
+busy and stall counters as shares of the clocks, the stepper alone's clocks on the edges the
+renderer sends once (`edgeaa.model.timing`), and simulated clocks per second beside the
+stepper-only harness's on the same edges (the ratio is the steadier figure on a shared
+machine).
 --write puts both tables into docs/hardware.md between its markers.
 
     python benchmarks/bench_pipeline.py [--tile 64x32] [--pipelines compact,fast]
@@ -224,21 +227,22 @@ def measure(scene: Scene, tile: TileConfig, pipelines: list[str], repeats: int) 
             key=lambda r: r.seconds,
         )
         image = image_from_frames(plan, tile, run.frames(tile))
-        flushed, lanes = len(timing.pixels), pipeline.pixel_lanes
+        flushed, lanes, scan = len(timing.pixels), pipeline.pixel_lanes, pipeline.scan_lanes
         rows.append(
             {
                 "scene": scene.name,
                 "pipeline": name,
                 "setup_units": pipeline.setup_units,
                 "pixel_lanes": lanes,
+                "scan_lanes": scan,
                 "size": f"{scene.width}x{scene.height}",
                 "pixels": scene.width * scene.height,
                 "commands": len(commands),
                 "clocks": timing.clocks,
                 "flushed": flushed,
                 "scanned": timing.tile.cells_scanned,
-                # a beat of `lanes` pixels a clock; a scanned cell a clock
-                "floor": max(flushed // lanes, timing.tile.cells_scanned),
+                # a beat of `lanes` pixels a clock; a beat of `scan` scanned cells a clock
+                "floor": max(flushed // lanes, timing.tile.beats_scanned),
                 "verilator_clocks": run.clocks,
                 "drain": pipeline_harness.pixel_drain_clocks(tile),
                 "stepper_cycles": model.cycles,
@@ -259,7 +263,7 @@ def exact(r: dict) -> bool:
 
 def rate_table(rows: list[dict]) -> list[str]:
     head = ["scene", "size", "pipeline", "clocks", "px/clock"]
-    head += ["floor (flushed / lanes; scanned)"]
+    head += ["floor (flushed / lanes; scanned / scan lanes)"]
     head += ["clocks/floor", "fps at Fmax", "AGG (ms)", "Skia (ms)", "FPGA/AGG"]
     head += ["Verilator: image, clocks"]
     lines = ["| " + " | ".join(head) + " |", "|---|---|---|" + "---:|" * (len(head) - 4) + "---|"]
@@ -270,7 +274,8 @@ def rate_table(rows: list[dict]) -> list[str]:
         cells = [r["scene"], r["size"], r["pipeline"], f"{r['clocks']:,}"]
         cells.append(f"{r['pixels'] / r['clocks']:.3f}")
         lanes = f" / {r['pixel_lanes']}" if r["pixel_lanes"] > 1 else ""
-        floor = f"{r['floor']:,} ({r['flushed']:,}{lanes}; {r['scanned']:,})"
+        scan = f" / {r['scan_lanes']}" if r["scan_lanes"] > 1 else ""
+        floor = f"{r['floor']:,} ({r['flushed']:,}{lanes}; {r['scanned']:,}{scan})"
         cells += [floor, f"{r['clocks'] / r['floor']:.2f}", f"{1 / seconds:.1f}"]
         cells += [f"{1e3 * r['agg_seconds']:.2f}", f"{1e3 * r['skia_seconds']:.2f}"]
         cells += [f"{seconds / r['agg_seconds']:.1f}", check]

@@ -13,15 +13,18 @@ cells (a simple dual-port block RAM); back-to-back deltas to one cell are neithe
 doubled (read-modify-write with forwarding, `_rmw`).
 
 Out: ``cells`` to the resolve. An end taken in clock a reads, from a + 2, the rows the
-polygon touched in ascending order, one cell per clock while the output advances (``start``
-marks a row's first cell, where the resolve's prefix sum restarts), each read clearing its
-cell; a row already scanned in this tile is read over the polygon's scan span only
-(`edgeaa.model.tile`, "Scan span", where it is shown exact). A cell read in clock s is
+polygon touched in ascending order, one beat of ``lanes`` cells per clock while the output
+advances (`edgeaa.model.pipeline.PipelineConfig.scan_lanes`: 1 in the compact pipeline, the
+memory then one; 2 in the fast one, a memory per lane, banked by column modulo the lanes,
+so a beat is a word of each, and the input side writes its cell's lane; ``start`` marks a
+row's first beat, where the resolve's prefix sum restarts), each read clearing its cells; a
+row already scanned in this tile is read over the polygon's scan span only, widened to
+whole beats (`edgeaa.model.tile`, "Scan span", where it is shown exact). A cell read in clock s is
 offered in s + 1 (the end's first in a + 3), and a stalled cell holds. Tile and flush ops go
 out through the same output register, in order.
 
 Reset clears the registers, not the memory: a memory holding deltas of an unfinished polygon
-(``dirty``, kept through reset) is cleared, one cell a clock, ``width x height`` clocks,
+(``dirty``, kept through reset) is cleared, a beat a clock, ``width x height / lanes`` clocks,
 before the first op after the reset; a clean one takes ops from the first clock. The
 clock-by-clock story, the scan span's registers and the costs: docs/hardware.md, "Polygon
 pipeline", Accumulation memory.
@@ -35,10 +38,11 @@ from amaranth.hdl import Const, Module, Mux, Signal, signed
 from amaranth.lib import memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..model.pipeline import SCAN_LANES
 from ..model.tile import TileConfig
 from .accumulator_cells import read_modify_write, route_cell
 from .accumulator_scan import scan_states
-from .layouts import CELL_OP, TILE_OP, tile_cell_layout, tile_op_layout
+from .layouts import CELL_OP, TILE_OP, cell_sum_fields, tile_cell_layout, tile_op_layout
 
 __all__ = ["TileAccumulator"]
 
@@ -51,14 +55,16 @@ class TileAccumulator(wiring.Component):
     (`edgeaa.sim.verification.formal.accumulator`); its input side is
     `edgeaa.hdl.accumulator_cells`, its scan `edgeaa.hdl.accumulator_scan`."""
 
-    def __init__(self, tile: TileConfig):
+    def __init__(self, tile: TileConfig, lanes: int = 1):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
-        self._tile = tile
+        if lanes not in SCAN_LANES:
+            raise ValueError(f"lanes must be one of {SCAN_LANES}, not {lanes!r}")
+        self._tile, self._lanes = tile, lanes
         super().__init__(
             {
                 "ops": In(stream.Signature(tile_op_layout(tile))),
-                "cells": Out(stream.Signature(tile_cell_layout(tile))),
+                "cells": Out(stream.Signature(tile_cell_layout(tile, lanes))),
                 "scanning": Out(1),
                 "busy": Out(1),
             }
@@ -68,13 +74,28 @@ class TileAccumulator(wiring.Component):
     def tile(self) -> TileConfig:
         return self._tile
 
+    @property
+    def lanes(self) -> int:
+        """Cells the scan reads a clock (`PipelineConfig.scan_lanes`)."""
+        return self._lanes
+
     def elaborate(self, platform):
         m = Module()
-        tile = self._tile
-        mem = memory.Memory(shape=signed(tile.cell_bits), depth=tile.pixels, init=[])
-        m.submodules.cells_memory = mem
-        rd, wr = mem.read_port(), mem.write_port()
-        self.observe = types.SimpleNamespace(memory=mem, read=rd)
+        tile, lanes = self._tile, self._lanes
+        if lanes == 1:
+            mem = memory.Memory(shape=signed(tile.cell_bits), depth=tile.pixels, init=[])
+            m.submodules.cells_memory = mem
+            rd, wr = mem.read_port(), mem.write_port()
+            self.observe = types.SimpleNamespace(memory=mem, read=rd)
+        else:  # a memory per lane, banked by column modulo the lanes: a beat is a word of each
+            mems = [
+                memory.Memory(shape=signed(tile.cell_bits), depth=tile.pixels // lanes, init=[])
+                for _ in range(lanes)
+            ]
+            for j, mem in enumerate(mems):
+                m.submodules[f"cells_memory_lane{j}"] = mem
+            rd, wr = [mem.read_port() for mem in mems], [mem.write_port() for mem in mems]
+            self.observe = types.SimpleNamespace(memories=mems, reads=rd)
         o_valid = Signal()
         advance = ~o_valid | self.cells.ready
         free = Signal()  # in ACC, the output register free and no clear pending: take
@@ -128,7 +149,8 @@ class TileAccumulator(wiring.Component):
         )
         rsum = Signal(signed(tile.cell_bits))  # the row's sum through the cells sent
         total = Signal(signed(tile.cell_bits))  # ... and through the cell waiting
-        m.d.comb += total.eq(Mux(o["start"], 0, rsum) + self.cells.payload.sum)
+        sums = [self.cells.payload[name] for name in cell_sum_fields(self._lanes)]
+        m.d.comb += total.eq(Mux(o["start"], 0, rsum) + sum(sums[1:], start=sums[0]))
         with m.If(advance & o_valid & (o["op"] == CELL_OP["cell"])):
             m.d.sync += rsum.eq(total)
         self.observe.__dict__.update(rsum=rsum, total=total)
@@ -162,13 +184,17 @@ class TileAccumulator(wiring.Component):
 
     def _output(self, m, rd, o, params, background):
         out = self.cells.payload
+        ports = rd if isinstance(rd, list) else [rd]  # a beat: each lane's memory's word
         m.d.comb += [
             out.op.eq(o["op"]),
             out.x.eq(o["x"]),
             out.y.eq(o["y"]),
             out.first.eq(o["first"]),
             out.start.eq(o["start"]),
-            out.sum.eq(rd.data),
+            *(
+                out[name].eq(port.data)
+                for name, port in zip(cell_sum_fields(self._lanes), ports, strict=True)
+            ),
             out.background.eq(background),
             *(out[name].eq(reg) for name, reg in params.items()),
         ]

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Cat, Const, Mux, Signal, signed
+from amaranth.hdl import Array, Cat, Const, Mux, Signal, signed
 
-from .layouts import TILE_OP
+from .layouts import TILE_OP, log2
 
 __all__ = ["read_modify_write", "route_cell"]
 
@@ -78,9 +78,12 @@ def read_modify_write(m, unit, rd, wr, cell):
     what was read, or to the sum of the cell before if it wrote the same cell last clock,
     which the read did not see; write the sum). Stage B's delta is zero when it holds no
     cell, so a scan's clear is the same add with the read forced to zero. `unit._clear`
-    (the scan's) takes the write port when set and writes zero at `unit._scan_addr`."""
+    (the scan's) takes the write port when set and writes zero at `unit._scan_addr`. `rd` and
+    `wr` may be lists, a port of each lane's memory (banked by column modulo the lanes): B
+    takes its lane's read data, writes its lane's memory, and a clear zeroes every lane's
+    word at the beat `unit._scan_addr`."""
     tile = unit.tile
-    addr_bits = len(rd.addr)
+    addr_bits = tile.x_bits + tile.y_bits  # a cell's full address (lanes: bank and word)
     unit._scan_addr = Signal(addr_bits)
     unit._clear = Signal()
     unit._read_en = Signal()
@@ -96,10 +99,22 @@ def read_modify_write(m, unit, rd, wr, cell):
         c_addr=c_addr,
         c_sum=c_sum,
     )
-    m.d.comb += [
-        rd.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)),
-        rd.en.eq(unit._read_en),
-    ]
+    lanes = rd if isinstance(rd, list) else None  # a memory per lane, banked by column
+    if lanes is None:
+        m.d.comb += [
+            rd.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)),
+            rd.en.eq(unit._read_en),
+        ]
+        read = rd.data
+    else:
+        lane_bits = log2(len(lanes))
+        read = Array(port.data for port in lanes)[b_addr[:lane_bits]]  # the lane B read
+        unit.observe.read = types.SimpleNamespace(data=read)  # as one memory's read port
+        for port in lanes:
+            m.d.comb += [
+                port.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)[lane_bits:]),
+                port.en.eq(unit._read_en),
+            ]
     m.d.sync += [
         b_valid.eq(cell.keep),
         b_addr.eq(addr),
@@ -110,10 +125,19 @@ def read_modify_write(m, unit, rd, wr, cell):
     ]
     # the write of the cell before (C) is not in the read B got; a clear writes zero
     # (b_delta is zero while scanning)
-    base = Mux(c_valid & (c_addr == b_addr), c_sum, Mux(unit._clear, 0, rd.data))
-    m.d.comb += [
-        total.eq(base + b_delta),
-        wr.addr.eq(Mux(unit._clear, unit._scan_addr, b_addr)),
-        wr.data.eq(total),
-        wr.en.eq(unit._clear | b_valid),
-    ]
+    base = Mux(c_valid & (c_addr == b_addr), c_sum, Mux(unit._clear, 0, read))
+    m.d.comb += total.eq(base + b_delta)
+    if lanes is None:
+        m.d.comb += [
+            wr.addr.eq(Mux(unit._clear, unit._scan_addr, b_addr)),
+            wr.data.eq(total),
+            wr.en.eq(unit._clear | b_valid),
+        ]
+        return
+    # a clear zeroes a beat (every lane's word); stage B writes its cell's lane
+    for j, port in enumerate(wr):
+        m.d.comb += [
+            port.addr.eq(Mux(unit._clear, unit._scan_addr, b_addr)[lane_bits:]),
+            port.data.eq(total),
+            port.en.eq(unit._clear | (b_valid & (b_addr[:lane_bits] == j))),
+        ]

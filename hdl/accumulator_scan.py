@@ -10,7 +10,7 @@ clock by clock.
 
 from __future__ import annotations
 
-from amaranth.hdl import Cat, Mux, Signal
+from amaranth.hdl import Cat, Const, Mux, Signal
 
 from .layouts import CELL_OP, log2
 
@@ -31,10 +31,15 @@ def lowest_set(bits: Signal, width: int):
 def scan_states(m, unit, o, o_valid, advance, first):
     """WAIT and SCAN: the touched rows in ascending order, a row seen since the tile
     started from ``lo`` to ``hi`` and on to the last column when its sum through ``hi``
-    is nonzero (`edgeaa.model.tile`, "Scan span"), a row not seen yet whole."""
-    tile, obs = unit.tile, unit.observe
+    is nonzero (`edgeaa.model.tile`, "Scan span"), a row not seen yet whole; in beats of
+    ``unit.lanes`` cells (``scan_x`` a multiple of the lanes, the span widened to them)."""
+    tile, obs, lanes = unit.tile, unit.observe, unit.lanes
     lo, hi, touched, seen = obs.lo, obs.hi, obs.touched, obs.seen
     last = tile.width - 1
+    last_beat = tile.width - lanes  # the row's last beat (its first column)
+    if lanes > 1:  # lo and hi down to their beats' first columns
+        low = log2(lanes)
+        lo, hi = Cat(Const(0, low), lo[low:]), Cat(Const(0, low), hi[low:])
     scan_x, scan_y = Signal(tile.x_bits), Signal(tile.y_bits)
     scan_addr = Cat(scan_x, scan_y)
     partial = Signal()  # the row is read from lo (it was seen)
@@ -57,7 +62,7 @@ def scan_states(m, unit, o, o_valid, advance, first):
         ]
 
     def done():
-        m.d.sync += [lo.eq(last), hi.eq(0), obs.dirty.eq(0)]
+        m.d.sync += [obs.lo.eq(last), obs.hi.eq(0), obs.dirty.eq(0)]
         m.next = "ACC"
 
     with m.State("WAIT"):  # the last beat's write landed in the clock before
@@ -82,17 +87,17 @@ def scan_states(m, unit, o, o_valid, advance, first):
                 o["start"].eq(row_start),
                 first.eq(0),
                 row_start.eq(0),
-                scan_x.eq(scan_x + 1),
-                decide.eq(partial & (scan_x == hi) & (hi != last)),
+                scan_x.eq(scan_x + lanes),
+                decide.eq(partial & (scan_x == hi) & (hi != last_beat)),
             ]
-            with m.If(stop | (scan_x == last)):
+            with m.If(stop | (scan_x == last_beat)):
                 choose()
                 with m.If(touched == 0):
                     done()
-    with m.State("CLEAR"):  # after a reset: zero to every cell, one a clock, no output
+    with m.State("CLEAR"):  # after a reset: zero to every cell, a beat a clock, no output
         m.d.comb += [unit._clear.eq(1), unit._scan_addr.eq(scan_addr)]
-        m.d.sync += scan_x.eq(scan_x + 1)
-        with m.If(scan_x == last):
+        m.d.sync += scan_x.eq(scan_x + lanes)
+        with m.If(scan_x == last_beat):
             m.d.sync += scan_y.eq(scan_y + 1)
             with m.If(scan_y == tile.height - 1):
                 m.d.sync += [scan_x.eq(0), scan_y.eq(0), obs.dirty.eq(0)]

@@ -23,6 +23,7 @@ from ..model.tile import OPS, PAINT, RESOLVE_OPS, TileConfig
 __all__ = [
     "CELL_OP",
     "TILE_OP",
+    "cell_sum_fields",
     "check_config",
     "clip_layout",
     "const_mul",
@@ -181,16 +182,17 @@ def tile_op_layout(tile: TileConfig) -> data.StructLayout:
     )
 
 
-def tile_cell_layout(tile: TileConfig) -> data.StructLayout:
-    """The resolve's input: ``op`` (an index of `RESOLVE_OPS`), a cell's tile pixel and sum
-    (``first``: the polygon's first cell; ``start``: its row's first cell, where the prefix
-    sum restarts), and the polygon's fields or the background."""
+def tile_cell_layout(tile: TileConfig, lanes: int = 1) -> data.StructLayout:
+    """The resolve's input: ``op`` (an index of `RESOLVE_OPS`), a beat of `lanes` cells: its
+    first cell's tile pixel and the cells' sums side by side (`cell_sum_fields`; ``first``:
+    the polygon's first beat; ``start``: its row's first, where the prefix sum restarts),
+    and the polygon's fields or the background."""
     return data.StructLayout(
         {
             "op": unsigned(_code_bits(RESOLVE_OPS)),
             "x": unsigned(tile.x_bits),
             "y": unsigned(tile.y_bits),
-            "sum": signed(tile.cell_bits),
+            **{name: signed(tile.cell_bits) for name in cell_sum_fields(lanes)},
             "first": unsigned(1),
             "start": unsigned(1),
             **_polygon_fields(tile),
@@ -211,6 +213,12 @@ def tile_pixel_layout(tile: TileConfig, lanes: int = 1) -> data.StructLayout:
             "last": unsigned(1),
         }
     )
+
+
+def cell_sum_fields(lanes: int) -> tuple[str, ...]:
+    """The sum fields of a beat of `lanes` cells (`tile_cell_layout`): lane k, the cell at
+    column ``x + k``, is ``sum`` for k = 0, else ``sum<k>``."""
+    return ("sum", *(f"sum{k}" for k in range(1, lanes)))
 
 
 def pixel_value_fields(lanes: int) -> tuple[str, ...]:

@@ -66,8 +66,8 @@ class EdgePipeline(wiring.Component):
         self._pipeline = pipeline_config(pipeline)
         self._tile = tile = self._pipeline.tile
         self.core = PolygonCore(tile.config, setup_units=self._pipeline.setup_units)
-        lanes = self._pipeline.pixel_lanes
-        self.acc, self.res = TileAccumulator(tile), TileResolve(tile, lanes)
+        lanes, scan = self._pipeline.pixel_lanes, self._pipeline.scan_lanes
+        self.acc, self.res = TileAccumulator(tile, scan), TileResolve(tile, lanes, scan)
         stats = data.StructLayout({name: unsigned(STATS_BITS) for name in STATS})
         super().__init__(
             {

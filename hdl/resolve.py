@@ -2,8 +2,12 @@
 """The tile's resolve (`TileResolve`): cell sums in, composited pixels into the tile's pixel
 memory, the tile out on a flush. `edgeaa.model.tile` is the model and the cycle model.
 
-One cell per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks (I + 4 in
-colour) from taking a cell to writing its pixel:
+One beat of cells per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks (I + 4
+in colour) from taking a beat to writing its pixels. A beat is one cell, or with ``scan_lanes``
+2 (`PipelineConfig.scan_lanes`, the fast pipeline's) two, the columns ``x`` and ``x + 1``:
+every stage below is then a lane per cell (the registers of lane 1 named ``_l1``; one
+prefix sum register, the second cell's sum the first's plus its own), and each lane reads
+and writes its own pixel lane's memory (scan lanes equal pixel lanes):
 
 * take (clock r): the pixel's read is issued;
 * s1: the row's prefix sum (restarting at the row's first cell, ``start``) and whether
@@ -59,7 +63,8 @@ writes, ``fwritten`` and ``fbackground`` the flushed tile's written rows and bac
 of registers, each with ``valid``; the values a stage carries are in the delay lines,
 ``delays`` (their `Memory` by name, ``"xy"`` and ``"carry"``), at the address its
 ``delayed`` names per line (a value, no logic); the last stage's are its fields ``x``,
-``y``, ``below``, ``zero`` and ``neg``, the read ports' data), ``acc`` the row's prefix
+``y``, ``below``, ``zero`` and ``neg``, with two scan lanes lane 1's ``below_l1``,
+``zero_l1`` and ``neg_l1`` too, the read ports' data), ``acc`` the row's prefix
 sum, ``d2``, ``written``, ``background``, ``p_valid`` and ``p`` the output register (``x``,
 ``y``, ``last``, ``written``), ``fx`` and ``fy`` the flush position (the flush side reads
 while ``flushing``).
@@ -74,9 +79,9 @@ from amaranth.hdl import Array, Cat, Const, Module, Mux, Signal, Value, unsigned
 from amaranth.lib import data, memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..model.pipeline import PIXEL_LANES
+from ..model.pipeline import PIXEL_LANES, SCAN_LANES
 from ..model.tile import RESOLVE_OPS, TileConfig, resolve_latency
-from .layouts import pixel_value_fields, tile_cell_layout, tile_pixel_layout
+from .layouts import cell_sum_fields, pixel_value_fields, tile_cell_layout, tile_pixel_layout
 
 __all__ = ["TileResolve"]
 
@@ -87,15 +92,17 @@ class TileResolve(wiring.Component):
     """Resolve and pixel memory of a `TileConfig` tile. ``cells`` (in, `tile_cell_layout`),
     ``pixels`` (out, `tile_pixel_layout`); ``flushing`` is high while a tile goes out."""
 
-    def __init__(self, tile: TileConfig, lanes: int = 1):
+    def __init__(self, tile: TileConfig, lanes: int = 1, scan_lanes: int = 1):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
         if lanes not in PIXEL_LANES:
             raise ValueError(f"lanes must be one of {PIXEL_LANES}, not {lanes!r}")
-        self._tile, self._lanes = tile, lanes
+        if scan_lanes not in SCAN_LANES or scan_lanes not in (1, lanes):
+            raise ValueError(f"scan_lanes must be 1 or the lanes ({lanes}), not {scan_lanes!r}")
+        self._tile, self._lanes, self._scan_lanes = tile, lanes, scan_lanes
         super().__init__(
             {
-                "cells": In(stream.Signature(tile_cell_layout(tile))),
+                "cells": In(stream.Signature(tile_cell_layout(tile, scan_lanes))),
                 "pixels": Out(stream.Signature(tile_pixel_layout(tile, lanes))),
                 "flushing": Out(1),
             }
@@ -109,6 +116,11 @@ class TileResolve(wiring.Component):
     def lanes(self) -> int:
         """Pixels a flush sends a clock (`PipelineConfig.pixel_lanes`)."""
         return self._lanes
+
+    @property
+    def scan_lanes(self) -> int:
+        """Cells it takes a clock (`PipelineConfig.scan_lanes`)."""
+        return self._scan_lanes
 
     @property
     def latency(self) -> int:
@@ -149,20 +161,26 @@ class TileResolve(wiring.Component):
         pairs = list(zip(*reads, strict=True))  # (bank 0's, bank 1's) read port of each lane
         frd.lanes = [frd.data, *(Mux(bank, r0.data, r1.data) for r0, r1 in pairs[1:])]
         wr = types.SimpleNamespace(addr=Signal(range(tile.pixels)), data=Signal(value), en=Signal())
-        if lanes > 1:  # the resolve's read: the lane of the column it read a clock ago
+        scan = self._scan_lanes  # a beat of `scan` cells: a pixel of each lane's memory
+        wr.lanes = [wr.data, *(Signal(value, name=f"wr_data_l{j}") for j in range(1, scan))]
+        if scan > 1:  # the resolve reads and writes a beat's pixels, a lane each
+            rd.lanes = [Mux(bank, r1.data, r0.data) for r0, r1 in pairs]
+        elif lanes > 1:  # the resolve's read: the lane of the column it read a clock ago
             read_lane = Signal(lane_bits, name="read_lane")
             m.d.sync += read_lane.eq(rd.addr[:lane_bits])
             rd.data = Array(Mux(bank, r1.data, r0.data) for r0, r1 in pairs)[read_lane]
+        if scan == 1:
+            rd.lanes = [rd.data]
         for k, j in itertools.product(range(2), range(lanes)):
             mine = bank == k
             write = wr.en & mine
-            if lanes > 1:
+            if lanes > 1 and scan == 1:
                 write = write & (wr.addr[:lane_bits] == j)
             m.d.comb += [
                 reads[k][j].addr.eq(Mux(mine, rd.addr, frd.addr)[lane_bits:]),
                 reads[k][j].en.eq(mine | advance),
                 writes[k][j].addr.eq(wr.addr[lane_bits:]),
-                writes[k][j].data.eq(wr.data),
+                writes[k][j].data.eq(wr.lanes[j % scan]),
                 writes[k][j].en.eq(write),
             ]
         stages = self._pipeline(m, rd, wr, written, background)
@@ -186,12 +204,17 @@ class TileResolve(wiring.Component):
         # x and y from the take to the last stage
         xy = _delay_line(m, self.observe, "xy", ptr, self.latency - 1, x=c.x, y=c.y)
         acc = Signal.like(c.sum)  # the row's prefix sum, wrapping like the cells
-        total = (Mux(c.start, 0, acc) + c.sum)[: tile.cell_bits].as_signed()
+        # a beat's cells, lane k the column x + k: lane n's names end in n ("" for lane 0)
+        lanes = [""] + [f"_l{k}" for k in range(1, self._scan_lanes)]
+        totals, total = [], Mux(c.start, 0, acc)
+        for name in cell_sum_fields(len(lanes)):  # each lane's prefix sum, one adder each
+            total = (total + c[name])[: tile.cell_bits].as_signed()
+            totals.append(total)
         s1 = _stage(
             m,
             "s1",
             valid=take,
-            sum=total,
+            **{f"sum{n}": t for n, t in zip(lanes, totals, strict=True)},
             written=written.bit_select(c.y, 1),
             intensity=c.intensity,
             i_out=c.i_out,
@@ -208,43 +231,52 @@ class TileResolve(wiring.Component):
             m,
             "s2",
             valid=s1.valid,
-            cov=self._fill(s1.sum, ifix, s1.evenodd),
-            below=Mux(s1.written, rd.data, background),
+            **{f"cov{n}": self._fill(getattr(s1, f"sum{n}"), ifix, s1.evenodd) for n in lanes},
+            **{
+                f"below{n}": Mux(s1.written, data, background)
+                for n, data in zip(lanes, rd.lanes, strict=True)
+            },
             intensity=s1.intensity,
             d=d,
         )
-        q = Mux(s2.d == 0, 0, (s2.cov + (1 << (F - 1))) >> F)[: bits + 1]
+        qs = [Mux(s2.d == 0, 0, (getattr(s2, f"cov{n}") + (1 << (F - 1))) >> F) for n in lanes]
+        qs = [q[: bits + 1] for q in qs]
         # each channel: its paint (the intensity, grey) against the pixel below, one numerator
         pre, stages = s2, [s1, s2]  # the stage before s3
         if tile.channels == 1:
-            paints, belows = [s2.intensity], [s2.below]
+            paints, belows = [s2.intensity], [[getattr(s2, f"below{n}")] for n in lanes]
         else:  # colour: the alpha stage
-            pre, paints, belows = self._alpha_stage(m, s2, q)
-            q, stages = pre.q, [s1, s2, pre]
-        negs, nums = [], []
-        for k, (paint, below) in enumerate(zip(paints, belows, strict=True)):
-            if paint is None:  # towards full scale: never below, and full - below is ~below
-                neg, diff = Const(0, 1), ~below
-            else:
-                neg = paint < below
-                diff = Mux(neg, below - paint, paint - below)[:bits]
-            product = _product(m, q, diff, "" if k == 0 else f"_c{k}")
-            negs.append(neg)
-            nums.append(((product << 1) + pre.d - neg)[: 2 * bits + 2])  # >= 0 unless q = 0
+            pre, paints, belows = self._alpha_stage(m, s2, qs, lanes)
+            qs, stages = [getattr(pre, f"q{n}") for n in lanes], [s1, s2, pre]
+        negs, nums, names = [[] for _ in lanes], [], []  # names: each lane's channels
+        for j, (lane, q) in enumerate(zip(lanes, qs, strict=True)):
+            for k, (paint, below) in enumerate(zip(paints, belows[j], strict=True)):
+                if paint is None:  # towards full scale: never below, and full - below is ~below
+                    neg, diff = Const(0, 1), ~below
+                else:
+                    neg = paint < below
+                    diff = Mux(neg, below - paint, paint - below)[:bits]
+                names.append(lane + ("" if k == 0 else f"_c{k}"))
+                product = _product(m, q, diff, names[-1])
+                negs[j].append(neg)
+                nums.append(((product << 1) + pre.d - neg)[: 2 * bits + 2])  # >= 0 unless q = 0
         # 2 D: one register, as every cell in flight is one polygon's (its first cell waits
         # for the pipeline to empty)
         d2 = Signal(bits + 1, name="d2")
         with m.If(s2.valid):
             m.d.sync += d2.eq(s2.d << 1)
         self.observe.d2 = d2
-        # the pixel below, q = 0 and the sign from s3 to the last stage
-        carry = _delay_line(
-            m, self.observe, "carry", ptr, bits, below=pre.below, zero=q == 0, neg=Cat(*negs)
-        )
+        # each lane's pixel below, q = 0 and signs from s3 to the last stage
+        carried_values = {}
+        for lane, q, lane_negs in zip(lanes, qs, negs, strict=True):
+            carried_values[f"below{lane}"] = getattr(pre, f"below{lane}")
+            carried_values[f"zero{lane}"] = q == 0
+            carried_values[f"neg{lane}"] = Cat(*lane_negs)
+        carry = _delay_line(m, self.observe, "carry", ptr, bits, **carried_values)
         # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
         # bits) and the dividend's low bits, which the quotient's bits replace one a stage;
-        # a pair per channel (channel 0's named rem and low), one divisor 2 D
-        names = ["" if k == 0 else f"_c{k}" for k in range(tile.channels)]
+        # a pair per channel of each lane (lane 0's channel 0 named rem and low), one
+        # divisor 2 D
         s3 = _stage(
             m,
             "s3",
@@ -266,41 +298,54 @@ class TileResolve(wiring.Component):
         for k, st in enumerate(stages[:-1], start=1):  # where stage k's values are now
             st.delayed = {"xy": ptr - k} | ({"carry": ptr - (k - carried)} if k > carried else {})
         last = stages[-1]
-        last.__dict__.update(x=xy.x, y=xy.y, below=carry.below, zero=carry.zero, neg=carry.neg)
-        news = []
-        for k, n in enumerate(names):
-            quot, neg = getattr(last, f"low{n}"), last.neg[k] if names[1:] else last.neg
-            below = last.below[bits * k :][:bits] if names[1:] else last.below
-            # below - quot as below + ~quot + 1: one adder
-            signed_quot = quot ^ neg.replicate(bits)
-            news.append(Mux(last.zero, below, below + signed_quot + neg)[:bits])
+        last.__dict__.update(x=xy.x, y=xy.y, **{name: carry[name] for name in carried_values})
+        writes, colour = [], tile.channels > 1
+        for lane in lanes:
+            news = []
+            for k in range(tile.channels):
+                n = lane + ("" if k == 0 else f"_c{k}")
+                lane_neg = getattr(last, f"neg{lane}")
+                quot, neg = getattr(last, f"low{n}"), lane_neg[k] if colour else lane_neg
+                below = getattr(last, f"below{lane}")
+                below = below[bits * k :][:bits] if colour else below
+                # below - quot as below + ~quot + 1: one adder
+                signed_quot = quot ^ neg.replicate(bits)
+                news.append(
+                    Mux(getattr(last, f"zero{lane}"), below, below + signed_quot + neg)[:bits]
+                )
+            writes.append(news[0] if len(news) == 1 else Cat(*news))
         m.d.comb += [
             wr.addr.eq(Cat(last.x, last.y)),
-            wr.data.eq(news[0] if len(news) == 1 else Cat(*news)),
+            wr.data.eq(writes[0]),
             wr.en.eq(last.valid),
+            *(port.eq(data) for port, data in zip(wr.lanes[1:], writes[1:], strict=True)),
         ]
-        self._row_done = last.valid & (last.x == tile.width - 1)
+        self._row_done = last.valid & (last.x == tile.width - len(lanes))
         self._row_done_y = last.y
         assert len(stages) == self.latency, (len(stages), self.latency)
         return stages
 
-    def _alpha_stage(self, m, s2, q):
-        """Colour's stage sa: q' = round(q A / full) (`_alpha`), and the pixel below, the
-        paint's three colours and D carried to s3; returns it, each channel's paint (None:
-        the alpha channel's, full scale) and each channel's pixel below."""
+    def _alpha_stage(self, m, s2, qs, lanes):
+        """Colour's stage sa: each lane's q' = round(q A / full) (`_alpha`; `qs` a q per
+        lane, `lanes` their names' suffixes), and its pixel below, the paint's three colours
+        and D carried to s3; returns it, each channel's paint (None: the alpha channel's,
+        full scale) and each lane's pixel below per channel."""
         bits, channels = self._tile.config.intensity_bits, self._tile.channels
         colour = s2.intensity[bits:]  # red, green, blue, alpha (`PAINT`)
+        alpha = colour[bits * 3 :][:bits]
         sa = _stage(
             m,
             "sa",
             valid=s2.valid,
-            q=_alpha(m, q, colour[bits * 3 :][:bits], bits),
-            below=s2.below,
+            **{f"q{n}": _alpha(m, q, alpha, bits, n) for n, q in zip(lanes, qs, strict=True)},
+            **{f"below{n}": getattr(s2, f"below{n}") for n in lanes},
             paint=colour[: bits * 3],
             d=s2.d,
         )
         paints = [sa.paint[bits * k :][:bits] for k in range(3)] + [None]
-        belows = [sa.below[bits * k :][:bits] for k in range(channels)]
+        belows = [
+            [getattr(sa, f"below{n}")[bits * k :][:bits] for k in range(channels)] for n in lanes
+        ]
         return sa, paints[:channels], belows
 
     def _fill(self, s, ifix, evenodd):
@@ -379,11 +424,11 @@ class TileResolve(wiring.Component):
         ]
 
 
-def _alpha(m, q, alpha, bits: int):
+def _alpha(m, q, alpha, bits: int, suffix: str = ""):
     """``round(q * alpha / full)`` half up, full = 2**bits - 1, with no divider
     (`edgeaa.model.tile.alpha_steps`): y = q alpha + 2**(bits - 1) - 1, then
-    (y + (y >> bits) + 1) >> bits; q and alpha at most full."""
-    y = _product(m, q, alpha, "_alpha") + ((1 << (bits - 1)) - 1)
+    (y + (y >> bits) + 1) >> bits; q and alpha at most full (`suffix`: the lane's)."""
+    y = _product(m, q, alpha, "_alpha" + suffix) + ((1 << (bits - 1)) - 1)
     return ((y + (y >> bits) + 1) >> bits)[: bits + 1]
 
 

@@ -49,6 +49,7 @@ __all__ = [
     "COMMAND_VERSION",
     "PIPELINES",
     "PIXEL_LANES",
+    "SCAN_LANES",
     "Command",
     "PipelineConfig",
     "Decoded",
@@ -72,12 +73,17 @@ class PipelineConfig:
     SetupArray` when more than one) and the pixel lanes: the pixels the resolve's flush
     sends a clock, side by side in one beat of its ``pixels`` stream (lane k the column
     ``x + k``; its pixel memories banked by column modulo the lanes). The commands, the
-    frames and the images do not depend on `setup_units` or `pixel_lanes`; only the clocks
-    (`edgeaa.model.pipeline_timing`) and the area do."""
+    scan lanes: the accumulated cells its accumulator's scan reads and its resolve composites
+    a clock, side by side in one beat of the ``cells`` stream (lane k the column ``x + k``;
+    the accumulation memory banked by column modulo the lanes; more than one needs as many
+    pixel lanes, whose memories the resolve then reads and writes a lane each). The commands,
+    the frames and the images do not depend on `setup_units`, `pixel_lanes` or `scan_lanes`;
+    only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
 
     tile: TileConfig = field(default_factory=TileConfig)
     setup_units: int = 1
     pixel_lanes: int = 1
+    scan_lanes: int = 1
 
     def __post_init__(self):
         if not isinstance(self.tile, TileConfig):
@@ -92,6 +98,13 @@ class PipelineConfig:
             raise TypeError(f"pixel_lanes must be an integer, not {lanes!r}")
         if lanes not in PIXEL_LANES:  # a power of two up to the narrowest tile's width
             raise ValueError(f"pixel_lanes must be one of {PIXEL_LANES}, not {lanes}")
+        scan = self.scan_lanes
+        if isinstance(scan, bool) or not isinstance(scan, int):
+            raise TypeError(f"scan_lanes must be an integer, not {scan!r}")
+        if scan not in SCAN_LANES:
+            raise ValueError(f"scan_lanes must be one of {SCAN_LANES}, not {scan}")
+        if scan > 1 and lanes != scan:  # the resolve reads and writes a pixel lane per cell
+            raise ValueError(f"scan_lanes {scan} needs pixel_lanes {scan}, not {lanes}")
 
     @classmethod
     def named(cls, name: str, tile: TileConfig | None = None) -> PipelineConfig:
@@ -103,14 +116,15 @@ class PipelineConfig:
 
 
 PIXEL_LANES = (1, 2, 4)  # a tile is at least 4 pixels wide: a row is whole beats
+SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the resolve
 
 # The named configurations, built from the same components (docs/hardware.md, "Display
-# rate"): their setup units and pixel lanes. compact: the smallest, fits an iCE40 HX8K; fast:
-# for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the knee of
-# clocks over area) and a flush of two pixels a clock.
+# rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40
+# HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
+# knee of clocks over area), a flush of two pixels a clock and a scan of two cells a clock.
 PIPELINES = {
-    "compact": {"setup_units": 1, "pixel_lanes": 1},
-    "fast": {"setup_units": 4, "pixel_lanes": 2},
+    "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1},
+    "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2},
 }
 
 

@@ -69,7 +69,8 @@ class _Top:
     def __init__(self, pipeline: PipelineConfig, count: int):
         self.tile = tile = pipeline.tile
         self.units = pipeline.setup_units
-        self.model, self.clock = TileModel(tile), TileClock(tile, pipeline.pixel_lanes)
+        self.model = TileModel(tile, pipeline.scan_lanes)
+        self.clock = TileClock(tile, pipeline.pixel_lanes)
         self.taken = [0] * count
         self.offer = 0  # clock the next command is offered
         self.polygon: list | None = None  # the open polygon's (index, shape or OTHER)

@@ -48,6 +48,10 @@ it has none either, so the prefix sum is the sum through ``hi`` there; a prefix 
 gives coverage 0 under both fill rules and ``composite`` leaves the pixel as it is. A row
 not seen yet is read whole because the resolve marks a pixel row written only once all its
 pixels are (its unwritten rows read as the background, so a tile start costs one clock).
+A scan of ``lanes`` cells a clock (`edgeaa.model.pipeline.PipelineConfig.scan_lanes`) reads
+whole beats of ``lanes`` columns (``x`` a multiple of ``lanes``): the span widened to them,
+``lo`` down and ``hi`` up (exact for the same reasons), and a row stops at ``hi``'s beat only
+when that beat is not the row's last.
 """
 
 from __future__ import annotations
@@ -230,27 +234,36 @@ def alpha_steps(q: int, alpha: int, bits: int) -> int:
 
 
 class Scan(NamedTuple):
-    """What a `PolygonEnd` read (the cycle model's input): per touched row, the cells read and
-    whether the row stopped at ``hi`` on a zero sum (the accumulator then reads one more cell,
-    and does not send it)."""
+    """What a `PolygonEnd` read (the cycle model's input): per touched row, the beats read
+    (of `lanes` cells each) and whether the row stopped at ``hi`` on a zero sum (the
+    accumulator then reads one more beat, and does not send it)."""
 
     runs: tuple[tuple[int, bool], ...] = ()
+    lanes: int = 1
 
     @property
     def rows(self) -> int:
         return len(self.runs)
 
     @property
-    def cells(self) -> int:
+    def beats(self) -> int:
         return sum(n for n, _ in self.runs)
+
+    @property
+    def cells(self) -> int:
+        return self.beats * self.lanes
 
 
 class TileModel:
     """The tile's stages on integers: `feed` an op, get a frame (height x width) on Flush, the
-    `Scan` on a PolygonEnd."""
+    `Scan` on a PolygonEnd (of `scan_lanes` cells a beat: `PipelineConfig.scan_lanes`; the
+    frames do not depend on it)."""
 
-    def __init__(self, tile: TileConfig):
-        self.tile = tile
+    def __init__(self, tile: TileConfig, scan_lanes: int = 1):
+        lanes = scan_lanes
+        if not isinstance(lanes, int) or lanes < 1 or lanes & (lanes - 1) or lanes > tile.width:
+            raise ValueError(f"scan_lanes must be a power of two up to the width, not {lanes!r}")
+        self.tile, self.scan_lanes = tile, scan_lanes
         big = tile.cell_bits + 24 > 62  # exact sums of up to 2**24 deltas in int64
         self._dtype = object if big else np.int64
         self.cells = np.zeros((tile.height, tile.width), dtype=self._dtype)
@@ -297,15 +310,16 @@ class TileModel:
             self.lo, self.hi = min(self.lo, int(tx.min())), max(self.hi, int(tx.max()))
 
     def span(self, row: int) -> tuple[int, int, bool]:
-        """The columns `first .. last` an end reads of touched `row` (module docstring) and
-        whether the read stops at ``hi`` for a zero sum."""
-        last = self.tile.width - 1
+        """The columns `first .. last` an end reads of touched `row` (module docstring: whole
+        beats of `scan_lanes`) and whether the read stops at ``hi``'s beat for a zero sum."""
+        last, lanes = self.tile.width - 1, self.scan_lanes
         if not self.seen[row]:
             return 0, last, False
-        if self.hi == last:
-            return self.lo, last, False
+        first, end = self.lo - self.lo % lanes, self.hi | (lanes - 1)
+        if end == last:
+            return first, last, False
         total = int(self.cells[row, : self.hi + 1].sum()) % (1 << self.tile.cell_bits)
-        return self.lo, last if total else self.hi, not total
+        return first, last if total else end, not total
 
     def _resolve(self, end: PolygonEnd) -> Scan:
         if end.rule not in FILL_RULES:
@@ -322,7 +336,7 @@ class TileModel:
             targets = (*end.paint[:3], full)[:channels]
         for row in rows:
             first, last, stop = self.span(row)
-            runs.append((last - first + 1, stop))
+            runs.append(((last - first + 1) // self.scan_lanes, stop))
             sums = np.cumsum(self.cells[row])
             self.cells[row] = 0
             if d == 0:
@@ -343,7 +357,7 @@ class TileModel:
         self.seen |= self.touched
         self.touched[:] = False
         self.lo, self.hi = self.tile.width - 1, 0
-        return Scan(tuple(runs))
+        return Scan(tuple(runs), self.scan_lanes)
 
 
 # -- cycle model ----------------------------------------------------------------------------
@@ -352,13 +366,14 @@ class TileModel:
 # are offered back to back (each from the clock after the previous one was taken) and the
 # pixel sink is always ready. The accumulator takes a beat in `beat_clocks` clocks (its
 # nonzero cells one a clock), the beat's transfer in the last of them. An end taken in clock
-# a reads the first touched cell in a + 2 (the last beat's read-modify-write lands in a + 1)
-# and offers it to the resolve in a + 3, then one cell per clock (the runs of `Scan`), the
-# next read as a cell is taken; a row that stops at ``hi`` leaves a clock with no cell after
-# it (the read of ``hi + 1``, not sent). It takes the next op once the last cell is taken and
-# the scan is over (the clock after its last read); with no touched row in a + 2. Tile and
-# flush pass through its output register (offered in a + 1). The resolve takes a cell per
-# clock; a cell taken in r writes its pixel in clock r + `resolve_latency`. A polygon's first
+# a reads the first touched beat of cells in a + 2 (the last beat's read-modify-write lands in
+# a + 1) and offers it to the resolve in a + 3, then one beat of `Scan.lanes` cells per clock
+# (the runs of `Scan`), the next read as a beat is taken; a row that stops at ``hi``'s beat
+# leaves a clock with no beat after it (the read of the next beat, not sent). It takes the
+# next op once the last beat is taken and the scan is over (the clock after its last read);
+# with no touched row in a + 2. Tile and flush pass through its output register (offered in
+# a + 1). The resolve takes a beat per clock; a beat taken in r writes its pixels in clock
+# r + `resolve_latency`. A polygon's first
 # cell, a tile and a flush wait until no cell is in flight (the pixels they read must be
 # written). The resolve has two pixel memories: a flush taken in f hands it the one the
 # resolve wrote, which it sends (pixel k in f + 2 + k // lanes, row by row, `lanes` pixels a
@@ -387,6 +402,7 @@ class TileTiming:
     frames: list[np.ndarray] = field(default_factory=list)
     rows_scanned: int = 0
     cells_scanned: int = 0
+    beats_scanned: int = 0  # clocks of cells into the resolve: cells over the scan lanes
 
     @property
     def clocks(self) -> int:
@@ -399,7 +415,8 @@ class TileClock:
     clock the accumulator can take the next op (it stays ready from then until it takes a
     non-beat op). `timing` collects the transfers; `acc_stall` and `resolve_busy` count
     clocks as the top's counters do (`edgeaa.hdl.pipeline.STATS`). `lanes`: the pixels a
-    flush sends a clock (`edgeaa.model.pipeline.PipelineConfig.pixel_lanes`)."""
+    flush sends a clock (`edgeaa.model.pipeline.PipelineConfig.pixel_lanes`); a `Scan`'s
+    runs are in beats of its own lanes (`PipelineConfig.scan_lanes`), one a clock."""
 
     def __init__(self, tile: TileConfig, lanes: int = 1):
         self.tile, self.latency = tile, resolve_latency(tile)
@@ -433,7 +450,8 @@ class TileClock:
         if isinstance(op, PolygonEnd):
             out.rows_scanned += result.rows
             out.cells_scanned += result.cells
-            if not result.cells:
+            out.beats_scanned += result.beats
+            if not result.beats:
                 self.ready = a + EMPTY_END
                 return a
             r = t = max(a + SCAN_START, self.quiet)
@@ -444,11 +462,11 @@ class TileClock:
             last, stop = out.cells[-1], result.runs[-1][1]
             # the first read in a + 2, the next ones as the cells are taken; SCAN ends after
             # the last read, or after the one as the last cell is taken (a row that stops)
-            end = last + 1 if stop else (last if result.cells > 1 else a + SCAN_START)
+            end = last + 1 if stop else (last if result.beats > 1 else a + SCAN_START)
             self.ready, self.quiet = max(last, end), last + 1 + self.latency
             self.scanning += end - (a + SCAN_START - 1)
             self.acc_stall += r - a - SCAN_START
-            self.resolve_ops += result.cells
+            self.resolve_ops += result.beats
             return a
         flush = isinstance(op, Flush)
         r = max(a + 1, self.free if flush else 0, self.quiet)  # tile or flush: output register

@@ -54,7 +54,8 @@ from .scene import SceneError
 
 PIPELINE_ENGINES = ("verilator", "amaranth")  # simulators of the whole pipeline
 # The most clocks (`clock_estimate`, an upper estimate: 1.2 to 2.1 times the cycle model's
-# clocks on the built-ins, the HUD, serif text and the 1080p scene) a scene may need in each
+# clocks on the built-ins, the HUD, serif text and the 1080p scene; up to 2.6 times with two
+# scan lanes) a scene may need in each
 # simulator: 60 s of Verilator at its measured 1 to 1.5 million clocks per second; for
 # Amaranth's simulator (about 500 clocks per second) the built-ins' 1.3 million
 # (docs/scenes.md, "Errors and limits").
@@ -362,7 +363,10 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     the rows read whole; per tile its work or its flush, whichever is more (the flush runs
     beside the next tile's work); and the clear pass after reset. 1.2 to
     2.1 times the cycle model's clocks on the built-ins, the HUD, serif text and the 1080p
-    scene of `benchmarks/bench_pipeline.py`, compact and fast (docs/scenes.md).
+    scene of `benchmarks/bench_pipeline.py`, compact and fast with one scan lane; with the
+    fast pipeline's two 1.58 to 2.60 times (the scan is counted a cell a clock: it also
+    stands for the accumulator's cell a clock in, which two scan lanes do not halve; halving
+    it fell below the exact clocks on the 1080p scene and the starburst) (docs/scenes.md).
     `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
     and needs the commands."""
     pipeline = pipeline_config(pipeline)

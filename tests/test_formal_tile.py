@@ -1,14 +1,15 @@
 # amaranth: UnusedElaboratable=no
 """Formal checks of the tile stages (`edgeaa.sim.verification.formal.tile`).
 
-By default: the k-induction proofs of both stages' stream hold rule and of the
-accumulator's deltas and sums, all on the default 64 x 32 tile, the accumulator's under a
+By default: the k-induction proofs of both stages' stream hold rule (one pixel lane, two,
+and two scan lanes) and of the accumulator's deltas and sums, all on the default 64 x 32
+tile, the accumulator's under a
 free reset (seconds each; the sums under a minute), a check that each property can fail (a
 fault in the harness or in what the stage is given, caught by the group's own assertions
 from power-on and by the unbounded proof), covers of the invariants' premises on the 4 x 2
 tile `SMALL_TILE` (none is vacuous) and the plumbing.
-Marked ``formal`` (``pytest -m formal``): the k-induction proof of the resolve's pixels on
-`SMALL_TILE` (under a minute).
+Marked ``formal`` (``pytest -m formal``): the k-induction proofs of the resolve's pixels on
+`SMALL_TILE`, with one pixel lane, two, and two scan lanes (minutes each).
 """
 
 from __future__ import annotations
@@ -39,7 +40,9 @@ def _explain(result) -> str:
 
 
 @pytest.mark.parametrize(
-    "name", ["acc_stream", "res_stream", "res_stream_lanes", "acc_deltas", "acc_sums"]
+    "name",
+    ["acc_stream", "res_stream", "res_stream_lanes", "acc_stream_scan", "res_stream_scan"]
+    + ["acc_deltas", "acc_sums", "acc_deltas_scan", "acc_sums_scan"],
 )
 def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
@@ -47,7 +50,9 @@ def test_fast_proofs(tools, name):
 
 
 @pytest.mark.parametrize(
-    "name", ["acc_deltas_cover", "acc_sums_cover", "res_pixels_cover", "res_pixels_lanes_cover"]
+    "name",
+    ["acc_deltas_cover", "acc_sums_cover", "res_pixels_cover", "res_pixels_lanes_cover"]
+    + ["res_pixels_scan_cover", "acc_deltas_scan_cover", "acc_sums_scan_cover"],
 )
 def test_invariants_not_vacuous(tools, name):
     """Each invariant's premise is reached with its conclusion from power-on on `SMALL_TILE`
@@ -57,7 +62,7 @@ def test_invariants_not_vacuous(tools, name):
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", ["res_pixels", "res_pixels_lanes"])
+@pytest.mark.parametrize("name", ["res_pixels", "res_pixels_lanes", "res_pixels_scan"])
 def test_slow_proofs(tools, name):
     result = run_tile_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -72,12 +77,19 @@ def test_slow_proofs(tools, name):
         ("acc_stream", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
         ("res_stream", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
         ("res_stream_lanes", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
+        ("acc_stream_scan", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
+        ("res_stream_scan", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
         ("acc_sums", "lost_delta", 6, "cells: a beat taken with its last cell (bmc)"),
         ("acc_deltas", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         ("acc_sums", "stale_origin", 8, "sums: cell sum (bmc)"),
         ("res_pixels", "wide_range", 16, "pixels: value (bmc)"),
         ("res_pixels_lanes", "wide_range", 16, "pixels: value (bmc)"),
         ("res_pixels_lanes", "swap_lanes", 16, "pixels: value (bmc)"),
+        ("res_pixels_scan", "swap_sums", 16, "pixels: value (bmc)"),
+        ("acc_sums_scan", "swap_cells", 8, "sums: cell sum (bmc)"),
+        ("acc_sums_scan", "stale_origin", 8, "sums: cell sum (bmc)"),
+        ("acc_deltas_scan", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
+        ("res_pixels_scan", "wide_range", 16, "pixels: value (bmc)"),
     ],
 )
 def test_fault_is_caught(tools, name, fault, depth, message):
@@ -99,6 +111,9 @@ def test_fault_is_caught(tools, name, fault, depth, message):
         ("acc_deltas", "stale_origin", None, "state: origin (basecase)"),
         ("res_pixels", "lost_first", None, "state: stage 0 order (basecase)"),
         ("res_pixels_lanes", "lost_first", None, "state: stage 0 order (basecase)"),
+        ("res_pixels_scan", "lost_first", None, "state: stage 0 order (basecase)"),
+        ("acc_deltas_scan", "stale_origin", None, "state: origin (basecase)"),
+        ("acc_sums_scan", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
         # the wrong pixel is written 8 clocks from power-on: one past the proof's k
         ("res_pixels", "wide_range", 9, "state: value (basecase)"),
     ],
@@ -124,8 +139,12 @@ def test_harness_rejects_unknown_options():
         TileHarness(SMALL_TILE, "resolve", ("stream",), fault="lost_delta")
     with pytest.raises(ValueError, match="two or more pixel lanes"):
         TileHarness(SMALL_TILE, "resolve", ("pixels",), fault="swap_lanes")
+    with pytest.raises(ValueError, match="swap_sums needs two scan lanes"):
+        TileHarness(SMALL_TILE, "resolve", ("pixels",), lanes=2, fault="swap_sums")
     with pytest.raises(ValueError, match="pixel lanes are the resolve's"):
         TileHarness(SMALL_TILE, "accumulator", ("stream",), lanes=2)
+    with pytest.raises(ValueError, match="swap_cells needs two scan lanes"):
+        TileHarness(SMALL_TILE, "accumulator", ("sums",), fault="swap_cells")
     with pytest.raises(TypeError, match="TileConfig"):
         TileHarness(None, "resolve", ())
     with pytest.raises(ValueError, match="proof must be one of"):

@@ -23,11 +23,12 @@ from core_bench import observed_beat
 from fixtures import CORE_CONFIGS
 
 from edgeaa.hdl import LineCore
+from edgeaa.hdl.layouts import pixel_value_fields
 from edgeaa.hdl.pipeline import STATS, EdgePipeline, command_const
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge
 from edgeaa.model.column import IntArith
 from edgeaa.model.edge import fold, window
-from edgeaa.model.pipeline import CODE, Command, command_ops
+from edgeaa.model.pipeline import CODE, Command, PipelineConfig, command_ops
 from edgeaa.model.tile import TileConfig, TileModel
 from edgeaa.sim.simulators.amaranth_runner import decoder
 from edgeaa.sim.simulators.commands import edge_command
@@ -174,7 +175,8 @@ def test_pipeline_reset_takes_nothing_and_clears_the_counters():
 
 def _reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result):
     """Offer `first`, wait `wait` clocks, reset for RESET_CLOCKS, then offer `second`;
-    collect the pixels after the reset."""
+    collect the pixels after the reset (each beat's lanes)."""
+    fields = pixel_value_fields(dut.pipeline.pixel_lanes)
 
     async def offer(ctx, commands):
         for command in commands:
@@ -185,7 +187,7 @@ def _reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result):
                     dut.commands.ready, dut.pixels.valid, dut.pixels.payload
                 )
                 if valid:
-                    result["pixels"].append(int(pixel.value))
+                    result["pixels"].extend(int(pixel[name]) for name in fields)
                 if taken:
                     break
         ctx.set(dut.commands.valid, 0)
@@ -205,20 +207,21 @@ def _reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result):
                 dut.commands.ready, dut.pixels.valid, dut.pixels.payload
             )
             if valid:
-                result["pixels"].append(int(pixel.value))
+                result["pixels"].extend(int(pixel[name]) for name in fields)
 
     return bench
 
 
+@pytest.mark.parametrize("scan", [1, 2], ids=["one scan lane", "two scan lanes"])
 @pytest.mark.parametrize(
     "ended, wait",
     [(False, 200), (True, 6)],
     ids=["open polygon, its beats in the memory", "in the end's scan"],
 )
-def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(ended, wait):
+def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(ended, wait, scan):
     """A reset while a polygon's deltas are in the accumulation memory (the polygon open, or
-    its scan under way): they are cleared, so the next scene is the model's image of that
-    scene alone."""
+    its scan under way): they are cleared (with two scan lanes, a beat of the banked
+    memory a clock), so the next scene is the model's image of that scene alone."""
     tile = TileConfig(CONFIG, 8, 4)
     tri = [(1, 0, 7, 3), (7, 3, 0, 3), (0, 3, 1, 0)]
     first = [Command.tile(0, 0, 3), Command.begin(15, 3)]
@@ -227,7 +230,7 @@ def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(ended, wait):
     second += [Command.edge(*e) for e in [(2, 0, 6, 3), (6, 3, 2, 3), (2, 3, 2, 0)]]
     second += [Command.end(), Command.flush()]
     (frame,) = TileModel(tile).run(command_ops(tile, second).ops)
-    dut = EdgePipeline(tile)
+    dut = EdgePipeline(PipelineConfig(tile, 1, scan, scan))
     top, domain = _with_domain(dut)
     result = {"pixels": []}
     sim = Simulator(top)

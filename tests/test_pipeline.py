@@ -234,11 +234,14 @@ def test_the_pipeline_verilog_is_lint_clean(channels):
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def test_the_pipeline_verilog_of_two_pixel_lanes_is_lint_clean():
+@pytest.mark.parametrize("scan", [1, 2])
+def test_the_pipeline_verilog_of_two_pixel_lanes_is_lint_clean(scan):
+    """Two pixel lanes, and one or two scan lanes (the banked accumulation memories)."""
     from edgeaa.sim.simulators.verilator import lint
 
-    source = pipeline_verilog(PipelineConfig(TileConfig(SMALL, 8, 4), 1, 2))
+    source = pipeline_verilog(PipelineConfig(TileConfig(SMALL, 8, 4), 1, 2, scan))
     assert "pixels__payload__value1" in source and "pixels__payload__value2" not in source
+    assert ("cells_memory_lane1" in source) == (scan == 2)
     proc = lint(source)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
@@ -311,10 +314,10 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 def test_the_named_configurations():
     assert PIPELINES == {
-        "compact": {"setup_units": 1, "pixel_lanes": 1},
-        "fast": {"setup_units": 4, "pixel_lanes": 2},
+        "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1},
+        "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2},
     }
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2)
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
@@ -326,6 +329,15 @@ def test_the_named_configurations():
     for bad, error in [(0, ValueError), (3, ValueError), (8, ValueError), (True, TypeError)]:
         with pytest.raises(error):
             PipelineConfig(TILE, 1, bad)
+    fast = EdgePipeline(PipelineConfig.named("fast", TILE))
+    assert (fast.acc.lanes, fast.res.scan_lanes) == (2, 2)
+    assert (EdgePipeline(TILE).acc.lanes, EdgePipeline(TILE).res.scan_lanes) == (1, 1)
+    for bad, error in [(0, ValueError), (4, ValueError), (True, TypeError), (2.0, TypeError)]:
+        with pytest.raises(error, match="scan_lanes"):
+            PipelineConfig(TILE, 1, 2, bad)
+    for lanes in (1, 4):  # two scan lanes read and write two pixel lanes
+        with pytest.raises(ValueError, match=f"scan_lanes 2 needs pixel_lanes 2, not {lanes}"):
+            PipelineConfig(TILE, 1, lanes, 2)
     with pytest.raises(ValueError, match="no pipeline named"):
         PipelineConfig.named("quick")
 
@@ -354,8 +366,9 @@ def test_the_fast_pipeline_renders_every_builtin_to_the_renderers_image(name):
 
 
 # Each configuration is a Verilator build (about 15 s of CPU): the tests below share them.
-# Four units are tested with two pixel lanes (fast), one unit with four.
-LANE_BUILDS = [(4, 2), (1, 4)]  # (setup units, pixel lanes)
+# Four units with two pixel lanes and two scan lanes (fast), one unit with four pixel lanes,
+# one with two pixel lanes and one scan lane.
+LANE_BUILDS = [(4, 2, 2), (1, 4, 1), (1, 2, 1)]  # (setup units, pixel lanes, scan lanes)
 
 
 @settings(max_examples=15, deadline=None, database=None)
@@ -371,24 +384,26 @@ def test_two_setup_units_under_back_pressure_give_the_renderers_image(data, seed
 @settings(max_examples=12, deadline=None, database=None)
 @given(data=st.data(), seed=st.integers(0, 2**31), build=st.sampled_from(LANE_BUILDS))
 def test_pixel_lanes_under_back_pressure_give_the_renderers_image(data, seed, build):
-    """A flush of two or four pixels a clock, the sink stalling at random: every pixel in its
-    place, the renderer's image."""
-    units, lanes = build
+    """A flush of two or four pixels a clock (with two, a scan of one or two cells a clock),
+    the sink stalling at random: every pixel in its place, the renderer's image."""
+    units, lanes, scan = build
     scene = data.draw(small_scenes(DEFAULT))
-    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units, lanes)
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8), units, lanes, scan)
     plan = plan_scene(scene, DEFAULT)
     result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4)
-    assert result.mismatches == 0, f"seed {seed}, {units} units, {lanes} lanes"
+    assert result.mismatches == 0, f"seed {seed}, {units} units, {lanes} lanes, {scan} scan"
     assert result.pipeline.stats["resolve_stall"] > 0
 
 
 @settings(max_examples=4, deadline=None, database=None)
 @given(data=st.data(), seed=st.integers(0, 2**31))
 def test_two_lanes_of_four_channels_under_back_pressure_are_the_canvas(data, seed):
-    """Two pixels of red, green, blue and alpha a beat (64 bits of values)."""
+    """Two pixels of red, green, blue and alpha a beat (64 bits of values), scanned one or two
+    cells a clock."""
     scene = colour_scene(data, data.draw(small_scenes(DEFAULT)))
     plan = plan_scene(coverage_scene(scene), DEFAULT)
-    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8, channels=4), 1, 2)
+    scan = data.draw(st.sampled_from([1, 2]))
+    pipeline = PipelineConfig(TileConfig(DEFAULT, 16, 8, channels=4), 1, 2, scan)
     canvas = Canvas(scene, DEFAULT.full_scale)
     result = render_pipeline(plan, "verilator", pipeline, seed=seed, idle=0.3, stall=0.4,
                              canvas=canvas)  # fmt: skip
@@ -396,7 +411,7 @@ def test_two_lanes_of_four_channels_under_back_pressure_are_the_canvas(data, see
     assert result.mismatches == 0 and np.array_equal(result.image, want), f"seed {seed}"
 
 
-@pytest.mark.parametrize(("build", "seed"), zip(LANE_BUILDS, [1, 2], strict=True))
+@pytest.mark.parametrize(("build", "seed"), zip(LANE_BUILDS, [1, 2, 3], strict=True))
 def test_pixel_lanes_drop_bad_commands_as_the_model_does(build, seed):
     from edgeaa.sim.simulators import pipeline_harness
 
@@ -408,7 +423,7 @@ def test_pixel_lanes_drop_bad_commands_as_the_model_does(build, seed):
     run = pipeline_harness.run(pipeline, commands, seed=seed, idle=0.3, stall=0.3)
     assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors)
     for frame, model in zip(run.frames(tile), want, strict=True):
-        assert np.array_equal(frame, model), f"{lanes} lanes, seed {seed}"
+        assert np.array_equal(frame, model), f"{build} (units, pixel lanes, scan lanes), seed {seed}"
     clock, last = (run.pixels[:, PIXEL_COLUMNS.index(n)] for n in ("clock", "last"))
     assert np.flatnonzero(last).tolist() == [tile.pixels - 1, 2 * tile.pixels - 1]
     beats = clock.reshape(-1, lanes)  # a beat's pixels share its clock, each beat its own

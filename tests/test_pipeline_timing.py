@@ -237,18 +237,38 @@ def test_several_setup_units_in_the_models_clocks(units, seed):
         check_clock_for_clock(SMALL_TILE, commands, hw, "one unit's model")
 
 
-@pytest.mark.parametrize(("units", "lanes", "seed"), [(1, 2, 2), (4, 2, 7), (2, 4, 10)])
-def test_pixel_lanes_in_the_models_clocks(units, lanes, seed):
-    """A flush of `lanes` pixels a clock (the fast pipeline's two), with the bad commands and
-    the stalls: each pixel in its beat's clock."""
-    pipeline = PipelineConfig(SMALL_TILE, units, lanes)
+@pytest.mark.parametrize(
+    ("units", "lanes", "scan", "seed"),
+    [(1, 2, 1, 2), (4, 2, 1, 7), (2, 4, 1, 10), (1, 2, 2, 2), (4, 2, 2, 7), (2, 2, 2, 10)],
+)
+def test_pixel_lanes_in_the_models_clocks(units, lanes, scan, seed):
+    """A flush of `lanes` pixels a clock and a scan of `scan` cells a clock (the fast
+    pipeline's two and two), with the bad commands and the stalls: each pixel in its beat's
+    clock, each beat of cells in its clock."""
+    pipeline = PipelineConfig(SMALL_TILE, units, lanes, scan)
     commands = random_commands(random.Random(seed), SMALL_TILE)
     hw = run_transfers(pipeline, commands)
-    check_clock_for_clock(pipeline, commands, hw, f"{units} units, {lanes} lanes, seed {seed}")
+    label = f"{units} units, {lanes} lanes, {scan} scan lanes, seed {seed}"
+    check_clock_for_clock(pipeline, commands, hw, label)
     assert hw.stats["acc_stall"] > 0  # the stall is exercised
-    # the model of a flush of one pixel a clock does not fit
+    # the model of a flush of one pixel a clock, or of a scan of one cell a clock, does not fit
+    wrongs = [{"pixel_lanes": 1, "scan_lanes": 1}] + [{"scan_lanes": 3 - scan}] * (lanes == 2)
+    for wrong in wrongs:
+        with pytest.raises(AssertionError):
+            check_clock_for_clock(replace(pipeline, **wrong), commands, hw, f"{wrong}")
+
+
+@pytest.mark.parametrize("seed", [4, 11])
+def test_two_scan_lanes_in_colour_in_the_models_clocks(seed):
+    """Two cells a clock through the resolve's colour datapath (an alpha stage per lane)."""
+    rng = random.Random(seed)
+    colours = 1 << (4 * SMALL.intensity_bits)  # red, green, blue and alpha
+    commands = [c._replace(paint=rng.randrange(colours)) for c in random_commands(rng, COLOUR_TILE)]
+    pipeline = PipelineConfig(COLOUR_TILE, 2, 2, 2)
+    hw = run_transfers(pipeline, commands)
+    check_clock_for_clock(pipeline, commands, hw, f"colour, two scan lanes, seed {seed}")
     with pytest.raises(AssertionError):
-        check_clock_for_clock(PipelineConfig(SMALL_TILE, units), commands, hw, "one lane's")
+        check_clock_for_clock(replace(pipeline, scan_lanes=1), commands, hw, "one scan lane")
 
 
 @settings(max_examples=3, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -1273,7 +1273,7 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
     from edgeaa.render import pipeline
 
     p = plan(builtin(name), DEFAULT)
-    tile = PipelineConfig(TileConfig(DEFAULT), units)
+    tile = PipelineConfig(TileConfig(DEFAULT), units)  # one scan lane
     commands = pipeline.scene_commands(p, tile.tile)
     exact = pipeline_cycles(tile, commands).clocks
     estimate, count = pipeline.clock_estimate(p, tile)
@@ -1283,8 +1283,9 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
 
 @pytest.mark.parametrize("name", ["text", "hatch"])
 def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
-    """Two pixel lanes (the fast pipeline): the estimate stays above the cycle model's
-    clocks and within 2.1 times, with the flush at two pixels a clock."""
+    """Two pixel lanes and two scan lanes (the fast pipeline): the estimate stays above the
+    cycle model's clocks, with the flush at two pixels a clock, and within 2.7 times (it
+    counts the scan a cell a clock, which also bounds the accumulator's input)."""
     from edgeaa.model.pipeline import PipelineConfig
     from edgeaa.model.pipeline_timing import pipeline_cycles
     from edgeaa.model.tile import TileConfig
@@ -1292,10 +1293,10 @@ def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
 
     p = plan(builtin(name, DEFAULT), DEFAULT)
     fast = PipelineConfig.named("fast", TileConfig(DEFAULT))
-    assert fast.pixel_lanes == 2
+    assert fast.pixel_lanes == fast.scan_lanes == 2
     exact = pipeline_cycles(fast, pipeline.scene_commands(p, fast.tile)).clocks
     estimate, _ = pipeline.clock_estimate(p, fast)
-    assert exact <= estimate <= 2.1 * exact, (exact, estimate)
+    assert exact <= estimate <= 2.7 * exact, (exact, estimate)
 
 
 def test_a_comb_is_swept_and_the_engine_refuses_work_past_its_limit(monkeypatch):

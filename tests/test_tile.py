@@ -22,6 +22,7 @@ from edgeaa.model.accumulate import (
     fill,
     intensity_offset,
 )
+from edgeaa.model.pipeline import command_ops
 from edgeaa.model.tile import (
     Beats,
     Flush,
@@ -34,7 +35,7 @@ from edgeaa.model.tile import (
     composite_steps,
 )
 from edgeaa.render import builtin, plan_scene, render_scene
-from edgeaa.render.pipeline import render_tiles
+from edgeaa.render.pipeline import render_tiles, scene_commands
 
 DEFAULT = EdgeConfig()
 SMALL = EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4)
@@ -145,6 +146,32 @@ def test_a_prefix_sum_past_the_cells_range_is_refused():
         cells = [bad if cell[0] == bad[0] else cell for cell in fits]
         with pytest.raises(TileOverflow, match="exact range"):
             TileModel(tile).run(_ops(tile, cells, PolygonEnd(15, 0)))
+
+
+@settings(max_examples=30, deadline=None, database=None)
+@given(data=st.data())
+def test_two_scan_lanes_read_whole_beats_and_leave_the_frames(data):
+    """A scan of two cells a clock (`PipelineConfig.scan_lanes`) reads each row's one-lane
+    span widened to whole beats, stops at ``hi``'s beat unless it is the row's last, and
+    gives the same frames."""
+    scene = data.draw(small_scenes(SMALL))
+    tile = TileConfig(SMALL, 8, 4)
+    ops = command_ops(tile, scene_commands(plan_scene(scene, SMALL), tile)).ops
+    one, two = TileModel(tile), TileModel(tile, 2)
+    last = tile.width - 1
+    for op in ops:
+        rows = np.flatnonzero(one.touched) if isinstance(op, PolygonEnd) else []
+        spans = [(one.span(row), two.span(row)) for row in rows]
+        a, b = one.feed(op), two.feed(op)
+        if isinstance(op, Flush):
+            assert np.array_equal(a, b)
+        for (f1, l1, s1), (f2, l2, s2) in spans:
+            assert (f2, l2, s2) == (f1 - f1 % 2, l1 | 1, s1 and (l1 | 1) != last), scene
+        if isinstance(op, PolygonEnd):
+            assert b.cells == 2 * b.beats == sum(l2 - f2 + 1 for _, (f2, l2, _) in spans)
+    for bad in (0, 3, 16, 2.0):
+        with pytest.raises(ValueError, match="scan_lanes"):
+            TileModel(tile, bad)
 
 
 def test_bad_tile_sizes_are_refused():

@@ -57,9 +57,9 @@ from __future__ import annotations
 import types
 
 from amaranth.asserts import AnyConst
-from amaranth.hdl import Assert, Cat, Mux, Signal
+from amaranth.hdl import Array, Assert, Cat, Const, Mux, Signal
 
-from ....hdl.layouts import CELL_OP
+from ....hdl.layouts import CELL_OP, cell_sum_fields
 from ....hdl.layouts import TILE_OP as OP
 from ....model.beat import CELLS
 from ....model.tile import RESOLVE_OPS
@@ -69,14 +69,36 @@ from .tile_common import When, any_, bit, follows, state_checks, track_rows
 __all__ = ["check_cells"]
 
 
-def check_cells(m, tile, dut, payload, held_in, read, checks, *, invariants, covers):
+def check_cells(m, tile, dut, payload, held_in, read, checks, *, invariants, covers, cells=None):
     """The ``deltas`` and ``sums`` groups of `checks` on `dut` (a `TileAccumulator`) given the
     source's `payload` and its held flag `held_in`; with `invariants`, also the invariants
-    that make them inductive (`read`: the harness's reader of the memory, for ``sums``)."""
-    s = _accumulator_deltas(m, tile, dut, payload, dut.cells, checks)
+    that make them inductive (`read`: the harness's reader of the memory, for ``sums``);
+    `cells`: the output stream as the groups see it (None: the accumulator's; fault
+    ``swap_cells``)."""
+    cells = dut.cells if cells is None else cells
+    s = _accumulator_deltas(m, tile, dut, payload, cells, checks)
     s.held_in = held_in
     if invariants:
         _accumulator_invariants(m, tile, dut, read, s, checks, covers)
+
+
+def _beat_of(x, lanes: int):
+    """The first column of the beat of `lanes` cells holding column `x`."""
+    low = lanes.bit_length() - 1
+    return x if lanes == 1 else Cat(Const(0, low), x[low:])
+
+
+def _sum_at(out, x, lanes: int):
+    """The sum a beat of cells (`out`) carries for column `x` (in the beat)."""
+    if lanes == 1:
+        return out.sum
+    return Array(out[name] for name in cell_sum_fields(lanes))[x[: lanes.bit_length() - 1]]
+
+
+def _beat_sum(out, lanes: int):
+    """The sum of a beat's cells (modulo a cell's width, as the accumulator adds them)."""
+    sums = [out[name] for name in cell_sum_fields(lanes)]
+    return sum(sums[1:], start=sums[0])
 
 
 def _placed(tile, beat, origin):
@@ -136,13 +158,14 @@ def _accumulator_deltas(m, tile, dut, src, cells, checks):
         last=[Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")],
     )
     m.d.comb += [s.X.eq(AnyConst(tile.x_bits)), s.Y.eq(AnyConst(tile.y_bits))]
-    s.cells = cells
+    s.cells, s.lanes = cells, dut.lanes
+    s.bx = _beat_of(s.X, s.lanes)  # (X, Y)'s beat's first column
     take = ops.valid & ops.ready
     is_op = {name: take & (src.op == code) for name, code in OP.items()}
     counted = _ghost_cells(m, tile, dut, src, s, checks)
     hits = sum(Mux(k & (x == s.X) & (y == s.Y), d, 0) for k, x, y, d in counted)
     out, sent = cells.payload, cells.valid & cells.ready
-    tracked = sent & (out.op == CELL_OP["cell"]) & (out.x == s.X) & (out.y == s.Y)
+    tracked = sent & (out.op == CELL_OP["cell"]) & (out.x == s.bx) & (out.y == s.Y)
     base = Mux(tracked, 0, s.shadow)
     m.d.sync += [
         s.shadow.eq((base + hits)[: tile.cell_bits]),
@@ -158,7 +181,7 @@ def _accumulator_deltas(m, tile, dut, src, cells, checks):
     if "deltas" in checks:
         m.d.comb += Assert(condition, "deltas: op taken before a cell")
     if "sums" in checks:
-        same = out.sum[: tile.cell_bits] == s.shadow
+        same = _sum_at(out, s.X, s.lanes)[: tile.cell_bits] == s.shadow
         m.d.comb += Assert(implies(tracked, same), "sums: cell sum")
     _accumulator_outputs(m, tile, s, out, sent, tracked, "deltas" in checks)
     with m.If(tracked):
@@ -194,15 +217,17 @@ def _memory_state(m, tile, dut, read, s, covers):
     obs, out, st = dut.observe, s.cells.payload, dut.observe.stage
     o = obs.o
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
-    o_addr, t_addr = Cat(o["x"], o["y"]), Cat(s.X, s.Y)
+    t_addr = Cat(s.X, s.Y)
     forwarded = st.c_valid & (st.c_addr == st.b_addr)
-    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    waiting = pending & (o["x"] == s.bx) & (o["y"] == s.Y)
+    # the output register's beat: each cell's address
+    o_addrs = [Cat(o["x"] | k, o["y"]) for k in range(s.lanes)]
     # after a reset with deltas in the memory (``check`` and ``dirty``, then CLEAR) the
     # memory holds what the reset left until the clear pass has zeroed it
     clearing = obs.in_clear | (obs.check & obs.dirty)
     cleared_to = Cat(obs.scan_x, obs.scan_y)  # CLEAR has zeroed the cells below
     checks = [
-        (When(pending, read(o_addr) == 0), "state: output cell cleared"),
+        (When(pending, all_(read(a) == 0 for a in o_addrs)), "state: output cell cleared"),
         (When(clearing, ~st.b_valid & ~st.c_valid), "state: no write pending in a clear"),
         (
             When(obs.in_clear & (t_addr < cleared_to), read(t_addr) == 0),
@@ -226,7 +251,7 @@ def _memory_state(m, tile, dut, read, s, covers):
         (When(pending, ~st.b_valid), "state: stage B empty while a cell waits"),
     ]
     stage_b = Mux(st.b_valid & (st.b_addr == t_addr), st.b_delta, 0)
-    total = read(t_addr) + stage_b + Mux(waiting, out.sum, 0)
+    total = read(t_addr) + stage_b + Mux(waiting, _sum_at(out, s.X, s.lanes), 0)
     checks.append((When(~clearing, s.shadow == total[: len(s.shadow)]), "state: shadow"))
     # so a cell outside the scan span is zero (the read after a row's hi clears one)
     owed = Mux(obs.in_acc, s.hit, s.owed) | waiting
@@ -237,7 +262,7 @@ def _memory_state(m, tile, dut, read, s, covers):
 def _closed(tile, s):
     """The last row sent ended at its last column or its cells sent sum to zero (modulo
     ``2**cell_bits``): right of it the prefix sum is zero, so the row may stop there."""
-    return (s.last[0] == tile.width - 1) | (s.row_sum == 0)
+    return (s.last[0] == tile.width - s.lanes) | (s.row_sum == 0)
 
 
 def _scan_state(m, tile, dut, s, covers):
@@ -251,7 +276,7 @@ def _scan_state(m, tile, dut, s, covers):
     plus a row whose first cell is still to send; a tile or flush op waiting there is the
     ghost's. Each follows from all of them in the clock before."""
     obs, o = dut.observe, dut.observe.o
-    scan, last = dut.scanning, tile.width - 1
+    scan, last = dut.scanning, tile.width - s.lanes  # the row's last beat
     touched, scan_x, scan_y, lo, hi = obs.touched, obs.scan_x, obs.scan_y, obs.lo, obs.hi
     row_start, partial, decide = obs.row_start, obs.partial, obs.decide
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
@@ -259,7 +284,7 @@ def _scan_state(m, tile, dut, s, covers):
     row_left = touched.bit_select(s.Y, 1)
     in_span = (lo <= s.X) & (hi >= s.X)
     ahead = (scan_y == s.Y) & (scan_x <= s.X)
-    waiting = pending & (o["x"] == s.X) & (o["y"] == s.Y)
+    waiting = pending & (o["x"] == s.bx) & (o["y"] == s.Y)
     above = all_(~touched[r] | (scan_y < r) for r in range(tile.height))
     due = Mux(scan & row_start, bit(tile, scan_y), 0) | Mux(
         pending & o["start"], bit(tile, o["y"]), 0
@@ -295,14 +320,25 @@ def _scan_state(m, tile, dut, s, covers):
         (When(scan & (row_left | ahead), s.may), "not sent yet in SCAN"),
         (When(waiting, s.may), "waiting, not sent"),
         (When(scan, above), "rows above the scan"),
-        (When(decide, scan & pending & partial & (o["x"] == hi) & (hi != last)), "decide"),
+        (
+            When(
+                decide,
+                scan
+                & pending
+                & partial
+                & (o["x"] == _beat_of(hi, s.lanes))
+                & (_beat_of(hi, s.lanes) != last),
+            ),
+            "decide",
+        ),
         (When(scan & obs.first, ~obs.o_valid & s.first & row_start), "SCAN start"),
         (When(scan & ~obs.first, pending | (~obs.o_valid & row_start)), "SCAN output"),
         (When(scan & ~obs.o_valid & ~obs.first, scan_y > s.last[1]), "scan after a stop"),
         (
             When(
                 scan & row_start,
-                (scan_x == Mux(partial, lo, 0)) & (partial == s.seen.bit_select(scan_y, 1)),
+                (scan_x == Mux(partial, _beat_of(lo, s.lanes), 0))
+                & (partial == s.seen.bit_select(scan_y, 1)),
             ),
             "row start",
         ),
@@ -312,7 +348,7 @@ def _scan_state(m, tile, dut, s, covers):
                 Mux(
                     row_start,
                     (o["x"] == last) & (scan_y > o["y"]),
-                    (scan_x == o["x"] + 1) & (scan_y == o["y"]),
+                    (scan_x == o["x"] + s.lanes) & (scan_y == o["y"]),
                 ),
             ),
             "scan after the output",
@@ -338,7 +374,7 @@ def _scan_state(m, tile, dut, s, covers):
             "first pass from column 0",
         ),
         (
-            When(pending & ~o["first"], follows(o["x"], o["y"], o["start"], *s.last)),
+            When(pending & ~o["first"], follows(o["x"], o["y"], o["start"], *s.last, s.lanes)),
             "output after the last sent",
         ),
         (
@@ -347,7 +383,7 @@ def _scan_state(m, tile, dut, s, covers):
                 pending
                 & ~o["start"]
                 & (o["y"] == s.last[1])
-                & (o["x"] == s.last[0] + 1)
+                & (o["x"] == s.last[0] + s.lanes)
                 & implies(o["x"] != last, current & ~partial),
             ),
             "first pass goes on",
@@ -362,6 +398,10 @@ def _scan_state(m, tile, dut, s, covers):
         ),
         (obs.in_acc | obs.in_wait | scan | obs.in_clear, "a known state"),
     ]
+    if s.lanes > 1:  # the scan and the output register hold whole beats
+        low = s.lanes.bit_length() - 1
+        checks.append((scan_x[:low] == 0, "scan on a beat"))
+        checks.append((When(pending, o["x"][:low] == 0), "output on a beat"))
     state_checks(m, checks, covers)
 
 
@@ -369,7 +409,7 @@ def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
     """What each output transfer must be (the ``deltas`` group's output side, asserted when
     `check`), and the ghost's record of it."""
     is_cell = sent & (out.op == CELL_OP["cell"])
-    after_last = follows(out.x, out.y, out.start, *s.last)
+    after_last = follows(out.x, out.y, out.start, *s.last, s.lanes)
     seen = s.seen.bit_select(out.y, 1)
     checks = [
         (implies(tracked, s.may), "deltas: a cell sent twice or not after an end"),
@@ -398,9 +438,9 @@ def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
     ]
     for condition, message in checks if check else ():
         m.d.comb += Assert(condition, message)
-    track_rows(m, tile, out, is_cell, s.last, s.seen, s.open)
+    track_rows(m, tile, out, is_cell, s.last, s.seen, s.open, s.lanes)
     with m.If(is_cell):
         m.d.sync += s.first.eq(0)
-        m.d.sync += s.row_sum.eq(Mux(out.start, 0, s.row_sum) + out.sum)
+        m.d.sync += s.row_sum.eq(Mux(out.start, 0, s.row_sum) + _beat_sum(out, s.lanes))
     with m.If(sent & ~is_cell):
         m.d.sync += s.passing.eq(0)

@@ -19,7 +19,12 @@
     pixel lanes (`TileResolve.lanes` > 1: the fast pipeline's two) a beat is the ``lanes``
     pixels from its (x, y) on: the count goes by beats, ``last`` is on the tile's last beat,
     and each lane's value is asserted where its pixel is (X, Y), so no pixel is lost,
-    doubled or sent in another lane's place (fault ``swap_lanes``).
+    doubled or sent in another lane's place (fault ``swap_lanes``). With scan lanes
+    (`TileResolve.scan_lanes` 2: the fast pipeline's) the input is beats of two cells, ``x``
+    even, the beats following one another as the cells do; each cell's sum is the residue
+    of its exact prefix less the one before it (the beat's first cell's or the row's last
+    one's), each in the range, and (X, Y) takes the composite of the exact prefix of the
+    beat's cell in its column.
 
 Invariants (`_resolve_invariants`): (X, Y) not in flight holds the shadow: its word in the
 pixel memory the resolve writes (``bank``) if its row was written since the tile started or
@@ -47,7 +52,7 @@ import types
 from amaranth.asserts import AnyConst, AnySeq
 from amaranth.hdl import Assert, Assume, Cat, Const, Mux, Signal, signed
 
-from ....hdl.layouts import CELL_OP, pixel_value_fields
+from ....hdl.layouts import CELL_OP, cell_sum_fields, pixel_value_fields
 from ....model.accumulate import composite, fill_coverage, intensity_offset
 from ....model.tile import RESOLVE_OPS
 from .spec import HdlArith, all_, implies
@@ -62,16 +67,19 @@ def check_pixels(m, tile, dut, payload, read, *, wide, invariants, covers, pixel
     the pixel memory). ``wide``: fault ``wide_range``; `pixels`: the output stream as the
     group sees it (None: the resolve's; fault ``swap_lanes``)."""
     pixels = dut.pixels if pixels is None else pixels
-    g = _resolve_pixels(m, tile, dut.cells, payload, pixels, wide=wide, lanes=dut.lanes)
+    g = _resolve_pixels(
+        m, tile, dut.cells, payload, pixels, wide=wide, lanes=dut.lanes, scan=dut.scan_lanes
+    )
     if invariants:
         _resolve_invariants(m, tile, dut, read, g, covers)
 
 
-def _resolve_source(m, tile, cells, src, wide):
-    """Assumptions on the resolve's input (what the accumulator is proved to send; `src`, the
-    source's payload) and the exact prefix sums; returns (the ghost of the input: ``exact``
-    the exact prefix of the cell taken now, ``prev`` the last one, ``last``, ``row_open``,
-    ``need_first``; d; a cell taken)."""
+def _resolve_source(m, tile, cells, src, wide, scan=1):
+    """Assumptions on the resolve's input (what the accumulator is proved to send, in beats of
+    `scan` cells, ``x`` a multiple of `scan`; `src`, the source's payload) and the exact
+    prefix sums; returns (the ghost of the input: ``exact`` the exact prefix of each cell of
+    the beat taken now, ``prev`` the beat before's last, ``last``, ``row_open``,
+    ``need_first``; d; a beat taken)."""
     c = src
     take = cells.valid & cells.ready
     is_cell = c.op == CELL_OP["cell"]
@@ -82,7 +90,8 @@ def _resolve_source(m, tile, cells, src, wide):
     need_first = Signal(init=1, name="need_first")
     well_formed = [
         c.op < len(RESOLVE_OPS),
-        implies(is_cell, c.first | (~need_first & follows(c.x, c.y, c.start, *last))),
+        implies(is_cell, c.first | (~need_first & follows(c.x, c.y, c.start, *last, scan))),
+        implies(is_cell, (c.x & (scan - 1)) == 0),
         implies(is_cell & c.first, c.start),
         implies(is_cell & c.start, ~row_open & (seen.bit_select(c.y, 1) | (c.x == 0))),
         implies(is_cell & ~c.first, all_(c[n] == r for n, r in params.items())),
@@ -90,7 +99,7 @@ def _resolve_source(m, tile, cells, src, wide):
     ]
     with m.If(cells.valid):
         m.d.comb += Assume(all_(well_formed), "source: cells as the accumulator sends them")
-    track_rows(m, tile, c, take & is_cell, last, seen, row_open)
+    track_rows(m, tile, c, take & is_cell, last, seen, row_open, scan)
     with m.If(take & is_cell):
         m.d.sync += need_first.eq(0)
         with m.If(c.first):
@@ -98,39 +107,47 @@ def _resolve_source(m, tile, cells, src, wide):
     with m.If(take & ~is_cell):
         m.d.sync += [need_first.eq(1), seen.eq(0)]
     n = tile.cell_bits
-    exact, prev = Signal(signed(n + 4), name="exact"), Signal(signed(n + 4), name="exact_prev")
-    m.d.comb += exact.eq(AnySeq(n + 4))
+    prev = Signal(signed(n + 4), name="exact_prev")
+    exact = [Signal(signed(n + 4), name="exact" + (f"{k}" if k else "")) for k in range(scan)]
+    m.d.comb += [e.eq(AnySeq(n + 4)) for e in exact]
     d = Mux(c.intensity >= c.i_out, c.intensity - c.i_out, c.i_out - c.intensity)
     limit = (tile.winding_limit * (2 if wide else 1)) * (d << tile.config.F)
-    residue = (exact - Mux(c.start, 0, prev))[:n]
-    in_range = (d == 0) | ((exact >= -limit) & (exact < limit))
-    with m.If(cells.valid & is_cell):
-        m.d.comb += Assume(in_range & (c.sum[:n] == residue), "source: exact sums")
+    before = Mux(c.start, 0, prev)  # each cell's exact prefix less the one before it
+    for e, name in zip(exact, cell_sum_fields(scan), strict=True):
+        residue = (e - before)[:n]
+        in_range = (d == 0) | ((e >= -limit) & (e < limit))
+        with m.If(cells.valid & is_cell):
+            m.d.comb += Assume(in_range & (c[name][:n] == residue), "source: exact sums")
+        before = e
     with m.If(take & is_cell):
-        m.d.sync += prev.eq(exact)
+        m.d.sync += prev.eq(exact[-1])
+    exact = exact if scan > 1 else exact[0]
     ghost = types.SimpleNamespace(
         last=last, seen=seen, row_open=row_open, need_first=need_first, prev=prev, exact=exact
     )
     return ghost, d, take & is_cell
 
 
-def _resolve_pixels(m, tile, cells, src, pixels, *, wide, lanes=1):
+def _resolve_pixels(m, tile, cells, src, pixels, *, wide, lanes=1, scan=1):
     """The ``pixels`` group (module docstring); `src` is the source's payload; `lanes` the
-    pixels a beat carries (lane k the pixel after lane 0's k places in raster order)."""
+    pixels a beat carries (lane k the pixel after lane 0's k places in raster order); `scan`
+    the cells a beat of the input carries (lane k the column ``x + k``)."""
     config, c = tile.config, src
-    g, d, took = _resolve_source(m, tile, cells, src, wide)
-    exact = g.exact
+    g, d, took = _resolve_source(m, tile, cells, src, wide, scan)
+    exacts = g.exact if scan > 1 else [g.exact]
     X, Y = Signal(tile.x_bits, name="track_x"), Signal(tile.y_bits, name="track_y")
     m.d.comb += [X.eq(AnyConst(tile.x_bits)), Y.eq(AnyConst(tile.y_bits))]
     bits = config.intensity_bits
     value, frame, background = (Signal(bits, name=n) for n in ("value", "frame", "background"))
     take = cells.valid & cells.ready
     ifix = d << config.F
-    coverage = fill_coverage(HdlArith(config), exact, c.evenodd, ifix)
-    q = intensity_offset(coverage, config.F)
-    new = composite(value, q, c.intensity, d)
-    with m.If(took & (c.x == X) & (c.y == Y) & (d != 0)):
-        m.d.sync += value.eq(new)
+    for k, exact in enumerate(exacts):  # (X, Y) in lane k of the beat taken
+        coverage = fill_coverage(HdlArith(config), exact, c.evenodd, ifix)
+        q = intensity_offset(coverage, config.F)
+        new = composite(value, q, c.intensity, d)
+        mine = (c.x == X) if k == 0 else (c.x + k == X)
+        with m.If(took & mine & (c.y == Y) & (d != 0)):
+            m.d.sync += value.eq(new)
     with m.If(take & (c.op == CELL_OP["tile"])):
         m.d.sync += [value.eq(c.background), background.eq(c.background)]
     flushing = Signal(name="flushing_h")
@@ -156,7 +173,7 @@ def _resolve_pixels(m, tile, cells, src, pixels, *, wide, lanes=1):
     g.__dict__.update(
         X=X, Y=Y, value=value, frame=frame, background=background, flushing=flushing, count=count
     )
-    g.lanes = lanes
+    g.lanes, g.scan = lanes, scan
     g.pixels = pixels
     return g
 
@@ -188,6 +205,10 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
     flush = dut.flushing
     last_pos = Cat(*g.last)
     tracked = Cat(g.X, g.Y)
+    scan = g.scan
+    # the beat of cells holding (X, Y): its first column
+    beat_x = g.X if scan == 1 else Cat(Const(0, 1), g.X[1:])
+    tracked_beat = Cat(beat_x, g.Y)
 
     def in_flight(position):
         return any_(st.valid & (Cat(st.x, st.y) == position) for st in stages)
@@ -197,11 +218,11 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
     shown = Mux(written_y, pixel, obs.background)  # what a read of (X, Y) gives
     # what the flush reads of (X, Y): the other memory, the flushed tile's rows and background
     flushed = Mux(obs.fwritten.bit_select(g.Y, 1), read(tracked, ~obs.bank), obs.fbackground)
-    row_end = Cat(Const(tile.width - 1, tile.x_bits), g.Y)
+    row_end = Cat(Const(tile.width - scan, tile.x_bits), g.Y)  # the row's last beat
     # written in this pass of its row, the row not yet marked written: the row's end is in
     # flight, or the row is still open and (X, Y) was taken
     row_open = (g.last[1] == g.Y) & g.row_open & ~g.need_first
-    done = in_flight(row_end) | (row_open & (g.last[0] >= g.X))
+    done = in_flight(row_end) | (row_open & (g.last[0] >= beat_x))
     seen_y = g.seen.bit_select(g.Y, 1)
     n = tile.cell_bits
     count, lanes = g.count, g.lanes
@@ -221,7 +242,7 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
         (obs.acc[:n] == g.prev[:n], "row prefix sum"),
         (g.flushing == (flush | obs.p_valid), "flushing"),
         (When(g.need_first, ~busy), "nothing in flight"),
-        (When(g.row_open, ~g.need_first & (g.last[0] != tile.width - 1)), "open row"),
+        (When(g.row_open, ~g.need_first & (g.last[0] != tile.width - scan)), "open row"),
         (When(~g.need_first, g.seen.bit_select(g.last[1], 1)), "last row seen"),
         (When(seen_y & ~row_open & ~in_flight(row_end), written_y), "seen row written"),
         (
@@ -238,7 +259,7 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
             "frame not yet read",
         ),
         *waiting,
-        (When(~in_flight(tracked), g.value == Mux(done, pixel, shown)), "value"),
+        (When(~in_flight(tracked_beat), g.value == Mux(done, pixel, shown)), "value"),
     ]
     for i, st in enumerate(stages):
         position = Cat(st.x, st.y)

@@ -24,7 +24,15 @@ origin: cells land in the wrong columns); ``wide_range`` assumes the prefix sums
 with ``first`` cleared (a stage that takes a polygon's first cell while the previous
 polygon's cells are in flight, so its pixel read may miss their writes); ``swap_lanes``
 gives the ``pixels`` group the resolve's beats with lanes 0 and 1 swapped (a flush of two
-or more pixel lanes that sends a beat's pixels in each other's places).
+or more pixel lanes that sends a beat's pixels in each other's places); ``swap_sums`` gives
+the resolve of two scan lanes each beat of cells with its two sums swapped (a resolve that
+composites a beat's cells in each other's columns); ``swap_cells`` gives the accumulator's
+groups its beats of two cells with their sums swapped (a scan that sends a beat's cells in
+each other's places, or reads the banks the wrong way round).
+
+Scan lanes (``scan_lanes`` 2, `PipelineConfig.scan_lanes`): every group covers them (the
+accumulator's beats of two cells from its memories banked by column parity, the
+resolve's two cells a clock); `TILE_PROOFS` names those runs ``*_scan``.
 
 All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
 the memories and registers at their initial values, no reset; the accumulator's from
@@ -90,6 +98,7 @@ class TileHarness(ClockedHarness):
         invariants=True,
         covers=False,
         lanes=1,
+        scan_lanes=1,
     ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
@@ -110,7 +119,12 @@ class TileHarness(ClockedHarness):
             raise ValueError(f"pixel lanes are the resolve's, not the {stage}'s")
         if fault == "swap_lanes" and lanes == 1:
             raise ValueError("fault swap_lanes needs two or more pixel lanes")
-        self.dut = TileAccumulator(tile) if stage == "accumulator" else TileResolve(tile, lanes)
+        if fault in ("swap_sums", "swap_cells") and scan_lanes == 1:
+            raise ValueError(f"fault {fault} needs two scan lanes")
+        if stage == "accumulator":
+            self.dut = TileAccumulator(tile, scan_lanes)
+        else:
+            self.dut = TileResolve(tile, lanes, scan_lanes)
 
     def elaborate(self, platform):
         m = Module()
@@ -122,7 +136,7 @@ class TileHarness(ClockedHarness):
             # adds read ports to its memories
             m.submodules.dut = dut.elaborate(platform)
             if "sums" in self.checks:
-                read = memory_reader(m, dut.observe.memory)
+                read = _cell_reader(m, dut)
             elif "pixels" in self.checks:  # the resolve's two pixel memories, by bank
                 read = _pixel_reader(m, dut)
         else:
@@ -145,12 +159,17 @@ class TileHarness(ClockedHarness):
 
             hold_rule(m, sink.valid, seen, was_held, check, "output")
         if groups:
+            cells = None
+            if self.fault == "swap_cells":
+                cells = _swapped(m, dut.cells, "sum", "sum1", "cells_swapped")
             check_cells(
                 m, self.tile, dut, payload, held_in, read, self.checks,
-                invariants=self.invariants, covers=self.covers,
+                invariants=self.invariants, covers=self.covers, cells=cells,
             )  # fmt: skip
         if "pixels" in self.checks:
-            pixels = _swapped_lanes(m, dut.pixels) if self.fault == "swap_lanes" else None
+            pixels = None
+            if self.fault == "swap_lanes":
+                pixels = _swapped(m, dut.pixels, "value", "value1", "pixels_swapped")
             check_pixels(
                 m, self.tile, dut, payload, read, wide=self.fault == "wide_range",
                 invariants=self.invariants, covers=self.covers, pixels=pixels,
@@ -158,12 +177,31 @@ class TileHarness(ClockedHarness):
         return m
 
 
-def _swapped_lanes(m, pixels):
-    """The ``pixels`` stream as fault ``swap_lanes`` shows it: lanes 0 and 1 swapped."""
-    payload = Signal(pixels.payload.shape(), name="pixels_swapped")
-    m.d.comb += payload.eq(pixels.payload)
-    m.d.comb += [payload.value.eq(pixels.payload.value1), payload.value1.eq(pixels.payload.value)]
-    return types.SimpleNamespace(valid=pixels.valid, ready=pixels.ready, payload=payload)
+def _swapped(m, stream, first: str, second: str, name: str):
+    """`stream` as faults ``swap_lanes`` and ``swap_cells`` show it: its payload's fields
+    `first` and `second` (lanes 0 and 1) swapped."""
+    payload = Signal(stream.payload.shape(), name=name)
+    m.d.comb += payload.eq(stream.payload)
+    m.d.comb += [
+        payload[first].eq(stream.payload[second]),
+        payload[second].eq(stream.payload[first]),
+    ]
+    return types.SimpleNamespace(valid=stream.valid, ready=stream.ready, payload=payload)
+
+
+def _cell_reader(m, dut):
+    """``read(address)``: cell `address` of the accumulation memory, from the memory of its
+    lane (the address's low bits, with scan lanes) at its word (the rest)."""
+    if dut.lanes == 1:
+        return memory_reader(m, dut.observe.memory)
+    lane_bits = dut.lanes.bit_length() - 1
+    readers = [memory_reader(m, mem) for mem in dut.observe.memories]
+
+    def read(address):
+        words = [reader(address[lane_bits:]) for reader in readers]
+        return Array(words)[address[:lane_bits]]
+
+    return read
 
 
 def _pixel_reader(m, dut):
@@ -202,6 +240,7 @@ class TileProof:
     memory_map: bool = True
     description: str = ""
     lanes: int = 1  # the resolve's pixel lanes (`PipelineConfig.pixel_lanes`)
+    scan_lanes: int = 1  # both stages' scan lanes (`PipelineConfig.scan_lanes`)
 
 
 TILE_PROOFS: dict[str, TileProof] = {
@@ -243,6 +282,34 @@ TILE_PROOFS: dict[str, TileProof] = {
             lanes=2,
         ),
         TileProof(
+            "acc_stream_scan",
+            "accumulator",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="cells hold rule with two scan lanes (the fast pipeline's: a beat of "
+            "two cells from the memories banked by column parity, both sums), any reachable "
+            "state (k-induction), default tile",
+            scan_lanes=2,
+        ),
+        TileProof(
+            "res_stream_scan",
+            "resolve",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="pixels hold rule with two scan lanes and two pixel lanes (the fast "
+            "pipeline's resolve), any reachable state (k-induction), default tile",
+            lanes=2,
+            scan_lanes=2,
+        ),
+        TileProof(
             "acc_deltas",
             "accumulator",
             ("deltas",),
@@ -270,6 +337,32 @@ TILE_PROOFS: dict[str, TileProof] = {
             "read-modify-write stages' invariants), default tile",
         ),
         TileProof(
+            "acc_deltas_scan",
+            "accumulator",
+            ("deltas",),
+            "prove",
+            2,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="acc_deltas with two scan lanes (the fast pipeline's): beats of two "
+            "cells from even columns, each cell kept sent once per end in its beat",
+            scan_lanes=2,
+        ),
+        TileProof(
+            "acc_sums_scan",
+            "accumulator",
+            ("sums",),
+            "prove",
+            2,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="acc_sums with two scan lanes: the accumulation memory banked by "
+            "column parity, each cell's sum in its lane of the beat",
+            scan_lanes=2,
+        ),
+        TileProof(
             "res_pixels",
             "resolve",
             ("pixels",),
@@ -290,6 +383,18 @@ TILE_PROOFS: dict[str, TileProof] = {
             "column parity",
             lanes=2,
         ),
+        TileProof(
+            "res_pixels_scan",
+            "resolve",
+            ("pixels",),
+            "prove",
+            resolve_latency(SMALL_TILE) + 1,
+            description="res_pixels_lanes with two scan lanes (the fast pipeline's): the "
+            "resolve takes a beat of two cells a clock, each composited in its lane and "
+            "written to its pixel lane's memory",
+            lanes=2,
+            scan_lanes=2,
+        ),
         *(
             TileProof(
                 f"{name}_cover",
@@ -302,12 +407,16 @@ TILE_PROOFS: dict[str, TileProof] = {
                 "with its conclusion (not vacuous; cover from power-on, with resets for the "
                 "accumulator)",
                 lanes=lanes,
+                scan_lanes=scan,
             )
-            for name, stage, check, depth, lanes in (
-                ("acc_deltas", "accumulator", "deltas", 16, 1),
-                ("acc_sums", "accumulator", "sums", 16, 1),
-                ("res_pixels", "resolve", "pixels", 14, 1),
-                ("res_pixels_lanes", "resolve", "pixels", 14, 2),
+            for name, stage, check, depth, lanes, scan in (
+                ("acc_deltas", "accumulator", "deltas", 16, 1, 1),
+                ("acc_sums", "accumulator", "sums", 16, 1, 1),
+                ("acc_deltas_scan", "accumulator", "deltas", 16, 1, 2),
+                ("acc_sums_scan", "accumulator", "sums", 16, 1, 2),
+                ("res_pixels", "resolve", "pixels", 14, 1, 1),
+                ("res_pixels_lanes", "resolve", "pixels", 14, 2, 1),
+                ("res_pixels_scan", "resolve", "pixels", 14, 2, 2),
             )
         ),
     )
@@ -353,6 +462,7 @@ def run_tile_proof(
         invariants=invariants,
         covers=mode == "cover",
         lanes=proof.lanes,
+        scan_lanes=proof.scan_lanes,
     )
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles

@@ -18,12 +18,14 @@ from .stream import held, hold_rule
 TILE_CHECKS = {"accumulator": ("stream", "deltas", "sums"), "resolve": ("stream", "pixels")}
 TILE_FAULTS = {
     "stall_cell": "accumulator",
+    "swap_cells": "accumulator",
     "lost_delta": "accumulator",
     "stale_origin": "accumulator",
     "stall_pixel": "resolve",
     "wide_range": "resolve",
     "lost_first": "resolve",
     "swap_lanes": "resolve",
+    "swap_sums": "resolve",
 }
 
 # The smallest tile with W = 4, no sub-pixel bits and 4-bit intensity: 4 x 2 pixels, 18-bit
@@ -65,7 +67,7 @@ def free_source(m, stream, fault):
     """Drive `stream` from a free source that keeps the hold rule; returns the source's
     payload (a view) and the flag of a held transfer (the payload is the clock before's).
     Faults ``lost_delta``, ``stale_origin``, ``lost_first``: the stage gets cell 3's delta,
-    x0 or ``first`` zeroed."""
+    x0 or ``first`` zeroed; ``swap_sums``: a beat of two cells with their sums swapped."""
     layout = stream.payload.shape()
     free = Signal(layout, name="source")
     m.d.comb += [stream.valid.eq(AnySeq(1)), Value.cast(free).eq(AnySeq(layout.size))]
@@ -77,6 +79,8 @@ def free_source(m, stream, fault):
         m.d.comb += given.x0.eq(0)
     if fault == "lost_first":
         m.d.comb += given.first.eq(0)
+    if fault == "swap_sums":
+        m.d.comb += [given.sum.eq(free.sum1), given.sum1.eq(free.sum)]
     m.d.comb += stream.payload.eq(given)
     was_held = held(m, stream, "held_in")
 
@@ -105,20 +109,20 @@ def bit(tile, y):
     return (Const(1, tile.height) << y)[: tile.height]
 
 
-def follows(x, y, start, last_x, last_y):
-    """Cell (x, y) comes right after (last_x, last_y): the next column, or a later row's first
-    cell (`start`)."""
-    return Mux(start, y > last_y, (x == last_x + 1) & (y == last_y))
+def follows(x, y, start, last_x, last_y, step=1):
+    """Cell (x, y) comes right after (last_x, last_y): the next column (the next beat of
+    `step` cells), or a later row's first cell (`start`)."""
+    return Mux(start, y > last_y, (x == last_x + step) & (y == last_y))
 
 
-def track_rows(m, tile, cell, took, last, seen, row_open):
-    """The ghost's record of the rows of cells sent: with a cell taken (`took`), its position
-    (`last`), the rows begun since the tile or flush op (`seen`, on a row's ``start``) and
-    whether the row's first pass is open (begun at a row not seen, not yet at its last
-    column)."""
+def track_rows(m, tile, cell, took, last, seen, row_open, step=1):
+    """The ghost's record of the rows of cells sent: with a cell (a beat of `step` cells)
+    taken (`took`), its position (`last`), the rows begun since the tile or flush op
+    (`seen`, on a row's ``start``) and whether the row's first pass is open (begun at a row
+    not seen, not yet at its last column)."""
     with m.If(took):
         m.d.sync += [last[0].eq(cell.x), last[1].eq(cell.y)]
         whole = Mux(cell.start, ~seen.bit_select(cell.y, 1), row_open)
-        m.d.sync += row_open.eq(whole & (cell.x != tile.width - 1))
+        m.d.sync += row_open.eq(whole & (cell.x != tile.width - step))
         with m.If(cell.start):
             m.d.sync += seen.eq(seen | bit(tile, cell.y))
