@@ -423,7 +423,7 @@ def test_pixel_lanes_drop_bad_commands_as_the_model_does(build, seed):
     run = pipeline_harness.run(pipeline, commands, seed=seed, idle=0.3, stall=0.3)
     assert (run.errors, run.edge_errors) == (result.errors, result.edge_errors)
     for frame, model in zip(run.frames(tile), want, strict=True):
-        assert np.array_equal(frame, model), f"{build} (units, pixel lanes, scan lanes), seed {seed}"
+        assert np.array_equal(frame, model), f"{build} (units, lanes, scan), seed {seed}"
     clock, last = (run.pixels[:, PIXEL_COLUMNS.index(n)] for n in ("clock", "last"))
     assert np.flatnonzero(last).tolist() == [tile.pixels - 1, 2 * tile.pixels - 1]
     beats = clock.reshape(-1, lanes)  # a beat's pixels share its clock, each beat its own
