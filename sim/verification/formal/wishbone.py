@@ -93,6 +93,40 @@ SMALL = TileConfig(EdgeConfig(coord_bits=7, subpixel_bits=2, intensity_bits=4), 
 LANE_RUNS = tuple((1 << n) - 1 << k for n in range(1, 5) for k in range(5 - n))
 
 
+class _Request:
+    """The request as a stream for `held`: valid ``stb``, ready ``~stall``."""
+
+    def __init__(self, bus):
+        self.valid, self.ready = bus.stb, ~bus.stall
+
+
+def initiator_rules(m: Module, bus, limit: int, fault: str | None):
+    """A Wishbone B4 pipelined initiator's rules against a target that answers only the
+    requests it took (ack or err, not both): `stb` only within `cyc`, `cyc` held while a
+    request is unanswered, at most `limit` in flight, a stalled request offered again
+    unchanged. The fault ``drop_stb`` drops a held request. Returns the harness's `check`
+    and its count of unanswered requests, for the initiator's own rules."""
+    unanswered = Signal(range(limit + 2))
+    taken = bus.cyc & bus.stb & ~bus.stall
+    answer = bus.ack | bus.err
+    m.d.comb += Assume(~(bus.ack & bus.err))
+    m.d.comb += Assume(~answer | (unanswered != 0))
+    m.d.sync += unanswered.eq(unanswered + taken - answer)
+    stb = bus.stb
+    was_held = held(m, _Request(bus), "request_held")
+    if fault == "drop_stb":
+        stb = bus.stb & ~was_held
+
+    def check(condition, message):
+        m.d.comb += Assert(condition, message)
+
+    check(~bus.stb | bus.cyc, "wishbone: stb only within cyc")
+    check((unanswered == 0) | bus.cyc, "wishbone: cyc held while a request is unanswered")
+    check(unanswered <= limit, f"wishbone: at most {limit} requests in flight")
+    hold_rule(m, stb, Cat(bus.adr, bus.sel, bus.dat_w, bus.we), was_held, check, "request")
+    return check, unanswered
+
+
 class WriterHarness(ClockedHarness):
     def __init__(self, tile: TileConfig = SMALL, fault: str | None = None):
         if fault is not None and fault not in WRITER_FAULTS:
@@ -112,39 +146,14 @@ class WriterHarness(ClockedHarness):
         free += [bus.stall, bus.ack, bus.err, bus.dat_r]
         for port in map(Value.cast, free):
             m.d.comb += port.eq(AnySeq(len(port)))
-        # The target: answers only requests it took, ack or err, not both.
-        unanswered = Signal(range(MAX_OUTSTANDING + 2))
-        taken = bus.cyc & bus.stb & ~bus.stall
-        answer = bus.ack | bus.err
-        m.d.comb += Assume(~(bus.ack & bus.err))
-        m.d.comb += Assume(~answer | (unanswered != 0))
-        m.d.sync += unanswered.eq(unanswered + taken - answer)
-        stb = bus.stb
-        was_held = held(m, _Request(bus), "request_held")
-        if self.fault == "drop_stb":
-            stb = bus.stb & ~was_held
-
-        def check(condition, message):
-            m.d.comb += Assert(condition, message)
-
-        check(~bus.stb | bus.cyc, "wishbone: stb only within cyc")
-        check((unanswered == 0) | bus.cyc, "wishbone: cyc held while a request is unanswered")
-        check(unanswered <= MAX_OUTSTANDING, "wishbone: at most MAX_OUTSTANDING in flight")
+        check, unanswered = initiator_rules(m, bus, MAX_OUTSTANDING, self.fault)
         check(unanswered == dut.outstanding, "writer: its count of writes in flight")
         check(~bus.stb | bus.we, "wishbone: the writer only writes")
         run = Cat(*(bus.sel == lanes for lanes in LANE_RUNS)).any()
         check(run, "wishbone: sel a run of byte lanes")
         rest = Cat(*(dut.hi_sel == lanes for lanes in (0, 1, 3, 7))).any()
         check(rest, "writer: a pixel's part in the next word starts at lane 0")
-        hold_rule(m, stb, Cat(bus.adr, bus.sel, bus.dat_w, bus.we), was_held, check, "request")
         return m
-
-
-class _Request:
-    """The request as a stream for `held`: valid ``stb``, ready ``~stall``."""
-
-    def __init__(self, bus):
-        self.valid, self.ready = bus.stb, ~bus.stall
 
 
 def run_writer_proof(
@@ -181,28 +190,11 @@ class ReaderHarness(ClockedHarness):
         for port in map(Value.cast, free):
             m.d.comb += port.eq(AnySeq(len(port)))
         words = command_words(self.tile)
-        unanswered = Signal(range(words + 2))
-        taken = bus.cyc & bus.stb & ~bus.stall
-        answer = bus.ack | bus.err
-        m.d.comb += Assume(~(bus.ack & bus.err))
-        m.d.comb += Assume(~answer | (unanswered != 0))
-        m.d.sync += unanswered.eq(unanswered + taken - answer)
-        stb = bus.stb
-        was_held = held(m, _Request(bus), "request_held")
-        if self.fault == "drop_stb":
-            stb = bus.stb & ~was_held
-
-        def check(condition, message):
-            m.d.comb += Assert(condition, message)
-
-        check(~bus.stb | bus.cyc, "wishbone: stb only within cyc")
-        check((unanswered == 0) | bus.cyc, "wishbone: cyc held while a request is unanswered")
-        check(unanswered <= words, "wishbone: at most a command's words in flight")
+        check, unanswered = initiator_rules(m, bus, words, self.fault)
         check(dut.issued <= words, "reader: at most a command's reads issued")
         check(dut.answered <= dut.issued, "reader: no more answers than reads")
         check(unanswered == dut.issued - dut.answered, "reader: its count of reads in flight")
         check(~bus.we & (bus.sel == 0xF), "wishbone: the reader reads whole words")
-        hold_rule(m, stb, Cat(bus.adr, bus.sel, bus.dat_w, bus.we), was_held, check, "request")
         command_held = held(m, out, "command_held")
         hold_rule(m, out.valid, out.payload, command_held, check, "command")
         return m
