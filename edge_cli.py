@@ -362,8 +362,8 @@ class VerilogCommand(Command):
         "writes__valid/ready/payload__lane0__*, lane1__*, lane1_valid, last, and errors/error. "
         "--top pipeline writes the whole polygon pipeline instead (commands in, a tile's "
         "pixels out; docs/hardware.md, 'Polygon pipeline'); --top peripheral writes it "
-        "behind a Wishbone register window with a framebuffer writer (docs/hardware.md, "
-        "'Integrating edgeaa')."
+        "behind a Wishbone register window (--bus axi-lite: AXI4-Lite) with a framebuffer "
+        "writer and a display-list reader (docs/hardware.md, 'Integrating edgeaa')."
     )
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
