@@ -493,7 +493,10 @@ class _Datapath(wiring.Component):
         return m
 
 
-_FB_REGS = ("fb_base", "fb_stride", "fb_size", "fb_origin", "fb_format")
+# The framebuffer registers; all but fb_format take any value written (a format code this
+# build does not write is ignored, and its read shows the codes it writes).
+_FB_PLAIN = ("fb_base", "fb_stride", "fb_size", "fb_origin")
+_FB_REGS = (*_FB_PLAIN, "fb_format")
 
 
 class EdgePeripheral(wiring.Component):
@@ -571,7 +574,7 @@ class EdgePeripheral(wiring.Component):
             for k, stage in enumerate(staged):
                 with m.Case(REGISTERS["cmd"] + k):
                     m.d.sync += stage.eq(bus.dat_w)
-            for name in _FB_REGS[:-1]:
+            for name in _FB_PLAIN:
                 with m.Case(REGISTERS[name]):
                     m.d.sync += fb[name].eq(bus.dat_w)
             with m.Case(REGISTERS["fb_format"]):  # a format this build does not write: ignored
@@ -608,7 +611,7 @@ class EdgePeripheral(wiring.Component):
             REGISTERS["errors"]: Cat(dp.errors, dp.edge_errors),
             REGISTERS["tiles"]: dp.tiles,
         }
-        values |= {REGISTERS[name]: fb[name] for name in _FB_REGS}
+        values |= {REGISTERS[name]: fb[name] for name in _FB_PLAIN}
         mask = sum(1 << f.code for f in format_codes(tile.channels))
         values[REGISTERS["fb_format"]] = Cat(
             fb["fb_format"], Const(0, 4 - FORMAT_BITS), Const(mask, 4)
