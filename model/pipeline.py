@@ -88,21 +88,9 @@ class PipelineConfig:
     def __post_init__(self):
         if not isinstance(self.tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {self.tile!r}")
-        units = self.setup_units
-        if isinstance(units, bool) or not isinstance(units, int):
-            raise TypeError(f"setup_units must be an integer, not {units!r}")
-        if not 1 <= units <= MAX_SETUP_UNITS:
-            raise ValueError(f"setup_units must be in [1, {MAX_SETUP_UNITS}], not {units}")
-        lanes = self.pixel_lanes
-        if isinstance(lanes, bool) or not isinstance(lanes, int):
-            raise TypeError(f"pixel_lanes must be an integer, not {lanes!r}")
-        if lanes not in PIXEL_LANES:  # a power of two up to the narrowest tile's width
-            raise ValueError(f"pixel_lanes must be one of {PIXEL_LANES}, not {lanes}")
-        scan = self.scan_lanes
-        if isinstance(scan, bool) or not isinstance(scan, int):
-            raise TypeError(f"scan_lanes must be an integer, not {scan!r}")
-        if scan not in SCAN_LANES:
-            raise ValueError(f"scan_lanes must be one of {SCAN_LANES}, not {scan}")
+        _check_count("setup_units", self.setup_units, range(1, MAX_SETUP_UNITS + 1))
+        lanes = _check_count("pixel_lanes", self.pixel_lanes, PIXEL_LANES)  # a row: whole beats
+        scan = _check_count("scan_lanes", self.scan_lanes, SCAN_LANES)
         if scan > 1 and lanes != scan:  # the resolve reads and writes a pixel lane per cell
             raise ValueError(f"scan_lanes {scan} needs pixel_lanes {scan}, not {lanes}")
 
@@ -113,6 +101,18 @@ class PipelineConfig:
         if name not in PIPELINES:
             raise ValueError(f"no pipeline named {name!r}: {', '.join(PIPELINES)}")
         return cls(TileConfig() if tile is None else tile, **PIPELINES[name])
+
+
+def _check_count(name: str, value, allowed) -> int:
+    """`value` if it is an integer in `allowed` (a range or a tuple); TypeError or ValueError
+    saying which otherwise."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"{name} must be an integer, not {value!r}")
+    if value not in allowed:
+        ranged = isinstance(allowed, range)
+        shown = f"in [{allowed.start}, {allowed.stop - 1}]" if ranged else f"one of {allowed}"
+        raise ValueError(f"{name} must be {shown}, not {value}")
+    return value
 
 
 PIXEL_LANES = (1, 2, 4)  # a tile is at least 4 pixels wide: a row is whole beats
