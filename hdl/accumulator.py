@@ -6,17 +6,21 @@ read. `edgeaa.model.tile` is the model and the cycle model (`beat_clocks`, `tile
 In: ``ops``, delta beats and tile, end and flush ops. A beat's nonzero cells are taken one a
 clock, in cell order, and the beat in the clock of its last (one clock for a beat with none:
 `edgeaa.model.tile.beat_clocks`), so ``ops.ready`` depends on the beat's deltas; any four
-cells make a beat, repeats included. A cell left of the tile moves into its row's first
+cells make a beat, repeats included. With two scan lanes the cells go in by pairs, (0, 1)
+then (2, 3), a clock for a pair with a nonzero cell, each cell into its column's bank (two
+cells at one cell added first), two clocks when the pair's cells are two cells of one bank
+(`accumulator_cells.route_pair`). A cell left of the tile moves into its row's first
 column; one right of, above or below it is dropped (it still takes its clock). A cell holds
 its sum modulo ``2**cell_bits`` in one `amaranth.lib.memory.Memory` of ``width x height``
-cells (a simple dual-port block RAM); back-to-back deltas to one cell are neither lost nor
-doubled (read-modify-write with forwarding, `_rmw`).
+cells (a simple dual-port block RAM; with two lanes a memory per bank); back-to-back deltas
+to one cell are neither lost nor doubled (read-modify-write with forwarding,
+`accumulator_cells.read_modify_write`, a copy per bank).
 
 Out: ``cells`` to the resolve. An end taken in clock a reads, from a + 2, the rows the
 polygon touched in ascending order, one beat of ``lanes`` cells per clock while the output
 advances (`edgeaa.model.pipeline.PipelineConfig.scan_lanes`: 1 in the compact pipeline, the
 memory then one; 2 in the fast one, a memory per lane, banked by column modulo the lanes,
-so a beat is a word of each, and the input side writes its cell's lane; ``start`` marks a
+so a beat is a word of each, and the input side writes each cell's lane; ``start`` marks a
 row's first beat, where the resolve's prefix sum restarts), each read clearing its cells; a
 row already scanned in this tile is read over the polygon's scan span only, widened to
 whole beats (`edgeaa.model.tile`, "Scan span", where it is shown exact). A cell read in clock s is
@@ -40,7 +44,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..model.pipeline import SCAN_LANES
 from ..model.tile import TileConfig
-from .accumulator_cells import read_modify_write, route_cell
+from .accumulator_cells import read_modify_write, route_cell, route_pair
 from .accumulator_scan import scan_states
 from .layouts import CELL_OP, TILE_OP, cell_sum_fields, tile_cell_layout, tile_op_layout
 
@@ -99,7 +103,7 @@ class TileAccumulator(wiring.Component):
         o_valid = Signal()
         advance = ~o_valid | self.cells.ready
         free = Signal()  # in ACC, the output register free and no clear pending: take
-        cell = route_cell(m, self, free)
+        cell = (route_cell if lanes == 1 else route_pair)(m, self, free)
         read_modify_write(m, self, rd, wr, cell)
         self._control(m, rd, o_valid, advance, free, cell)
         return m
@@ -125,13 +129,17 @@ class TileAccumulator(wiring.Component):
         # kept deltas not yet scanned, through reset; the first clock after a reset
         dirty, check = Signal(reset_less=True), Signal(init=1)
         m.d.sync += check.eq(0)
+        if self._lanes == 1:
+            rows = touched | (Const(1, tile.height) << cell.y)
+            new_lo, new_hi = Mux(cell.x < lo, cell.x, lo), Mux(cell.x > hi, cell.x, hi)
+        else:  # a cell a bank this clock, each kept or not
+            rows, new_lo, new_hi = touched, lo, hi
+            for c in cell.banks:
+                rows = rows | Mux(c.keep, Const(1, tile.height) << c.y, 0)
+                new_lo = Mux(c.keep & (c.x < new_lo), c.x, new_lo)
+                new_hi = Mux(c.keep & (c.x > new_hi), c.x, new_hi)
         with m.If(cell.keep):
-            m.d.sync += [
-                dirty.eq(1),
-                touched.eq(touched | (Const(1, tile.height) << cell.y)),
-                lo.eq(Mux(cell.x < lo, cell.x, lo)),
-                hi.eq(Mux(cell.x > hi, cell.x, hi)),
-            ]
+            m.d.sync += [dirty.eq(1), touched.eq(rows), lo.eq(new_lo), hi.eq(new_hi)]
         with m.If(accept & ((p.op == TILE_OP["tile"]) | (p.op == TILE_OP["flush"]))):
             m.d.sync += seen.eq(0)
         self.observe.__dict__.update(

@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Array, Cat, Const, Mux, Signal, signed
+from amaranth.hdl import Cat, Const, Mux, Signal, signed
 
-from .layouts import TILE_OP, log2
+from .layouts import TILE_OP
 
-__all__ = ["read_modify_write", "route_cell"]
+__all__ = ["read_modify_write", "route_cell", "route_pair"]
 
 
 def _select(sel, values):
@@ -30,12 +30,10 @@ def _select(sel, values):
     return Mux(hi, (low & v3) | (~low & v2), low)
 
 
-def route_cell(m, unit, free) -> types.SimpleNamespace:
-    """The cell taken this clock: the beat's lowest nonzero cell not yet taken, moved into
-    the tile (``keep``: it is inside after the move; ``x``, ``y`` tile coordinates),
-    ``last`` when no other waits (the beat is taken with it), ``done`` the cells taken in
-    earlier clocks."""
-    tile, p = unit.tile, unit.ops.payload
+def _beat_source(m, unit):
+    """The tile op's origin register, the beat's cells and their ``done`` (taken in earlier
+    clocks) and ``pending`` (nonzero, not yet taken) masks."""
+    p = unit.ops.payload
     x0, y0 = Signal.like(p.x0), Signal.like(p.y0)  # the origin, set by a tile op
     with m.If(unit.ops.valid & unit.ops.ready & (p.op == TILE_OP["tile"])):
         m.d.sync += [x0.eq(p.x0), y0.eq(p.y0)]
@@ -43,15 +41,33 @@ def route_cell(m, unit, free) -> types.SimpleNamespace:
     done = Signal(4)  # the beat's cells taken in earlier clocks
     pending = Signal(4)
     m.d.comb += pending.eq(Cat(*(c.delta != 0 for c in cells)) & ~done)
-    sel = (pending & -pending)[:4]  # the lowest (as `lowest_set`; fewer LUT4s here)
-    last = (pending & ~sel) == 0
-    taking = Signal()  # a clock of a beat: its cell `sel` (none: an all-zero beat)
+    return (x0, y0), cells, done, pending
+
+
+def _take(m, unit, free, done, sel, last):
+    """``taking``: a clock of a beat, its cells `sel` (none: an all-zero beat); `done`
+    follows, cleared with the beat's `last`."""
+    p = unit.ops.payload
+    taking = Signal()
     m.d.comb += [
         taking.eq(unit.ops.valid & free & (p.op == TILE_OP["beat"])),
         unit.busy.eq((unit.ops.valid & unit.ops.ready) | taking | unit.scanning),
     ]
     with m.If(taking):
         m.d.sync += done.eq(Mux(last, 0, done | sel))
+    return taking
+
+
+def route_cell(m, unit, free) -> types.SimpleNamespace:
+    """The cell taken this clock (one lane): the beat's lowest nonzero cell not yet taken,
+    moved into the tile (``keep``: it is inside after the move; ``x``, ``y`` tile
+    coordinates), ``last`` when no other waits (the beat is taken with it), ``done`` the
+    cells taken in earlier clocks."""
+    tile = unit.tile
+    (x0, y0), cells, done, pending = _beat_source(m, unit)
+    sel = (pending & -pending)[:4]  # the lowest (as `lowest_set`; fewer LUT4s here)
+    last = (pending & ~sel) == 0
+    taking = _take(m, unit, free, done, sel, last)
     x, y = _select(sel, [c.x for c in cells]), _select(sel, [c.y for c in cells])
     tx, ty = x - x0, y - y0
     keep = taking & (sel != 0) & (ty >= 0) & (ty < tile.height) & (tx < tile.width)
@@ -73,48 +89,92 @@ def route_cell(m, unit, free) -> types.SimpleNamespace:
     return cell
 
 
+def route_pair(m, unit, free) -> types.SimpleNamespace:
+    """The cells taken this clock with two lanes (a memory bank per column parity,
+    `edgeaa.model.tile.beat_clocks`): the pair (0, 1) while either waits, else (2, 3), both
+    at once unless they clash (both kept, one bank, two cells: then the first, and the second
+    the clock after). ``banks``: per bank, the cell it adds this clock (``keep``, tile ``x``
+    and ``y``, ``delta``: the pair's two deltas added when both land on that one cell);
+    ``keep`` when either bank keeps one; ``last`` and ``done`` as `route_cell`'s."""
+    tile = unit.tile
+    (x0, y0), cells, done, pending = _beat_source(m, unit)
+    first = pending[0] | pending[1]  # the pair taken: (0, 1), then (2, 3)
+    wait = Mux(first, pending[:2], pending[2:])
+    pair = []
+    for j in range(2):
+        a, b = cells[j], cells[j + 2]
+        tx, ty = Mux(first, a.x, b.x) - x0, Mux(first, a.y, b.y) - y0
+        inside = (ty >= 0) & (ty < tile.height) & (tx < tile.width)
+        col = Signal(tile.x_bits, name=f"pair{j}_x")
+        m.d.comb += col.eq(Mux(tx < 0, 0, tx))
+        pair.append((wait[j] & inside, col, ty[: tile.y_bits], Mux(first, a.delta, b.delta)))
+    (k0, x_0, y_0, _), (k1, x_1, y_1, _) = pair
+    clash = k0 & k1 & (x_0[0] == x_1[0]) & ((x_0 != x_1) | (y_0 != y_1))
+    take = Cat(wait[0], wait[1] & ~clash)
+    sel = Cat(Mux(first, take, 0), Mux(first, 0, take))
+    last = (pending & ~sel) == 0
+    taking = _take(m, unit, free, done, sel, last)
+    banks = []
+    for k in range(2):
+        hits = [taking & take[j] & kept & (x[0] == k) for j, (kept, x, _, _) in enumerate(pair)]
+        cell = types.SimpleNamespace(
+            keep=Signal(name=f"bank{k}_keep"),
+            x=Signal(tile.x_bits, name=f"bank{k}_x"),
+            y=Signal(tile.y_bits, name=f"bank{k}_y"),
+            delta=Signal(signed(tile.cell_bits), name=f"bank{k}_delta"),
+        )
+        m.d.comb += [
+            cell.keep.eq(hits[0] | hits[1]),
+            cell.x.eq(Mux(hits[0], pair[0][1], pair[1][1])),
+            cell.y.eq(Mux(hits[0], pair[0][2], pair[1][2])),
+            cell.delta.eq(Mux(hits[0], pair[0][3], 0) + Mux(hits[1], pair[1][3], 0)),
+        ]
+        banks.append(cell)
+    out = types.SimpleNamespace(
+        banks=banks, keep=banks[0].keep | banks[1].keep, last=last, done=done
+    )
+    unit.observe.__dict__.update(origin=(x0, y0), cell=out)
+    return out
+
+
 def read_modify_write(m, unit, rd, wr, cell):
     """Read-modify-write in two stages: A (the cell is taken; read it), B (add the delta to
     what was read, or to the sum of the cell before if it wrote the same cell last clock,
     which the read did not see; write the sum). Stage B's delta is zero when it holds no
     cell, so a scan's clear is the same add with the read forced to zero. `unit._clear`
     (the scan's) takes the write port when set and writes zero at `unit._scan_addr`. `rd` and
-    `wr` may be lists, a port of each lane's memory (banked by column modulo the lanes): B
-    takes its lane's read data, writes its lane's memory, and a clear zeroes every lane's
-    word at the beat `unit._scan_addr`."""
+    `wr` may be lists, a port of each lane's memory (banked by column parity, two lanes):
+    then `cell` is `route_pair`'s and each bank runs its own stages on its cell
+    (`_bank_rmw`), and a clear zeroes every lane's word at the beat `unit._scan_addr`."""
     tile = unit.tile
     addr_bits = tile.x_bits + tile.y_bits  # a cell's full address (lanes: bank and word)
     unit._scan_addr = Signal(addr_bits)
     unit._clear = Signal()
     unit._read_en = Signal()
+    if isinstance(rd, list):
+        banks = zip(rd, wr, cell.banks, strict=True)
+        unit.observe.stages = [
+            _bank_rmw(m, unit, k, r, w, bank) for k, (r, w, bank) in enumerate(banks)
+        ]
+        return
     addr = Cat(cell.x, cell.y)
     b_valid, b_addr, b_delta = Signal(), Signal(addr_bits), Signal(signed(tile.cell_bits))
     c_valid, c_addr, c_sum = Signal(), Signal(addr_bits), Signal.like(b_delta)
     total = Signal.like(b_delta)
-    unit.observe.stage = types.SimpleNamespace(
+    stage = types.SimpleNamespace(
         b_valid=b_valid,
         b_addr=b_addr,
         b_delta=b_delta,
         c_valid=c_valid,
         c_addr=c_addr,
         c_sum=c_sum,
+        read=rd.data,
     )
-    lanes = rd if isinstance(rd, list) else None  # a memory per lane, banked by column
-    if lanes is None:
-        m.d.comb += [
-            rd.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)),
-            rd.en.eq(unit._read_en),
-        ]
-        read = rd.data
-    else:
-        lane_bits = log2(len(lanes))
-        read = Array(port.data for port in lanes)[b_addr[:lane_bits]]  # the lane B read
-        unit.observe.read = types.SimpleNamespace(data=read)  # as one memory's read port
-        for port in lanes:
-            m.d.comb += [
-                port.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)[lane_bits:]),
-                port.en.eq(unit._read_en),
-            ]
+    unit.observe.stages = [stage]  # as the banks' (`_bank_rmw`), for the formal harness
+    m.d.comb += [
+        rd.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)),
+        rd.en.eq(unit._read_en),
+    ]
     m.d.sync += [
         b_valid.eq(cell.keep),
         b_addr.eq(addr),
@@ -125,19 +185,54 @@ def read_modify_write(m, unit, rd, wr, cell):
     ]
     # the write of the cell before (C) is not in the read B got; a clear writes zero
     # (b_delta is zero while scanning)
-    base = Mux(c_valid & (c_addr == b_addr), c_sum, Mux(unit._clear, 0, read))
+    base = Mux(c_valid & (c_addr == b_addr), c_sum, Mux(unit._clear, 0, rd.data))
     m.d.comb += total.eq(base + b_delta)
-    if lanes is None:
-        m.d.comb += [
-            wr.addr.eq(Mux(unit._clear, unit._scan_addr, b_addr)),
-            wr.data.eq(total),
-            wr.en.eq(unit._clear | b_valid),
-        ]
-        return
-    # a clear zeroes a beat (every lane's word); stage B writes its cell's lane
-    for j, port in enumerate(wr):
-        m.d.comb += [
-            port.addr.eq(Mux(unit._clear, unit._scan_addr, b_addr)[lane_bits:]),
-            port.data.eq(total),
-            port.en.eq(unit._clear | (b_valid & (b_addr[:lane_bits] == j))),
-        ]
+    m.d.comb += [
+        wr.addr.eq(Mux(unit._clear, unit._scan_addr, b_addr)),
+        wr.data.eq(total),
+        wr.en.eq(unit._clear | b_valid),
+    ]
+
+
+def _bank_rmw(m, unit, k, rd, wr, cell) -> types.SimpleNamespace:
+    """Bank `k`'s read-modify-write (stages A, B and its own forwarding, as the one lane's)
+    on its `cell` (`route_pair`'s), through its memory's read and write ports, addressed by
+    word (the column's bank bit dropped). Returns its stages for the formal harness, the
+    addresses full (bank and word) and ``read`` its read data."""
+    tile = unit.tile
+    word = Cat(cell.x[1:], cell.y)
+    b_valid, b_word = Signal(name=f"bank{k}_b_valid"), Signal(len(word), name=f"bank{k}_b_word")
+    b_delta = Signal(signed(tile.cell_bits), name=f"bank{k}_b_delta")
+    c_valid, c_word = Signal(name=f"bank{k}_c_valid"), Signal(len(word), name=f"bank{k}_c_word")
+    c_sum = Signal.like(b_delta, name=f"bank{k}_c_sum")
+    total = Signal.like(b_delta, name=f"bank{k}_total")
+    scan_word = unit._scan_addr[1:]  # the scan's beat: a word of each bank
+    m.d.comb += [
+        rd.addr.eq(Mux(unit.scanning, scan_word, word)),
+        rd.en.eq(unit._read_en),
+    ]
+    m.d.sync += [
+        b_valid.eq(cell.keep),
+        b_word.eq(word),
+        b_delta.eq(cell.delta),
+        c_valid.eq(b_valid),
+        c_word.eq(b_word),
+        c_sum.eq(total),
+    ]
+    base = Mux(c_valid & (c_word == b_word), c_sum, Mux(unit._clear, 0, rd.data))
+    m.d.comb += [
+        total.eq(base + b_delta),
+        wr.addr.eq(Mux(unit._clear, scan_word, b_word)),
+        wr.data.eq(total),
+        wr.en.eq(unit._clear | b_valid),
+    ]
+    bank = Const(k, 1)
+    return types.SimpleNamespace(
+        b_valid=b_valid,
+        b_addr=Cat(bank, b_word),
+        b_delta=b_delta,
+        c_valid=c_valid,
+        c_addr=Cat(bank, c_word),
+        c_sum=c_sum,
+        read=rd.data,
+    )

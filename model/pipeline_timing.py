@@ -20,7 +20,8 @@ It composes the stages' own cycle models, command by command (`decode_commands`)
 The stall. The accumulator is not ready while it scans the previous polygon's rows or holds
 a tile or flush op the resolve has not taken: from the polygon's begin it is ready from
 `TileClock.ready` (T) on, and then takes the polygon's beats until its end (the only other
-op, sent when the core is idle), each over `beat_clocks` clocks (a nonzero cell a clock). So
+op, sent when the core is idle), each over `beat_clocks` clocks (a nonzero cell a clock, or
+with two scan lanes a pair of cells with a nonzero one, `TileModel.beat_clocks`). So
 the core sees a sink first ready in clock T that holds each beat that long:
 `schedule(..., sink_ready=T, holds=...)`. The stepper's one enable freezes the loop and its
 pipeline while a beat waits (`edgeaa.model.timing.beat_wait`), while the setup runs on until
@@ -34,7 +35,7 @@ from dataclasses import dataclass, field
 from .beat import DELTAS
 from .edge import EdgeError, setup
 from .pipeline import Decoded, PipelineConfig, decode_commands, pipeline_config
-from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming, beat_clocks
+from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming
 from .timing import pipeline_depth, schedule
 
 __all__ = ["PipelineTiming", "pipeline_cycles"]
@@ -124,7 +125,7 @@ class _Top:
             else:
                 shapes.append(shape)
                 idle.append(extra + (0 if idle else self.first))
-                holds.append(beat_clocks(op.cells) if shape else ())
+                holds.append(self.model.beat_clocks(op.cells) if shape else ())
                 extra = 0
         config = self.tile.config
         timings = iter(

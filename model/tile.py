@@ -5,8 +5,9 @@ A tile is ``width`` x ``height`` pixels at an origin in engine pixels. Its stage
 order, a stream of *ops* (the accumulator's input):
 
 * `TileStart` (origin, background): the tile's pixels become the background.
-* `Beats`: delta beats of the stepper (`edgeaa.model.beat.DeltaBeat`), one cell a clock: a
-  beat takes a clock per nonzero cell, one when it has none (`beat_clocks`). A cell is moved
+* `Beats`: delta beats of the stepper (`edgeaa.model.beat.DeltaBeat`), a cell a clock (two
+  with two scan lanes, one a bank): a beat takes a clock per nonzero cell (per pair of cells
+  with a nonzero one), one when it has none (`beat_clocks`). A cell is moved
   into the tile (origin subtracted); one left of it is added into its row's first column (the
   prefix sum carries it), one right of, above or below it is dropped, as
   `edgeaa.model.accumulate.resolve_rows` does. A row holding a nonzero delta is *touched*.
@@ -205,10 +206,31 @@ def tile_cells(tile: TileConfig, origin, x, y, delta):
     return np.maximum(tx[keep], 0), ty[keep], delta[keep]
 
 
-def beat_clocks(cells: np.ndarray) -> np.ndarray:
-    """Clocks the accumulator takes for each beat of `cells` (n, 4, 3): one per nonzero
-    cell, one for a beat with none (it takes a cell a clock and skips the zero ones)."""
-    return np.maximum(np.count_nonzero(np.asarray(cells)[:, :, 2], axis=1), 1)
+def beat_clocks(cells: np.ndarray, lanes: int = 1, tile: TileConfig | None = None, origin=(0, 0)):
+    """Clocks the accumulator takes for each beat of `cells` (n, 4, 3) (the beat goes in the
+    last of them; a beat with no nonzero cell takes one). One lane (one memory): one clock
+    per nonzero cell. Two lanes (`edgeaa.model.pipeline.PipelineConfig.scan_lanes`: a memory
+    bank per column parity): the cells go by pairs, (0, 1) then (2, 3), one clock for a pair
+    with a nonzero cell (a pair of zeros is skipped), each cell into its own bank, or both
+    into one cell (their deltas added), but two clocks (first cell, then second) when the
+    pair *clashes*: both nonzero and kept in the tile at `origin` (`tile_cells`) at two
+    cells of one bank. The stepper's beats never clash (a pair is two neighbouring columns
+    of a row, or both moved into its first column)."""
+    cells = np.asarray(cells).reshape(-1, 4, 3)
+    nonzero = cells[:, :, 2] != 0
+    if lanes == 1:
+        return np.maximum(np.count_nonzero(nonzero, axis=1), 1)
+    if lanes != 2 or tile is None:
+        raise ValueError(f"beat_clocks takes one lane, or two with the tile, not {lanes!r}")
+    tx, ty = cells[:, :, 0] - origin[0], cells[:, :, 1] - origin[1]
+    kept = nonzero & (ty >= 0) & (ty < tile.height) & (tx < tile.width)
+    col = np.maximum(tx, 0)
+    clocks = np.zeros(len(cells), dtype=np.int64)
+    for a, b in ((0, 1), (2, 3)):
+        clash = kept[:, a] & kept[:, b] & (col[:, a] % 2 == col[:, b] % 2)
+        clash &= (col[:, a] != col[:, b]) | (ty[:, a] != ty[:, b])
+        clocks += (nonzero[:, a] | nonzero[:, b]).astype(np.int64) + clash  # not bool's +
+    return np.maximum(clocks, 1)
 
 
 def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> int:
@@ -301,6 +323,10 @@ class TileModel:
         """The frames of every Flush in `ops`."""
         return [out for op in ops if isinstance(out := self.feed(op), np.ndarray)]
 
+    def beat_clocks(self, cells: np.ndarray) -> np.ndarray:
+        """`beat_clocks` of beats `cells` taken now (the tile's origin, its scan lanes)."""
+        return beat_clocks(cells, self.scan_lanes, self.tile, self.origin)
+
     def _accumulate(self, cells: np.ndarray) -> None:
         cells = cells.reshape(-1, 3)
         tx, ty, delta = tile_cells(self.tile, self.origin, cells[:, 0], cells[:, 1], cells[:, 2])
@@ -365,7 +391,8 @@ class TileModel:
 # Clocks from 0; a transfer happens in a clock where valid and ready are both high. The ops
 # are offered back to back (each from the clock after the previous one was taken) and the
 # pixel sink is always ready. The accumulator takes a beat in `beat_clocks` clocks (its
-# nonzero cells one a clock), the beat's transfer in the last of them. An end taken in clock
+# nonzero cells one a clock, or a pair a clock with two lanes), the beat's transfer in the
+# last of them. An end taken in clock
 # a reads the first touched beat of cells in a + 2 (the last beat's read-modify-write lands in
 # a + 1) and offers it to the resolve in a + 3, then one beat of `Scan.lanes` cells per clock
 # (the runs of `Scan`), the next read as a beat is taken; a row that stops at ``hi``'s beat
@@ -487,14 +514,14 @@ class TileClock:
         self.overlap += max(0, min(stop, self.free) - max(start, self.flush_from))
 
 
-def tile_cycles(tile: TileConfig, ops) -> TileTiming:
+def tile_cycles(tile: TileConfig, ops, lanes: int = 1) -> TileTiming:
     """The clock of every transfer of the tile stages (and their frames, from `TileModel`)
-    for ops offered back to back."""
-    model, clock = TileModel(tile), TileClock(tile)
+    for ops offered back to back, with `lanes` scan and pixel lanes."""
+    model, clock = TileModel(tile, lanes), TileClock(tile, lanes)
     for op in ops:
         result = model.feed(op)
         if isinstance(op, (Beats, DeltaBeat)):
-            holds = beat_clocks((Beats.of([op]) if isinstance(op, DeltaBeat) else op).cells)
+            holds = model.beat_clocks((Beats.of([op]) if isinstance(op, DeltaBeat) else op).cells)
             clock.beats(clock.ready - 1 + np.cumsum(holds), holds)
         else:
             clock.take(op, result)

@@ -364,9 +364,9 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     beside the next tile's work); and the clear pass after reset. 1.2 to
     2.1 times the cycle model's clocks on the built-ins, the HUD, serif text and the 1080p
     scene of `benchmarks/bench_pipeline.py`, compact and fast with one scan lane; with the
-    fast pipeline's two 1.58 to 2.60 times (the scan is counted a cell a clock: it also
-    stands for the accumulator's cell a clock in, which two scan lanes do not halve; halving
-    it fell below the exact clocks on the 1080p scene and the starburst) (docs/scenes.md).
+    fast pipeline's two (the scan a beat of two cells a clock: the accumulator also takes
+    a beat's cells two a clock) 1.09 to 1.90 times (docs/scenes.md; counting the scan a
+    cell a clock, as before the accumulator took two, gave 2.03 to 2.69).
     `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
     and needs the commands."""
     pipeline = pipeline_config(pipeline)
@@ -436,7 +436,8 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             work = edge_clocks(columns[crossing]).sum() + (edge_clocks(extent) * n_merged).sum()
             work += clipped * (crossing & starts_above).sum()
             scanned = (scan_rows * (last + 1 - first)).sum()
-            work += (latency + 8) * present + max(scanned, tile.width * min(tile.height, scanned))
+            whole = max(scanned, tile.width * min(tile.height, scanned))
+            work += (latency + 8) * present + whole / pipeline.scan_lanes
             # the flush (its beats) runs beside the next tile's work
             clocks += max(work, tile.pixels // pipeline.pixel_lanes + 8)
             commands += sent_edges + 2 * int(present) + 2

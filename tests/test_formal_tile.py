@@ -87,7 +87,8 @@ def test_slow_proofs(tools, name):
         ("res_pixels_lanes", "swap_lanes", 16, "pixels: value (bmc)"),
         ("res_pixels_scan", "swap_sums", 16, "pixels: value (bmc)"),
         ("acc_sums_scan", "swap_cells", 8, "sums: cell sum (bmc)"),
-        ("acc_sums_scan", "stale_origin", 8, "sums: cell sum (bmc)"),
+        # with two scan lanes the origin decides a pair's clash, so the beat's clocks go first
+        ("acc_sums_scan", "stale_origin", 8, "cells: a beat taken with its last cell (bmc)"),
         ("acc_deltas_scan", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         ("res_pixels_scan", "wide_range", 16, "pixels: value (bmc)"),
     ],

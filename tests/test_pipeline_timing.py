@@ -241,10 +241,11 @@ def test_several_setup_units_in_the_models_clocks(units, seed):
     ("units", "lanes", "scan", "seed"),
     [(1, 2, 1, 2), (4, 2, 1, 7), (2, 4, 1, 10), (1, 2, 2, 2), (4, 2, 2, 7), (2, 2, 2, 10)],
 )
-def test_pixel_lanes_in_the_models_clocks(units, lanes, scan, seed):
+def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed):
     """A flush of `lanes` pixels a clock and a scan of `scan` cells a clock (the fast
-    pipeline's two and two), with the bad commands and the stalls: each pixel in its beat's
-    clock, each beat of cells in its clock."""
+    pipeline's two and two; two scan lanes also take a beat's cells into the accumulator by
+    pairs), with the bad commands and the stalls: each pixel in its beat's clock, each beat
+    of cells in its clock."""
     pipeline = PipelineConfig(SMALL_TILE, units, lanes, scan)
     commands = random_commands(random.Random(seed), SMALL_TILE)
     hw = run_transfers(pipeline, commands)
@@ -256,6 +257,11 @@ def test_pixel_lanes_in_the_models_clocks(units, lanes, scan, seed):
     for wrong in wrongs:
         with pytest.raises(AssertionError):
             check_clock_for_clock(replace(pipeline, **wrong), commands, hw, f"{wrong}")
+    if scan == 2:  # nor does two scan lanes' model with a cell a clock into the accumulator
+        one = tile_model.beat_clocks
+        monkeypatch.setattr(tile_model.TileModel, "beat_clocks", lambda self, cells: one(cells))
+        with pytest.raises(AssertionError):
+            check_clock_for_clock(pipeline, commands, hw, "a cell a clock in")
 
 
 @pytest.mark.parametrize("seed", [4, 11])

@@ -32,9 +32,11 @@ from edgeaa.model.tile import (
     TileOverflow,
     TileStart,
     alpha_steps,
+    beat_clocks,
     composite_steps,
 )
 from edgeaa.render import builtin, plan_scene, render_scene
+from edgeaa.render.builtin import BUILTINS
 from edgeaa.render.pipeline import render_tiles, scene_commands
 
 DEFAULT = EdgeConfig()
@@ -172,6 +174,60 @@ def test_two_scan_lanes_read_whole_beats_and_leave_the_frames(data):
     for bad in (0, 3, 16, 2.0):
         with pytest.raises(ValueError, match="scan_lanes"):
             TileModel(tile, bad)
+
+
+def test_two_lanes_take_a_beats_cells_by_pairs():
+    """`beat_clocks` with two lanes: a clock per pair (0, 1), (2, 3) with a nonzero cell, two
+    for a pair that clashes (both kept, one bank, two cells); cells moved into the first
+    column, dropped or zero do not clash."""
+    tile, d = TileConfig(SMALL, 8, 4), 5
+    beats = [
+        [(2, 0, d), (3, 0, d), (2, 1, d), (3, 1, d)],  # x-major block: a clock a pair
+        [(4, 1, d), (5, 1, d), (6, 1, 0), (7, 1, 0)],  # the second pair all zero: skipped
+        [(4, 1, 0), (5, 1, 0), (6, 1, 0), (7, 1, 0)],  # no nonzero cell: one clock
+        [(2, 0, d), (4, 0, d), (3, 1, d), (3, 2, d)],  # both pairs clash
+        [(-3, 2, d), (-1, 2, d), (-1, 2, d), (0, 2, d)],  # all into column 0 of row 2
+        [(-1, 1, d), (-1, 2, d), (2, 0, d), (2, 9, d)],  # column 0, two rows; one dropped
+        [(1, 0, d), (3, 0, 0), (1, 0, d), (9, 0, d)],  # a zero and one right of the tile
+    ]
+    cells = np.array(beats)
+    assert beat_clocks(cells).tolist() == [4, 2, 1, 4, 4, 4, 3]
+    assert beat_clocks(cells, 2, tile).tolist() == [2, 1, 1, 4, 2, 3, 2]
+    # the bank is the tile's column: moved into column 0 the cell's parity is the origin's
+    moved = np.array([[(-1, 0, d), (1, 0, d), (0, 0, 0), (0, 0, 0)]])
+    assert [beat_clocks(moved, 2, tile, (x, 0)).tolist() for x in (0, -1, -2)] == [[1], [2], [2]]
+    with pytest.raises(ValueError, match="two with the tile"):
+        beat_clocks(cells, 2)
+
+
+def _pair_clocks(tile: TileConfig, plan):
+    """Check that every beat the stepper makes for `plan` takes, with two lanes, a clock per
+    pair with a nonzero cell (none clashes); returns (beats, clocks)."""
+    model, beats, clocks = TileModel(tile, 2), 0, 0
+    for op in command_ops(tile, scene_commands(plan, tile)).ops:
+        if isinstance(op, Beats):
+            nonzero = op.cells[:, :, 2] != 0
+            want = np.maximum(nonzero[:, :2].any(1) * 1 + nonzero[:, 2:].any(1), 1)
+            assert model.beat_clocks(op.cells).tolist() == want.tolist()
+            beats, clocks = beats + len(op.cells), clocks + int(want.sum())
+        model.feed(op)
+    return beats, clocks
+
+
+@pytest.mark.parametrize("name", BUILTINS)
+def test_the_steppers_beats_never_clash(name):
+    """A stepper's beat is two neighbouring columns of a row a pair, or both moved into the
+    tile's first column: with two lanes, a clock per pair with a nonzero cell."""
+    plan = plan_scene(builtin(name, DEFAULT), DEFAULT)
+    beats, clocks = _pair_clocks(TileConfig(DEFAULT, 16, 8), plan)
+    assert beats < clocks < 2 * beats, name  # some beats take two clocks, not all
+
+
+@settings(max_examples=30, deadline=None, database=None)
+@given(data=st.data())
+def test_the_steppers_beats_never_clash_on_random_scenes(data):
+    scene = data.draw(small_scenes(SMALL))
+    _pair_clocks(TileConfig(SMALL, 8, 4), plan_scene(scene, SMALL))
 
 
 def test_bad_tile_sizes_are_refused():

@@ -29,6 +29,7 @@ from edgeaa.model.tile import (
     TileOverflow,
     TileStart,
     resolve_latency,
+    tile_cells,
     tile_cycles,
 )
 from edgeaa.render import parse_scene, plan_scene, render_scene
@@ -102,8 +103,8 @@ def random_ops(tile: TileConfig, config: EdgeConfig, seed: int) -> list:
     return ops
 
 
-def check_exact(tile: TileConfig, ops) -> None:
-    run, want = run_stages(tile, ops), tile_cycles(tile, ops)
+def check_exact(tile: TileConfig, ops, lanes: int = 1) -> None:
+    run, want = run_stages(tile, ops, lanes=lanes), tile_cycles(tile, ops, lanes)
     assert run.accepts == want.accepts, "op clocks differ from tile_cycles"
     assert run.cells == want.cells, "cell clocks differ from tile_cycles"
     assert [p[0] for p in run.pixels] == want.pixels, "pixel clocks differ from tile_cycles"
@@ -136,6 +137,37 @@ CASES = [
 def test_random_beats_clock_for_clock(tile, seed):
     for k in range(3):
         check_exact(tile, random_ops(tile, tile.config, 10 * seed + k))
+
+
+@pytest.mark.parametrize("seed", [7, 8])
+def test_two_lanes_take_a_pair_of_cells_a_clock_clock_for_clock(seed):
+    """Two lanes (a memory bank per column parity): a beat's cells go in by pairs, a clash
+    (two cells of one bank) in two clocks, two cells of one cell added; random beats of any
+    four cells (repeats, cells left of the tile, odd origins) as `tile_cycles` says."""
+    tile = TileConfig(SMALL, 8, 4)
+    seen = {"clash": 0, "one cell": 0}
+    for k in range(3):
+        ops = random_ops(tile, SMALL, 10 * seed + k)
+        check_exact(tile, ops, lanes=2)
+        for kind in _pair_kinds(tile, ops):
+            seen[kind] = seen.get(kind, 0) + 1
+    assert seen["clash"] and seen["one cell"], seen  # both cases were driven
+
+
+def _pair_kinds(tile: TileConfig, ops):
+    """Per pair of nonzero kept cells of every beat: "clash" (one bank, two cells), "one
+    cell" (both at one cell) or "two banks"."""
+    origin = (0, 0)
+    for op in ops:
+        if isinstance(op, TileStart):
+            origin = (op.x0, op.y0)
+        for beat in op.cells.tolist() if isinstance(op, Beats) else []:
+            for a, b in ((0, 1), (2, 3)):
+                placed = [tile_cells(tile, origin, *([v] for v in beat[j])) for j in (a, b)]
+                if all(len(tx) for tx, _, _ in placed):  # both nonzero and kept
+                    (xa, ya), (xb, yb) = ((int(tx[0]), int(ty[0])) for tx, ty, _ in placed)
+                    same = (xa, ya) == (xb, yb)
+                    yield "one cell" if same else "clash" if xa % 2 == xb % 2 else "two banks"
 
 
 def test_back_to_back_polygons_with_no_gap_wait_for_the_pixels_below():
@@ -207,12 +239,12 @@ def test_a_scene_through_the_stages_is_the_renderers_image():
     assert np.array_equal(image, render_tiles(plan, tile))
 
 
-@pytest.mark.parametrize("seed", [5, 6])
-def test_random_back_pressure_gives_the_same_frames(seed):
+@pytest.mark.parametrize(("seed", "lanes"), [(5, 1), (6, 1), (5, 2), (6, 2)])
+def test_random_back_pressure_gives_the_same_frames(seed, lanes):
     tile = TileConfig(SMALL, 8, 4)
     ops = random_ops(tile, SMALL, seed)
-    run = run_stages(tile, ops, seed=seed, idle=0.3, stall=0.4)
-    want = tile_cycles(tile, ops)
+    run = run_stages(tile, ops, seed=seed, idle=0.3, stall=0.4, lanes=lanes)
+    want = tile_cycles(tile, ops, lanes)
     for frame, model in zip(run.frames(tile), want.frames, strict=True):
         assert np.array_equal(frame, model)
     assert len(run.pixels) == len(want.pixels)

@@ -17,7 +17,12 @@ from edgeaa.hdl.resolve import TileResolve
 from edgeaa.model.beat import CELL_FIELDS, CELLS
 from edgeaa.model.tile import OPS, Beats, Flush, PolygonEnd, TileConfig, TileStart
 from edgeaa.sim.simulators.amaranth_runner import Probe, Sink, Source, row_decoder, run_component
-from edgeaa.sim.simulators.pipeline_harness import PIXEL_COLUMNS, pixel_drain_clocks, stuck_limit
+from edgeaa.sim.simulators.pipeline_harness import (
+    beat_columns,
+    pixel_drain_clocks,
+    pixel_rows,
+    stuck_limit,
+)
 
 
 def op_payloads(tile: TileConfig, ops) -> list:
@@ -50,10 +55,11 @@ def op_payloads(tile: TileConfig, ops) -> list:
 
 
 class Stages(wiring.Component):
-    """The accumulator and the resolve, connected (the top's tile half, for tests)."""
+    """The accumulator and the resolve, connected (the top's tile half, for tests), with
+    `lanes` scan and pixel lanes (the fast pipeline's 2: `PipelineConfig.scan_lanes`)."""
 
-    def __init__(self, tile: TileConfig):
-        self.acc, self.res = TileAccumulator(tile), TileResolve(tile)
+    def __init__(self, tile: TileConfig, lanes: int = 1):
+        self.acc, self.res = TileAccumulator(tile, lanes), TileResolve(tile, lanes, lanes)
         super().__init__(
             {
                 "ops": wiring.In(self.acc.ops.signature.flip()),
@@ -81,12 +87,13 @@ class StageRun:
         return list(values.reshape(-1, tile.height, tile.width))
 
 
-def run_stages(tile: TileConfig, ops, *, seed=None, idle=0.0, stall=0.0) -> StageRun:
+def run_stages(tile: TileConfig, ops, *, seed=None, idle=0.0, stall=0.0, lanes=1) -> StageRun:
     """Offer the ops' payloads in order and take the pixels (random idles and stalls with a
     seed, a stalled pixel must hold: `amaranth_runner.run_component`), observing the clock
-    of every cell the accumulator hands the resolve; stops once the pixels of every flush
-    are out and a drain has passed."""
-    dut = Stages(tile)
+    of every beat of cells the accumulator hands the resolve; stops once the pixels of every
+    flush are out and a drain has passed. `lanes`: `Stages`'s (a pixel beat is split into
+    its pixels, each with the beat's clock)."""
+    dut = Stages(tile, lanes)
     run = StageRun()
 
     def cell(clock, valid, ready, op):
@@ -95,13 +102,14 @@ def run_stages(tile: TileConfig, ops, *, seed=None, idle=0.0, stall=0.0) -> Stag
 
     cells = dut.acc.cells
     want = sum(isinstance(op, Flush) for op in ops) * tile.pixels
-    pixels = row_decoder(dut.pixels.payload.shape(), PIXEL_COLUMNS[1:])
+    pixels = row_decoder(dut.pixels.payload.shape(), beat_columns(lanes))
     trace = run_component(
-        dut, [Source("ops", op_payloads(tile, ops))], [Sink("pixels", want, pixels)],
+        dut, [Source("ops", op_payloads(tile, ops))], [Sink("pixels", want // lanes, pixels)],
         drain=pixel_drain_clocks(tile), stuck=stuck_limit(tile, idle, stall),
         probes=[Probe((cells.valid, cells.ready, cells.payload.op), cell)], seed=seed,
         idle=idle, stall=stall, tag=f"[stages seed={seed} idle={idle} stall={stall} {tile}]",
     )  # fmt: skip
     (run.accepts,) = trace.accepts
-    run.pixels = [(clock, *pixel) for clock, pixel in trace.beats[0]]
+    beats = [(clock, *pixel) for clock, pixel in trace.beats[0]]
+    run.pixels = [tuple(row) for row in pixel_rows(beats, lanes).tolist()]
     return run

@@ -4,8 +4,10 @@
 
 ``accumulator`` ``deltas``
     One symbolic cell (X, Y) of the tile (``AnyConst``). Beats are any four cells (repeats
-    included). Asserted: (X, Y) is sent after an end, before the accumulator takes another
-    op, when a nonzero delta was kept there since the previous end (the model's
+    included). Asserted: each beat is taken in the clocks `edgeaa.model.tile.beat_clocks`
+    gives it (a nonzero cell a clock, by pairs with two scan lanes: `_ghost_sel`); (X, Y) is
+    sent after an end, before the accumulator takes another op, when a nonzero delta was
+    kept there since the previous end (the model's
     `tile_cells`: the origin of the last tile op subtracted, a cell left of the tile moved
     into column 0), and at most once per end (nothing lost, nothing doubled); the cells come
     in rows, each row's cells in consecutive columns from its first (``start``), the rows
@@ -22,7 +24,8 @@
     sent carries the shadow, all ``cell_bits`` bits, and the shadow restarts from 0 (the
     clear).
 
-Invariants. ``sums`` (`_memory_state`): the memory's row of (X, Y) plus stage B's delta for
+Invariants. ``sums`` (`_memory_state`, each bank's stages with two scan lanes): the
+memory's row of (X, Y) plus stage B's delta for
 its address plus the output's sum while (X, Y) waits in the output register equals the
 shadow; stage C's sum is in the memory (written the clock before), stage B's read is the
 memory's row unless stage C wrote that row the clock before (then B takes C's sum: the
@@ -112,17 +115,36 @@ def _placed(tile, beat, origin):
     return out
 
 
+def _ghost_sel(pending, placed, lanes: int):
+    """The cells of the beat the ghost counts this clock, from its `pending` ones (nonzero, not
+    yet counted), as `edgeaa.model.tile.beat_clocks` times them: one lane, the lowest; two,
+    the pair (0, 1) while either is pending, else (2, 3), both unless they clash (both kept
+    at two cells of one column parity: then the first)."""
+    if lanes == 1:
+        return (pending & -pending)[:4]
+    takes = []
+    for a in (0, 2):
+        (ka, xa, ya, _), (kb, xb, yb, _) = placed[a], placed[a + 1]
+        both = pending[a] & pending[a + 1] & ka & kb
+        clash = both & (xa[0] == xb[0]) & ((xa != xb) | (ya != yb))
+        takes.append(Cat(pending[a], pending[a + 1] & ~clash))
+    first = pending[0] | pending[1]
+    return Mux(first, Cat(takes[0], Const(0, 2)), Cat(Const(0, 2), takes[1]))
+
+
 def _ghost_cells(m, tile, dut, src, s, checks):
-    """The ghost takes a beat's nonzero cells (of the source's payload `src`) one a clock, in
-    cell order, in the clocks the accumulator takes a cell (``busy`` outside a scan with a
-    beat offered; the port's meaning), and asserts that the beat is taken with its last: so
-    it counts every cell of every beat taken, once. Returns, per cell, whether the ghost
-    counts it this clock and where it lands (kept, x, y, delta: `_placed`)."""
+    """The ghost takes a beat's nonzero cells (of the source's payload `src`) as the model
+    times them (`_ghost_sel`: one a clock in cell order, or by pairs with two scan lanes), in
+    the clocks the accumulator takes cells (``busy`` outside a scan with a beat offered; the
+    port's meaning), and asserts that the beat is taken with its last: so it counts every
+    cell of every beat taken, once. Returns, per cell, whether the ghost counts it this clock
+    and where it lands (kept, x, y, delta: `_placed`)."""
     ops = dut.ops
     done = Signal(4, name="ghost_done")
     pending = Signal(4, name="ghost_pending")
     m.d.comb += pending.eq(Cat(*(src.beat[c].delta != 0 for c in CELLS)) & ~done)
-    sel = (pending & -pending)[:4]
+    placed = _placed(tile, src.beat, s.origin)
+    sel = _ghost_sel(pending, placed, dut.lanes)
     last = (pending & ~sel) == 0
     taking = dut.busy & ~dut.scanning & ops.valid & (src.op == OP["beat"])
     with m.If(taking):
@@ -131,7 +153,6 @@ def _ghost_cells(m, tile, dut, src, s, checks):
     if "deltas" in checks or "sums" in checks:
         m.d.comb += Assert(take_beat == (taking & last), "cells: a beat taken with its last cell")
     s.ghost_done = done
-    placed = _placed(tile, src.beat, s.origin)
     return [(taking & sel[j] & keep, x, y, d) for j, (keep, x, y, d) in enumerate(placed)]
 
 
@@ -210,15 +231,14 @@ def _accumulator_invariants(m, tile, dut, read, s, checks, covers):
 
 def _memory_state(m, tile, dut, read, s, covers):
     """Invariants of the accumulator's state (what makes the groups inductive): the read-
-    modify-write stages agree with the memory, the output register's cell was cleared, and
-    the tracked cell's shadow is the memory's row plus stage B's delta for it plus the
-    output's sum while the cell waits there. Each is implied by the ones before in the clock
-    before."""
-    obs, out, st = dut.observe, s.cells.payload, dut.observe.stage
+    modify-write stages (one, or one per bank with two scan lanes) agree with the memory, the
+    output register's cell was cleared, and the tracked cell's shadow is the memory's row plus
+    stage B's delta for it plus the output's sum while the cell waits there. Each is implied
+    by the ones before in the clock before."""
+    obs, out, stages = dut.observe, s.cells.payload, dut.observe.stages
     o = obs.o
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
     t_addr = Cat(s.X, s.Y)
-    forwarded = st.c_valid & (st.c_addr == st.b_addr)
     waiting = pending & (o["x"] == s.bx) & (o["y"] == s.Y)
     # the output register's beat: each cell's address
     o_addrs = [Cat(o["x"] | k, o["y"]) for k in range(s.lanes)]
@@ -226,31 +246,34 @@ def _memory_state(m, tile, dut, read, s, covers):
     # memory holds what the reset left until the clear pass has zeroed it
     clearing = obs.in_clear | (obs.check & obs.dirty)
     cleared_to = Cat(obs.scan_x, obs.scan_y)  # CLEAR has zeroed the cells below
+    empty = all_(~st.b_valid & ~st.c_valid for st in stages)
     checks = [
         (When(pending, all_(read(a) == 0 for a in o_addrs)), "state: output cell cleared"),
-        (When(clearing, ~st.b_valid & ~st.c_valid), "state: no write pending in a clear"),
+        (When(clearing, empty), "state: no write pending in a clear"),
         (
             When(obs.in_clear & (t_addr < cleared_to), read(t_addr) == 0),
             "state: the clear pass zeroed the cells below it",
         ),
-        (
-            When(~obs.dirty & ~obs.in_clear, ~st.b_valid & ~st.c_valid & (read(t_addr) == 0)),
-            "state: a clean memory",
-        ),
+        (When(~obs.dirty & ~obs.in_clear, empty & (read(t_addr) == 0)), "state: a clean memory"),
         (When(obs.check | obs.in_clear, s.shadow == 0), "state: no delta since a reset"),
         (When(s.shadow != 0, obs.dirty | waiting), "state: a delta kept is dirty"),
-        (When(st.b_valid, obs.in_acc), "state: stage B outside ACC"),
-        (When(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty"),
-        (When(st.c_valid, ~dut.scanning), "state: stage C in SCAN"),
-        (When(st.c_valid, read(st.c_addr) == st.c_sum), "state: stage C written"),
-        (
-            When(st.b_valid & ~forwarded, obs.read.data == read(st.b_addr)),
-            "state: stage B read",
-        ),
-        # a cell is taken only as the output advances
-        (When(pending, ~st.b_valid), "state: stage B empty while a cell waits"),
     ]
-    stage_b = Mux(st.b_valid & (st.b_addr == t_addr), st.b_delta, 0)
+    for k, st in enumerate(stages):
+        name = "" if len(stages) == 1 else f" (bank {k})"
+        forwarded = st.c_valid & (st.c_addr == st.b_addr)
+        checks += [
+            (When(st.b_valid, obs.in_acc), "state: stage B outside ACC" + name),
+            (When(~st.b_valid, st.b_delta == 0), "state: stage B's delta when empty" + name),
+            (When(st.c_valid, ~dut.scanning), "state: stage C in SCAN" + name),
+            (When(st.c_valid, read(st.c_addr) == st.c_sum), "state: stage C written" + name),
+            (
+                When(st.b_valid & ~forwarded, st.read == read(st.b_addr)),
+                "state: stage B read" + name,
+            ),
+            # a cell is taken only as the output advances
+            (When(pending, ~st.b_valid), "state: stage B empty while a cell waits" + name),
+        ]
+    stage_b = sum(Mux(st.b_valid & (st.b_addr == t_addr), st.b_delta, 0) for st in stages)
     total = read(t_addr) + stage_b + Mux(waiting, _sum_at(out, s.X, s.lanes), 0)
     checks.append((When(~clearing, s.shadow == total[: len(s.shadow)]), "state: shadow"))
     # so a cell outside the scan span is zero (the read after a row's hi clears one)
