@@ -66,7 +66,7 @@ def crop_box(text: str) -> tuple[int, int, int, int]:
 def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str) -> str:
     """8-bit greyscale PNG (16-bit when intensity_bits > 8); other widths are scaled to the
     PNG's full scale, rounding half up. Returns a description."""
-    from PIL import Image
+    from .png import write_png_file
 
     if image.ndim == 3:
         return _write_colour_png(image, full_scale, path)
@@ -78,7 +78,7 @@ def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str
         array = ((2 * data * top + full_scale) // (2 * full_scale)).astype(dtype)
     else:  # the values as they are (no int64 copy of the image)
         array = image.astype(dtype, copy=False)
-    Image.fromarray(array).save(path, format="PNG")
+    write_png_file(array, path)
     scaled = "" if full_scale == top else f", scaled from {intensity_bits} bits"
     return f"{bits}-bit greyscale{scaled}"
 
@@ -86,16 +86,15 @@ def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str
 def _write_colour_png(image: np.ndarray, full_scale: int, path: str) -> str:
     """A colour canvas (premultiplied, `paint`) as an 8-bit RGB PNG, RGBA where any pixel is
     not opaque; channels scaled from full scale to 255 half up."""
-    from PIL import Image
-
     from .paint import straight
+    from .png import write_png_file
 
     data, opaque = straight(image, full_scale)
     if full_scale != 255:
         data = (2 * data * 255 + full_scale) // (2 * full_scale)
     mode = "RGB" if opaque else "RGBA"
     array = data[..., :3] if opaque else data
-    Image.fromarray(np.ascontiguousarray(array.astype(np.uint8)), mode).save(path, format="PNG")
+    write_png_file(array.astype(np.uint8), path)
     return f"8-bit {mode}"
 
 

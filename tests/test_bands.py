@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from unittest.mock import patch
 
 import numpy as np
 from hypothesis import given, settings
@@ -38,8 +39,10 @@ def scenes(draw):
 
 
 @settings(max_examples=150, deadline=None)
-@given(scenes(), st.integers(1, 90), st.sampled_from(CONFIGS))
-def test_a_banded_render_is_the_whole_buffer_render(scene, rows, config):
+@given(scenes(), st.integers(1, 90), st.sampled_from(CONFIGS), st.integers(1, 4))
+def test_a_banded_render_is_the_whole_buffer_render(scene, rows, config, run_edges):
+    """Bands, threads, and the model's runs of edges within a band (`RUN_EDGES`, here from one
+    edge a run) and runs of accumulation buffers (`RUN_CELLS`, here from 16 cells)."""
     full = config.full_scale
     polygons = tuple(
         Polygon(p.contours, p.intensity * full // 15, p.fill_rule) for p in scene.polygons
@@ -47,7 +50,9 @@ def test_a_banded_render_is_the_whole_buffer_render(scene, rows, config):
     scene = Scene(scene.width, scene.height, polygons, background=scene.background * full // 15)
     plan = plan_scene(scene, config)
     whole = render_scene(plan, rows=0)
-    banded = render_scene(plan, rows=min(rows, scene.height))
+    runs = patch("edgeaa.render.render.RUN_EDGES", run_edges)
+    with runs, patch("edgeaa.render.render.RUN_CELLS", 16 * run_edges):
+        banded = render_scene(plan, rows=min(rows, scene.height))
     threads = render_scene(plan, rows=min(rows, scene.height), workers=3)
     assert whole.bands == 1 and banded.bands == -(-scene.height // min(rows, scene.height))
     assert threads.workers == min(3, banded.bands)
