@@ -63,9 +63,10 @@ def crop_box(text: str) -> tuple[int, int, int, int]:
     return x0, y0, x1, y1
 
 
-def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str) -> str:
+def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path) -> str:
     """8-bit greyscale PNG (16-bit when intensity_bits > 8); other widths are scaled to the
-    PNG's full scale, rounding half up. Returns a description."""
+    PNG's full scale, rounding half up, to `path` (a file name or a binary file). Returns a
+    description."""
     from .png import write_png_file
 
     if image.ndim == 3:
@@ -83,7 +84,7 @@ def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str
     return f"{bits}-bit greyscale{scaled}"
 
 
-def _write_colour_png(image: np.ndarray, full_scale: int, path: str) -> str:
+def _write_colour_png(image: np.ndarray, full_scale: int, path) -> str:
     """A colour canvas (premultiplied, `paint`) as an 8-bit RGB PNG, RGBA where any pixel is
     not opaque; channels scaled from full scale to 255 half up."""
     from .paint import straight

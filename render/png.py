@@ -59,7 +59,10 @@ def png_bytes(array: np.ndarray) -> bytes:
 
 
 def write_png_file(array: np.ndarray, path) -> None:
-    """`png_bytes` of `array` written to the file `path`."""
+    """`png_bytes` of `array` written to `path`: a file name, or a binary file to write to."""
     data = png_bytes(array)
+    if hasattr(path, "write"):
+        path.write(data)
+        return
     with open(path, "wb") as file:
         file.write(data)

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from PIL import Image
 
-from edgeaa.render.png import png_bytes
+from edgeaa.render.png import png_bytes, write_png_file
 
 SHAPES = st.tuples(st.integers(1, 9), st.integers(1, 9), st.sampled_from([None, 3, 4]))
 
@@ -33,11 +33,15 @@ def test_pillow_reads_back_every_sample(image):
     assert np.array_equal(read.astype(np.int64), image.astype(np.int64))
 
 
-def test_a_rendered_page_reads_back():
-    """A large image with every byte value in each row, the Up filter's wraps included."""
+def test_a_large_image_reads_back_from_a_file_and_a_stream(tmp_path):
+    """Every byte value in each row (the Up filter's wraps), by name and into a binary file."""
     rng = np.random.default_rng(7)
     image = rng.integers(0, 256, (300, 517), dtype=np.uint8)
-    assert np.array_equal(np.asarray(Image.open(io.BytesIO(png_bytes(image)))), image)
+    stream = io.BytesIO()
+    write_png_file(image, stream)
+    write_png_file(image, tmp_path / "a.png")
+    assert stream.getvalue() == (tmp_path / "a.png").read_bytes() == png_bytes(image)
+    assert np.array_equal(np.asarray(Image.open(tmp_path / "a.png")), image)
 
 
 @pytest.mark.parametrize(
