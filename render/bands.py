@@ -25,10 +25,11 @@ import numpy as np
 
 # Columns (states of the engine's loop) a band should step, about: a band's deltas and its
 # accumulation's temporaries grow with its columns (the engine's own arrays do not: it takes a
-# band in runs, `render.RUN_EDGES`, and chunks, `model.vector.CHUNK_STATES`); 1 << 15 held
-# 4 to 6 MB more at the 1,250 and 5,000-cell maps' peaks, 1 << 16 (before) 9 to 16 MB more. A
-# band is at least MIN_BAND_ROWS high (an x-major edge is stepped whole in every band it meets).
-BAND_COLUMNS = 1 << 14
+# band in runs, `render.RUN_EDGES` and `RUN_COLUMNS`). 1 << 16 (before) held 2 to 5 MB more at
+# the maps' peaks; 1 << 14 took 8 to 20 % more render time on the maps and pages (each band
+# composites its polygons' waves again). A band is at least MIN_BAND_ROWS high (an x-major
+# edge is stepped whole in every band it meets).
+BAND_COLUMNS = 1 << 15
 MIN_BAND_ROWS = 32
 
 

@@ -963,30 +963,49 @@ def _band_windows(windows: np.ndarray, band: Band) -> np.ndarray:
     return cut
 
 
-RUN_EDGES = 1 << 12  # edges the model sets up and steps in one run within a band: a run's
-# setups are some 400 bytes an edge and its deltas, zeros and all, 128 bytes a column, until
-# `in_image` keeps its nonzero ones in the band, narrowed
+RUN_EDGES = 1 << 12  # edges the model sets up at once within a band (some 400 bytes an edge)
+RUN_COLUMNS = 1 << 13  # and steps at once: its deltas, zeros and all, are 128 bytes a column
+# (and as much again in `in_image`) until the nonzero ones in the band are kept, narrowed
 
 
 def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, counts, cut: bool):
     """The nonzero deltas of the band's edges (clipped to the band's rows when `cut`, and
     only those in its rows kept), in image pixels, in the narrowest integer types. The model
-    takes the band's edges in runs of RUN_EDGES, each cut down as it comes; a simulator takes
-    the band as one stream (its clocks count the whole stream)."""
+    sets up the band's edges RUN_EDGES at a time and steps them about RUN_COLUMNS columns at
+    a time, each run cut down as it comes; a simulator takes the band as one stream (its
+    clocks count the whole stream)."""
     arrays = edge_arrays(plan, band.edges, clip=skip)
     if cut:
         arrays = replace(arrays, clip=_band_clip(plan, band, arrays))
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
-    rows = (band.y0, band.y1) if cut else None
-    step = RUN_EDGES if engine == "model" else max(len(arrays), 1)
+    rows, bounds = ((band.y0, band.y1) if cut else None), _delta_range(plan.config)
+    model = engine == "model"
+    step = RUN_EDGES if model else max(len(arrays), 1)
     runs = []
     for start in range(0, max(len(arrays), 1), step):
-        part = slice(start, start + step)
-        edges = arrays.take(part)
+        ids, edges = band.edges[start : start + step], arrays.take(slice(start, start + step))
         setups = _check_columns(plan.config, edges, counts, cut)
-        run, _ = run_deltas(plan.config, edges, engine, progress=report, setups=setups)
-        runs.append(run.in_image(band.edges[part], plan.offset, rows, _delta_range(plan.config)))
+        for part in _column_runs(setups.columns, RUN_COLUMNS if model else None):
+            run, _ = run_deltas(
+                plan.config, edges.take(part), engine, progress=report, setups=setups.take(part)
+            )
+            runs.append(run.in_image(ids[part], plan.offset, rows, bounds))
     return runs[0] if len(runs) == 1 else DeltaRun.joined(runs)
+
+
+def _column_runs(columns: np.ndarray, limit: int | None) -> list[slice]:
+    """Consecutive edges in runs of about `limit` stepped columns, the edge that reaches it
+    closing a run (one run without a limit)."""
+    if limit is None or int(columns.sum()) <= limit:
+        return [slice(None)]
+    total = np.cumsum(columns.astype(np.int64) + 1)  # an edge of no column costs a little
+    runs, start = [], 0
+    while start < len(columns):
+        base = int(total[start - 1]) if start else 0
+        stop = int(np.searchsorted(total, base + limit)) + 1
+        runs.append(slice(start, min(max(stop, start + 1), len(columns))))
+        start = runs[-1].stop
+    return runs
 
 
 def _band_clip(plan: Plan, band: Band, arrays: EdgeArrays) -> tuple[np.ndarray, ...]:
