@@ -571,6 +571,18 @@ class SetupBatch:
     def __iter__(self) -> Iterator[EdgeSetup]:
         return (self[k] for k in range(len(self)))
 
+    def take(self, index) -> SetupBatch:
+        """The setups of the edges `index` (a slice or an array of indices), in that order."""
+        values = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name != "pieces":
+                values[f.name] = (
+                    tuple(a[index] for a in value) if isinstance(value, tuple) else value[index]
+                )
+        pieces = EndPieces(*(getattr(self.pieces, f.name)[index] for f in fields(EndPieces)))
+        return SetupBatch(**values, pieces=pieces)
+
     @property
     def major_neg_x(self) -> np.ndarray:
         """x-major edges that step left (`EdgeSetup.major_neg_x`)."""

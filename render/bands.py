@@ -23,10 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# Columns (states of the engine's loop) a band should step, about: the engine holds some
-# 300 bytes a column at its peak, so about 20 MB; a band is at least MIN_BAND_ROWS high
-# (an x-major edge is stepped whole in every band it meets).
-BAND_COLUMNS = 1 << 16
+# Columns (states of the engine's loop) a band should step, about: a band's deltas and its
+# accumulation's temporaries grow with its columns (the engine's own arrays do not: it takes a
+# band in runs, `render.RUN_EDGES` and `RUN_COLUMNS`). 1 << 16 (before) held 2 to 5 MB more at
+# the maps' peaks; 1 << 14 took 8 to 20 % more render time on the maps and pages (each band
+# composites its polygons' waves again). A band is at least MIN_BAND_ROWS high (an x-major
+# edge is stepped whole in every band it meets).
+BAND_COLUMNS = 1 << 15
 MIN_BAND_ROWS = 32
 
 

@@ -63,10 +63,11 @@ def crop_box(text: str) -> tuple[int, int, int, int]:
     return x0, y0, x1, y1
 
 
-def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str) -> str:
+def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path) -> str:
     """8-bit greyscale PNG (16-bit when intensity_bits > 8); other widths are scaled to the
-    PNG's full scale, rounding half up. Returns a description."""
-    from PIL import Image
+    PNG's full scale, rounding half up, to `path` (a file name or a binary file). Returns a
+    description."""
+    from .png import write_png_file
 
     if image.ndim == 3:
         return _write_colour_png(image, full_scale, path)
@@ -78,24 +79,23 @@ def write_png(image: np.ndarray, full_scale: int, intensity_bits: int, path: str
         array = ((2 * data * top + full_scale) // (2 * full_scale)).astype(dtype)
     else:  # the values as they are (no int64 copy of the image)
         array = image.astype(dtype, copy=False)
-    Image.fromarray(array).save(path, format="PNG")
+    write_png_file(array, path)
     scaled = "" if full_scale == top else f", scaled from {intensity_bits} bits"
     return f"{bits}-bit greyscale{scaled}"
 
 
-def _write_colour_png(image: np.ndarray, full_scale: int, path: str) -> str:
+def _write_colour_png(image: np.ndarray, full_scale: int, path) -> str:
     """A colour canvas (premultiplied, `paint`) as an 8-bit RGB PNG, RGBA where any pixel is
     not opaque; channels scaled from full scale to 255 half up."""
-    from PIL import Image
-
     from .paint import straight
+    from .png import write_png_file
 
     data, opaque = straight(image, full_scale)
     if full_scale != 255:
         data = (2 * data * 255 + full_scale) // (2 * full_scale)
     mode = "RGB" if opaque else "RGBA"
     array = data[..., :3] if opaque else data
-    Image.fromarray(np.ascontiguousarray(array.astype(np.uint8)), mode).save(path, format="PNG")
+    write_png_file(array.astype(np.uint8), path)
     return f"8-bit {mode}"
 
 

@@ -125,6 +125,15 @@ class DeltaRun:
             self.seconds, self.clocks, self.beat_clocks,
         )  # fmt: skip
 
+    @staticmethod
+    def joined(runs: list[DeltaRun]) -> DeltaRun:
+        """One run of the deltas of `runs`, in order (engine seconds summed; the simulators'
+        figures are one stream's and are not joined)."""
+        columns = (
+            np.concatenate([getattr(r, n) for r in runs]) for n in ("edge", "x", "y", "delta")
+        )
+        return DeltaRun(runs[0].engine, *columns, sum(r.seconds for r in runs))
+
     def in_image(self, sent: np.ndarray, offset: tuple[int, int], rows=None, bounds=None):
         """The nonzero deltas, with scene edge ids and image pixel coordinates; with `rows`
         (y0, y1) only those in image rows y0 .. y1 - 1; with `bounds` (x and y's least and

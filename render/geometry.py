@@ -22,7 +22,7 @@ from operator import itemgetter
 
 import numpy as np
 
-CHUNK = 1 << 18  # point x edge pairs per numpy pass (about 25 MB of temporaries; 1 << 20 was
+CHUNK = 1 << 15  # point x edge pairs per numpy pass (about 25 MB of temporaries; 1 << 20 was
 # no faster on the 4,000-glyph page and held 34 MiB more)
 
 
@@ -62,15 +62,19 @@ def _windings(edges: np.ndarray, points: np.ndarray, perturbations) -> list[np.n
     """`winding_numbers` of the same points under several perturbations (first, second),
     from one search for the pairs. Only a pair where P is on the edge's line or on the row
     of one of its ends (a tie) depends on the perturbation: the others are decided once,
-    and the perturbed test runs on the ties alone."""
+    and the perturbed test runs on each chunk's ties as they come (kept to the end, the
+    ties of a page of text were 10 MiB of temporaries at the plan's peak)."""
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 4)
     points = np.asarray(points, dtype=np.int64).reshape(-1, 2)
     ax, ay, bx, by = (edges[:, i].copy() for i in range(4))
     ex, ey = bx - ax, by - ay
     px, py = points[:, 0].copy(), points[:, 1].copy()
     n = len(points)
-    common = np.zeros(n, dtype=np.int64)
-    ties_q, ties_e = [], []
+    steps = [
+        tuple(np.broadcast_to(np.asarray(v, dtype=np.int64), points.shape) for v in pair)
+        for pair in perturbations
+    ]
+    ups, downs = [[] for _ in steps], [[] for _ in steps]  # the points of crossing pairs
     for q, e in _stabbing_pairs(np.minimum(ay, by), np.maximum(ay, by), py):
         y = py[q]
         above_a, above_b = ay[e] - y, by[e] - y  # > 0: the end is below P on the image
@@ -78,26 +82,23 @@ def _windings(edges: np.ndarray, points: np.ndarray, perturbations) -> list[np.n
         tie = (above_a == 0) | (above_b == 0) | (t0 == 0)
         up = (above_a < 0) & (above_b > 0) & (t0 > 0)  # never a tie: every term nonzero
         down = (above_a > 0) & (above_b < 0) & (t0 < 0)
-        common += np.bincount(q[up], minlength=n) - np.bincount(q[down], minlength=n)
-        ties_q.append(q[tie])
-        ties_e.append(e[tie])
-    q = np.concatenate(ties_q) if ties_q else np.zeros(0, dtype=np.int64)
-    e = np.concatenate(ties_e) if ties_e else np.zeros(0, dtype=np.int64)
-    out = []
-    for first, second in perturbations:
-        first = np.broadcast_to(np.asarray(first, dtype=np.int64), points.shape)
-        second = np.broadcast_to(np.asarray(second, dtype=np.int64), points.shape)
-        v1x, v1y, v2x, v2y = first[q, 0], first[q, 1], second[q, 0], second[q, 1]
-        sy = _lex_sign(v1y, v2y)  # the point's y moves up (-) or down (+) from py
-        y, ex_, ey_ = py[q], ex[e], ey[e]
-        a_le = (ay[e] < y) | ((ay[e] == y) & (sy > 0))  # a.y <= P.y
-        b_gt = (by[e] > y) | ((by[e] == y) & (sy < 0))  # b.y > P.y
-        t0 = ex_ * (y - ay[e]) - (px[q] - ax[e]) * ey_
-        left = _lex_sign(t0, ex_ * v1y - v1x * ey_, ex_ * v2y - v2x * ey_)
-        up = a_le & b_gt & (left > 0)
-        down = ~a_le & ~b_gt & (left < 0)
-        out.append(common + np.bincount(q[up], minlength=n) - np.bincount(q[down], minlength=n))
-    return out
+        common = q[up], q[down]
+        q, e, t0 = q[tie], e[tie], t0[tie]
+        for k, (first, second) in enumerate(steps):
+            v1x, v1y, v2x, v2y = first[q, 0], first[q, 1], second[q, 0], second[q, 1]
+            sy = _lex_sign(v1y, v2y)  # the point's y moves up (-) or down (+) from py
+            y, ex_, ey_ = py[q], ex[e], ey[e]
+            a_le = (ay[e] < y) | ((ay[e] == y) & (sy > 0))  # a.y <= P.y
+            b_gt = (by[e] > y) | ((by[e] == y) & (sy < 0))  # b.y > P.y
+            left = _lex_sign(t0, ex_ * v1y - v1x * ey_, ex_ * v2y - v2x * ey_)
+            ups[k] += [common[0], q[a_le & b_gt & (left > 0)]]
+            downs[k] += [common[1], q[~a_le & ~b_gt & (left < 0)]]
+    empty = np.zeros(0, dtype=np.int64)
+    return [
+        np.bincount(np.concatenate([empty, *up]), minlength=n)
+        - np.bincount(np.concatenate([empty, *down]), minlength=n)
+        for up, down in zip(ups, downs, strict=True)
+    ]
 
 
 BAND = 32  # points per horizontal band of `_stabbing_pairs`

@@ -189,6 +189,13 @@ class EdgeArrays:
     def __len__(self) -> int:
         return len(self.x0)
 
+    def take(self, index) -> EdgeArrays:
+        """The edges `index` (a slice or an array of indices), in that order."""
+        clip = self.clip
+        if isinstance(clip, tuple) and not isinstance(clip, Clip):  # an array per bound
+            clip = tuple(bound[index] for bound in clip)
+        return EdgeArrays(*(a[index] for a in self.args()), clip)
+
     def args(self) -> tuple:
         return (self.x0, self.y0, self.x1, self.y1, self.inside_left, self.i_in, self.i_out)
 
@@ -291,24 +298,27 @@ def _quantize(scene: Scene, S: int):
     if len(values) != 2 * sizes.sum():  # not all (x, y): np.asarray says what is wrong
         flat = [p for poly in scene.polygons for contour in poly.contours for p in contour]
         values = np.asarray(flat, dtype=np.float64)
-    pts = np.floor(values.reshape(-1, 2) * S + 0.5)
-    local = np.arange(len(pts)) - np.repeat(first, sizes)  # index in its contour
-    prev = np.arange(len(pts)) - 1
+    pts = values.reshape(-1, 2)  # rounded in place: the scene's floats are a page's memory
+    pts *= S
+    pts += 0.5
+    np.floor(pts, out=pts)
+    prev = np.arange(-1, len(pts) - 1)
     prev[first] = first + sizes - 1  # a contour's first vertex follows its last
-    keep = np.any(pts != pts[prev], axis=1)
+    keep = (pts[:, 0] != pts[prev, 0]) | (pts[:, 1] != pts[prev, 1])
+    del prev
     none = np.add.reduceat(keep, first) == 0  # one point repeated: keep its first
     keep[first[none]] = True
     owner = np.repeat(np.arange(len(sizes)), sizes)[keep]
     kept = pts[keep]
     order = np.lexsort((kept[:, 1], kept[:, 0], owner))  # distinct points per contour
+    by_owner, by_point = owner[order], kept[order]
     same = np.zeros(len(order), dtype=bool)
-    same[1:] = (owner[order][1:] == owner[order][:-1]) & np.all(
-        kept[order][1:] == kept[order][:-1], axis=1
-    )
-    distinct = np.bincount(owner[order][~same], minlength=len(sizes))
+    same[1:] = (by_owner[1:] == by_owner[:-1]) & np.all(by_point[1:] == by_point[:-1], axis=1)
+    distinct = np.bincount(by_owner[~same], minlength=len(sizes))
+    del by_owner, by_point, same, order
     counts = np.bincount(owner, minlength=len(sizes))
     ends = np.cumsum(counts).tolist()  # slices, not np.split: its cost is per piece
-    kept_local = local[keep]
+    kept_local = (np.arange(len(pts)) - np.repeat(first, sizes))[keep]  # index in its contour
     parts = [kept[a:b] for a, b in zip([0, *ends], ends, strict=False)]
     indices = [kept_local[a:b] for a, b in zip([0, *ends], ends, strict=False)]
     contours, owners = [], []
@@ -393,11 +403,16 @@ def _split_edges(scene: Scene, contours, owners, offset, S: int):
     return coords, polygon, contour, starts, crossings
 
 
+BATCH_EDGES = 1 << 13  # edges a search of `_crossing` takes at most (its temporaries, some
+# 150 bytes an edge, were 12 MiB of the 4,000-glyph page's peak in one search)
+
+
 def _crossing(by_polygon: list[list[np.ndarray]]) -> tuple[np.ndarray, dict]:
     """Whether each polygon has edges that cross or touch (`split_crossings` would insert a
     point), for many polygons in one search: each is moved right, past the previous one,
-    so that no two polygons' boxes meet, in batches whose coordinates stay below
-    geometry.SAFE / 2 (the search's exact integer filter). A batch whose points would pass
+    so that no two polygons' boxes meet, in batches of at most BATCH_EDGES edges (whole
+    polygons) whose coordinates stay below geometry.SAFE / 2 (the search's exact integer
+    filter). A batch whose points would pass
     the limit is left to the polygons one by one (True).
 
     A crossing polygon whose batch splitting leaves nothing to split in a second round
@@ -408,7 +423,7 @@ def _crossing(by_polygon: list[list[np.ndarray]]) -> tuple[np.ndarray, dict]:
     batch: list[int] = []
     moved: list[np.ndarray] = []
     shifts: list[np.ndarray] = []
-    base = 0
+    base = edges = 0
 
     def flush():
         if batch:
@@ -428,9 +443,11 @@ def _crossing(by_polygon: list[list[np.ndarray]]) -> tuple[np.ndarray, dict]:
             out[i] = False
             continue
         lo_x, lo_y, hi_x, hi_y = boxes[i]
-        if base + (hi_x - lo_x) + 1 >= SAFE // 2 or hi_y - lo_y >= SAFE // 2:
+        size = sum(map(len, mine))
+        wide = base + (hi_x - lo_x) + 1 >= SAFE // 2 or hi_y - lo_y >= SAFE // 2
+        if wide or edges + size > BATCH_EDGES:
             flush()
-            batch, moved, shifts, base = [], [], [], 0
+            batch, moved, shifts, base, edges = [], [], [], 0, 0
         if hi_x - lo_x >= SAFE // 2 or hi_y - lo_y >= SAFE // 2:
             continue  # too wide for any batch: one by one
         batch.append(i)
@@ -438,6 +455,7 @@ def _crossing(by_polygon: list[list[np.ndarray]]) -> tuple[np.ndarray, dict]:
         moved += [c + shift for c in mine]
         shifts += [shift] * len(mine)
         base += hi_x - lo_x + 1
+        edges += size
     flush()
     return out, noded
 
@@ -545,15 +563,29 @@ def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
     return np.array([tuple(r) in known for r in rows.tolist()], dtype=bool)
 
 
+SIDE_EDGES = 1 << 12  # edges per pass of the side test (whole polygons): its temporaries,
+# some 200 bytes an edge, were 30 MiB of the 4,000-glyph page's peak in one pass
+
+
 def _inside_sides(scene: Scene, coords: np.ndarray, starts: list[int]):
-    """Each edge's inside side by its polygon's fill rule ('' if not a boundary), every
-    polygon in one pass; returns the sides and how many coincident boundary edges were left
-    to the first of them."""
-    counts = np.diff(np.asarray(starts, dtype=np.int64))
-    group = np.repeat(np.arange(len(scene.polygons)), counts)
-    rules = np.array([p.fill_rule for p in scene.polygons] or ["nonzero"])[group]
-    inside = inside_sides(coords, rules, group).astype("<U5")
-    return inside, _drop_coincident(coords, inside, group)
+    """Each edge's inside side by its polygon's fill rule ('' if not a boundary), the
+    polygons in passes of about SIDE_EDGES edges (a polygon's sides count its own edges
+    only, so any cut between polygons gives the same sides); returns the sides and how many
+    coincident boundary edges were left to the first of them."""
+    inside = np.zeros(len(coords), dtype="<U5")
+    starts = np.asarray(starts, dtype=np.int64)
+    dropped, a = 0, 0
+    while a < len(scene.polygons):
+        # the polygons from a whose edges end within SIDE_EDGES of a's first (one at least)
+        b = max(a + 1, int(np.searchsorted(starts, starts[a] + SIDE_EDGES, side="right")) - 1)
+        lo, hi = starts[a], starts[b]
+        group = np.repeat(np.arange(b - a), np.diff(starts[a : b + 1]))
+        rules = np.array([p.fill_rule for p in scene.polygons[a:b]])[group]
+        part = inside_sides(coords[lo:hi], rules, group).astype("<U5")
+        dropped += _drop_coincident(coords[lo:hi], part, group)
+        inside[lo:hi] = part
+        a = b
+    return inside, dropped
 
 
 def _drop_coincident(coords: np.ndarray, inside: np.ndarray, group: np.ndarray) -> int:
@@ -623,9 +655,31 @@ def _polygon_plans(scene: Scene, intensities, starts, boxes, full: int) -> list[
     return polys
 
 
+PAIR_ROWS = 128  # rows of `_meets_earlier`'s pair test a pass: six bools a pair per temporary,
+# so a block of 8,192 windows is 6 MB a pass (1,024 rows were 15 MB of the map's peak)
+
+
+STRIP_PIXELS = 1 << 18  # pixels of a strip of `_meets_earlier` (its tables: 9 bytes a pixel)
+
+
 def _meets_earlier(windows: np.ndarray, width: int, height: int) -> np.ndarray:
     """Whether each window (x0, y0, x1, y1: the pixels [x0, x1) x [y0, y1) of the image)
-    shares a pixel with an earlier one. In blocks of B windows: against the earlier blocks
+    shares a pixel with an earlier one, in strips of whole rows of about STRIP_PIXELS
+    pixels (the shared pixel lies in some strip, where both windows' parts are): the
+    tables of a strip, not of the image (the 5,000-cell map's 1144 x 1144: 12 MB)."""
+    out = np.zeros(len(windows), dtype=bool)
+    rows = max(1, STRIP_PIXELS // max(width, 1))
+    for top in range(0, height, rows):
+        bottom = min(top + rows, height)
+        k = np.flatnonzero((windows[:, 1] < bottom) & (windows[:, 3] > top))
+        part = windows[k].copy()
+        part[:, 1::2] = np.clip(part[:, 1::2], top, bottom) - top
+        out[k] |= _meets_earlier_in(part, width, bottom - top)
+    return out
+
+
+def _meets_earlier_in(windows: np.ndarray, width: int, height: int) -> np.ndarray:
+    """`_meets_earlier` in one image (a strip). In blocks of B windows: against the earlier blocks
     by a summed-area table of the pixels they cover, within the block pair by pair, so
     (P / B) image passes plus P B pairs, with B four times the square root of the image's
     pixels (not P**2 pairs: 66,666 windows would be 2.2e9)."""
@@ -649,8 +703,8 @@ def _meets_earlier(windows: np.ndarray, width: int, height: int) -> np.ndarray:
             table[0, :], table[:, 0] = 0, 0
             hits = table[y1[k], x1[k]] - table[y0[k], x1[k]] - table[y1[k], x0[k]]
             out[k] = hits + table[y0[k], x0[k]] > 0
-        for r in range(0, len(k), 1024):  # rows of the block's pairs, 1024 at a time
-            a, b = k[r : r + 1024, None], k[None, :]
+        for r in range(0, len(k), PAIR_ROWS):  # the block's pairs, PAIR_ROWS rows at a time
+            a, b = k[r : r + PAIR_ROWS, None], k[None, :]
             pairs = (x0[a] < x1[b]) & (x0[b] < x1[a]) & (y0[a] < y1[b]) & (y0[b] < y1[a])
             out[a[:, 0]] |= np.tril(pairs, r - 1).any(axis=1)
         for ys, xs, sign in ((y0, x0, 1), (y0, x1, -1), (y1, x0, -1), (y1, x1, 1)):
@@ -909,17 +963,49 @@ def _band_windows(windows: np.ndarray, band: Band) -> np.ndarray:
     return cut
 
 
+RUN_EDGES = 1 << 12  # edges the model sets up at once within a band (some 400 bytes an edge)
+RUN_COLUMNS = 1 << 13  # and steps at once: its deltas, zeros and all, are 128 bytes a column
+# (and as much again in `in_image`) until the nonzero ones in the band are kept, narrowed
+
+
 def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, counts, cut: bool):
     """The nonzero deltas of the band's edges (clipped to the band's rows when `cut`, and
-    only those in its rows kept), in image pixels, in the narrowest integer types."""
+    only those in its rows kept), in image pixels, in the narrowest integer types. The model
+    sets up the band's edges RUN_EDGES at a time and steps them about RUN_COLUMNS columns at
+    a time, each run cut down as it comes; a simulator takes the band as one stream (its
+    clocks count the whole stream)."""
     arrays = edge_arrays(plan, band.edges, clip=skip)
     if cut:
         arrays = replace(arrays, clip=_band_clip(plan, band, arrays))
-    setups = _check_columns(plan.config, arrays, counts, cut)
     report = None if progress is None else (lambda done, total: progress(done, total, engine))
-    run, _ = run_deltas(plan.config, arrays, engine, progress=report, setups=setups)
-    rows = (band.y0, band.y1) if cut else None
-    return run.in_image(band.edges, plan.offset, rows, _delta_range(plan.config))
+    rows, bounds = ((band.y0, band.y1) if cut else None), _delta_range(plan.config)
+    model = engine == "model"
+    step = RUN_EDGES if model else max(len(arrays), 1)
+    runs = []
+    for start in range(0, max(len(arrays), 1), step):
+        ids, edges = band.edges[start : start + step], arrays.take(slice(start, start + step))
+        setups = _check_columns(plan.config, edges, counts, cut)
+        for part in _column_runs(setups.columns, RUN_COLUMNS if model else None):
+            run, _ = run_deltas(
+                plan.config, edges.take(part), engine, progress=report, setups=setups.take(part)
+            )
+            runs.append(run.in_image(ids[part], plan.offset, rows, bounds))
+    return runs[0] if len(runs) == 1 else DeltaRun.joined(runs)
+
+
+def _column_runs(columns: np.ndarray, limit: int | None) -> list[slice]:
+    """Consecutive edges in runs of about `limit` stepped columns, the edge that reaches it
+    closing a run (one run without a limit)."""
+    if limit is None or int(columns.sum()) <= limit:
+        return [slice(None)]
+    total = np.cumsum(columns.astype(np.int64) + 1)  # an edge of no column costs a little
+    runs, start = [], 0
+    while start < len(columns):
+        base = int(total[start - 1]) if start else 0
+        stop = int(np.searchsorted(total, base + limit)) + 1
+        runs.append(slice(start, min(max(stop, start + 1), len(columns))))
+        start = runs[-1].stop
+    return runs
 
 
 def _band_clip(plan: Plan, band: Band, arrays: EdgeArrays) -> tuple[np.ndarray, ...]:
@@ -993,7 +1079,8 @@ def _accumulate(plan: Plan, deltas: DeltaRun, windows, image, skip: bool, counts
 
 
 RUN_POLYGONS = 4096  # polygons accumulated in one buffer at most (`_accumulation_runs`)
-RUN_CELLS = 1 << 18  # and its cells (2 MiB of int64)
+RUN_CELLS = 1 << 16  # and its cells: some 60 bytes a cell of temporaries (1 << 18 was 4 MB
+# more at the maps' peaks)
 RUN_PAIRS = 1 << 22  # candidate window pairs past which runs are not looked for
 
 
@@ -1112,7 +1199,7 @@ def _draw_run(plan: Plan, run: list[list[int]], deltas: DeltaRun, sizes, image, 
     sums[start[1:]] -= totals[:-1]
     np.cumsum(sums, out=sums)  # in place: every fresh array costs its pages
     same = len(shift) and (shift == shift[0]).all()
-    ifix = int(shift[0]) if same else np.repeat(shift[owner], width).astype(dtype)
+    ifix = int(shift[0]) if same else np.repeat(shift[owner].astype(dtype), width)
     odd_cells = np.repeat(odd[owner], width) if odd.any() else None
     folded = None if odd_cells is None else evenodd_coverage(ArrayArith, sums, ifix)
     coverage = nonzero_coverage(_InPlace, sums, ifix)  # sums becomes the coverage

@@ -25,6 +25,7 @@ import gc
 import json
 import math
 import re
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from ..model.numbers import shown
@@ -171,18 +172,27 @@ def parse_json(text: str, source: str = "scene"):
 def load_scene(path: str) -> Scene:
     """Read a scene file (JSON, see docs/scenes.md)."""
     name = path.rsplit("/", 1)[-1].rsplit(".", 1)[0]
-    return scene_from_json(read_text(path), source=path, name=name)
+    with _collector_paused():
+        data = parse_json(read_text(path), path)  # the text is freed once parsed
+        return parse_scene(data, path, name, items=_emptying)
 
 
 def scene_from_json(text: str, source: str = "scene", name: str = "scene") -> Scene:
-    """A scene from a JSON scene file's text. Python's cyclic garbage collector is paused
-    meanwhile: the parse makes a few objects a vertex and no reference cycles, and the
-    collector's passes over them made it superlinear (the 1,000 to 4,000-glyph pages' parse
-    slope 1.19 with it, 0.91 without, docs/results.md section 7)."""
+    """A scene from a JSON scene file's text."""
+    with _collector_paused():
+        return parse_scene(parse_json(text, source), source, name, items=_emptying)
+
+
+@contextmanager
+def _collector_paused():
+    """Python's cyclic garbage collector paused, as it was found after: the parse makes a
+    few objects a vertex and no reference cycles, and the collector's passes over them made
+    it superlinear (the 1,000 to 4,000-glyph pages' parse slope 1.19 with it, 0.91
+    without, docs/results.md section 7)."""
     paused = gc.isenabled()
     gc.disable()
     try:
-        return parse_scene(parse_json(text, source), source=source, name=name)
+        yield
     finally:
         if paused:
             gc.enable()
@@ -217,6 +227,15 @@ def _check_keys(where: str, data: dict, allowed: tuple[str, ...]) -> None:
             raise SceneError(f"{where}: unknown field {key!r} (allowed: {', '.join(allowed)})")
 
 
+def _emptying(items: list):
+    """Each item of `items`, its place in the list emptied as it is handed out: a scene's
+    own JSON is freed polygon by polygon as its tuples are built (the JSON and the tuples
+    both whole were the load's peak, 27 of the 4,000-glyph page's 117 MB)."""
+    for i, item in enumerate(items):
+        items[i] = None
+        yield item
+
+
 def _contour(where: str, points) -> Contour:
     if not isinstance(points, list):
         raise SceneError(f"{where} must be a list of [x, y] vertices, not {shown(points)}")
@@ -239,8 +258,9 @@ def _contour(where: str, points) -> Contour:
     return tuple(out)
 
 
-def parse_scene(data, source: str = "scene", name: str = "scene") -> Scene:
-    """Build a Scene from parsed JSON, checking every field and every limit."""
+def parse_scene(data, source: str = "scene", name: str = "scene", items=iter) -> Scene:
+    """Build a Scene from parsed JSON, checking every field and every limit. `items` goes
+    through the polygons' list (`_emptying` for JSON no one else holds)."""
     if not isinstance(data, dict):
         raise SceneError(f"{source}: a scene is a JSON object with width, height and polygons")
     _check_keys(source, data, SCENE_KEYS)
@@ -266,7 +286,7 @@ def parse_scene(data, source: str = "scene", name: str = "scene") -> Scene:
     if not isinstance(polygons, list):
         raise SceneError(f"{source}: polygons must be a list")
     parsed, edges = [], 0
-    for i, item in enumerate(polygons):
+    for i, item in enumerate(items(polygons)):
         polygon = parse_polygon(item, f"{source}: polygon {i}", tolerance)
         edges += sum(len(c) for c in polygon.contours)
         if edges > MAX_EDGES:

@@ -8,6 +8,7 @@ import os
 import subprocess
 import sys
 from pathlib import Path
+from unittest.mock import patch
 
 import numpy as np
 from hypothesis import given, settings
@@ -38,8 +39,11 @@ def scenes(draw):
 
 
 @settings(max_examples=150, deadline=None)
-@given(scenes(), st.integers(1, 90), st.sampled_from(CONFIGS))
-def test_a_banded_render_is_the_whole_buffer_render(scene, rows, config):
+@given(scenes(), st.integers(1, 90), st.sampled_from(CONFIGS), st.integers(1, 4))
+def test_a_banded_render_is_the_whole_buffer_render(scene, rows, config, run_edges):
+    """Bands, threads, and the model's runs within a band: of edges set up (`RUN_EDGES`, here
+    from one edge a run), of columns stepped (`RUN_COLUMNS`, from 5) and of accumulation
+    buffers (`RUN_CELLS`, from 16 cells)."""
     full = config.full_scale
     polygons = tuple(
         Polygon(p.contours, p.intensity * full // 15, p.fill_rule) for p in scene.polygons
@@ -47,7 +51,10 @@ def test_a_banded_render_is_the_whole_buffer_render(scene, rows, config):
     scene = Scene(scene.width, scene.height, polygons, background=scene.background * full // 15)
     plan = plan_scene(scene, config)
     whole = render_scene(plan, rows=0)
-    banded = render_scene(plan, rows=min(rows, scene.height))
+    edges = patch("edgeaa.render.render.RUN_EDGES", run_edges)
+    columns = patch("edgeaa.render.render.RUN_COLUMNS", 5 * run_edges)
+    with edges, columns, patch("edgeaa.render.render.RUN_CELLS", 16 * run_edges):
+        banded = render_scene(plan, rows=min(rows, scene.height))
     threads = render_scene(plan, rows=min(rows, scene.height), workers=3)
     assert whole.bands == 1 and banded.bands == -(-scene.height // min(rows, scene.height))
     assert threads.workers == min(3, banded.bands)

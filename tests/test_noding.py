@@ -488,6 +488,28 @@ def test_the_plans_are_the_same_swept_or_banded(monkeypatch):
         assert swept.duplicates == banded.duplicates, scene.name
 
 
+@pytest.mark.parametrize("size", [1, 7])
+def test_the_plans_are_the_same_in_passes_of_any_size(monkeypatch, size):
+    """The crossing search (`BATCH_EDGES`) and the side test (`SIDE_EDGES`) take the
+    polygons in passes to bound their memory: passes of a polygon each (size 1) or of a few
+    edges give the one-pass plan on the corpus, edge for edge and side for side."""
+    from edgeaa.model import EdgeConfig
+    from edgeaa.render import plan_scene
+    from edgeaa.render import render as render_module
+
+    for scene in _corpus_scenes():
+        monkeypatch.setattr(render_module, "BATCH_EDGES", 1 << 40)
+        monkeypatch.setattr(render_module, "SIDE_EDGES", 1 << 40)
+        whole = plan_scene(scene, EdgeConfig())
+        monkeypatch.setattr(render_module, "BATCH_EDGES", size)
+        monkeypatch.setattr(render_module, "SIDE_EDGES", size)
+        passes = plan_scene(scene, EdgeConfig())
+        assert np.array_equal(whole.coords, passes.coords), scene.name
+        assert whole.inside.tolist() == passes.inside.tolist(), scene.name
+        assert (whole.duplicates, whole.crossings) == (passes.duplicates, passes.crossings)
+        assert np.array_equal(whole.polygon, passes.polygon), scene.name
+
+
 def test_a_radial_star_is_swept(monkeypatch):
     """3,000 vertices (the radial star of benchmarks/bench_sweep.py): the plan sweeps it and
     gets the banded winding numbers' sides."""

@@ -1065,6 +1065,9 @@ def test_the_overlap_of_windows_matches_the_pairwise_test(seed, monkeypatch):
     many = np.concatenate([windows] * 8)[:2048]
     want = _meets_earlier_reference(many.tolist())
     assert _meets_earlier(many, width, height).tolist() == want, note
+    for rows in (1, 3):  # strips of a row, of three: a window in several, met in one
+        monkeypatch.setattr("edgeaa.render.render.STRIP_PIXELS", rows * width)
+        assert _meets_earlier(many, width, height).tolist() == want, f"{note}, strips {rows}"
 
 
 def _winding_reference(edges, points, first, second):
