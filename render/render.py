@@ -977,7 +977,6 @@ def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, coun
     arrays = edge_arrays(plan, band.edges, clip=skip)
     if cut:
         arrays = replace(arrays, clip=_band_clip(plan, band, arrays))
-    report = None if progress is None else (lambda done, total: progress(done, total, engine))
     rows, bounds = ((band.y0, band.y1) if cut else None), _delta_range(plan.config)
     model = engine == "model"
     step = RUN_EDGES if model else max(len(arrays), 1)
@@ -986,11 +985,20 @@ def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, coun
         ids, edges = band.edges[start : start + step], arrays.take(slice(start, start + step))
         setups = _check_columns(plan.config, edges, counts, cut)
         for part in _column_runs(setups.columns, RUN_COLUMNS if model else None):
+            report = _run_report(progress, engine, start + (part.start or 0), len(arrays))
             run, _ = run_deltas(
                 plan.config, edges.take(part), engine, progress=report, setups=setups.take(part)
             )
             runs.append(run.in_image(ids[part], plan.offset, rows, bounds))
     return runs[0] if len(runs) == 1 else DeltaRun.joined(runs)
+
+
+def _run_report(progress, engine: str, first: int, total: int):
+    """The engine's progress(done, total) of a run whose edges start at the band's `first`,
+    said as progress(done in the band, the band's `total`, engine); None without progress."""
+    if progress is None:
+        return None
+    return lambda done, _: progress(first + done, total, engine)
 
 
 def _column_runs(columns: np.ndarray, limit: int | None) -> list[slice]:

@@ -136,3 +136,22 @@ def test_peak_memory_of_a_big_scene_is_bounded_by_its_size(tmp_path):
     edges = 4 * len(big["polygons"])
     bound = base + 1000 * edges + 3 * big["width"] * big["height"] + (48 << 20)
     assert peak <= bound, f"peak RSS {peak / 2**20:.1f} MiB > {bound / 2**20:.1f} MiB"
+
+
+def test_the_engines_progress_counts_a_bands_edges_across_its_runs():
+    """In runs of two edges, the model's reports climb through the band's edges and end at
+    its count, as one run's would (not each run's own count from zero)."""
+    from edgeaa.render import builtin
+
+    plan = plan_scene(builtin("text", EdgeConfig()), EdgeConfig())
+    reports = []
+    with patch("edgeaa.render.render.RUN_EDGES", 2):
+        render_scene(
+            plan, rows=0, progress=lambda done, total, stage: reports.append((done, total, stage))
+        )
+    model = [(done, total) for done, total, stage in reports if stage == "model"]
+    totals = {total for _, total in model}
+    assert len(totals) == 1 and len(model) > 4
+    (total,) = totals
+    done = [d for d, _ in model]
+    assert done == sorted(done) and done[-1] == total and done[0] == 0
