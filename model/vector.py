@@ -72,8 +72,8 @@ from .step import Write
 INT64_U_LIMIT = 1 << 62  # largest U_n an edge may reach on the int64 path
 INT64_IFIX_LIMIT = 1 << 58  # largest ifix on the int64 path (intermediates < 32 ifix)
 _FLOAT_EXACT = 1 << 53  # integers up to this convert to float64 exactly
-CHUNK_STATES = 1 << 13  # column states per numpy pass: some 1 kB a state of temporaries
-# (1 << 15 was 8 MB more at a band's peak; 1 << 13 costs about 5 % of a page's render time)
+CHUNK_STATES = 1 << 13  # column states per numpy pass: some 500 bytes a state of temporaries
+# (1 << 15 held up to 7 MB more at a page's peak; 1 << 13 costs about 5 % of its render time)
 
 
 class VectorInvariantError(AssertionError):
