@@ -145,7 +145,7 @@ def read_modify_write(m, unit, rd, wr, cell):
     (the scan's) takes the write port when set and writes zero at `unit._scan_addr`. `rd` and
     `wr` may be lists, a port of each lane's memory (banked by column parity, two lanes):
     then `cell` is `route_pair`'s and each bank runs its own stages on its cell
-    (`_bank_rmw`), and a clear zeroes every lane's word at the beat `unit._scan_addr`."""
+    (`_stages`), and a clear zeroes every lane's word at the beat `unit._scan_addr`."""
     tile = unit.tile
     addr_bits = tile.x_bits + tile.y_bits  # a cell's full address (lanes: bank and word)
     unit._scan_addr = Signal(addr_bits)
@@ -154,25 +154,29 @@ def read_modify_write(m, unit, rd, wr, cell):
     if isinstance(rd, list):
         banks = zip(rd, wr, cell.banks, strict=True)
         unit.observe.stages = [
-            _bank_rmw(m, unit, k, r, w, bank) for k, (r, w, bank) in enumerate(banks)
+            _stages(m, unit, r, w, bank, Cat(bank.x[1:], bank.y), unit._scan_addr[1:], k)
+            for k, (r, w, bank) in enumerate(banks)
         ]
-        return
-    addr = Cat(cell.x, cell.y)
-    b_valid, b_addr, b_delta = Signal(), Signal(addr_bits), Signal(signed(tile.cell_bits))
-    c_valid, c_addr, c_sum = Signal(), Signal(addr_bits), Signal.like(b_delta)
-    total = Signal.like(b_delta)
-    stage = types.SimpleNamespace(
-        b_valid=b_valid,
-        b_addr=b_addr,
-        b_delta=b_delta,
-        c_valid=c_valid,
-        c_addr=c_addr,
-        c_sum=c_sum,
-        read=rd.data,
-    )
-    unit.observe.stages = [stage]  # as the banks' (`_bank_rmw`), for the formal harness
+    else:
+        addr = Cat(cell.x, cell.y)
+        unit.observe.stages = [_stages(m, unit, rd, wr, cell, addr, unit._scan_addr)]
+
+
+def _stages(m, unit, rd, wr, cell, addr, scan_addr, bank: int | None = None):
+    """Stages A and B and their forwarding on `cell` through one memory's ports, `addr` the
+    cell's address in it and `scan_addr` the scan's (bank `bank`'s: the column's bank bit
+    dropped; the one memory's: the full address). Returns the stages for the formal harness,
+    the addresses full (bank and word) and ``read`` the read data."""
+    name = "" if bank is None else f"bank{bank}_"
+    b_valid = Signal(name=f"{name}b_valid")
+    b_addr = Signal(len(addr), name=f"{name}b_addr")
+    b_delta = Signal(signed(unit.tile.cell_bits), name=f"{name}b_delta")
+    c_valid = Signal(name=f"{name}c_valid")
+    c_addr = Signal(len(addr), name=f"{name}c_addr")
+    c_sum = Signal.like(b_delta, name=f"{name}c_sum")
+    total = Signal.like(b_delta, name=f"{name}total")
     m.d.comb += [
-        rd.addr.eq(Mux(unit.scanning, unit._scan_addr, addr)),
+        rd.addr.eq(Mux(unit.scanning, scan_addr, addr)),
         rd.en.eq(unit._read_en),
     ]
     m.d.sync += [
@@ -188,51 +192,17 @@ def read_modify_write(m, unit, rd, wr, cell):
     base = Mux(c_valid & (c_addr == b_addr), c_sum, Mux(unit._clear, 0, rd.data))
     m.d.comb += total.eq(base + b_delta)
     m.d.comb += [
-        wr.addr.eq(Mux(unit._clear, unit._scan_addr, b_addr)),
+        wr.addr.eq(Mux(unit._clear, scan_addr, b_addr)),
         wr.data.eq(total),
         wr.en.eq(unit._clear | b_valid),
     ]
-
-
-def _bank_rmw(m, unit, k, rd, wr, cell) -> types.SimpleNamespace:
-    """Bank `k`'s read-modify-write (stages A, B and its own forwarding, as the one lane's)
-    on its `cell` (`route_pair`'s), through its memory's read and write ports, addressed by
-    word (the column's bank bit dropped). Returns its stages for the formal harness, the
-    addresses full (bank and word) and ``read`` its read data."""
-    tile = unit.tile
-    word = Cat(cell.x[1:], cell.y)
-    b_valid, b_word = Signal(name=f"bank{k}_b_valid"), Signal(len(word), name=f"bank{k}_b_word")
-    b_delta = Signal(signed(tile.cell_bits), name=f"bank{k}_b_delta")
-    c_valid, c_word = Signal(name=f"bank{k}_c_valid"), Signal(len(word), name=f"bank{k}_c_word")
-    c_sum = Signal.like(b_delta, name=f"bank{k}_c_sum")
-    total = Signal.like(b_delta, name=f"bank{k}_total")
-    scan_word = unit._scan_addr[1:]  # the scan's beat: a word of each bank
-    m.d.comb += [
-        rd.addr.eq(Mux(unit.scanning, scan_word, word)),
-        rd.en.eq(unit._read_en),
-    ]
-    m.d.sync += [
-        b_valid.eq(cell.keep),
-        b_word.eq(word),
-        b_delta.eq(cell.delta),
-        c_valid.eq(b_valid),
-        c_word.eq(b_word),
-        c_sum.eq(total),
-    ]
-    base = Mux(c_valid & (c_word == b_word), c_sum, Mux(unit._clear, 0, rd.data))
-    m.d.comb += [
-        total.eq(base + b_delta),
-        wr.addr.eq(Mux(unit._clear, scan_word, b_word)),
-        wr.data.eq(total),
-        wr.en.eq(unit._clear | b_valid),
-    ]
-    bank = Const(k, 1)
+    word = (lambda a: a) if bank is None else (lambda a: Cat(Const(bank, 1), a))  # full
     return types.SimpleNamespace(
         b_valid=b_valid,
-        b_addr=Cat(bank, b_word),
+        b_addr=word(b_addr),
         b_delta=b_delta,
         c_valid=c_valid,
-        c_addr=Cat(bank, c_word),
+        c_addr=word(c_addr),
         c_sum=c_sum,
         read=rd.data,
     )
