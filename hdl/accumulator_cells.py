@@ -196,13 +196,16 @@ def _stages(m, unit, rd, wr, cell, addr, scan_addr, bank: int | None = None):
         wr.data.eq(total),
         wr.en.eq(unit._clear | b_valid),
     ]
-    word = (lambda a: a) if bank is None else (lambda a: Cat(Const(bank, 1), a))  # full
+
+    def full(address):  # a bank's word with its bank bit: the cell's full address
+        return address if bank is None else Cat(Const(bank, 1), address)
+
     return types.SimpleNamespace(
         b_valid=b_valid,
-        b_addr=word(b_addr),
+        b_addr=full(b_addr),
         b_delta=b_delta,
         c_valid=c_valid,
-        c_addr=word(c_addr),
+        c_addr=full(c_addr),
         c_sum=c_sum,
         read=rd.data,
     )

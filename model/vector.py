@@ -270,18 +270,23 @@ def chunked(items: Sequence, weight, limit: int) -> list[list]:
     return chunks
 
 
-def _chunks(weights: np.ndarray, group: np.ndarray) -> list[np.ndarray]:
-    """Split a group of edges into runs of about CHUNK_STATES column states (cache-sized
-    arrays: several times faster than one huge batch): `chunked` with weights[k] per edge k,
-    one searchsorted per run."""
-    total = np.cumsum(weights[group])
+def weighted_runs(weights: np.ndarray, limit: int) -> list[slice]:
+    """Consecutive runs (slices) of items whose `weights` (each at least 1) add up to about
+    `limit`: `chunked` in numpy, one searchsorted per run (the item that brings a run to the
+    limit closes it)."""
+    total = np.cumsum(weights)
     runs, start, base = [], 0, 0
-    while start < len(group):
-        # The first edge that brings the run to the limit closes it (weights are >= 1).
-        stop = min(int(np.searchsorted(total, base + CHUNK_STATES)) + 1, len(group))
-        runs.append(group[start:stop])
+    while start < len(total):
+        stop = min(int(np.searchsorted(total, base + limit)) + 1, len(total))
+        runs.append(slice(start, stop))
         start, base = stop, int(total[stop - 1])
     return runs
+
+
+def _chunks(weights: np.ndarray, group: np.ndarray) -> list[np.ndarray]:
+    """Split a group of edges into runs of about CHUNK_STATES column states (cache-sized
+    arrays: several times faster than one huge batch), weights[k] per edge k."""
+    return [group[run] for run in weighted_runs(weights[group], CHUNK_STATES)]
 
 
 def _divmod(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -51,6 +51,7 @@ from ..model.accumulate import (
 )
 from ..model.beat import DELTAS
 from ..model.column import ArrayArith
+from ..model.vector import weighted_runs
 from .bands import Band, band_columns, band_rows, split_bands
 from .engines import DeltaRun, cycles_of, run_deltas
 from .geometry import (
@@ -984,7 +985,9 @@ def _band_deltas(plan: Plan, band: Band, engine: str, skip: bool, progress, coun
     for start in range(0, max(len(arrays), 1), step):
         ids, edges = band.edges[start : start + step], arrays.take(slice(start, start + step))
         setups = _check_columns(plan.config, edges, counts, cut)
-        for part in _column_runs(setups.columns, RUN_COLUMNS if model else None):
+        states = setups.columns.astype(np.int64) + 1  # an edge of no column costs a little
+        parts = weighted_runs(states, RUN_COLUMNS) if model else []
+        for part in parts or [slice(None)]:
             report = _run_report(progress, engine, start + (part.start or 0), len(arrays))
             run, _ = run_deltas(
                 plan.config, edges.take(part), engine, progress=report, setups=setups.take(part)
