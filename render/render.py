@@ -1004,21 +1004,6 @@ def _run_report(progress, engine: str, first: int, total: int):
     return lambda done, _: progress(first + done, total, engine)
 
 
-def _column_runs(columns: np.ndarray, limit: int | None) -> list[slice]:
-    """Consecutive edges in runs of about `limit` stepped columns, the edge that reaches it
-    closing a run (one run without a limit)."""
-    if limit is None or int(columns.sum()) <= limit:
-        return [slice(None)]
-    total = np.cumsum(columns.astype(np.int64) + 1)  # an edge of no column costs a little
-    runs, start = [], 0
-    while start < len(columns):
-        base = int(total[start - 1]) if start else 0
-        stop = int(np.searchsorted(total, base + limit)) + 1
-        runs.append(slice(start, min(max(stop, start + 1), len(columns))))
-        start = runs[-1].stop
-    return runs
-
-
 def _band_clip(plan: Plan, band: Band, arrays: EdgeArrays) -> tuple[np.ndarray, ...]:
     """Each edge's clip window in the band: the accumulation clip cut to the band's rows and
     to the columns where the edge's line is near them (`bands.band_columns`)."""
