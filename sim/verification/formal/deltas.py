@@ -27,10 +27,12 @@ setup holds the bank while the stepper steps its edge).
     ``dpipe`` states what p1 holds (the model's heights and the column's per-edge selects),
     what p2 holds (those it carries, the model's clamped estimate, the piece's cover of
     each row) and what p3 holds (those it carries, the areas of the upper and lower rows,
-    the total less the lower, the middle row's bound), ``dcells`` that the cells the output
-    register loads from p3 are the model's in full width, ``dbeat`` the output register
-    against the model's cells of p3's snapshot, registered by the harness as the pipeline
-    moves (one copy of the model, not two).
+    the total less the lower, the middle row's bound: of p2's values, which the harness
+    registers as the pipeline moves), ``dcells`` that the cells the output register loads
+    from p3 are the model's in full width, ``dbeat`` the output register against them; the
+    harness registers the model's cells of p2's snapshot as the pipeline moves (one copy of
+    the model per stage up to p2, none after it: k-induction would have to prove the copies
+    equal).
 """
 
 from __future__ import annotations
@@ -186,9 +188,9 @@ def _snapshots(ctx, st) -> list:
 def _pipeline(ctx, st):
     snaps = _snapshots(ctx, st)
     _stage_p1(ctx, *snaps[0])
-    _stage_p2(ctx, *snaps[1])
-    cells = _stage_p3(ctx, *snaps[2])
-    _output(ctx, *snaps[2], cells)
+    values, cells = _stage_p2(ctx, *snaps[1])
+    valid, last, cells = _stage_p3(ctx, *snaps[2], values, cells)
+    _output(ctx, valid, last, cells)
 
 
 def _stage_p1(ctx, s1, v1):
@@ -272,19 +274,22 @@ def _snapshot_ok(ctx, group, snap, valid, where):
 
 
 def _stage_p2(ctx, s2, v2):
-    """``dpipe``: p2 holds the column of its snapshot (`_p2_values`)."""
+    """``dpipe``: p2 holds the column of its snapshot (`_p2_values`); returns those values
+    and the model's cells of that column (`spec.deltas_column`)."""
     p2 = ctx.stages[1]
+    c2 = _column(ctx, s2, "d2spec")
+    values = _p2_values(s2, c2)
     ctx.emit("dpipe", p2.valid == v2, "dpipe: p2 valid")
-    for name, value in _p2_values(s2, _column(ctx, s2, "d2spec")).items():
+    for name, value in values.items():
         ctx.emit("dpipe", implies(v2, getattr(p2, name) == value), f"dpipe: p2 {name}")
+    return values, c2.cells
 
 
-def _p3_values(s, c) -> dict:
-    """What p3 holds for the column of loop state `s`: p2's values it carries and the
-    areas of the column's lower and upper rows (restated from `column_deltas`: ``lo``,
-    ``hi``), the total less the lower (``rest``) and the middle row's bound, each the
-    x-major or the y-major one."""
-    p2 = _p2_values(s, c)
+def _p3_values(p2) -> dict:
+    """What p3 holds, from the values p2 held (`_p2_values`) one move earlier: those it
+    carries and the areas of the column's lower and upper rows (restated from
+    `column_deltas`: ``lo``, ``hi``), the total less the lower (``rest``) and the middle
+    row's bound, each the x-major or the y-major one."""
     carried = ("last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg", "up")
     carried += ("cov_up", "cov_low")
     total, t, band = p2["total"], p2["t"], p2["band_rect"]
@@ -304,30 +309,41 @@ def _p3_values(s, c) -> dict:
     )
 
 
-def _stage_p3(ctx, s3, v3):
-    """``dpipe``: p3 holds the column of its snapshot (`_p3_values`); ``dcells``: the cells
-    the output register loads from it are the model's, in full width."""
-    p3 = ctx.stages[2]
-    c3 = _column(ctx, s3, "d3spec")
+def _stage_p3(ctx, s3, v3, p2_values, p2_cells):
+    """``dpipe``: p3 holds `_p3_values` of what p2 held (`p2_values`, registered by the
+    harness as the pipeline moves: no second copy of the model's column, which k-induction
+    would have to prove equal to p2's); ``dcells``: the cells the output register loads
+    from it are the model's cells of p2's column one move earlier (`p2_cells`, registered
+    likewise), in full width. Returns p3's valid, its model ``last`` and those cells."""
+    m, p3 = ctx.m, ctx.stages[2]
+    en = ~ctx.out.valid | ctx.out.ready
+    held = {name: delayed(m, en, value, f"d3m_{name}") for name, value in p2_values.items()}
+    cells = [
+        [
+            delayed(m, en, value, f"d3m_cell{k}_{name}")
+            for value, name in zip(cell, "xyd", strict=True)
+        ]
+        for k, cell in enumerate(p2_cells)
+    ]
     ctx.emit("dpipe", p3.valid == v3, "dpipe: p3 valid")
-    for name, value in _p3_values(s3, c3).items():
+    for name, value in _p3_values(held).items():
         ctx.emit("dpipe", implies(v3, getattr(p3, name) == value), f"dpipe: p3 {name}")
-    for k, (cell, model) in enumerate(zip(ctx.stepper.delta_cells, c3.cells, strict=True)):
+    for k, (cell, model) in enumerate(zip(ctx.stepper.delta_cells, cells, strict=True)):
         match = all_([Value.cast(a) == b for a, b in zip(cell, model, strict=True)])
         ctx.emit("dcells", implies(v3, match), f"dcells: p3 cell{k}")
-    return c3.cells
+    return v3, held["last"], cells
 
 
-def _output(ctx, s3, v3, cells):
+def _output(ctx, v3, last3, cells):
     """``dbeat``: the output register is the beat of its column: the model's cells of the
-    loop state the column was stepped with (`cells`, of p3's snapshot `s3`, registered by
-    the harness when the pipeline moves; modulo the payload's widths) and ``last`` on the
-    edge's last column."""
+    loop state the column was stepped with (`cells`, of p2's snapshot as `_stage_p3`
+    registered them, registered again by the harness when the pipeline moves; modulo the
+    payload's widths) and ``last`` on the edge's last column (`last3`, likewise)."""
     m, out = ctx.m, ctx.out
     en = ~out.valid | out.ready
     beat = data.View(ctx.layout, ctx.payload)
     v4 = delayed(m, en, v3, "d4_valid")
-    last = delayed(m, en, s3.remaining == 0, "d4_last")
+    last = delayed(m, en, last3, "d4_last")
     ctx.emit("dbeat", out.valid == v4, "dbeat: beat valid")
     ctx.emit("dbeat", implies(v4, beat.last == last), "dbeat: last")
     for k, model in enumerate(cells):
