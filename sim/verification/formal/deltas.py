@@ -274,14 +274,17 @@ def _snapshot_ok(ctx, group, snap, valid, where):
 
 
 def _stage_p2(ctx, s2, v2):
-    """``dpipe``: p2 holds the column of its snapshot (`_p2_values`); returns those values
-    and the model's cells of that column (`spec.deltas_column`)."""
+    """``dpipe``: p2 holds the column of its snapshot (`_p2_values`), which satisfies
+    `_snapshot_ok`; returns those values and the model's cells of that column
+    (`spec.deltas_column`)."""
     p2 = ctx.stages[1]
     c2 = _column(ctx, s2, "d2spec")
     values = _p2_values(s2, c2)
     ctx.emit("dpipe", p2.valid == v2, "dpipe: p2 valid")
     for name, value in values.items():
         ctx.emit("dpipe", implies(v2, getattr(p2, name) == value), f"dpipe: p2 {name}")
+    # what `dcells` needs of the column whose cells p3 gets one move later (p1's, moved on)
+    _snapshot_ok(ctx, "dpipe", s2, v2, "p2")
     return values, c2.cells
 
 
