@@ -17,7 +17,12 @@ column per clock:
   nothing after the stepping clock reads the bank);
 * p2: the clamped triangle estimate of the depth (`triangle_estimate`, shift-adds by the
   small odd constants) and the piece's cover in each row;
-* the output register: the cells of `column_deltas` and their screen cells (`delta_cells`).
+* p3: the areas of the column's upper and lower rows (`column_deltas`' r_up and r_low, or
+  a_up and a_low), the total less the lower and the middle row's bound (one register each
+  for the x-major and the y-major value): the cut that splits the cells' chain of carry
+  chains (about six from p2) over two clocks, for Fmax;
+* the output register: the middle row's area, the cells of `column_deltas` and their screen
+  cells (`delta_cells`), each delta one subtraction with the winding's sign folded in.
 
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
 intermediate wraps; a value is cut narrower only where its operands' shapes bound it (a
@@ -29,8 +34,9 @@ shifts.
 
 Observation points for the formal harness (attributes of the stepper, set when it is
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
-registers of p1 and p2 (namespaces, each with ``valid`` and ``last``), ``delta_cells`` the
-four ``(x, y, delta)`` values the output register loads from p2 (before the payload's cut).
+registers of p1, p2 and p3 (namespaces, each with ``valid`` and ``last``), ``delta_cells``
+the four ``(x, y, delta)`` values the output register loads from p3 (before the payload's
+cut).
 """
 
 from __future__ import annotations
@@ -61,7 +67,8 @@ class DeltaStepper(ColumnLoop):
     valid and not taken, and takes the bank in the clock it steps the edge's last column:
     the transfer means "edge done". ``deltas`` (out stream, `delta_layout`, also ``out``):
     one registered beat per column, ``latency`` = `edgeaa.model.beat.DELTAS.pipeline_depth`
-    (3) clocks after the column's step when nothing stalls (p1, p2, the output register).
+    (4) clocks after the column's step when nothing stalls (p1, p2, p3, the output
+    register).
 
     Observation points (formal harness): `ColumnLoop`'s, ``delta_regs`` (name -> register),
     and, once elaborated, ``delta_he``, ``delta_stages`` and ``delta_cells`` (this module's
@@ -75,7 +82,7 @@ class DeltaStepper(ColumnLoop):
 
     @property
     def stages(self) -> list:
-        """The registers of p1 and p2 (``delta_stages``; set when elaborated)."""
+        """The registers of p1, p2 and p3 (``delta_stages``; set when elaborated)."""
         return self.delta_stages
 
     def _handshake(self, last) -> list:
@@ -159,10 +166,11 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     _loop(m, st, he, advance.row_step)
     p1 = _stage(m, en, "d1", _stage0(st, last, he))
     p2 = _stage(m, en, "d2", _covers(st.config, p1))
-    cells = _output(m, st, en, p2)
+    p3 = _stage(m, en, "d3", _ends(p2))
+    cells = _output(m, st, en, p3)
     # Observation points (formal harness): no logic of their own.
-    st.delta_he, st.delta_stages, st.delta_cells = he, [p1, p2], cells
-    return [p1.valid, p2.valid]
+    st.delta_he, st.delta_stages, st.delta_cells = he, [p1, p2, p3], cells
+    return [p1.valid, p2.valid, p3.valid]
 
 
 def _piece_end(m, st, last):
@@ -307,8 +315,8 @@ def _covers(config: EdgeConfig, p1) -> dict:
     )
 
 
-def _cells_x_major(p2):
-    """`_deltas_x_major`: areas on the +u side, row by row."""
+def _x_major_ends(p2):
+    """`_deltas_x_major`'s r_low and r_up: the areas on the +u side in rows r + 1 and r - 1."""
     total, t = p2.total, p2.t
     r_low = Mux(p2.hs_ge, total, Mux(p2.low, _clamp(t + p2.rect_low, p2.cov_low), 0))
     # cov_up - t - rect > cov_up iff t + rect < 0: the clamp's compare is the sign of t + rect,
@@ -317,14 +325,11 @@ def _cells_x_major(p2):
     over = p2.cov_up - t_rect
     clamped_up = Mux(over < 0, 0, Mux(t_rect < 0, p2.cov_up, over))[: len(p2.cov_up)].as_signed()
     r_up = Mux(p2.he_le0, total, Mux(p2.up, clamped_up, 0))
-    r_mid = _clamp(total - r_low - r_up, p2.cov_mid)
-    r_a, cov_a = Mux(p2.up, r_up, r_mid), Mux(p2.up, p2.cov_up, p2.cov_mid)
-    r_b, cov_b = Mux(p2.up, r_mid, r_low), Mux(p2.up, p2.cov_mid, p2.cov_low)
-    return r_a, cov_a - r_a, r_b, cov_b - r_b
+    return r_low, r_up
 
 
-def _cells_y_major(p2):
-    """`_deltas_y_major`: areas on the smaller-v side, differenced along +v."""
+def _y_major_ends(p2):
+    """`_deltas_y_major`'s a_low and a_up: the areas in cells r + 1 and r - 1."""
     total, band, t = p2.total, p2.band_rect, p2.t
     a_low = _clamp(Mux(p2.hs_ge, total - band, Mux(p2.low, t, 0)), band)
     # up_value > band only when he <= 0 and total > 0 (band - t > band never: t >= 0): the
@@ -332,38 +337,83 @@ def _cells_y_major(p2):
     up_value = Mux(p2.he_le0, total + band, Mux(p2.up, band - t, band))
     over = p2.he_le0 & (total > 0)
     a_up = Mux(up_value < 0, 0, Mux(over, band, up_value))[: len(band)].as_signed()
-    a_mid = _clamp(total + band - a_up - a_low, band)
-    q0, q1 = Mux(p2.up, a_up, a_mid), Mux(p2.up, a_mid, a_low)
-    return band - q0, q0 - q1, q1, 0
+    return a_low, a_up
 
 
-def _screen_cells(p2) -> list:
-    """The four cells on screen, signed by the winding: ``(x, y, delta)`` expressions of
-    p2's registers."""
-    cx, cy = _cells_x_major(p2), _cells_y_major(p2)
-    up = p2.up
-    cells = []
+def _ends(p2) -> dict:
+    """What p3 loads: the column's areas in its lower and upper rows (``lo``, ``hi``), the
+    total less the lower (``rest``: the middle row's area is rest - hi clamped to ``bound``)
+    and the middle row's bound (x-major: the cover of row r; y-major: the band). An edge is
+    x-major or y-major: one register for each pair (the cut that balances p2's carry chains
+    against the output register's, about three each)."""
+    carried = ("valid", "last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg", "up")
+    r_low, r_up = _x_major_ends(p2)
+    a_low, a_up = _y_major_ends(p2)
+    x_major, total, band = p2.x_major, p2.total, p2.band_rect
+    return dict(
+        {name: getattr(p2, name) for name in carried},
+        cov_up=p2.cov_up,
+        cov_low=p2.cov_low,
+        lo=Mux(x_major, r_low, a_low),
+        hi=Mux(x_major, r_up, a_up),
+        rest=Mux(x_major, total - r_low, total + band - a_low),
+        bound=Mux(x_major, p2.cov_mid, band),
+    )
+
+
+def _cell_operands(p3) -> list:
+    """Each cell's value before the winding's sign as a difference ``(a, b)``: a - b.
+    x-major (`_deltas_x_major`): r_a, cov_a - r_a, r_b, cov_b - r_b, the column pair swapped
+    when ``neg``; y-major (`_deltas_y_major`): band - q0, q0 - q1, q1, 0, where q0 and q1 are
+    r_a and r_b's selects of the y-major areas."""
+    up = p3.up
+    mid = _clamp(p3.rest - p3.hi, p3.bound)  # r_mid or a_mid
+    r_a, r_b = Mux(up, p3.hi, mid), Mux(up, mid, p3.lo)
+    cov_a, cov_b = Mux(up, p3.cov_up, p3.bound), Mux(up, p3.bound, p3.cov_low)
+    y_major = _y_major_operands(p3, r_a, r_b)
+    operands = []
     for k in range(4):
+        pair, right = divmod(k, 2)
+        r, cov = (r_a, cov_a) if pair == 0 else (r_b, cov_b)
+        covered = p3.neg ^ right  # the cell holds cov - r, else r
+        a = Mux(covered, cov, r)
+        b = Mux(covered, r, 0)
+        operands.append((Mux(p3.x_major, a, y_major[k][0]), Mux(p3.x_major, b, y_major[k][1])))
+    return operands
+
+
+def _y_major_operands(p3, q0, q1) -> list:
+    """`_deltas_y_major`'s cells as differences: band - q0, q0 - q1, q1, 0 (the band is
+    p3's ``bound``)."""
+    return [(p3.bound, q0), (q0, q1), (q1, 0), (0, 0)]
+
+
+def _screen_cells(p3) -> list:
+    """The four cells on screen, signed by the winding: ``(x, y, delta)`` expressions of
+    p3's registers. Each delta is one subtraction: -(a - b) = b - a swaps the operands."""
+    up = p3.up
+    cells = []
+    for k, (a, b) in enumerate(_cell_operands(p3)):
         pair, right = divmod(k, 2)  # x-major: row a or b, column x or x + 1
-        value_x = Mux(p2.neg, cx[2 * pair + 1 - right], cx[k])
         row = pair - up  # x-major: -1, 0 or +1 rows along +v, one row_dy each on screen
         # y-major: v offset k - up, one cell lower along -v. Each coordinate is one add of
         # a small offset (selects of constants and up).
-        dx = Mux(p2.x_major, right, Mux(p2.minor_neg, 1 + up - k, k - up))
-        dy = Mux(p2.x_major, Mux(p2.minor_neg, -row, row), 0)
-        value = Mux(p2.x_major, value_x, cy[k])
-        cells.append((p2.x + dx, p2.y + dy, Mux(p2.sigma_neg, -value, value)))
+        dx = Mux(p3.x_major, right, Mux(p3.minor_neg, 1 + up - k, k - up))
+        dy = Mux(p3.x_major, Mux(p3.minor_neg, -row, row), 0)
+        sigma_neg = p3.sigma_neg
+        delta = Mux(sigma_neg, b, a) - Mux(sigma_neg, a, b)
+        cells.append((p3.x + dx, p3.y + dy, delta))
     return cells
 
 
-def _output(m, st, en, p2) -> list:
+def _output(m, st, en, p3) -> list:
     """`delta_cells`: the four cells on screen, signed by the winding, into the payload;
     returns them (the values the payload loads)."""
     widths = st.config.register_widths()
-    cells = _screen_cells(p2)
+    cells = _screen_cells(p3)
     beat = st.out.payload
     with m.If(en):
-        m.d.sync += [st.out.valid.eq(p2.valid), beat.last.eq(p2.last)]
+        m.d.sync += [st.out.valid.eq(p3.valid), beat.last.eq(p3.last)]
         for k, (x, y, delta) in enumerate(cells):
             cell = beat[f"cell{k}"]
             m.d.sync += [cell.x.eq(x), cell.y.eq(y), cell.delta.eq(delta)]

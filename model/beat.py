@@ -269,8 +269,9 @@ DELTAS = BeatFormat(
     run_edge_deltas,
     pieces=True,
     live_bank=True,
-    # p1 (the piece's depth), p2 (the estimate and covers), the output register (the cells)
-    depth=lambda config: 3,
+    # p1 (the piece's depth), p2 (the estimate and covers), p3 (the upper and lower rows'
+    # areas), the output register (the cells)
+    depth=lambda config: 4,
     # FINAL forms the y-major total0 product one bit of w0 (s + 2 bits) a clock
     final=lambda config: config.subpixel_bits + 2,
 )

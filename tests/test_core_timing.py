@@ -59,6 +59,7 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     assert dut.setup.final_cycles == final == s + 2
     assert timing_model.final_cycles(config) == LineCore(config).setup.final_cycles == 1
     depth = timing_model.pipeline_depth(config, DELTAS)
+    assert dut.stepper.latency == depth == 4  # p1, p2, p3, the output register
     assert dut.setup_latency == timing_model.setup_latency(config, DELTAS)
     assert dut.setup_latency == config.intensity_bits + config.F + 5 + final + depth
     assert dut.setup_interval == timing_model.setup_interval(config, 1, DELTAS) == R + 3 + final

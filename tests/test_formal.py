@@ -106,7 +106,7 @@ def test_deltas_proofs(tools, name):
 
 @pytest.mark.formal
 def test_deltas_cells_default(tools):
-    """The cells from p2 are the model's at the default configuration (F = 11: about 30 min
+    """The cells from p3 are the model's at the default configuration (F = 11: about 30 min
     on the shared 2-core machine; at F = 21 it did not finish)."""
     result = run_proof("deltas_cells", timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -114,20 +114,21 @@ def test_deltas_cells_default(tools):
 
 @pytest.mark.formal
 def test_deltas_cells_small(tools):
-    """The cells from p2 are the model's: proved at the small configuration (5 min)."""
+    """The cells from p3 are the model's: proved at the small configuration (5 min)."""
     result = run_proof("deltas_cells", DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
 
 def _wrong_sign(monkeypatch):
-    """The deltas core with the sign of the y-major middle cell flipped (`_cells_y_major`)."""
-    cells = hdl_deltas._cells_y_major
+    """The deltas core with the sign of the y-major middle cell flipped
+    (`_y_major_operands`: q1 - q0 for q0 - q1)."""
+    operands = hdl_deltas._y_major_operands
 
-    def flipped(p2):
-        first, middle, last, zero = cells(p2)
-        return first, -middle, last, zero
+    def flipped(p3, q0, q1):
+        first, (a, b), last, zero = operands(p3, q0, q1)
+        return first, (b, a), last, zero
 
-    monkeypatch.setattr(hdl_deltas, "_cells_y_major", flipped)
+    monkeypatch.setattr(hdl_deltas, "_y_major_operands", flipped)
 
 
 def _flat_piece(monkeypatch):
@@ -180,11 +181,11 @@ def test_broken_deltas_core_is_caught(tools, monkeypatch, name):
 
 @pytest.mark.formal
 def test_deltas_wrong_sign_is_caught(tools, monkeypatch):
-    """A core with a wrong sign fails the cells proof (its p2 cells are not the model's)."""
+    """A core with a wrong sign fails the cells proof (its p3 cells are not the model's)."""
     _wrong_sign(monkeypatch)
     result = run_proof("deltas_cells", DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
     assert not result.passed, _explain(result)
-    assert "dcells: p2 cell1 (induction)" in result.failed, _explain(result)
+    assert "dcells: p3 cell1 (induction)" in result.failed, _explain(result)
 
 
 # -- the checks can fail ---------------------------------------------------------------------
@@ -281,7 +282,8 @@ def test_deltas_observation_points():
     harness_rtlil(harness)
     stepper = harness.core.stepper
     assert set(stepper.delta_regs) == {"hs", "adj", "first_col"}
-    assert [stage.valid.name for stage in stepper.delta_stages] == ["d1_valid", "d2_valid"]
+    names = [stage.valid.name for stage in stepper.delta_stages]
+    assert names == ["d1_valid", "d2_valid", "d3_valid"]
     assert stepper.delta_he.name == "he" and len(stepper.delta_cells) == 4
     assert harness.core.setup.pieces.end_height.name == "pc_end_height"
 

@@ -127,8 +127,8 @@ DELTA_PROOFS = (
         1,
         assumes=("bounds", "dbounds", "dpipe"),
         top=PolygonCore,
-        description="the four cells the output register loads from p2 are the model's "
-        "`delta_cells` of p2's column snapshot, in full width (k-induction)",
+        description="the four cells the output register loads from p3 are the model's "
+        "`delta_cells` of p3's column snapshot, in full width (k-induction)",
     ),
     Proof(
         "deltas_beat",
