@@ -24,7 +24,7 @@ differs between the line core and the polygon core lives in these two objects.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -269,13 +269,18 @@ DELTAS = BeatFormat(
     run_edge_deltas,
     pieces=True,
     live_bank=True,
-    # p1 (the piece's depth), p2 (the estimate and covers), p3 (the upper and lower rows'
-    # areas), the output register (the cells)
-    depth=lambda config: 4,
+    # p1 (the piece's depth), p2 (the estimate and covers), the output register (the cells)
+    depth=lambda config: 3,
     # FINAL forms the y-major total0 product one bit of w0 (s + 2 bits) a clock
     final=lambda config: config.subpixel_bits + 2,
 )
 """The polygon core's output: the accumulation deltas, four cells a column."""
+
+# p1, p2, p3 (the upper and lower rows' areas: the cut of the cells' carry chains, for Fmax),
+# the output register
+DELTAS_DEEP = replace(DELTAS, depth=lambda config: 4)
+"""The same output from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), the fast
+pipeline's: the same stream, beats and bank, one clock later."""
 
 
 def format_of(stream: str) -> BeatFormat:

@@ -22,6 +22,7 @@ from edgeaa.hdl import LineCore, PolygonCore, setup_layout
 from edgeaa.hdl import deltas as hdl_deltas
 from edgeaa.hdl.setup import STATES, accept_values
 from edgeaa.model import Edge, EdgeConfig, setup, timing
+from edgeaa.model.beat import DELTAS_DEEP
 from edgeaa.sim.verification.formal import (
     DELTA_PROOFS,
     PROOFS,
@@ -95,10 +96,12 @@ def test_minor_axis_rows_bounded(tools):
 # gives their run times on the 2-core machine); `deltas_cells` has its own tests below (at
 # F = 21 the default configuration's did not finish in 20 minutes; at F = 11 it takes 30).
 SLOW_DELTAS = ["deltas_bounds", "deltas_pieces", "deltas_pipe", "deltas_cover"]
+# The deep stepper's (`DELTAS_DEEP`, the fast pipeline's p3): the proofs its p3 changes.
+SLOW_DEEP = ["deep_stream", "deep_count", "deep_pipe", "deep_beat", "deep_cover"]
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", SLOW_DELTAS)
+@pytest.mark.parametrize("name", SLOW_DELTAS + SLOW_DEEP)
 def test_deltas_proofs(tools, name):
     result = run_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -106,29 +109,40 @@ def test_deltas_proofs(tools, name):
 
 @pytest.mark.formal
 def test_deltas_cells_default(tools):
-    """The cells from p3 are the model's at the default configuration (F = 11: about 30 min
+    """The cells from p2 are the model's at the default configuration (F = 11: about 30 min
     on the shared 2-core machine; at F = 21 it did not finish)."""
     result = run_proof("deltas_cells", timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
 
 @pytest.mark.formal
-def test_deltas_cells_small(tools):
-    """The cells from p3 are the model's: proved at the small configuration (5 min)."""
-    result = run_proof("deltas_cells", DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
+@pytest.mark.parametrize("name", ["deltas_cells", "deep_cells"])
+def test_deltas_cells_small(tools, name):
+    """The cells the output register loads (from p2, or the deep stepper's p3) are the
+    model's: proved at the small configuration (minutes)."""
+    result = run_proof(name, DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
 
-def _wrong_sign(monkeypatch):
-    """The deltas core with the sign of the y-major middle cell flipped
-    (`_y_major_operands`: q1 - q0 for q0 - q1)."""
-    operands = hdl_deltas._y_major_operands
+def _wrong_sign(monkeypatch, deep: bool):
+    """The deltas core with the sign of the y-major middle cell flipped: q1 - q0 for q0 - q1
+    (`_y_major_operands` of the deep stepper, `_y_major_values` of the other)."""
+    if deep:
+        operands = hdl_deltas._y_major_operands
 
-    def flipped(p3, q0, q1):
-        first, (a, b), last, zero = operands(p3, q0, q1)
-        return first, (b, a), last, zero
+        def flipped(p3, q0, q1):
+            first, (a, b), last, zero = operands(p3, q0, q1)
+            return first, (b, a), last, zero
 
-    monkeypatch.setattr(hdl_deltas, "_y_major_operands", flipped)
+        monkeypatch.setattr(hdl_deltas, "_y_major_operands", flipped)
+    else:
+        values = hdl_deltas._y_major_values
+
+        def negated(band, q0, q1):
+            first, middle, last, zero = values(band, q0, q1)
+            return first, -middle, last, zero
+
+        monkeypatch.setattr(hdl_deltas, "_y_major_values", negated)
 
 
 def _flat_piece(monkeypatch):
@@ -180,12 +194,13 @@ def test_broken_deltas_core_is_caught(tools, monkeypatch, name):
 
 
 @pytest.mark.formal
-def test_deltas_wrong_sign_is_caught(tools, monkeypatch):
-    """A core with a wrong sign fails the cells proof (its p3 cells are not the model's)."""
-    _wrong_sign(monkeypatch)
-    result = run_proof("deltas_cells", DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
+@pytest.mark.parametrize("name", ["deltas_cells", "deep_cells"])
+def test_deltas_wrong_sign_is_caught(tools, monkeypatch, name):
+    """A core with a wrong sign fails the cells proof (its cells are not the model's)."""
+    _wrong_sign(monkeypatch, deep=name == "deep_cells")
+    result = run_proof(name, DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
     assert not result.passed, _explain(result)
-    assert "dcells: p3 cell1 (induction)" in result.failed, _explain(result)
+    assert "dcells: cell1 (induction)" in result.failed, _explain(result)
 
 
 # -- the checks can fail ---------------------------------------------------------------------
@@ -275,15 +290,17 @@ def test_observation_points():
     assert stepper.stages[0].t_above.name == "p1_t_above"
 
 
-def test_deltas_observation_points():
+@pytest.mark.parametrize("fmt, stages", [(None, 2), (DELTAS_DEEP, 3)])
+def test_deltas_observation_points(fmt, stages):
     """What the deltas harness reads besides the writes core's: the deltas loop registers
-    (constructor) and the pipeline's stages, piece end and cells (set as it elaborates)."""
-    harness = FormalHarness(checks=("dbeat",), top=PolygonCore)
+    (constructor) and the pipeline's stages (p3 only in the deep stepper), piece end and
+    cells (set as it elaborates)."""
+    harness = FormalHarness(checks=("dbeat",), top=PolygonCore, fmt=fmt)
     harness_rtlil(harness)
     stepper = harness.core.stepper
     assert set(stepper.delta_regs) == {"hs", "adj", "first_col"}
     names = [stage.valid.name for stage in stepper.delta_stages]
-    assert names == ["d1_valid", "d2_valid", "d3_valid"]
+    assert names == [f"d{k}_valid" for k in range(1, stages + 1)]
     assert stepper.delta_he.name == "he" and len(stepper.delta_cells) == 4
     assert harness.core.setup.pieces.end_height.name == "pc_end_height"
 
@@ -293,6 +310,8 @@ def test_harness_rejects_unknown_options():
         FormalHarness(checks=("nonsense",))
     with pytest.raises(ValueError, match="do not apply to PolygonCore"):
         FormalHarness(checks=("beat",), top=PolygonCore)
+    with pytest.raises(TypeError, match="fmt applies to PolygonCore, not LineCore"):
+        FormalHarness(fmt=DELTAS_DEEP)
     with pytest.raises(ValueError, match="do not apply to LineCore"):
         FormalHarness(checks=("dbeat",))
     with pytest.raises(ValueError, match="do not apply to LineCore"):

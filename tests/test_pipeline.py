@@ -314,10 +314,10 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 def test_the_named_configurations():
     assert PIPELINES == {
-        "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1},
-        "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2},
+        "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "delta_depth": 3},
+        "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "delta_depth": 4},
     }
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2)
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2, 4)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
@@ -340,6 +340,12 @@ def test_the_named_configurations():
             PipelineConfig(TILE, 1, lanes, 2)
     with pytest.raises(ValueError, match="no pipeline named"):
         PipelineConfig.named("quick")
+    # the deltas stepper's depth: 4 with p3 (fast), 3 without (compact)
+    assert fast.core.stepper.latency == fast.core.format.pipeline_depth(TILE.config) == 4
+    assert EdgePipeline(TILE).core.stepper.latency == 3
+    for bad, error in [(2, ValueError), (5, ValueError), (True, TypeError), (4.0, TypeError)]:
+        with pytest.raises(error, match="delta_depth"):
+            PipelineConfig(TILE, delta_depth=bad)
 
 
 # -- the compiled pipeline (Verilator) -----------------------------------------------------------

@@ -23,16 +23,16 @@ setup holds the bank while the stepper steps its edge).
     Every beat's cells are the model's `delta_cells` of the loop state its column was
     stepped with (modulo the payload's widths, which ``dbounds`` shows the model's values
     fit), and ``last`` is set exactly on an edge's last column. As for the writes core
-    (`pipeline`), the harness carries a snapshot of the loop state along p1, p2 and p3;
-    ``dpipe`` states what p1 holds (the model's heights and the column's per-edge selects),
-    what p2 holds (those it carries, the model's clamped estimate, the piece's cover of
-    each row) and what p3 holds (those it carries, the areas of the upper and lower rows,
-    the total less the lower, the middle row's bound: of p2's values, which the harness
-    registers as the pipeline moves), ``dcells`` that the cells the output register loads
-    from p3 are the model's in full width, ``dbeat`` the output register against them; the
-    harness registers the model's cells of p2's snapshot as the pipeline moves (one copy of
-    the model per stage up to p2, none after it: k-induction would have to prove the copies
-    equal).
+    (`pipeline`), the harness carries a snapshot of the loop state along p1, p2 and (the
+    deep stepper, `DELTAS_DEEP`) p3; ``dpipe`` states what p1 holds (the model's heights
+    and the column's per-edge selects), what p2 holds (those it carries, the model's
+    clamped estimate, the piece's cover of each row) and what p3 holds (those it carries,
+    the areas of the upper and lower rows, the total less the lower, the middle row's
+    bound: of p2's values, which the harness registers as the pipeline moves), ``dcells``
+    that the cells the output register loads from p2 or p3 are the model's in full width,
+    ``dbeat`` the output register against them; the harness registers the model's cells of
+    p2's snapshot as the pipeline moves (one copy of the model per stage up to p2, none
+    after it: k-induction would have to prove the copies equal).
 """
 
 from __future__ import annotations
@@ -189,8 +189,11 @@ def _pipeline(ctx, st):
     snaps = _snapshots(ctx, st)
     _stage_p1(ctx, *snaps[0])
     values, cells = _stage_p2(ctx, *snaps[1])
-    valid, last, cells = _stage_p3(ctx, *snaps[2], values, cells)
-    _output(ctx, valid, last, cells)
+    valid = snaps[1][1]
+    if len(ctx.stages) == 3:  # DELTAS_DEEP: p3 between p2 and the output register
+        valid, values, cells = _stage_p3(ctx, snaps[2][1], values, cells)
+    _cells_ok(ctx, valid, cells)
+    _output(ctx, valid, values["last"], cells)
 
 
 def _stage_p1(ctx, s1, v1):
@@ -312,12 +315,12 @@ def _p3_values(p2) -> dict:
     )
 
 
-def _stage_p3(ctx, s3, v3, p2_values, p2_cells):
-    """``dpipe``: p3 holds `_p3_values` of what p2 held (`p2_values`, registered by the
-    harness as the pipeline moves: no second copy of the model's column, which k-induction
-    would have to prove equal to p2's); ``dcells``: the cells the output register loads
-    from it are the model's cells of p2's column one move earlier (`p2_cells`, registered
-    likewise), in full width. Returns p3's valid, its model ``last`` and those cells."""
+def _stage_p3(ctx, v3, p2_values, p2_cells):
+    """``dpipe`` (the deep stepper's p3): p3 holds `_p3_values` of what p2 held
+    (`p2_values`, registered by the harness as the pipeline moves: no second copy of the
+    model's column, which k-induction would have to prove equal to p2's). Returns p3's
+    valid, p2's values and the model's cells of p2's column (`p2_cells`), both registered
+    likewise, one move later."""
     m, p3 = ctx.m, ctx.stages[2]
     en = ~ctx.out.valid | ctx.out.ready
     held = {name: delayed(m, en, value, f"d3m_{name}") for name, value in p2_values.items()}
@@ -331,30 +334,35 @@ def _stage_p3(ctx, s3, v3, p2_values, p2_cells):
     ctx.emit("dpipe", p3.valid == v3, "dpipe: p3 valid")
     for name, value in _p3_values(held).items():
         ctx.emit("dpipe", implies(v3, getattr(p3, name) == value), f"dpipe: p3 {name}")
+    return v3, held, cells
+
+
+def _cells_ok(ctx, valid, cells):
+    """``dcells``: the cells the output register loads (from p2, or the deep stepper's p3)
+    are the model's `cells` of that stage's column, in full width."""
     for k, (cell, model) in enumerate(zip(ctx.stepper.delta_cells, cells, strict=True)):
         match = all_([Value.cast(a) == b for a, b in zip(cell, model, strict=True)])
-        ctx.emit("dcells", implies(v3, match), f"dcells: p3 cell{k}")
-    return v3, held["last"], cells
+        ctx.emit("dcells", implies(valid, match), f"dcells: cell{k}")
 
 
-def _output(ctx, v3, last3, cells):
+def _output(ctx, valid, last, cells):
     """``dbeat``: the output register is the beat of its column: the model's cells of the
-    loop state the column was stepped with (`cells`, of p2's snapshot as `_stage_p3`
-    registered them, registered again by the harness when the pipeline moves; modulo the
-    payload's widths) and ``last`` on the edge's last column (`last3`, likewise)."""
+    loop state the column was stepped with (`cells` of the stage before it, of p2's
+    snapshot, registered again by the harness when the pipeline moves; modulo the payload's
+    widths) and ``last`` on the edge's last column (the stage's `last`, likewise)."""
     m, out = ctx.m, ctx.out
     en = ~out.valid | out.ready
     beat = data.View(ctx.layout, ctx.payload)
-    v4 = delayed(m, en, v3, "d4_valid")
-    last = delayed(m, en, last3, "d4_last")
-    ctx.emit("dbeat", out.valid == v4, "dbeat: beat valid")
-    ctx.emit("dbeat", implies(v4, beat.last == last), "dbeat: last")
+    v_out = delayed(m, en, valid, "dout_valid")
+    last = delayed(m, en, last, "dout_last")
+    ctx.emit("dbeat", out.valid == v_out, "dbeat: beat valid")
+    ctx.emit("dbeat", implies(v_out, beat.last == last), "dbeat: last")
     for k, model in enumerate(cells):
         cell = beat[f"cell{k}"]
         got = (cell.x, cell.y, cell.delta)
         want = [
-            delayed(m, en, Value.cast(b)[: len(Value.cast(a))], f"d4_cell{k}_{name}")
+            delayed(m, en, Value.cast(b)[: len(Value.cast(a))], f"dout_cell{k}_{name}")
             for a, b, name in zip(got, model, "xyd", strict=True)
         ]
         match = all_([Value.cast(a).as_unsigned() == b for a, b in zip(got, want, strict=True)])
-        ctx.emit("dbeat", implies(v4, match), f"dbeat: cell{k} is the model's")
+        ctx.emit("dbeat", implies(v_out, match), f"dbeat: cell{k} is the model's")
