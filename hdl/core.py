@@ -47,7 +47,7 @@ Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
   ``cell0`` .. ``cell3``, each ``x, y`` signed ``W + 2`` and ``delta`` signed ``I + F + 2``,
   and ``last``: the accumulation deltas of `edgeaa.model.step.run_edge_deltas`, zeros
   included, in its order. Same setup (with the end pieces, in the same clocks) and loop; the
-  column pipeline is 3 registers deep in every mode, 4 with `DELTAS_DEEP`
+  column pipeline is 3 registers deep in every mode, 4 with `DELTAS_FAST`
   (`edgeaa.hdl.deltas`).
 * ``errors`` (out, ``errors_bits`` = 16 bits by default): bad commands dropped so far,
   saturating at ``2**errors_bits - 1``.
@@ -196,7 +196,7 @@ class PolygonCore(_Core):
     latency: the module docstring; ``setup`` (`EdgeSetupUnit` with `EndPieces`, or a
     `SetupArray` of them) and ``stepper`` (`DeltaStepper`) are its parts."""
 
-    format = DELTAS  # `fmt`: DELTAS, or DELTAS_DEEP (the stepper one register deeper)
+    format = DELTAS  # `fmt`: DELTAS, or DELTAS_FAST (the stepper one register deeper)
 
     def __init__(
         self,

@@ -17,7 +17,7 @@ column per clock:
   nothing after the stepping clock reads the bank);
 * p2: the clamped triangle estimate of the depth (`triangle_estimate`, shift-adds by the
   small odd constants) and the piece's cover in each row;
-* p3 (`DELTAS_DEEP`, the fast pipeline's, only): the areas of the column's upper and lower
+* p3 (`DELTAS_FAST`, the fast pipeline's, only): the areas of the column's upper and lower
   rows (`column_deltas`' r_up and r_low, or a_up and a_low), the total less the lower and
   the middle row's bound (one register each for the x-major and the y-major value): the
   cut that splits the cells' chain of carry chains (about six from p2) over two clocks, for
@@ -47,7 +47,7 @@ import types
 
 from amaranth.hdl import Module, Mux, Signal, Value, signed
 
-from ..model.beat import DELTAS, DELTAS_DEEP, BeatFormat
+from ..model.beat import DELTAS, DELTAS_FAST, BeatFormat
 from ..model.config import EdgeConfig
 from .column_loop import ColumnLoop, derived_values
 from .layouts import const_mul, delta_layout, log2, register_shape, signed_widened
@@ -57,7 +57,7 @@ __all__ = ["DeltaStepper", "delta_pipeline", "delta_registers"]
 # The bank fields the loop steps: registers loaded from the bank when an edge starts. The
 # delta stepper reads every other field from the bank payload while it steps the edge.
 _LOOP_FIELDS = ("x", "y", "remaining", "jq", "jr")
-DELTA_FORMATS = (DELTAS, DELTAS_DEEP)  # the stepper's two depths
+DELTA_FORMATS = (DELTAS, DELTAS_FAST)  # the stepper's two depths
 
 
 class DeltaStepper(ColumnLoop):
@@ -71,7 +71,7 @@ class DeltaStepper(ColumnLoop):
     the transfer means "edge done". ``deltas`` (out stream, `delta_layout`, also ``out``):
     one registered beat per column, ``latency`` = `fmt.pipeline_depth` clocks after the
     column's step when nothing stalls: 3 for `edgeaa.model.beat.DELTAS` (p1, p2, the output
-    register), 4 for `DELTAS_DEEP` (p1, p2, p3, the output register).
+    register), 4 for `DELTAS_FAST` (p1, p2, p3, the output register).
 
     Observation points (formal harness): `ColumnLoop`'s, ``delta_regs`` (name -> register),
     and, once elaborated, ``delta_he``, ``delta_stages`` and ``delta_cells`` (this module's
@@ -80,7 +80,7 @@ class DeltaStepper(ColumnLoop):
 
     def __init__(self, config: EdgeConfig, fmt: BeatFormat = DELTAS):
         if fmt not in DELTA_FORMATS:
-            raise TypeError(f"fmt must be DELTAS or DELTAS_DEEP, not {fmt!r}")
+            raise TypeError(f"fmt must be DELTAS or DELTAS_FAST, not {fmt!r}")
         super().__init__(config, fmt, delta_layout(config))
         self.start = Signal(name="start")
         self.delta_regs = delta_registers(config)
@@ -174,7 +174,7 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     stages = [p1, p2]
     if st.latency == 4:  # p3 registers the rows' areas; one subtraction a cell after it
         stages.append(_stage(m, en, "d3", _ends(p2)))
-        cells = _output(m, st, en, stages[-1], _deep_cells(stages[-1]))
+        cells = _output(m, st, en, stages[-1], _fast_cells(stages[-1]))
     else:  # the fewest LUTs: the cells from p2 in one stage
         cells = _output(m, st, en, p2, _cells(p2))
     # Observation points (formal harness): no logic of their own.
@@ -396,7 +396,7 @@ def _ends(p2) -> dict:
     )
 
 
-def _deep_cells(p3) -> list:
+def _fast_cells(p3) -> list:
     """The four cells on screen from the deep stepper's p3 (`_cells`' values), each one
     subtraction ``a - b`` with the winding's sign folded in (-(a - b) = b - a swaps the
     operands): the fewest carry chains after p3."""

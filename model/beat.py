@@ -278,9 +278,9 @@ DELTAS = BeatFormat(
 
 # p1, p2, p3 (the upper and lower rows' areas: the cut of the cells' carry chains, for Fmax),
 # the output register
-DELTAS_DEEP = replace(DELTAS, depth=lambda config: 4)
-"""The same output from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), the fast
-pipeline's: the same stream, beats and bank, one clock later."""
+DELTAS_FAST = replace(DELTAS, depth=lambda config: 4)
+"""The fast pipeline's core output (`PipelineConfig.fast_core`): the same stream, beats and
+bank from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), one clock later."""
 
 
 def format_of(stream: str) -> BeatFormat:

@@ -37,7 +37,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from .beat import DELTAS, DELTAS_DEEP, BeatFormat, delta_column_beats
+from .beat import DELTAS, DELTAS_FAST, BeatFormat, delta_column_beats
 from .config import EdgeConfig
 from .edge import Clip, Edge, EdgeError
 from .step import run_edge_deltas
@@ -47,7 +47,6 @@ from .timing import MAX_SETUP_UNITS
 __all__ = [
     "COMMANDS",
     "COMMAND_VERSION",
-    "DELTA_DEPTHS",
     "PIPELINES",
     "PIXEL_LANES",
     "SCAN_LANES",
@@ -85,7 +84,7 @@ class PipelineConfig:
     setup_units: int = 1
     pixel_lanes: int = 1
     scan_lanes: int = 1
-    delta_depth: int = 3  # clocks from a column's step to its deltas beat (`DELTA_DEPTHS`)
+    fast_core: bool = False  # the core's output: DELTAS, or DELTAS_FAST (`deltas`)
 
     def __post_init__(self):
         if not isinstance(self.tile, TileConfig):
@@ -95,12 +94,14 @@ class PipelineConfig:
         scan = _check_count("scan_lanes", self.scan_lanes, SCAN_LANES)
         if scan > 1 and lanes != scan:  # the resolve reads and writes a pixel lane per cell
             raise ValueError(f"scan_lanes {scan} needs pixel_lanes {scan}, not {lanes}")
-        _check_count("delta_depth", self.delta_depth, tuple(DELTA_DEPTHS))
+        if not isinstance(self.fast_core, bool):
+            raise TypeError(f"fast_core must be True or False, not {self.fast_core!r}")
 
     @property
     def deltas(self) -> BeatFormat:
-        """The core's output (`edgeaa.model.beat`), its pipeline depth `delta_depth`."""
-        return DELTA_DEPTHS[self.delta_depth]
+        """The core's output (`edgeaa.model.beat`): `DELTAS_FAST` with `fast_core` (the
+        deltas stepper one register deeper, p3), else `DELTAS`."""
+        return DELTAS_FAST if self.fast_core else DELTAS
 
     @classmethod
     def named(cls, name: str, tile: TileConfig | None = None) -> PipelineConfig:
@@ -125,18 +126,15 @@ def _check_count(name: str, value, allowed) -> int:
 
 PIXEL_LANES = (1, 2, 4)  # a tile is at least 4 pixels wide: a row is whole beats
 SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the resolve
-# The deltas stepper's depths: 3, or 4 with p3 (`edgeaa.hdl.deltas`), one clock more a polygon
-# for a shorter critical path.
-DELTA_DEPTHS = {3: DELTAS, 4: DELTAS_DEEP}
 
 # The named configurations, built from the same components (docs/hardware.md, "Display
 # rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
 # knee of clocks over area), a flush of two pixels a clock, a scan of two cells a clock and
-# the deeper deltas stepper (its p3 does not fit compact's HX8K).
+# the fast core (`DELTAS_FAST`: its p3 does not fit compact's HX8K).
 PIPELINES = {
-    "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "delta_depth": 3},
-    "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "delta_depth": 4},
+    "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "fast_core": False},
+    "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "fast_core": True},
 }
 
 

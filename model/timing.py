@@ -39,7 +39,7 @@ takes them):
   pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
   register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
   every mode for the polygon core's accumulation deltas, 4 with its deep stepper,
-  `DELTAS_DEEP`): the beat is valid in
+  `DELTAS_FAST`): the beat is valid in
   clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
   clocks, FINAL's ``s + 2`` included: only D and Phi differ between the two outputs
   (`edgeaa.model.beat.WRITES` and `DELTAS` declare both, and whether the stepper holds the
@@ -71,7 +71,7 @@ finishes while the stepper is still on a long edge waits for it.
 for the default configuration and its pw variant (F = 11), 28 for seg2 and seg4, 37 for the
 truncated accumulator (F = 21); 19 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 7);
 for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration, 34 with the deep
-stepper (`edgeaa.model.beat.DELTAS_DEEP`, D = 4: the fast pipeline's).
+stepper (`edgeaa.model.beat.DELTAS_FAST`, D = 4: the fast pipeline's).
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
 at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 29 for its
@@ -164,7 +164,7 @@ def pipeline_depth(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
     """Clocks from a column's step to its beat (`BeatFormat.pipeline_depth`): the stepper's
     output pipeline, counting the output register (2 with at most one segment, 3 with two or
     more; the polygon core's is 3 in every mode: the piece's depth, the estimate and covers,
-    then the cells; 4 with the deep stepper, `DELTAS_DEEP`, whose p3 holds the outer rows'
+    then the cells; 4 with the deep stepper, `DELTAS_FAST`, whose p3 holds the outer rows'
     areas)."""
     return fmt.pipeline_depth(config)
 

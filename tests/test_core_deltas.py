@@ -39,7 +39,7 @@ from edgeaa.model import timing as timing_model
 from edgeaa.model.beat import (
     CELLS,
     DELTAS,
-    DELTAS_DEEP,
+    DELTAS_FAST,
     WRITES,
     DeltaBeat,
     delta_column_beats,
@@ -252,15 +252,15 @@ def test_setup_array(units):
 
 
 @pytest.mark.parametrize(("name", "units"), [("default", 1), ("small", 4)])
-def test_deep_stepper(name, units):
-    """The deep stepper (`DELTAS_DEEP`, the fast pipeline's: p3 between p2 and the output
+def test_fast_core(name, units):
+    """The fast core (`DELTAS_FAST`, the fast pipeline's: p3 between p2 and the output
     register): the same deltas, one clock later, every clock the timing model's; and under
     stalls."""
     config = CORE_CONFIGS[name]
     edges = mixed_edges(config, seed=40 + units, count=16)
-    core = {"setup_units": units, "fmt": DELTAS_DEEP}
-    run_and_check(config, edges, label="deep", **core)
-    run_and_check(config, edges, seed=units, idle=0.2, stall=0.5, label="deep", **core)
+    core = {"setup_units": units, "fmt": DELTAS_FAST}
+    run_and_check(config, edges, label="fast core", **core)
+    run_and_check(config, edges, seed=units, idle=0.2, stall=0.5, label="fast core", **core)
 
 
 def test_a_wrong_model_is_caught(monkeypatch):

@@ -21,7 +21,7 @@ from edgeaa.hdl import (
 )
 from edgeaa.model import Edge, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.model.beat import DELTAS, DELTAS_DEEP
+from edgeaa.model.beat import DELTAS, DELTAS_FAST
 from edgeaa.sim.simulators.commands import edge_payload
 from edgeaa.sim.simulators.streams import stream_put
 
@@ -60,8 +60,8 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     assert timing_model.final_cycles(config) == LineCore(config).setup.final_cycles == 1
     depth = timing_model.pipeline_depth(config, DELTAS)
     assert dut.stepper.latency == depth == 3  # p1, p2, the output register
-    deep = PolygonCore(config, fmt=DELTAS_DEEP)  # p3 too: one clock later, the same setup
-    assert deep.stepper.latency == timing_model.pipeline_depth(config, DELTAS_DEEP) == 4
+    deep = PolygonCore(config, fmt=DELTAS_FAST)  # p3 too: one clock later, the same setup
+    assert deep.stepper.latency == timing_model.pipeline_depth(config, DELTAS_FAST) == 4
     assert deep.setup_latency == dut.setup_latency + 1
     assert deep.setup_interval == dut.setup_interval
     assert dut.setup_latency == timing_model.setup_latency(config, DELTAS)

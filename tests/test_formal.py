@@ -22,7 +22,7 @@ from edgeaa.hdl import LineCore, PolygonCore, setup_layout
 from edgeaa.hdl import deltas as hdl_deltas
 from edgeaa.hdl.setup import STATES, accept_values
 from edgeaa.model import Edge, EdgeConfig, setup, timing
-from edgeaa.model.beat import DELTAS_DEEP
+from edgeaa.model.beat import DELTAS_FAST
 from edgeaa.sim.verification.formal import (
     DELTA_PROOFS,
     PROOFS,
@@ -96,12 +96,12 @@ def test_minor_axis_rows_bounded(tools):
 # gives their run times on the 2-core machine); `deltas_cells` has its own tests below (at
 # F = 21 the default configuration's did not finish in 20 minutes; at F = 11 it takes 30).
 SLOW_DELTAS = ["deltas_bounds", "deltas_pieces", "deltas_pipe", "deltas_cover"]
-# The deep stepper's (`DELTAS_DEEP`, the fast pipeline's p3): the proofs its p3 changes.
-SLOW_DEEP = ["deep_stream", "deep_count", "deep_pipe", "deep_beat", "deep_cover"]
+# The deep stepper's (`DELTAS_FAST`, the fast pipeline's p3): the proofs its p3 changes.
+SLOW_FAST = ["fast_stream", "fast_count", "fast_pipe", "fast_beat", "fast_cover"]
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", SLOW_DELTAS + SLOW_DEEP)
+@pytest.mark.parametrize("name", SLOW_DELTAS + SLOW_FAST)
 def test_deltas_proofs(tools, name):
     result = run_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -116,7 +116,7 @@ def test_deltas_cells_default(tools):
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", ["deltas_cells", "deep_cells"])
+@pytest.mark.parametrize("name", ["deltas_cells", "fast_cells"])
 def test_deltas_cells_small(tools, name):
     """The cells the output register loads (from p2, or the deep stepper's p3) are the
     model's: proved at the small configuration (minutes)."""
@@ -194,10 +194,10 @@ def test_broken_deltas_core_is_caught(tools, monkeypatch, name):
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", ["deltas_cells", "deep_cells"])
+@pytest.mark.parametrize("name", ["deltas_cells", "fast_cells"])
 def test_deltas_wrong_sign_is_caught(tools, monkeypatch, name):
     """A core with a wrong sign fails the cells proof (its cells are not the model's)."""
-    _wrong_sign(monkeypatch, deep=name == "deep_cells")
+    _wrong_sign(monkeypatch, deep=name == "fast_cells")
     result = run_proof(name, DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
     assert not result.passed, _explain(result)
     assert "dcells: cell1 (induction)" in result.failed, _explain(result)
@@ -290,7 +290,7 @@ def test_observation_points():
     assert stepper.stages[0].t_above.name == "p1_t_above"
 
 
-@pytest.mark.parametrize("fmt, stages", [(None, 2), (DELTAS_DEEP, 3)])
+@pytest.mark.parametrize("fmt, stages", [(None, 2), (DELTAS_FAST, 3)])
 def test_deltas_observation_points(fmt, stages):
     """What the deltas harness reads besides the writes core's: the deltas loop registers
     (constructor) and the pipeline's stages (p3 only in the deep stepper), piece end and
@@ -311,7 +311,7 @@ def test_harness_rejects_unknown_options():
     with pytest.raises(ValueError, match="do not apply to PolygonCore"):
         FormalHarness(checks=("beat",), top=PolygonCore)
     with pytest.raises(TypeError, match="fmt applies to PolygonCore, not LineCore"):
-        FormalHarness(fmt=DELTAS_DEEP)
+        FormalHarness(fmt=DELTAS_FAST)
     with pytest.raises(ValueError, match="do not apply to LineCore"):
         FormalHarness(checks=("dbeat",))
     with pytest.raises(ValueError, match="do not apply to LineCore"):

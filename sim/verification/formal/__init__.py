@@ -10,14 +10,14 @@ output's ready and, by default, the reset), with no input assumption at all. It 
 the observation attributes `EdgeSetupUnit` and the steppers expose for verification, so a
 rename there is an AttributeError when the harness is built, never a vacuous proof. Out: a
 `FormalResult` per proof (`run_proof`; `PROOFS` for the line core, `DELTA_PROOFS` for the
-polygon core, `DEEP_PROOFS` for it with the deep stepper, `DELTAS_DEEP`), whose ``failed``
+polygon core, `FAST_PROOFS` for it with the deep stepper, `DELTAS_FAST`), whose ``failed``
 lists the failing properties and induction helpers.
 
 Files: `spec` (the model-side specification: fold, window, bank invariants, one column in
 full width; `implies`), `harness` (`FormalHarness`), one module per property family
 (`stream`, also the one hold rule of every proof, `count`, `bounds`, `pipeline` for
 ``pipe``, ``beat`` and ``minor``, `deltas` for the polygon core, `covers`), `run` (`Proof`,
-`PROOFS`, `DELTA_PROOFS`, `DEEP_PROOFS`, `run_proof`, `main`) and the tile stages: `tile`
+`PROOFS`, `DELTA_PROOFS`, `FAST_PROOFS`, `run_proof`, `main`) and the tile stages: `tile`
 (`TileHarness`, `TILE_PROOFS`, `run_tile_proof`), `accumulator` and `resolve` (their check
 groups and invariants), `tile_common` (what those share). `python -m
 edgeaa.sim.verification.formal [proof ...]` runs proofs.
@@ -32,8 +32,8 @@ from __future__ import annotations
 from .count import capacity
 from .harness import CHECKS, COVERS, FAULTS, FormalHarness
 from .run import (
-    DEEP_PROOFS,
     DELTA_PROOFS,
+    FAST_PROOFS,
     PROOFS,
     FormalError,
     FormalResult,
@@ -49,7 +49,7 @@ from .run import (
 __all__ = [
     "CHECKS",
     "COVERS",
-    "DEEP_PROOFS",
+    "FAST_PROOFS",
     "DELTA_PROOFS",
     "FAULTS",
     "PROOFS",

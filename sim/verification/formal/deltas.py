@@ -24,7 +24,7 @@ setup holds the bank while the stepper steps its edge).
     stepped with (modulo the payload's widths, which ``dbounds`` shows the model's values
     fit), and ``last`` is set exactly on an edge's last column. As for the writes core
     (`pipeline`), the harness carries a snapshot of the loop state along p1, p2 and (the
-    deep stepper, `DELTAS_DEEP`) p3; ``dpipe`` states what p1 holds (the model's heights
+    deep stepper, `DELTAS_FAST`) p3; ``dpipe`` states what p1 holds (the model's heights
     and the column's per-edge selects), what p2 holds (those it carries, the model's
     clamped estimate, the piece's cover of each row) and what p3 holds (those it carries,
     the areas of the upper and lower rows, the total less the lower, the middle row's
@@ -190,7 +190,7 @@ def _pipeline(ctx, st):
     _stage_p1(ctx, *snaps[0])
     values, cells = _stage_p2(ctx, *snaps[1])
     valid = snaps[1][1]
-    if len(ctx.stages) == 3:  # DELTAS_DEEP: p3 between p2 and the output register
+    if len(ctx.stages) == 3:  # DELTAS_FAST: p3 between p2 and the output register
         valid, values, cells = _stage_p3(ctx, snaps[2][1], values, cells)
     _cells_ok(ctx, valid, cells)
     _output(ctx, valid, values["last"], cells)

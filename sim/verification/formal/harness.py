@@ -86,7 +86,7 @@ class FormalHarness(ClockedHarness):
     of `FAULTS`, a deliberate error the checks must catch. ``top``: the core proven,
     `LineCore` (its pipeline groups `LINE_CHECKS`, its cover ``stepper``) or `PolygonCore`
     (`DELTA_CHECKS`, its cover ``deltas``); the other core's groups do not apply. ``fmt``:
-    the polygon core's output, if not its default (`edgeaa.model.beat.DELTAS_DEEP`: the
+    the polygon core's output, if not its default (`edgeaa.model.beat.DELTAS_FAST`: the
     stepper with p3).
     """
 

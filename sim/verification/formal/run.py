@@ -18,12 +18,12 @@ from amaranth.back import rtlil
 
 from ....hdl.core import LineCore, PolygonCore
 from ....model import timing
-from ....model.beat import DELTAS_DEEP, BeatFormat
+from ....model.beat import DELTAS_FAST, BeatFormat
 from ....model.config import EdgeConfig
 from .harness import FAULTS, FormalHarness
 
 __all__ = [
-    "DEEP_PROOFS",
+    "FAST_PROOFS",
     "DELTA_PROOFS",
     "PROOFS",
     "FormalError",
@@ -64,7 +64,7 @@ class Proof:
     skip: int | str = 0  # clocks after reset whose assertions and covers are not checked
     description: str = ""
     top: type = LineCore  # the core proven: LineCore or PolygonCore
-    fmt: BeatFormat | None = None  # PolygonCore's output if not its default (DELTAS_DEEP)
+    fmt: BeatFormat | None = None  # PolygonCore's output if not its default (DELTAS_FAST)
 
     @property
     def format(self) -> BeatFormat:
@@ -161,13 +161,13 @@ DELTA_PROOFS = (
     ),
 )
 
-# The same proofs of the deep stepper (`DELTAS_DEEP`, the fast pipeline's p3): deep_stream,
-# deep_count, ..., deep_cover.
-DEEP_PROOFS = tuple(
+# The same proofs of the deep stepper (`DELTAS_FAST`, the fast pipeline's p3): fast_stream,
+# fast_count, ..., fast_cover.
+FAST_PROOFS = tuple(
     replace(
         proof,
-        name=proof.name.replace("deltas_", "deep_"),
-        fmt=DELTAS_DEEP,
+        name=proof.name.replace("deltas_", "fast_"),
+        fmt=DELTAS_FAST,
         description=f"(deep stepper) {proof.description}",
     )
     for proof in DELTA_PROOFS
@@ -244,7 +244,7 @@ PROOFS: dict[str, Proof] = {
             "held beat, two edges in flight (from the first beat of an edge accepted at reset)",
         ),
         *DELTA_PROOFS,
-        *DEEP_PROOFS,
+        *FAST_PROOFS,
     )
 }
 
