@@ -60,7 +60,7 @@ def _explain(result) -> str:
 
 
 QUICK = ["stream", "count", "cover_drop"]
-QUICK_DELTAS = ["deltas_stream", "deltas_count", "deltas_loop", "deltas_beat"]
+QUICK_DELTAS = ["deltas_stream", "deltas_count", "deltas_loop", "deltas_beat", "fast_beat"]
 
 
 @pytest.mark.parametrize("name", QUICK + QUICK_DELTAS)
@@ -97,7 +97,7 @@ def test_minor_axis_rows_bounded(tools):
 # F = 21 the default configuration's did not finish in 20 minutes; at F = 11 it takes 30).
 SLOW_DELTAS = ["deltas_bounds", "deltas_pieces", "deltas_pipe", "deltas_cover"]
 # The deep stepper's (`DELTAS_FAST`, the fast pipeline's p3): the proofs its p3 changes.
-SLOW_FAST = ["fast_stream", "fast_count", "fast_pipe", "fast_beat", "fast_cover"]
+SLOW_FAST = ["fast_stream", "fast_count", "fast_pipe", "fast_cover"]
 
 
 @pytest.mark.formal
