@@ -208,7 +208,9 @@ class PolygonCore(_Core):
     ):
         self.format = fmt
         stepper = functools.partial(DeltaStepper, fmt=fmt)
-        super().__init__(config, stepper, EndPieces, errors_bits, setup_units)
+        # FINAL in one clock: the y-major total0 product by a multiplier (`DELTAS_FAST`)
+        pieces = functools.partial(EndPieces, multiplier=fmt.final_cycles(config) == 1)
+        super().__init__(config, stepper, pieces, errors_bits, setup_units)
 
 
 # -- Verilog ---------------------------------------------------------------------------------

@@ -282,17 +282,21 @@ class EndPieces:
     and the hooks the unit calls. The bank gains the `edgeaa.model.bank` fields marked
     ``pieces`` (``in_bank``); WINDOW loads ``cut_end`` and clears the kq products; RUN forms
     the products by ``|I_d|`` beside lane A's pass 2 and by kq beside lane B, and loads
-    `run_end_loads` in its last clock; FINAL takes ``s + 2`` clocks (`total0_steps`);
-    ``next_bank`` gets `final_pieces`. One instance per setup unit (its registers)."""
+    `run_end_loads` in its last clock; FINAL takes ``s + 2`` clocks (`total0_steps`), or one
+    with `multiplier` (the product in one multiplication: a DSP block of the fast
+    pipeline's ECP5); ``next_bank`` gets `final_pieces`. One instance per setup unit (its
+    registers)."""
 
     in_bank = True
 
-    def __init__(self, config: EdgeConfig):
+    def __init__(self, config: EdgeConfig, *, multiplier: bool = False):
         vars(self).update(vars(pieces_registers(config)))
+        self.multiplier = multiplier
 
     @property
     def final_cycles(self) -> int:
-        return len(self.w0)  # one a bit of w0 (`total0_steps`)
+        # one a bit of w0 (`total0_steps`), or one multiplication
+        return 1 if self.multiplier else len(self.w0)
 
     def window_loads(self, unit) -> list:
         return [self.cut_end.eq(r_cut_end(unit.regs)), self.k_me.eq(0), self.k_mg.eq(0)]
@@ -317,7 +321,11 @@ class EndPieces:
         m.d.sync += run_end_loads(unit)
 
     def final(self, m, unit) -> None:
-        """FINAL: the y-major total0 product, one bit of w0 a clock."""
+        """FINAL: the y-major total0 product, one bit of w0 a clock or all at once."""
+        if self.multiplier:
+            m.d.sync += self.y_area0.eq(self.m_area0 * self.w0)
+            m.next = "HOLD"
+            return
         m.d.sync += total0_steps(unit)
         with m.If(unit.regs.counter == self.final_cycles - 1):
             m.next = "HOLD"

@@ -276,11 +276,17 @@ DELTAS = BeatFormat(
 )
 """The polygon core's output: the accumulation deltas, four cells a column."""
 
-# p1, p2, p3 (the upper and lower rows' areas: the cut of the cells' carry chains, for Fmax),
-# the output register
-DELTAS_FAST = replace(DELTAS, depth=lambda config: 4)
+DELTAS_FAST = replace(
+    DELTAS,
+    # p1, p2, p3 (the upper and lower rows' areas: the cut of the cells' carry chains, for
+    # Fmax), the output register
+    depth=lambda config: 4,
+    # FINAL forms the y-major total0 product with a multiplier (`edgeaa.hdl.pieces`)
+    final=lambda config: 1,
+)
 """The fast pipeline's core output (`PipelineConfig.fast_core`): the same stream, beats and
-bank from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), one clock later."""
+bank from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), one clock later, and a
+setup whose FINAL takes one clock (its product by a multiplier: the ECP5's DSP blocks)."""
 
 
 def format_of(stream: str) -> BeatFormat:

@@ -317,6 +317,11 @@ def test_deltas_setup_has_no_wide_product(name):
     small = config.subpixel_bits + 3
     assert widths and all(max(a, b) <= small for a, b in widths), widths
     assert len(widths) <= 5, widths
+    # The fast core's FINAL: one more, the height sum by the first piece's width (s + 2 bits)
+    fast = _mul_widths(EdgeSetupUnit(config, pieces=EndPieces(config, multiplier=True)))
+    wide = sorted(set(fast) - set(widths))
+    assert len(fast) == len(widths) + 1 and len(wide) == 1, fast
+    assert min(wide[0]) == config.subpixel_bits + 2 and max(wide[0]) > small, wide
 
 
 def test_the_line_core_keeps_its_bank():
