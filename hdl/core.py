@@ -208,8 +208,8 @@ class PolygonCore(_Core):
     ):
         self.format = fmt
         stepper = functools.partial(DeltaStepper, fmt=fmt)
-        # FINAL in one clock: the y-major total0 product by a multiplier (`DELTAS_FAST`)
-        pieces = functools.partial(EndPieces, multiplier=fmt.final_cycles(config) == 1)
+        # FINAL in two clocks: the y-major total0 product by a multiplier (`DELTAS_FAST`)
+        pieces = functools.partial(EndPieces, multiplier=fmt.final_cycles(config) == 2)
         super().__init__(config, stepper, pieces, errors_bits, setup_units)
 
 

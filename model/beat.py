@@ -281,12 +281,12 @@ DELTAS_FAST = replace(
     # p1, p2, p3 (the upper and lower rows' areas: the cut of the cells' carry chains, for
     # Fmax), the output register
     depth=lambda config: 4,
-    # FINAL forms the y-major total0 product with a multiplier (`edgeaa.hdl.pieces`)
-    final=lambda config: 1,
+    # FINAL registers the y-major total0's multiplicand, then multiplies (`edgeaa.hdl.pieces`)
+    final=lambda config: 2,
 )
 """The fast pipeline's core output (`PipelineConfig.fast_core`): the same stream, beats and
 bank from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), one clock later, and a
-setup whose FINAL takes one clock (its product by a multiplier: the ECP5's DSP blocks)."""
+setup whose FINAL takes two clocks (its product by a multiplier: the ECP5's DSP blocks)."""
 
 
 def format_of(stream: str) -> BeatFormat:

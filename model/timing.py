@@ -25,7 +25,8 @@ takes them):
 * FINAL (``Phi = final_cycles`` clocks, ``a + R + 3 .. a + R + 2 + Phi``): the bank's
   contents are complete in its last clock (combinational, from the registers). ``Phi = 1``
   for the line-writes core; ``s + 2`` for the deltas core, whose setup forms the y-major
-  ``total0`` product there, one bit of the first piece's width a clock.
+  ``total0`` product there, one bit of the first piece's width a clock; 2 for the fast
+  pipeline's deltas core (`edgeaa.model.beat.DELTAS_FAST`), whose setup multiplies.
 * HOLD (from clock ``a + R + 3 + Phi``): the bank is valid, the registers hold, until the
   stepper takes it; in that clock the setup accepts the next command if one is offered (IDLE
   after it otherwise).
@@ -70,8 +71,8 @@ finishes while the stepper is still on a long edge waits for it.
 ``R + 2 + Phi = L - D - 2``. ``L = I + F + 5 + Phi + D``: for the line-writes core 27 clocks
 for the default configuration and its pw variant (F = 11), 28 for seg2 and seg4, 37 for the
 truncated accumulator (F = 21); 19 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 7);
-for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration, 34 with the deep
-stepper (`edgeaa.model.beat.DELTAS_FAST`, D = 4: the fast pipeline's).
+for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration; 30 for the fast
+pipeline's (`edgeaa.model.beat.DELTAS_FAST`: D = 4, Phi = 2).
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
 at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 29 for its
