@@ -47,7 +47,8 @@ Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
   ``cell0`` .. ``cell3``, each ``x, y`` signed ``W + 2`` and ``delta`` signed ``I + F + 2``,
   and ``last``: the accumulation deltas of `edgeaa.model.step.run_edge_deltas`, zeros
   included, in its order. Same setup (with the end pieces, in the same clocks) and loop; the
-  column pipeline is 3 registers deep in every mode (`edgeaa.hdl.deltas`).
+  column pipeline is 3 registers deep in every mode, 4 with `DELTAS_FAST`
+  (`edgeaa.hdl.deltas`).
 * ``errors`` (out, ``errors_bits`` = 16 bits by default): bad commands dropped so far,
   saturating at ``2**errors_bits - 1``.
 * ``error`` (out): high for one clock when a bad command is dropped.
@@ -57,6 +58,8 @@ setup unit, clock by clock".
 """
 
 from __future__ import annotations
+
+import functools
 
 from amaranth.hdl import Module, ResetSignal, Signal, unsigned
 from amaranth.lib import data, stream, wiring
@@ -193,7 +196,7 @@ class PolygonCore(_Core):
     latency: the module docstring; ``setup`` (`EdgeSetupUnit` with `EndPieces`, or a
     `SetupArray` of them) and ``stepper`` (`DeltaStepper`) are its parts."""
 
-    format = DELTAS
+    format = DELTAS  # `fmt`: DELTAS, or DELTAS_FAST (the stepper one register deeper)
 
     def __init__(
         self,
@@ -201,8 +204,13 @@ class PolygonCore(_Core):
         *,
         errors_bits: int = ERRORS_BITS,
         setup_units: int = timing.DEFAULT_SETUP_UNITS,
+        fmt: BeatFormat = DELTAS,
     ):
-        super().__init__(config, DeltaStepper, EndPieces, errors_bits, setup_units)
+        self.format = fmt
+        stepper = functools.partial(DeltaStepper, fmt=fmt)
+        # FINAL in two clocks: the y-major total0 product by a multiplier (`DELTAS_FAST`)
+        pieces = functools.partial(EndPieces, multiplier=fmt.final_cycles(config) == 2)
+        super().__init__(config, stepper, pieces, errors_bits, setup_units)
 
 
 # -- Verilog ---------------------------------------------------------------------------------

@@ -17,7 +17,14 @@ column per clock:
   nothing after the stepping clock reads the bank);
 * p2: the clamped triangle estimate of the depth (`triangle_estimate`, shift-adds by the
   small odd constants) and the piece's cover in each row;
-* the output register: the cells of `column_deltas` and their screen cells (`delta_cells`).
+* p3 (`DELTAS_FAST`, the fast pipeline's, only): the areas of the column's upper and lower
+  rows (`column_deltas`' r_up and r_low, or a_up and a_low), the total less the lower and
+  the middle row's bound (one register each for the x-major and the y-major value): the
+  cut that splits the cells' chain of carry chains (about six from p2) over two clocks, for
+  Fmax. Without it (`DELTAS`) the output register loads the cells from p2 through the same
+  logic;
+* the output register: the middle row's area, the cells of `column_deltas` and their screen
+  cells (`delta_cells`), each delta one subtraction with the winding's sign folded in.
 
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
 intermediate wraps; a value is cut narrower only where its operands' shapes bound it (a
@@ -29,8 +36,9 @@ shifts.
 
 Observation points for the formal harness (attributes of the stepper, set when it is
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
-registers of p1 and p2 (namespaces, each with ``valid`` and ``last``), ``delta_cells`` the
-four ``(x, y, delta)`` values the output register loads from p2 (before the payload's cut).
+registers of p1, p2 and (deep) p3 (namespaces, each with ``valid`` and ``last``),
+``delta_cells`` the four ``(x, y, delta)`` values the output register loads (before the
+payload's cut).
 """
 
 from __future__ import annotations
@@ -39,7 +47,7 @@ import types
 
 from amaranth.hdl import Module, Mux, Signal, Value, signed
 
-from ..model.beat import DELTAS
+from ..model.beat import DELTAS, DELTAS_FAST, BeatFormat
 from ..model.config import EdgeConfig
 from .column_loop import ColumnLoop, derived_values
 from .layouts import const_mul, delta_layout, log2, register_shape, signed_widened
@@ -49,6 +57,7 @@ __all__ = ["DeltaStepper", "delta_pipeline", "delta_registers"]
 # The bank fields the loop steps: registers loaded from the bank when an edge starts. The
 # delta stepper reads every other field from the bank payload while it steps the edge.
 _LOOP_FIELDS = ("x", "y", "remaining", "jq", "jr")
+DELTA_FORMATS = (DELTAS, DELTAS_FAST)  # the stepper's two depths
 
 
 class DeltaStepper(ColumnLoop):
@@ -60,22 +69,25 @@ class DeltaStepper(ColumnLoop):
     and the derived constants from the payload, which the setup holds stable while it is
     valid and not taken, and takes the bank in the clock it steps the edge's last column:
     the transfer means "edge done". ``deltas`` (out stream, `delta_layout`, also ``out``):
-    one registered beat per column, ``latency`` = `edgeaa.model.beat.DELTAS.pipeline_depth`
-    (3) clocks after the column's step when nothing stalls (p1, p2, the output register).
+    one registered beat per column, ``latency`` = `fmt.pipeline_depth` clocks after the
+    column's step when nothing stalls: 3 for `edgeaa.model.beat.DELTAS` (p1, p2, the output
+    register), 4 for `DELTAS_FAST` (p1, p2, p3, the output register).
 
     Observation points (formal harness): `ColumnLoop`'s, ``delta_regs`` (name -> register),
     and, once elaborated, ``delta_he``, ``delta_stages`` and ``delta_cells`` (this module's
     docstring).
     """
 
-    def __init__(self, config: EdgeConfig):
-        super().__init__(config, DELTAS, delta_layout(config))
+    def __init__(self, config: EdgeConfig, fmt: BeatFormat = DELTAS):
+        if fmt not in DELTA_FORMATS:
+            raise TypeError(f"fmt must be DELTAS or DELTAS_FAST, not {fmt!r}")
+        super().__init__(config, fmt, delta_layout(config))
         self.start = Signal(name="start")
         self.delta_regs = delta_registers(config)
 
     @property
     def stages(self) -> list:
-        """The registers of p1 and p2 (``delta_stages``; set when elaborated)."""
+        """The registers of p1, p2 (and p3) (``delta_stages``; set when elaborated)."""
         return self.delta_stages
 
     def _handshake(self, last) -> list:
@@ -159,10 +171,15 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     _loop(m, st, he, advance.row_step)
     p1 = _stage(m, en, "d1", _stage0(st, last, he))
     p2 = _stage(m, en, "d2", _covers(st.config, p1))
-    cells = _output(m, st, en, p2)
+    stages = [p1, p2]
+    if st.latency == 4:  # p3 registers the rows' areas; one subtraction a cell after it
+        stages.append(_stage(m, en, "d3", _ends(p2)))
+        cells = _output(m, st, en, stages[-1], _fast_cells(stages[-1]))
+    else:  # the fewest LUTs: the cells from p2 in one stage
+        cells = _output(m, st, en, p2, _cells(p2))
     # Observation points (formal harness): no logic of their own.
-    st.delta_he, st.delta_stages, st.delta_cells = he, [p1, p2], cells
-    return [p1.valid, p2.valid]
+    st.delta_he, st.delta_stages, st.delta_cells = he, stages, cells
+    return [stage.valid for stage in stages]
 
 
 def _piece_end(m, st, last):
@@ -307,8 +324,8 @@ def _covers(config: EdgeConfig, p1) -> dict:
     )
 
 
-def _cells_x_major(p2):
-    """`_deltas_x_major`: areas on the +u side, row by row."""
+def _x_major_ends(p2):
+    """`_deltas_x_major`'s r_low and r_up: the areas on the +u side in rows r + 1 and r - 1."""
     total, t = p2.total, p2.t
     r_low = Mux(p2.hs_ge, total, Mux(p2.low, _clamp(t + p2.rect_low, p2.cov_low), 0))
     # cov_up - t - rect > cov_up iff t + rect < 0: the clamp's compare is the sign of t + rect,
@@ -317,14 +334,11 @@ def _cells_x_major(p2):
     over = p2.cov_up - t_rect
     clamped_up = Mux(over < 0, 0, Mux(t_rect < 0, p2.cov_up, over))[: len(p2.cov_up)].as_signed()
     r_up = Mux(p2.he_le0, total, Mux(p2.up, clamped_up, 0))
-    r_mid = _clamp(total - r_low - r_up, p2.cov_mid)
-    r_a, cov_a = Mux(p2.up, r_up, r_mid), Mux(p2.up, p2.cov_up, p2.cov_mid)
-    r_b, cov_b = Mux(p2.up, r_mid, r_low), Mux(p2.up, p2.cov_mid, p2.cov_low)
-    return r_a, cov_a - r_a, r_b, cov_b - r_b
+    return r_low, r_up
 
 
-def _cells_y_major(p2):
-    """`_deltas_y_major`: areas on the smaller-v side, differenced along +v."""
+def _y_major_ends(p2):
+    """`_deltas_y_major`'s a_low and a_up: the areas in cells r + 1 and r - 1."""
     total, band, t = p2.total, p2.band_rect, p2.t
     a_low = _clamp(Mux(p2.hs_ge, total - band, Mux(p2.low, t, 0)), band)
     # up_value > band only when he <= 0 and total > 0 (band - t > band never: t >= 0): the
@@ -332,38 +346,102 @@ def _cells_y_major(p2):
     up_value = Mux(p2.he_le0, total + band, Mux(p2.up, band - t, band))
     over = p2.he_le0 & (total > 0)
     a_up = Mux(up_value < 0, 0, Mux(over, band, up_value))[: len(band)].as_signed()
+    return a_low, a_up
+
+
+def _cells(p2) -> list:
+    """The four cells on screen from p2's registers, signed by the winding (`_cell_at`): each
+    value (`_deltas_x_major`: r_a, cov_a - r_a, r_b, cov_b - r_b, the column pair swapped
+    when ``neg``; `_deltas_y_major`: band - q0, q0 - q1, q1, 0), then its sign."""
+    total, band, up = p2.total, p2.band_rect, p2.up
+    r_low, r_up = _x_major_ends(p2)
+    r_mid = _clamp(total - r_low - r_up, p2.cov_mid)
+    r_a, cov_a = Mux(up, r_up, r_mid), Mux(up, p2.cov_up, p2.cov_mid)
+    r_b, cov_b = Mux(up, r_mid, r_low), Mux(up, p2.cov_mid, p2.cov_low)
+    cx = (r_a, cov_a - r_a, r_b, cov_b - r_b)
+    a_low, a_up = _y_major_ends(p2)
     a_mid = _clamp(total + band - a_up - a_low, band)
-    q0, q1 = Mux(p2.up, a_up, a_mid), Mux(p2.up, a_mid, a_low)
-    return band - q0, q0 - q1, q1, 0
-
-
-def _screen_cells(p2) -> list:
-    """The four cells on screen, signed by the winding: ``(x, y, delta)`` expressions of
-    p2's registers."""
-    cx, cy = _cells_x_major(p2), _cells_y_major(p2)
-    up = p2.up
+    cy = _y_major_values(band, Mux(up, a_up, a_mid), Mux(up, a_mid, a_low))
     cells = []
     for k in range(4):
         pair, right = divmod(k, 2)  # x-major: row a or b, column x or x + 1
-        value_x = Mux(p2.neg, cx[2 * pair + 1 - right], cx[k])
-        row = pair - up  # x-major: -1, 0 or +1 rows along +v, one row_dy each on screen
-        # y-major: v offset k - up, one cell lower along -v. Each coordinate is one add of
-        # a small offset (selects of constants and up).
-        dx = Mux(p2.x_major, right, Mux(p2.minor_neg, 1 + up - k, k - up))
-        dy = Mux(p2.x_major, Mux(p2.minor_neg, -row, row), 0)
-        value = Mux(p2.x_major, value_x, cy[k])
-        cells.append((p2.x + dx, p2.y + dy, Mux(p2.sigma_neg, -value, value)))
+        value = Mux(p2.x_major, Mux(p2.neg, cx[2 * pair + 1 - right], cx[k]), cy[k])
+        cells.append(_cell_at(p2, k, Mux(p2.sigma_neg, -value, value)))
     return cells
 
 
-def _output(m, st, en, p2) -> list:
-    """`delta_cells`: the four cells on screen, signed by the winding, into the payload;
-    returns them (the values the payload loads)."""
+def _y_major_values(band, q0, q1) -> tuple:
+    """`_deltas_y_major`'s cells: band - q0, q0 - q1, q1, 0."""
+    return band - q0, q0 - q1, q1, 0
+
+
+def _ends(p2) -> dict:
+    """What the deep stepper's p3 loads: the column's areas in its lower and upper rows
+    (``lo``, ``hi``), the total less the lower (``rest``: the middle row's area is rest - hi
+    clamped to ``bound``) and the middle row's bound (x-major: the cover of row r; y-major:
+    the band). An edge is x-major or y-major: one register for each pair (the cut that
+    balances p2's carry chains against the output register's, about three each)."""
+    carried = ("valid", "last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg", "up")
+    r_low, r_up = _x_major_ends(p2)
+    a_low, a_up = _y_major_ends(p2)
+    x_major, total, band = p2.x_major, p2.total, p2.band_rect
+    return dict(
+        {name: getattr(p2, name) for name in carried},
+        cov_up=p2.cov_up,
+        cov_low=p2.cov_low,
+        lo=Mux(x_major, r_low, a_low),
+        hi=Mux(x_major, r_up, a_up),
+        rest=Mux(x_major, total - r_low, total + band - a_low),
+        bound=Mux(x_major, p2.cov_mid, band),
+    )
+
+
+def _fast_cells(p3) -> list:
+    """The four cells on screen from the deep stepper's p3 (`_cells`' values), each one
+    subtraction ``a - b`` with the winding's sign folded in (-(a - b) = b - a swaps the
+    operands): the fewest carry chains after p3."""
+    up = p3.up
+    mid = _clamp(p3.rest - p3.hi, p3.bound)  # r_mid or a_mid
+    r_a, r_b = Mux(up, p3.hi, mid), Mux(up, mid, p3.lo)
+    cov_a, cov_b = Mux(up, p3.cov_up, p3.bound), Mux(up, p3.bound, p3.cov_low)
+    y_major = _y_major_operands(p3, r_a, r_b)
+    cells = []
+    for k in range(4):
+        pair, right = divmod(k, 2)
+        r, cov = (r_a, cov_a) if pair == 0 else (r_b, cov_b)
+        covered = p3.neg ^ right  # the x-major cell holds cov - r, else r
+        a = Mux(p3.x_major, Mux(covered, cov, r), y_major[k][0])
+        b = Mux(p3.x_major, Mux(covered, r, 0), y_major[k][1])
+        sigma_neg = p3.sigma_neg
+        cells.append(_cell_at(p3, k, Mux(sigma_neg, b, a) - Mux(sigma_neg, a, b)))
+    return cells
+
+
+def _y_major_operands(p3, q0, q1) -> list:
+    """`_deltas_y_major`'s cells as differences: band - q0, q0 - q1, q1, 0 (the band is
+    p3's ``bound``)."""
+    return [(p3.bound, q0), (q0, q1), (q1, 0), (0, 0)]
+
+
+def _cell_at(stage, k: int, delta) -> tuple:
+    """Cell `k` of the column on screen, ``(x, y, delta)``: x-major, row a or b (k // 2) and
+    column x or x + 1; y-major, v offset k - up, one cell lower along -v. Each coordinate is
+    one add of a small offset (selects of constants and ``up``)."""
+    pair, right = divmod(k, 2)
+    up = stage.up
+    row = pair - up  # x-major: -1, 0 or +1 rows along +v, one row_dy each on screen
+    dx = Mux(stage.x_major, right, Mux(stage.minor_neg, 1 + up - k, k - up))
+    dy = Mux(stage.x_major, Mux(stage.minor_neg, -row, row), 0)
+    return stage.x + dx, stage.y + dy, delta
+
+
+def _output(m, st, en, stage, cells) -> list:
+    """`delta_cells`: `cells` (of the stage before the output register, signed by the
+    winding) into the payload; returns them (the values the payload loads)."""
     widths = st.config.register_widths()
-    cells = _screen_cells(p2)
     beat = st.out.payload
     with m.If(en):
-        m.d.sync += [st.out.valid.eq(p2.valid), beat.last.eq(p2.last)]
+        m.d.sync += [st.out.valid.eq(stage.valid), beat.last.eq(stage.last)]
         for k, (x, y, delta) in enumerate(cells):
             cell = beat[f"cell{k}"]
             m.d.sync += [cell.x.eq(x), cell.y.eq(y), cell.delta.eq(delta)]

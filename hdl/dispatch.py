@@ -77,7 +77,10 @@ class SetupArray(wiring.Component):
         count = check_setup_units(units)
         self.units = [
             EdgeSetupUnit(
-                config, errors_bits=errors_bits, pieces=None if pieces is None else pieces(config)
+                config,
+                errors_bits=errors_bits,
+                pieces=None if pieces is None else pieces(config),
+                accept_in_hold=False,  # offered a command only when free (`busy`)
             )
             for _ in range(count)
         ]
@@ -126,8 +129,8 @@ class SetupArray(wiring.Component):
         for index, unit in enumerate(self.units):
             m.d.comb += [
                 unit.edges.payload.eq(self.edges.payload),
-                # A busy unit must not see the command: back in IDLE after a dropped command,
-                # or in HOLD in the clock its bank is taken, it would accept it.
+                # A busy unit must not see the command: back in IDLE after a dropped command
+                # it would accept it.
                 unit.edges.valid.eq(self.edges.valid & self.edges.ready & (d == index)),
             ]
         with m.If(self.edges.valid & self.edges.ready):

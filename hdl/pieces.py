@@ -53,6 +53,7 @@ __all__ = [
     "kq_products",
     "pieces_registers",
     "run_end_loads",
+    "total0_product",
     "total0_steps",
 ]
 
@@ -237,6 +238,16 @@ def total0_steps(unit) -> list:
     ]
 
 
+def total0_product(unit) -> list:
+    """One of FINAL's two clocks in the fast core's setup (`EndPieces` with ``multiplier``):
+    the first registers the multiplicand, ``y_area0 = hs0 + he_first`` (its carry chains
+    off the multiplier's path), the second multiplies, ``y_area0 = y_area0 w0``: the product
+    of `total0_steps`, modulo the same register."""
+    pc, counter = unit.pieces, unit.regs.counter
+    product = Mux(counter == 0, pc.m_area0, pc.y_area0 * pc.w0)
+    return [pc.y_area0.eq(product), counter.eq(counter + 1)]
+
+
 def final_pieces(m, unit) -> None:
     """The end pieces of ``next_bank`` (combinational, complete in FINAL's last clock): the
     registered ones, the flags, the winding sign, and ``hs0``, ``total0``, which need ``jq``
@@ -282,17 +293,20 @@ class EndPieces:
     and the hooks the unit calls. The bank gains the `edgeaa.model.bank` fields marked
     ``pieces`` (``in_bank``); WINDOW loads ``cut_end`` and clears the kq products; RUN forms
     the products by ``|I_d|`` beside lane A's pass 2 and by kq beside lane B, and loads
-    `run_end_loads` in its last clock; FINAL takes ``s + 2`` clocks (`total0_steps`);
+    `run_end_loads` in its last clock; FINAL takes ``s + 2`` clocks (`total0_steps`), or two
+    with `multiplier` (`total0_product`: a DSP block of the fast pipeline's ECP5);
     ``next_bank`` gets `final_pieces`. One instance per setup unit (its registers)."""
 
     in_bank = True
 
-    def __init__(self, config: EdgeConfig):
+    def __init__(self, config: EdgeConfig, *, multiplier: bool = False):
         vars(self).update(vars(pieces_registers(config)))
+        self.multiplier = multiplier
 
     @property
     def final_cycles(self) -> int:
-        return len(self.w0)  # one a bit of w0 (`total0_steps`)
+        # one a bit of w0 (`total0_steps`), or the multiplicand then the product
+        return 2 if self.multiplier else len(self.w0)
 
     def window_loads(self, unit) -> list:
         return [self.cut_end.eq(r_cut_end(unit.regs)), self.k_me.eq(0), self.k_mg.eq(0)]
@@ -317,8 +331,8 @@ class EndPieces:
         m.d.sync += run_end_loads(unit)
 
     def final(self, m, unit) -> None:
-        """FINAL: the y-major total0 product, one bit of w0 a clock."""
-        m.d.sync += total0_steps(unit)
+        """FINAL: the y-major total0 product, one bit of w0 a clock or by a multiplier."""
+        m.d.sync += total0_product(unit) if self.multiplier else total0_steps(unit)
         with m.If(unit.regs.counter == self.final_cycles - 1):
             m.next = "HOLD"
 

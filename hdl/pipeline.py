@@ -65,7 +65,9 @@ class EdgePipeline(wiring.Component):
     def __init__(self, pipeline: PipelineConfig | TileConfig):
         self._pipeline = pipeline_config(pipeline)
         self._tile = tile = self._pipeline.tile
-        self.core = PolygonCore(tile.config, setup_units=self._pipeline.setup_units)
+        self.core = PolygonCore(
+            tile.config, setup_units=self._pipeline.setup_units, fmt=self._pipeline.deltas
+        )
         lanes, scan = self._pipeline.pixel_lanes, self._pipeline.scan_lanes
         self.acc, self.res = TileAccumulator(tile, scan), TileResolve(tile, lanes, scan)
         stats = data.StructLayout({name: unsigned(STATS_BITS) for name in STATS})

@@ -4,7 +4,8 @@ constants out (the model's `edgeaa.model.edge.setup`).
 
 In: an ``edges`` beat (`edge_layout`) and the ``clip`` window sampled with it. Out: the
 ``bank`` stream (`setup_layout`), valid from the clock the bank is complete until the stepper
-takes it; the setup accepts its next command in that clock. A bad command (zero length or
+takes it; the setup accepts its next command in that clock (a `SetupArray`'s unit in IDLE
+after it: ``accept_in_hold``). A bad command (zero length or
 I_in == I_out, as the model's `validate`) gives no bank: it pulses ``error`` and counts in
 ``errors``, and the setup is ready again two clocks after accepting it. An edge with no column
 inside the window gives no bank and is not an error.
@@ -135,8 +136,19 @@ class EdgeSetupUnit(wiring.Component):
       FINAL's last clock on (``final_cycles`` clocks: `edgeaa.model.timing.final_cycles`).
     """
 
-    def __init__(self, config: EdgeConfig, *, errors_bits: int = ERRORS_BITS, pieces=None):
+    def __init__(
+        self,
+        config: EdgeConfig,
+        *,
+        errors_bits: int = ERRORS_BITS,
+        pieces=None,
+        accept_in_hold: bool = True,
+    ):
         self._config = check_config(config)
+        # A lone unit accepts its next command in the clock the stepper takes its bank; a
+        # `SetupArray`'s never does (it is offered commands only when free), so its ready
+        # need not wait for the stepper's: a long combinational path less.
+        self._accept_in_hold = accept_in_hold
         # The end pieces (`edgeaa.hdl.pieces.EndPieces`) extend the bank and hook into WINDOW,
         # RUN and FINAL; the line core's setup has none.
         self.pieces = NO_END_PIECES if pieces is None else pieces
@@ -266,10 +278,11 @@ class EdgeSetupUnit(wiring.Component):
         # The bank is ``next_bank`` of the registers HOLD keeps: no register of its own. The
         # next command is accepted in the clock the stepper takes the bank (the registers it
         # reads and the ones the command loads change on the same clock edge).
+        hold_ready = self.in_hold & bank.ready if self._accept_in_hold else 0
         m.d.comb += [
             bank.payload.eq(self.next_bank),
             bank.valid.eq(self.in_hold),
-            edges.ready.eq(self.in_idle | (self.in_hold & bank.ready)),
+            edges.ready.eq(self.in_idle | hold_ready),
         ]
         m.d.sync += self.error.eq(0)
         with m.FSM(name="setup") as fsm:
@@ -294,7 +307,8 @@ class EdgeSetupUnit(wiring.Component):
             with m.State("HOLD"):
                 with m.If(bank.ready):
                     m.next = "IDLE"
-                self._take(m, accept)
+                if self._accept_in_hold:
+                    self._take(m, accept)
         for state in STATES:
             m.d.comb += getattr(self, f"in_{state.lower()}").eq(fsm.ongoing(state))
 

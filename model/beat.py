@@ -24,7 +24,7 @@ differs between the line core and the polygon core lives in these two objects.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -275,6 +275,18 @@ DELTAS = BeatFormat(
     final=lambda config: config.subpixel_bits + 2,
 )
 """The polygon core's output: the accumulation deltas, four cells a column."""
+
+DELTAS_FAST = replace(
+    DELTAS,
+    # p1, p2, p3 (the upper and lower rows' areas: the cut of the cells' carry chains, for
+    # Fmax), the output register
+    depth=lambda config: 4,
+    # FINAL registers the y-major total0's multiplicand, then multiplies (`edgeaa.hdl.pieces`)
+    final=lambda config: 2,
+)
+"""The fast pipeline's core output (`PipelineConfig.fast_core`): the same stream, beats and
+bank from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), one clock later, and a
+setup whose FINAL takes two clocks (its product by a multiplier: the ECP5's DSP blocks)."""
 
 
 def format_of(stream: str) -> BeatFormat:

@@ -37,7 +37,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
-from .beat import delta_column_beats
+from .beat import DELTAS, DELTAS_FAST, BeatFormat, delta_column_beats
 from .config import EdgeConfig
 from .edge import Clip, Edge, EdgeError
 from .step import run_edge_deltas
@@ -69,21 +69,22 @@ CODE = {name: code for code, name in enumerate(COMMANDS)}
 @dataclass(frozen=True)
 class PipelineConfig:
     """What a polygon pipeline is built with: its tile (`TileConfig`, with the stepper's
-    `EdgeConfig`) and the setup units feeding its deltas stepper (`edgeaa.hdl.dispatch.
-    SetupArray` when more than one) and the pixel lanes: the pixels the resolve's flush
-    sends a clock, side by side in one beat of its ``pixels`` stream (lane k the column
-    ``x + k``; its pixel memories banked by column modulo the lanes). The commands, the
-    scan lanes: the accumulated cells its accumulator's scan reads and its resolve composites
-    a clock, side by side in one beat of the ``cells`` stream (lane k the column ``x + k``;
-    the accumulation memory banked by column modulo the lanes; more than one needs as many
-    pixel lanes, whose memories the resolve then reads and writes a lane each). The commands,
-    the frames and the images do not depend on `setup_units`, `pixel_lanes` or `scan_lanes`;
-    only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
+    `EdgeConfig`); the setup units feeding its deltas stepper (`edgeaa.hdl.dispatch.
+    SetupArray` when more than one); the pixel lanes, the pixels the resolve's flush sends
+    a clock, side by side in one beat of its ``pixels`` stream (lane k the column ``x + k``;
+    its pixel memories banked by column modulo the lanes); the scan lanes, the accumulated
+    cells its accumulator's scan reads and its resolve composites a clock, side by side in
+    one beat of the ``cells`` stream (lane k the column ``x + k``; the accumulation memory
+    banked by column modulo the lanes; more than one needs as many pixel lanes, whose
+    memories the resolve then reads and writes a lane each); and the deltas stepper's depth
+    (`deltas`). The commands, the frames and the images do not depend on any of these but
+    the tile; only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
 
     tile: TileConfig = field(default_factory=TileConfig)
     setup_units: int = 1
     pixel_lanes: int = 1
     scan_lanes: int = 1
+    fast_core: bool = False  # the core's output: DELTAS, or DELTAS_FAST (`deltas`)
 
     def __post_init__(self):
         if not isinstance(self.tile, TileConfig):
@@ -93,6 +94,14 @@ class PipelineConfig:
         scan = _check_count("scan_lanes", self.scan_lanes, SCAN_LANES)
         if scan > 1 and lanes != scan:  # the resolve reads and writes a pixel lane per cell
             raise ValueError(f"scan_lanes {scan} needs pixel_lanes {scan}, not {lanes}")
+        if not isinstance(self.fast_core, bool):
+            raise TypeError(f"fast_core must be True or False, not {self.fast_core!r}")
+
+    @property
+    def deltas(self) -> BeatFormat:
+        """The core's output (`edgeaa.model.beat`): `DELTAS_FAST` with `fast_core` (the
+        deltas stepper one register deeper, p3), else `DELTAS`."""
+        return DELTAS_FAST if self.fast_core else DELTAS
 
     @classmethod
     def named(cls, name: str, tile: TileConfig | None = None) -> PipelineConfig:
@@ -121,10 +130,11 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # The named configurations, built from the same components (docs/hardware.md, "Display
 # rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
-# knee of clocks over area), a flush of two pixels a clock and a scan of two cells a clock.
+# knee of clocks over area), a flush of two pixels a clock, a scan of two cells a clock and
+# the fast core (`DELTAS_FAST`: its p3 does not fit compact's HX8K).
 PIPELINES = {
-    "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1},
-    "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2},
+    "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "fast_core": False},
+    "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "fast_core": True},
 }
 
 

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .beat import DELTAS
 from .edge import EdgeError, setup
 from .pipeline import Decoded, PipelineConfig, decode_commands, pipeline_config
 from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming
@@ -70,6 +69,7 @@ class _Top:
     def __init__(self, pipeline: PipelineConfig, count: int):
         self.tile = tile = pipeline.tile
         self.units = pipeline.setup_units
+        self.deltas = pipeline.deltas  # the core's output: its depth
         self.model = TileModel(tile, pipeline.scan_lanes)
         self.clock = TileClock(tile, pipeline.pixel_lanes)
         self.taken = [0] * count
@@ -132,7 +132,7 @@ class _Top:
             schedule(
                 config,
                 shapes,
-                fmt=DELTAS,
+                fmt=self.deltas,
                 setup_units=self.units,
                 idle=idle,
                 sink_ready=self.clock.ready,
@@ -154,9 +154,8 @@ class _Top:
                 # each beat waits hold - 1 clocks; the polygon's first until the sink is ready
                 stalled += int(sum(hold)) - len(hold)
                 if first_beat:
-                    stalled += (
-                        t.beats[0] - hold[0] + 1 - (t.load + 1 + pipeline_depth(config, DELTAS))
-                    )
+                    depth = pipeline_depth(config, self.deltas)
+                    stalled += t.beats[0] - hold[0] + 1 - (t.load + 1 + depth)
                     first_beat = False
             else:  # dropped: the core is idle once its unit is free
                 stop = t.released

@@ -25,7 +25,8 @@ takes them):
 * FINAL (``Phi = final_cycles`` clocks, ``a + R + 3 .. a + R + 2 + Phi``): the bank's
   contents are complete in its last clock (combinational, from the registers). ``Phi = 1``
   for the line-writes core; ``s + 2`` for the deltas core, whose setup forms the y-major
-  ``total0`` product there, one bit of the first piece's width a clock.
+  ``total0`` product there, one bit of the first piece's width a clock; 2 for the fast
+  pipeline's deltas core (`edgeaa.model.beat.DELTAS_FAST`), whose setup multiplies.
 * HOLD (from clock ``a + R + 3 + Phi``): the bank is valid, the registers hold, until the
   stepper takes it; in that clock the setup accepts the next command if one is offered (IDLE
   after it otherwise).
@@ -38,7 +39,8 @@ takes them):
   Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
   pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
   register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
-  every mode for the polygon core's accumulation deltas): the beat is valid in
+  every mode for the polygon core's accumulation deltas, 4 with its deep stepper,
+  `DELTAS_FAST`): the beat is valid in
   clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
   clocks, FINAL's ``s + 2`` included: only D and Phi differ between the two outputs
   (`edgeaa.model.beat.WRITES` and `DELTAS` declare both, and whether the stepper holds the
@@ -69,7 +71,8 @@ finishes while the stepper is still on a long edge waits for it.
 ``R + 2 + Phi = L - D - 2``. ``L = I + F + 5 + Phi + D``: for the line-writes core 27 clocks
 for the default configuration and its pw variant (F = 11), 28 for seg2 and seg4, 37 for the
 truncated accumulator (F = 21); 19 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 7);
-for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration.
+for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration; 30 for the fast
+pipeline's (`edgeaa.model.beat.DELTAS_FAST`: D = 4, Phi = 2).
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
 at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 29 for its
@@ -161,8 +164,9 @@ def start_clip_cycles(config: EdgeConfig) -> int:
 def pipeline_depth(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
     """Clocks from a column's step to its beat (`BeatFormat.pipeline_depth`): the stepper's
     output pipeline, counting the output register (2 with at most one segment, 3 with two or
-    more; the polygon core's is 3 in every mode: the piece's depth and estimate, then the
-    cells)."""
+    more; the polygon core's is 3 in every mode: the piece's depth, the estimate and covers,
+    then the cells; 4 with the deep stepper, `DELTAS_FAST`, whose p3 holds the outer rows'
+    areas)."""
     return fmt.pipeline_depth(config)
 
 

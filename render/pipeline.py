@@ -28,7 +28,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..model import Clip, Edge
-from ..model.beat import DELTAS
 from ..model.pipeline import Command, PipelineConfig, pipeline_config
 from ..model.tile import (
     EMPTY_END,
@@ -380,7 +379,7 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     x_major = dx >= dy
     run = dx / np.maximum(dy, 1)  # columns per row (of an x-major edge)
     units = pipeline.setup_units
-    unit = unit_cycles(config, units, DELTAS)  # a unit's clocks per edge, but its columns
+    unit = unit_cycles(config, units, pipeline.deltas)  # a unit's clocks per edge, but its columns
 
     def edge_clocks(columns):
         """An edge's clocks in a stream: its columns and a clock (the stepper), or its
@@ -389,7 +388,8 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
 
     setup = unit / units
     clipped = start_clip_cycles(config) / pipeline.setup_units
-    latency = setup_latency(config, DELTAS) - setup  # a polygon's first edge, over its setup
+    # a polygon's first edge, over its setup
+    latency = setup_latency(config, pipeline.deltas) - setup
     owner = plan.polygon[sent]
     width, height = plan.scene.width, plan.scene.height
     tiles_x = np.arange(0, width, tile.width)

@@ -39,6 +39,7 @@ from edgeaa.hdl.core import ERRORS_BITS
 from edgeaa.model import Clip, Edge, EdgeConfig, EdgeError, run_edge, setup
 from edgeaa.model import timing as timing_model
 from edgeaa.model.bank import bank_values
+from edgeaa.model.beat import WRITES, BeatFormat
 from edgeaa.sim.simulators.amaranth_runner import Probe, decoder
 from edgeaa.sim.simulators.amaranth_sim import run_core
 from edgeaa.sim.simulators.verilator_harness import drain_clocks
@@ -77,6 +78,7 @@ class Run:
     banks: list = field(default_factory=list)  # (clock, decoded bank) handed to the stepper
     error_pulses: list = field(default_factory=list)  # clocks with `error` high
     setup_units: int = timing_model.DEFAULT_SETUP_UNITS
+    fmt: BeatFormat = WRITES  # the core's output (its depth)
     errors: int = 0  # final `errors` count
     final_idle: tuple = ()  # writes.valid, bank valid, stepper active, edges.ready
     clocks: int = 0

@@ -36,7 +36,14 @@ from edgeaa.hdl import (
 )
 from edgeaa.model import Edge, EdgeConfig, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.model.beat import CELLS, DELTAS, WRITES, DeltaBeat, delta_column_beats
+from edgeaa.model.beat import (
+    CELLS,
+    DELTAS,
+    DELTAS_FAST,
+    WRITES,
+    DeltaBeat,
+    delta_column_beats,
+)
 from edgeaa.model.step import run_edge_deltas
 from edgeaa.sim.simulators import amaranth_sim, verilator_harness
 from edgeaa.sim.simulators.amaranth_runner import decoder
@@ -60,16 +67,19 @@ def _as_beat(beat: dict) -> DeltaBeat:
     return DeltaBeat(cells, bool(beat["last"]))
 
 
-def simulate(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None) -> Run:
+def simulate(
+    config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None, fmt=DELTAS
+) -> Run:
     """Offer `edges` in order (each with its window on ``clip``) and drain the deltas as
     `DeltaBeat`s (`core_bench.drive`); with `seed`, random idle source clocks, sink stalls
-    and clip windows between the edges; `setup_units` the core's."""
+    and clip windows between the edges; `setup_units` and `fmt` (its depth) the core's."""
     units = timing_model.DEFAULT_SETUP_UNITS if setup_units is None else setup_units
-    dut = PolygonCore(config, setup_units=units)
-    tag = f"[{label} seed={seed} idle={idle} stall={stall} units={units} {config}]"
-    run = Run(config, list(edges), tag, dut.setup_latency, setup_units=units)
+    dut = PolygonCore(config, setup_units=units, fmt=fmt)
+    depth = fmt.pipeline_depth(config)
+    tag = f"[{label} seed={seed} idle={idle} stall={stall} units={units} depth={depth} {config}]"
+    run = Run(config, list(edges), tag, dut.setup_latency, setup_units=units, fmt=fmt)
     fields = decoder(delta_layout(config))
-    drain = drain_clocks(config, DELTAS)
+    drain = drain_clocks(config, fmt)
     return drive(dut, run, decode=lambda raw: _as_beat(fields(raw)), drain=drain,
                  seed=seed, idle=idle, stall=stall)  # fmt: skip
 
@@ -80,18 +90,19 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     check_outputs(run, got, expected_deltas(config, run.edges), pieces=True)
     if not exact_timing:
         return
-    timings = timing_model.write_cycles(config, run.edges, fmt=DELTAS, setup_units=run.setup_units)
+    fmt = run.fmt
+    timings = timing_model.write_cycles(config, run.edges, fmt=fmt, setup_units=run.setup_units)
     check_clocks(run, timings)
     # The stepper takes the bank (edge done) in the clock it steps the edge's last column.
-    depth = timing_model.pipeline_depth(config, DELTAS)
+    depth = timing_model.pipeline_depth(config, fmt)
     taken = [t.beats[-1] - depth for t in timings if not t.dropped]
     assert [clock for clock, _ in run.banks] == taken, f"{tag} bank transfer clocks"
 
 
-def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", setup_units=None):
-    run = simulate(
-        config, edges, seed=seed, idle=idle, stall=stall, label=label, setup_units=setup_units
-    )
+def run_and_check(config, edges, *, seed=None, idle=0.0, stall=0.0, label="", **core):
+    """`simulate` and check the deltas (and, without `seed`, every clock); `core`: the
+    core's ``setup_units`` and ``fmt``."""
+    run = simulate(config, edges, seed=seed, idle=idle, stall=stall, label=label, **core)
     check_run(run, exact_timing=seed is None)
     return run
 
@@ -240,6 +251,18 @@ def test_setup_array(units):
     run_and_check(config, edges, seed=units, idle=0.2, stall=0.5, label="array", setup_units=units)
 
 
+@pytest.mark.parametrize(("name", "units"), [("default", 1), ("small", 4)])
+def test_fast_core(name, units):
+    """The fast core (`DELTAS_FAST`, the fast pipeline's: p3 between p2 and the output
+    register): the same deltas, one clock later, every clock the timing model's; and under
+    stalls."""
+    config = CORE_CONFIGS[name]
+    edges = mixed_edges(config, seed=40 + units, count=16)
+    core = {"setup_units": units, "fmt": DELTAS_FAST}
+    run_and_check(config, edges, label="fast core", **core)
+    run_and_check(config, edges, seed=units, idle=0.2, stall=0.5, label="fast core", **core)
+
+
 def test_a_wrong_model_is_caught(monkeypatch):
     """The comparison can fail: with one cell of the model's deltas changed, it does."""
     import edgeaa.model.step as step
@@ -294,6 +317,11 @@ def test_deltas_setup_has_no_wide_product(name):
     small = config.subpixel_bits + 3
     assert widths and all(max(a, b) <= small for a, b in widths), widths
     assert len(widths) <= 5, widths
+    # The fast core's FINAL: one more, the height sum by the first piece's width (s + 2 bits)
+    fast = _mul_widths(EdgeSetupUnit(config, pieces=EndPieces(config, multiplier=True)))
+    wide = sorted(set(fast) - set(widths))
+    assert len(fast) == len(widths) + 1 and len(wide) == 1, fast
+    assert min(wide[0]) == config.subpixel_bits + 2 and max(wide[0]) > small, wide
 
 
 def test_the_line_core_keeps_its_bank():

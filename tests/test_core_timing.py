@@ -21,7 +21,7 @@ from edgeaa.hdl import (
 )
 from edgeaa.model import Edge, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.model.beat import DELTAS
+from edgeaa.model.beat import DELTAS, DELTAS_FAST
 from edgeaa.sim.simulators.commands import edge_payload
 from edgeaa.sim.simulators.streams import stream_put
 
@@ -59,6 +59,13 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     assert dut.setup.final_cycles == final == s + 2
     assert timing_model.final_cycles(config) == LineCore(config).setup.final_cycles == 1
     depth = timing_model.pipeline_depth(config, DELTAS)
+    assert dut.stepper.latency == depth == 3  # p1, p2, the output register
+    # The fast core: p3 (one clock later) and a FINAL of two clocks (by a multiplier).
+    fast = PolygonCore(config, fmt=DELTAS_FAST)
+    assert fast.stepper.latency == timing_model.pipeline_depth(config, DELTAS_FAST) == 4
+    assert fast.setup.final_cycles == timing_model.final_cycles(config, DELTAS_FAST) == 2
+    assert fast.setup_latency == dut.setup_latency + 1 - s
+    assert fast.setup_interval == dut.setup_interval - s == R + 5
     assert dut.setup_latency == timing_model.setup_latency(config, DELTAS)
     assert dut.setup_latency == config.intensity_bits + config.F + 5 + final + depth
     assert dut.setup_interval == timing_model.setup_interval(config, 1, DELTAS) == R + 3 + final

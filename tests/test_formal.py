@@ -22,6 +22,7 @@ from edgeaa.hdl import LineCore, PolygonCore, setup_layout
 from edgeaa.hdl import deltas as hdl_deltas
 from edgeaa.hdl.setup import STATES, accept_values
 from edgeaa.model import Edge, EdgeConfig, setup, timing
+from edgeaa.model.beat import DELTAS_FAST
 from edgeaa.sim.verification.formal import (
     DELTA_PROOFS,
     PROOFS,
@@ -59,7 +60,7 @@ def _explain(result) -> str:
 
 
 QUICK = ["stream", "count", "cover_drop"]
-QUICK_DELTAS = ["deltas_stream", "deltas_count", "deltas_loop", "deltas_beat"]
+QUICK_DELTAS = ["deltas_stream", "deltas_count", "deltas_loop", "deltas_beat", "fast_beat"]
 
 
 @pytest.mark.parametrize("name", QUICK + QUICK_DELTAS)
@@ -95,10 +96,12 @@ def test_minor_axis_rows_bounded(tools):
 # gives their run times on the 2-core machine); `deltas_cells` has its own tests below (at
 # F = 21 the default configuration's did not finish in 20 minutes; at F = 11 it takes 30).
 SLOW_DELTAS = ["deltas_bounds", "deltas_pieces", "deltas_pipe", "deltas_cover"]
+# The deep stepper's (`DELTAS_FAST`, the fast pipeline's p3): the proofs its p3 changes.
+SLOW_FAST = ["fast_stream", "fast_count", "fast_pipe", "fast_cover"]
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", SLOW_DELTAS)
+@pytest.mark.parametrize("name", SLOW_DELTAS + SLOW_FAST)
 def test_deltas_proofs(tools, name):
     result = run_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -113,21 +116,33 @@ def test_deltas_cells_default(tools):
 
 
 @pytest.mark.formal
-def test_deltas_cells_small(tools):
-    """The cells from p2 are the model's: proved at the small configuration (5 min)."""
-    result = run_proof("deltas_cells", DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
+@pytest.mark.parametrize("name", ["deltas_cells", "fast_cells"])
+def test_deltas_cells_small(tools, name):
+    """The cells the output register loads (from p2, or the deep stepper's p3) are the
+    model's: proved at the small configuration (minutes)."""
+    result = run_proof(name, DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
 
 
-def _wrong_sign(monkeypatch):
-    """The deltas core with the sign of the y-major middle cell flipped (`_cells_y_major`)."""
-    cells = hdl_deltas._cells_y_major
+def _wrong_sign(monkeypatch, deep: bool):
+    """The deltas core with the sign of the y-major middle cell flipped: q1 - q0 for q0 - q1
+    (`_y_major_operands` of the deep stepper, `_y_major_values` of the other)."""
+    if deep:
+        operands = hdl_deltas._y_major_operands
 
-    def flipped(p2):
-        first, middle, last, zero = cells(p2)
-        return first, -middle, last, zero
+        def flipped(p3, q0, q1):
+            first, (a, b), last, zero = operands(p3, q0, q1)
+            return first, (b, a), last, zero
 
-    monkeypatch.setattr(hdl_deltas, "_cells_y_major", flipped)
+        monkeypatch.setattr(hdl_deltas, "_y_major_operands", flipped)
+    else:
+        values = hdl_deltas._y_major_values
+
+        def negated(band, q0, q1):
+            first, middle, last, zero = values(band, q0, q1)
+            return first, -middle, last, zero
+
+        monkeypatch.setattr(hdl_deltas, "_y_major_values", negated)
 
 
 def _flat_piece(monkeypatch):
@@ -179,12 +194,13 @@ def test_broken_deltas_core_is_caught(tools, monkeypatch, name):
 
 
 @pytest.mark.formal
-def test_deltas_wrong_sign_is_caught(tools, monkeypatch):
-    """A core with a wrong sign fails the cells proof (its p2 cells are not the model's)."""
-    _wrong_sign(monkeypatch)
-    result = run_proof("deltas_cells", DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
+@pytest.mark.parametrize("name", ["deltas_cells", "fast_cells"])
+def test_deltas_wrong_sign_is_caught(tools, monkeypatch, name):
+    """A core with a wrong sign fails the cells proof (its cells are not the model's)."""
+    _wrong_sign(monkeypatch, deep=name == "fast_cells")
+    result = run_proof(name, DELTA_CONFIGS["small"], timeout=SLOW_TIMEOUT)
     assert not result.passed, _explain(result)
-    assert "dcells: p2 cell1 (induction)" in result.failed, _explain(result)
+    assert "dcells: cell1 (induction)" in result.failed, _explain(result)
 
 
 # -- the checks can fail ---------------------------------------------------------------------
@@ -274,14 +290,17 @@ def test_observation_points():
     assert stepper.stages[0].t_above.name == "p1_t_above"
 
 
-def test_deltas_observation_points():
+@pytest.mark.parametrize("fmt, stages", [(None, 2), (DELTAS_FAST, 3)])
+def test_deltas_observation_points(fmt, stages):
     """What the deltas harness reads besides the writes core's: the deltas loop registers
-    (constructor) and the pipeline's stages, piece end and cells (set as it elaborates)."""
-    harness = FormalHarness(checks=("dbeat",), top=PolygonCore)
+    (constructor) and the pipeline's stages (p3 only in the deep stepper), piece end and
+    cells (set as it elaborates)."""
+    harness = FormalHarness(checks=("dbeat",), top=PolygonCore, fmt=fmt)
     harness_rtlil(harness)
     stepper = harness.core.stepper
     assert set(stepper.delta_regs) == {"hs", "adj", "first_col"}
-    assert [stage.valid.name for stage in stepper.delta_stages] == ["d1_valid", "d2_valid"]
+    names = [stage.valid.name for stage in stepper.delta_stages]
+    assert names == [f"d{k}_valid" for k in range(1, stages + 1)]
     assert stepper.delta_he.name == "he" and len(stepper.delta_cells) == 4
     assert harness.core.setup.pieces.end_height.name == "pc_end_height"
 
@@ -291,6 +310,8 @@ def test_harness_rejects_unknown_options():
         FormalHarness(checks=("nonsense",))
     with pytest.raises(ValueError, match="do not apply to PolygonCore"):
         FormalHarness(checks=("beat",), top=PolygonCore)
+    with pytest.raises(TypeError, match="fmt applies to PolygonCore, not LineCore"):
+        FormalHarness(fmt=DELTAS_FAST)
     with pytest.raises(ValueError, match="do not apply to LineCore"):
         FormalHarness(checks=("dbeat",))
     with pytest.raises(ValueError, match="do not apply to LineCore"):

@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 
 from edgeaa.hdl.pipeline import EdgePipeline, command_layout, pipeline_verilog
 from edgeaa.model import EdgeConfig
+from edgeaa.model.beat import DELTAS, DELTAS_FAST
 from edgeaa.model.pipeline import (
     COMMAND_VERSION,
     PIPELINES,
@@ -314,10 +315,10 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 def test_the_named_configurations():
     assert PIPELINES == {
-        "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1},
-        "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2},
+        "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "fast_core": False},
+        "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "fast_core": True},
     }
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2)
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2, True)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
@@ -340,6 +341,13 @@ def test_the_named_configurations():
             PipelineConfig(TILE, 1, lanes, 2)
     with pytest.raises(ValueError, match="no pipeline named"):
         PipelineConfig.named("quick")
+    # the fast core: the deltas stepper 4 deep, with p3; compact's 3
+    assert fast.core.format is DELTAS_FAST and EdgePipeline(TILE).core.format is DELTAS
+    assert fast.core.stepper.latency == DELTAS_FAST.pipeline_depth(TILE.config) == 4
+    assert EdgePipeline(TILE).core.stepper.latency == 3
+    for bad in (1, 0, "yes", None):
+        with pytest.raises(TypeError, match="fast_core must be True or False"):
+            PipelineConfig(TILE, fast_core=bad)
 
 
 # -- the compiled pipeline (Verilator) -----------------------------------------------------------

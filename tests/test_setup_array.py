@@ -95,9 +95,10 @@ def test_a_wrong_unit_count_in_the_model_is_caught():
 
 
 def test_an_ungated_dispatch_is_caught(monkeypatch):
-    """The order check can fail: a dispatcher that offers the command to a busy unit (in
-    HOLD, it accepts it in the clock the stepper takes its bank, which the array does not
-    count) loses edges."""
+    """The order check can fail: a dispatcher that offers the command to a busy unit whose
+    unit accepts in HOLD as a lone unit does (it accepts it in the clock the stepper takes
+    its bank, which the array does not count) loses edges. (An array's units do not accept
+    in HOLD: ``accept_in_hold=False``.)"""
 
     def ungated(self, m):
         d = self.dispatch
@@ -111,6 +112,14 @@ def test_an_ungated_dispatch_is_caught(monkeypatch):
             m.d.sync += d.eq(self._next(d))
 
     monkeypatch.setattr(SetupArray, "_dispatch", ungated)
+    init = SetupArray.__init__
+
+    def lone_units(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        for unit in self.units:
+            unit._accept_in_hold = True
+
+    monkeypatch.setattr(SetupArray, "__init__", lone_units)
     config = CORE_CONFIGS["default"]
     edges = [run_of(config, 3 + n, 7 + n, 40 if n == 0 else 1) for n in range(8)]
     with pytest.raises(AssertionError):

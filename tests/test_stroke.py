@@ -11,7 +11,7 @@ import pytest
 from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 from shapely import unary_union
-from shapely.geometry import LineString
+from shapely.geometry import LineString, Point
 from shapely.geometry import Polygon as ShapelyPolygon
 from shapely.ops import substring
 
@@ -42,11 +42,28 @@ def union(pieces):
 
 
 def reference(points, closed: bool, style: StrokeStyle, join: str | None = None):
-    line = LineString([*points, points[0]] if closed else points)
-    return line.buffer(
-        style.width / 2, quad_segs=QUAD_SEGS, cap_style=GEOS_CAP[style.cap],
-        join_style=GEOS_JOIN[join or style.join], mitre_limit=style.miter_limit,
+    """GEOS's buffer of the path, with the parts every such stroke certainly covers: each
+    segment's body (width w, flat ends) and, for round joins or caps, the disc of radius
+    w/2 at each joint or end (the segments are at least w long). GEOS's buffer of a
+    self-crossing path with short segments can lose a face inside them: points=[(0, 0.5),
+    (1.75, 5.25), (0, 0), (1.75, 1)], closed, width 2, bevels lost 0.78 of a body;
+    [(0, 0.25), (0.25, 2), (0, 0), (1, 1.25)], closed, width 1.5, round joins lost 0.78 of
+    the loop it closes, every point of which lies within w/2 of the path."""
+    ring = [*points, points[0]] if closed else list(points)
+    r, join = style.width / 2, join or style.join
+    buffer = LineString(ring).buffer(
+        r, quad_segs=QUAD_SEGS, cap_style=GEOS_CAP[style.cap], join_style=GEOS_JOIN[join],
+        mitre_limit=style.miter_limit,
     )  # fmt: skip
+    parts = [
+        LineString(pair).buffer(r, cap_style="flat") for pair in zip(ring, ring[1:], strict=False)
+    ]
+    joints = ring if closed else ring[1:-1]
+    discs = (joints if join == "round" else []) + (
+        [ring[0], ring[-1]] if style.cap == "round" and not closed else []
+    )
+    parts += [Point(p).buffer(r, quad_segs=QUAD_SEGS) for p in discs]
+    return unary_union([buffer, *parts], grid_size=GRID)
 
 
 def miter_ratios(points, closed: bool) -> list[float]:
@@ -97,6 +114,14 @@ points_st = st.lists(
 @example(  # GEOS's floating overlay lost a face here (GRID above)
     points=[(0.75, 32.75), (0.0, 0.25), (38.5, 0.0), (0.25, 34.0), (1.75, 0.25), (3.5, 0.0)],
     closed=True, width=0.5, cap="butt", join="miter", limit=1.0,
+)  # fmt: skip
+@example(  # GEOS's buffer lost a face inside a segment's body here (`reference`)
+    points=[(0.0, 0.5), (1.75, 5.25), (0.0, 0.0), (1.75, 1.0)],
+    closed=True, width=2, cap="butt", join="miter", limit=1.0,
+)  # fmt: skip
+@example(  # GEOS's buffer lost the loop the path closes here (`reference`)
+    points=[(0.0, 0.25), (0.25, 2.0), (0.0, 0.0), (1.0, 1.25)],
+    closed=True, width=1.5, cap="butt", join="round", limit=4.0,
 )  # fmt: skip
 def test_the_stroke_is_shapelys_buffer_within_the_round_parts_bound(
     points, closed, width, cap, join, limit

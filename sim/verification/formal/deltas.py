@@ -23,13 +23,16 @@ setup holds the bank while the stepper steps its edge).
     Every beat's cells are the model's `delta_cells` of the loop state its column was
     stepped with (modulo the payload's widths, which ``dbounds`` shows the model's values
     fit), and ``last`` is set exactly on an edge's last column. As for the writes core
-    (`pipeline`), the harness carries a snapshot of the loop state along p1 and p2;
-    ``dpipe`` states what p1 holds (the model's heights and the column's per-edge selects)
-    and what p2 holds (those it carries, the model's clamped estimate, the piece's cover of
-    each row), ``dcells`` that the cells the output register loads from p2 are the model's
-    in full width, ``dbeat`` the output register against the model's cells of p2's
-    snapshot, registered by the harness as the pipeline moves (one copy of the model, not
-    two).
+    (`pipeline`), the harness carries a snapshot of the loop state along p1, p2 and (the
+    deep stepper, `DELTAS_FAST`) p3; ``dpipe`` states what p1 holds (the model's heights
+    and the column's per-edge selects), what p2 holds (those it carries, the model's
+    clamped estimate, the piece's cover of each row) and what p3 holds (those it carries,
+    the areas of the upper and lower rows, the total less the lower, the middle row's
+    bound: of p2's values, which the harness registers as the pipeline moves), ``dcells``
+    that the cells the output register loads from p2 or p3 are the model's in full width,
+    ``dbeat`` the output register against them; the harness registers the model's cells of
+    p2's snapshot as the pipeline moves (one copy of the model per stage up to p2, none
+    after it: k-induction would have to prove the copies equal).
 """
 
 from __future__ import annotations
@@ -161,7 +164,7 @@ def _loop(ctx, st):
 
 
 def _snapshots(ctx, st) -> list:
-    """(snapshot, valid) of the loop state for p1 and p2 (one enable moves them, as the
+    """(snapshot, valid) of the loop state for p1, p2, p3 (one enable moves them, as the
     stepper's pipeline)."""
     m, out = ctx.m, ctx.out
     en = ~out.valid | out.ready
@@ -185,8 +188,12 @@ def _snapshots(ctx, st) -> list:
 def _pipeline(ctx, st):
     snaps = _snapshots(ctx, st)
     _stage_p1(ctx, *snaps[0])
-    cells = _stage_p2(ctx, *snaps[1])
-    _output(ctx, *snaps[1], cells)
+    values, cells = _stage_p2(ctx, *snaps[1])
+    valid = snaps[1][1]
+    if len(ctx.stages) == 3:  # DELTAS_FAST: p3 between p2 and the output register
+        valid, values, cells = _stage_p3(ctx, snaps[2][1], values, cells)
+    _cells_ok(ctx, valid, cells)
+    _output(ctx, valid, values["last"], cells)
 
 
 def _stage_p1(ctx, s1, v1):
@@ -270,37 +277,92 @@ def _snapshot_ok(ctx, group, snap, valid, where):
 
 
 def _stage_p2(ctx, s2, v2):
-    """``dpipe``: p2 holds the column of its snapshot (`_p2_values`); ``dcells``: the cells
-    the output register loads from it are the model's, in full width."""
+    """``dpipe``: p2 holds the column of its snapshot (`_p2_values`), which satisfies
+    `_snapshot_ok`; returns those values and the model's cells of that column
+    (`spec.deltas_column`)."""
     p2 = ctx.stages[1]
     c2 = _column(ctx, s2, "d2spec")
+    values = _p2_values(s2, c2)
     ctx.emit("dpipe", p2.valid == v2, "dpipe: p2 valid")
-    for name, value in _p2_values(s2, c2).items():
+    for name, value in values.items():
         ctx.emit("dpipe", implies(v2, getattr(p2, name) == value), f"dpipe: p2 {name}")
-    for k, (cell, model) in enumerate(zip(ctx.stepper.delta_cells, c2.cells, strict=True)):
+    # what `dcells` needs of the column whose cells p3 gets one move later (p1's, moved on)
+    _snapshot_ok(ctx, "dpipe", s2, v2, "p2")
+    return values, c2.cells
+
+
+def _p3_values(p2) -> dict:
+    """What p3 holds, from the values p2 held (`_p2_values`) one move earlier: those it
+    carries and the areas of the column's lower and upper rows (restated from
+    `column_deltas`: ``lo``, ``hi``), the total less the lower (``rest``) and the middle
+    row's bound, each the x-major or the y-major one."""
+    carried = ("last", "x", "y", "x_major", "neg", "minor_neg", "sigma_neg", "up")
+    carried += ("cov_up", "cov_low")
+    total, t, band = p2["total"], p2["t"], p2["band_rect"]
+    hs_ge, low, up, he_le0 = p2["hs_ge"], p2["low"], p2["up"], p2["he_le0"]
+    cov_up, cov_low = p2["cov_up"], p2["cov_low"]
+    r_low = Mux(hs_ge, total, Mux(low, _clamp(t + p2["rect_low"], cov_low), 0))
+    r_up = Mux(he_le0, total, Mux(up, _clamp(cov_up - t - band, cov_up), 0))
+    a_low = _clamp(Mux(hs_ge, total - band, Mux(low, t, 0)), band)
+    a_up = _clamp(Mux(he_le0, total + band, Mux(up, band - t, band)), band)
+    x_major = p2["x_major"]
+    return dict(
+        {name: p2[name] for name in carried},
+        lo=Mux(x_major, r_low, a_low),
+        hi=Mux(x_major, r_up, a_up),
+        rest=Mux(x_major, total - r_low, total + band - a_low),
+        bound=Mux(x_major, p2["cov_mid"], band),
+    )
+
+
+def _stage_p3(ctx, v3, p2_values, p2_cells):
+    """``dpipe`` (the deep stepper's p3): p3 holds `_p3_values` of what p2 held
+    (`p2_values`, registered by the harness as the pipeline moves: no second copy of the
+    model's column, which k-induction would have to prove equal to p2's). Returns p3's
+    valid, p2's values and the model's cells of p2's column (`p2_cells`), both registered
+    likewise, one move later."""
+    m, p3 = ctx.m, ctx.stages[2]
+    en = ~ctx.out.valid | ctx.out.ready
+    held = {name: delayed(m, en, value, f"d3m_{name}") for name, value in p2_values.items()}
+    cells = [
+        [
+            delayed(m, en, value, f"d3m_cell{k}_{name}")
+            for value, name in zip(cell, "xyd", strict=True)
+        ]
+        for k, cell in enumerate(p2_cells)
+    ]
+    ctx.emit("dpipe", p3.valid == v3, "dpipe: p3 valid")
+    for name, value in _p3_values(held).items():
+        ctx.emit("dpipe", implies(v3, getattr(p3, name) == value), f"dpipe: p3 {name}")
+    return v3, held, cells
+
+
+def _cells_ok(ctx, valid, cells):
+    """``dcells``: the cells the output register loads (from p2, or the deep stepper's p3)
+    are the model's `cells` of that stage's column, in full width."""
+    for k, (cell, model) in enumerate(zip(ctx.stepper.delta_cells, cells, strict=True)):
         match = all_([Value.cast(a) == b for a, b in zip(cell, model, strict=True)])
-        ctx.emit("dcells", implies(v2, match), f"dcells: p2 cell{k}")
-    return c2.cells
+        ctx.emit("dcells", implies(valid, match), f"dcells: cell{k}")
 
 
-def _output(ctx, s2, v2, cells):
+def _output(ctx, valid, last, cells):
     """``dbeat``: the output register is the beat of its column: the model's cells of the
-    loop state the column was stepped with (`cells`, of p2's snapshot `s2`, registered by
-    the harness when the pipeline moves; modulo the payload's widths) and ``last`` on the
-    edge's last column."""
+    loop state the column was stepped with (`cells` of the stage before it, of p2's
+    snapshot, registered again by the harness when the pipeline moves; modulo the payload's
+    widths) and ``last`` on the edge's last column (the stage's `last`, likewise)."""
     m, out = ctx.m, ctx.out
     en = ~out.valid | out.ready
     beat = data.View(ctx.layout, ctx.payload)
-    v3 = delayed(m, en, v2, "d3_valid")
-    last = delayed(m, en, s2.remaining == 0, "d3_last")
-    ctx.emit("dbeat", out.valid == v3, "dbeat: beat valid")
-    ctx.emit("dbeat", implies(v3, beat.last == last), "dbeat: last")
+    v_out = delayed(m, en, valid, "dout_valid")
+    last = delayed(m, en, last, "dout_last")
+    ctx.emit("dbeat", out.valid == v_out, "dbeat: beat valid")
+    ctx.emit("dbeat", implies(v_out, beat.last == last), "dbeat: last")
     for k, model in enumerate(cells):
         cell = beat[f"cell{k}"]
         got = (cell.x, cell.y, cell.delta)
         want = [
-            delayed(m, en, Value.cast(b)[: len(Value.cast(a))], f"d3_cell{k}_{name}")
+            delayed(m, en, Value.cast(b)[: len(Value.cast(a))], f"dout_cell{k}_{name}")
             for a, b, name in zip(got, model, "xyd", strict=True)
         ]
         match = all_([Value.cast(a).as_unsigned() == b for a, b in zip(got, want, strict=True)])
-        ctx.emit("dbeat", implies(v3, match), f"dbeat: cell{k} is the model's")
+        ctx.emit("dbeat", implies(v_out, match), f"dbeat: cell{k} is the model's")

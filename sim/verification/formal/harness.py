@@ -85,7 +85,9 @@ class FormalHarness(ClockedHarness):
     Cover statements. ``assumes``: check groups proven elsewhere, assumed here. ``fault``: one
     of `FAULTS`, a deliberate error the checks must catch. ``top``: the core proven,
     `LineCore` (its pipeline groups `LINE_CHECKS`, its cover ``stepper``) or `PolygonCore`
-    (`DELTA_CHECKS`, its cover ``deltas``); the other core's groups do not apply.
+    (`DELTA_CHECKS`, its cover ``deltas``); the other core's groups do not apply. ``fmt``:
+    the polygon core's output, if not its default (`edgeaa.model.beat.DELTAS_FAST`: the
+    stepper with p3).
     """
 
     def __init__(
@@ -98,6 +100,7 @@ class FormalHarness(ClockedHarness):
         reset: bool = True,
         fault: str | None = None,
         top=LineCore,
+        fmt=None,
     ):
         self.config = EdgeConfig() if config is None else config
         if not isinstance(self.config, EdgeConfig):
@@ -116,7 +119,10 @@ class FormalHarness(ClockedHarness):
         _check_pipeline_groups(top, self.checks + self.assumes, self.covers)
         # One setup unit: the properties observe its internals (`SetupArray` is checked in
         # simulation, tests/test_setup_array.py).
-        self.core = top(self.config, setup_units=1)
+        if fmt is not None and top is not PolygonCore:
+            raise TypeError(f"fmt applies to PolygonCore, not {top.__name__}")
+        deep = {} if fmt is None else {"fmt": fmt}
+        self.core = top(self.config, setup_units=1, **deep)
 
     def elaborate(self, platform):
         m = Module()

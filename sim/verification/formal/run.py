@@ -11,17 +11,19 @@ import signal
 import subprocess
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from amaranth.back import rtlil
 
 from ....hdl.core import LineCore, PolygonCore
 from ....model import timing
+from ....model.beat import DELTAS_FAST, BeatFormat
 from ....model.config import EdgeConfig
 from .harness import FAULTS, FormalHarness
 
 __all__ = [
+    "FAST_PROOFS",
     "DELTA_PROOFS",
     "PROOFS",
     "FormalError",
@@ -62,6 +64,12 @@ class Proof:
     skip: int | str = 0  # clocks after reset whose assertions and covers are not checked
     description: str = ""
     top: type = LineCore  # the core proven: LineCore or PolygonCore
+    fmt: BeatFormat | None = None  # PolygonCore's output if not its default (DELTAS_FAST)
+
+    @property
+    def format(self) -> BeatFormat:
+        """The output of the core proven (its depth sets "latency" depths)."""
+        return self.top.format if self.fmt is None else self.fmt
 
 
 # The polygon core (`PolygonCore`): the stream, count and bounds groups of the line core,
@@ -127,8 +135,8 @@ DELTA_PROOFS = (
         1,
         assumes=("bounds", "dbounds", "dpipe"),
         top=PolygonCore,
-        description="the four cells the output register loads from p2 are the model's "
-        "`delta_cells` of p2's column snapshot, in full width (k-induction)",
+        description="the four cells the output register loads from p3 are the model's "
+        "`delta_cells` of p3's column snapshot, in full width (k-induction)",
     ),
     Proof(
         "deltas_beat",
@@ -151,6 +159,18 @@ DELTA_PROOFS = (
         description="the deltas stepper is reachable: pieces above and below their row, a "
         "one-column edge, a y-major column, a negative delta, last and held beats, two edges",
     ),
+)
+
+# The same proofs of the deep stepper (`DELTAS_FAST`, the fast pipeline's p3): fast_stream,
+# fast_count, ..., fast_cover.
+FAST_PROOFS = tuple(
+    replace(
+        proof,
+        name=proof.name.replace("deltas_", "fast_"),
+        fmt=DELTAS_FAST,
+        description=f"(deep stepper) {proof.description}",
+    )
+    for proof in DELTA_PROOFS
 )
 
 PROOFS: dict[str, Proof] = {
@@ -224,6 +244,7 @@ PROOFS: dict[str, Proof] = {
             "held beat, two edges in flight (from the first beat of an edge accepted at reset)",
         ),
         *DELTA_PROOFS,
+        *FAST_PROOFS,
     )
 }
 
@@ -408,7 +429,7 @@ def run_proof(
     mode = mode or proof.mode
     depth = proof.depth if depth is None else depth
     skip = proof.skip if skip is None else skip
-    latency = timing.setup_latency(config or EdgeConfig(), proof.top.format)
+    latency = timing.setup_latency(config or EdgeConfig(), proof.format)
     depth, skip = (
         latency + int(value[len("latency") :]) if isinstance(value, str) else value
         for value in (depth, skip)
@@ -422,6 +443,7 @@ def run_proof(
         reset=reset,
         fault=fault,
         top=proof.top,
+        fmt=proof.fmt,
     )
     script = sby_script(mode, depth, skip=skip, solver=solver)
     return run_harness(
