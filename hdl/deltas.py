@@ -21,10 +21,11 @@ column per clock:
   rows (`column_deltas`' r_up and r_low, or a_up and a_low), the total less the lower and
   the middle row's bound (one register each for the x-major and the y-major value): the
   cut that splits the cells' chain of carry chains (about six from p2) over two clocks, for
-  Fmax. Without it (`DELTAS`) the output register loads the cells from p2 through the same
-  logic;
-* the output register: the middle row's area, the cells of `column_deltas` and their screen
-  cells (`delta_cells`), each delta one subtraction with the winding's sign folded in.
+  Fmax;
+* the output register: the cells of `column_deltas` and their screen cells (`delta_cells`):
+  from p2, each value and then its sign (`_cells`, `DELTAS`: the fewest LUTs, compact's),
+  or from p3, the middle row's area and each delta one subtraction with the winding's sign
+  folded in (`_fast_cells`, `DELTAS_FAST`: the fewest carry chains after p3).
 
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
 intermediate wraps; a value is cut narrower only where its operands' shapes bound it (a
@@ -36,7 +37,7 @@ shifts.
 
 Observation points for the formal harness (attributes of the stepper, set when it is
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
-registers of p1, p2 and (deep) p3 (namespaces, each with ``valid`` and ``last``),
+registers of p1, p2 and (fast) p3 (namespaces, each with ``valid`` and ``last``),
 ``delta_cells`` the four ``(x, y, delta)`` values the output register loads (before the
 payload's cut).
 """
