@@ -66,7 +66,7 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model import timing
-from ..model.beat import DELTAS, WRITES, BeatFormat
+from ..model.beat import DELTAS, DELTAS_FAST, WRITES, BeatFormat
 from ..model.config import EdgeConfig
 from .deltas import DeltaStepper
 from .dispatch import SetupArray, check_setup_units
@@ -196,7 +196,7 @@ class PolygonCore(_Core):
     latency: the module docstring; ``setup`` (`EdgeSetupUnit` with `EndPieces`, or a
     `SetupArray` of them) and ``stepper`` (`DeltaStepper`) are its parts."""
 
-    format = DELTAS  # `fmt`: DELTAS, or DELTAS_FAST (the stepper one register deeper)
+    format = DELTAS  # `fmt`: DELTAS, or DELTAS_FAST (the deeper stepper, the multiplying setup)
 
     def __init__(
         self,
@@ -208,8 +208,9 @@ class PolygonCore(_Core):
     ):
         self.format = fmt
         stepper = functools.partial(DeltaStepper, fmt=fmt)
-        # FINAL in two clocks: the y-major total0 product by a multiplier (`DELTAS_FAST`)
-        pieces = functools.partial(EndPieces, multiplier=fmt.final_cycles(config) == 2)
+        # FINAL in two clocks: the y-major total0 product by a multiplier (`DELTAS_FAST`;
+        # the format, not FINAL's clocks, says so: with s = 0 the serial product takes two)
+        pieces = functools.partial(EndPieces, multiplier=fmt is DELTAS_FAST)
         super().__init__(config, stepper, pieces, errors_bits, setup_units)
 
 

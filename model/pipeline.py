@@ -76,8 +76,8 @@ class PipelineConfig:
     cells its accumulator's scan reads and its resolve composites a clock, side by side in
     one beat of the ``cells`` stream (lane k the column ``x + k``; the accumulation memory
     banked by column modulo the lanes; more than one needs as many pixel lanes, whose
-    memories the resolve then reads and writes a lane each); and the deltas stepper's depth
-    (`deltas`). The commands, the frames and the images do not depend on any of these but
+    memories the resolve then reads and writes a lane each); and its core (`fast_core`, the
+    output `deltas`). The commands, the frames and the images do not depend on any of these but
     the tile; only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
 
     tile: TileConfig = field(default_factory=TileConfig)
@@ -100,7 +100,8 @@ class PipelineConfig:
     @property
     def deltas(self) -> BeatFormat:
         """The core's output (`edgeaa.model.beat`): `DELTAS_FAST` with `fast_core` (the
-        deltas stepper one register deeper, p3), else `DELTAS`."""
+        deltas stepper one register deeper, p3, and a setup whose FINAL multiplies), else
+        `DELTAS`."""
         return DELTAS_FAST if self.fast_core else DELTAS
 
     @classmethod
@@ -131,7 +132,8 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
 # knee of clocks over area), a flush of two pixels a clock, a scan of two cells a clock and
-# the fast core (`DELTAS_FAST`: its p3 does not fit compact's HX8K).
+# the fast core (`DELTAS_FAST`: its p3 does not fit compact's HX8K, which has no multipliers
+# for its FINAL).
 PIPELINES = {
     "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "fast_core": False},
     "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "fast_core": True},

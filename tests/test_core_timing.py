@@ -64,6 +64,8 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     fast = PolygonCore(config, fmt=DELTAS_FAST)
     assert fast.stepper.latency == timing_model.pipeline_depth(config, DELTAS_FAST) == 4
     assert fast.setup.final_cycles == timing_model.final_cycles(config, DELTAS_FAST) == 2
+    # the format says which (with s = 0 the serial product takes two clocks too)
+    assert fast.setup.pieces.multiplier and not dut.setup.pieces.multiplier
     assert fast.setup_latency == dut.setup_latency + 1 - s
     assert fast.setup_interval == dut.setup_interval - s == R + 5
     assert dut.setup_latency == timing_model.setup_latency(config, DELTAS)
