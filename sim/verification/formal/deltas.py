@@ -286,7 +286,7 @@ def _stage_p2(ctx, s2, v2):
     ctx.emit("dpipe", p2.valid == v2, "dpipe: p2 valid")
     for name, value in values.items():
         ctx.emit("dpipe", implies(v2, getattr(p2, name) == value), f"dpipe: p2 {name}")
-    # what `dcells` needs of the column whose cells p3 gets one move later (p1's, moved on)
+    # what the fast core's `dcells` needs of the column whose cells p3 holds one move later
     _snapshot_ok(ctx, "dpipe", s2, v2, "p2")
     return values, c2.cells
 
