@@ -87,7 +87,7 @@ class FormalHarness(ClockedHarness):
     `LineCore` (its pipeline groups `LINE_CHECKS`, its cover ``stepper``) or `PolygonCore`
     (`DELTA_CHECKS`, its cover ``deltas``); the other core's groups do not apply. ``fmt``:
     the polygon core's output, if not its default (`edgeaa.model.beat.DELTAS_FAST`: the
-    stepper with p3).
+    fast pipeline's core, its stepper with p3 and its setup multiplying in FINAL).
     """
 
     def __init__(
@@ -121,8 +121,8 @@ class FormalHarness(ClockedHarness):
         # simulation, tests/test_setup_array.py).
         if fmt is not None and top is not PolygonCore:
             raise TypeError(f"fmt applies to PolygonCore, not {top.__name__}")
-        deep = {} if fmt is None else {"fmt": fmt}
-        self.core = top(self.config, setup_units=1, **deep)
+        output = {} if fmt is None else {"fmt": fmt}
+        self.core = top(self.config, setup_units=1, **output)
 
     def elaborate(self, platform):
         m = Module()

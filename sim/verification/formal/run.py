@@ -68,7 +68,7 @@ class Proof:
 
     @property
     def format(self) -> BeatFormat:
-        """The output of the core proven (its depth sets "latency" depths)."""
+        """The output of the core proven (its setup latency sets "latency" depths)."""
         return self.top.format if self.fmt is None else self.fmt
 
 
@@ -135,8 +135,8 @@ DELTA_PROOFS = (
         1,
         assumes=("bounds", "dbounds", "dpipe"),
         top=PolygonCore,
-        description="the four cells the output register loads from p3 are the model's "
-        "`delta_cells` of p3's column snapshot, in full width (k-induction)",
+        description="the four cells the output register loads (from p2; the fast core's "
+        "from p3) are the model's `delta_cells` of that column, in full width (k-induction)",
     ),
     Proof(
         "deltas_beat",
@@ -161,14 +161,14 @@ DELTA_PROOFS = (
     ),
 )
 
-# The same proofs of the deep stepper (`DELTAS_FAST`, the fast pipeline's p3): fast_stream,
-# fast_count, ..., fast_cover.
+# The same proofs of the fast pipeline's core (`DELTAS_FAST`: the stepper's p3, FINAL's
+# multiplier): fast_stream, fast_count, ..., fast_cover.
 FAST_PROOFS = tuple(
     replace(
         proof,
         name=proof.name.replace("deltas_", "fast_"),
         fmt=DELTAS_FAST,
-        description=f"(deep stepper) {proof.description}",
+        description=f"(fast core) {proof.description}",
     )
     for proof in DELTA_PROOFS
 )
