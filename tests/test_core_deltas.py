@@ -72,7 +72,8 @@ def simulate(
 ) -> Run:
     """Offer `edges` in order (each with its window on ``clip``) and drain the deltas as
     `DeltaBeat`s (`core_bench.drive`); with `seed`, random idle source clocks, sink stalls
-    and clip windows between the edges; `setup_units` and `fmt` (its depth) the core's."""
+    and clip windows between the edges; `setup_units` and `fmt` (its depth and FINAL) the
+    core's."""
     units = timing_model.DEFAULT_SETUP_UNITS if setup_units is None else setup_units
     dut = PolygonCore(config, setup_units=units, fmt=fmt)
     depth = fmt.pipeline_depth(config)
@@ -254,8 +255,8 @@ def test_setup_array(units):
 @pytest.mark.parametrize(("name", "units"), [("default", 1), ("small", 4)])
 def test_fast_core(name, units):
     """The fast core (`DELTAS_FAST`, the fast pipeline's: p3 between p2 and the output
-    register): the same deltas, one clock later, every clock the timing model's; and under
-    stalls."""
+    register, FINAL's product by a multiplier in two clocks): the same deltas and banks,
+    every clock the timing model's; and under stalls."""
     config = CORE_CONFIGS[name]
     edges = mixed_edges(config, seed=40 + units, count=16)
     core = {"setup_units": units, "fmt": DELTAS_FAST}
