@@ -78,7 +78,7 @@ class Run:
     banks: list = field(default_factory=list)  # (clock, decoded bank) handed to the stepper
     error_pulses: list = field(default_factory=list)  # clocks with `error` high
     setup_units: int = timing_model.DEFAULT_SETUP_UNITS
-    fmt: BeatFormat = WRITES  # the core's output (its depth)
+    fmt: BeatFormat = WRITES  # the core's output (its depth and FINAL's clocks)
     errors: int = 0  # final `errors` count
     final_idle: tuple = ()  # writes.valid, bank valid, stepper active, edges.ready
     clocks: int = 0

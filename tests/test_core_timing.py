@@ -21,7 +21,7 @@ from edgeaa.hdl import (
 )
 from edgeaa.model import Edge, setup
 from edgeaa.model import timing as timing_model
-from edgeaa.model.beat import DELTAS, DELTAS_FAST
+from edgeaa.model.beat import DELTAS, DELTAS_FAST, WRITES
 from edgeaa.sim.simulators.commands import edge_payload
 from edgeaa.sim.simulators.streams import stream_put
 
@@ -66,6 +66,8 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     assert fast.setup.final_cycles == timing_model.final_cycles(config, DELTAS_FAST) == 2
     # the format says which (with s = 0 the serial product takes two clocks too)
     assert fast.setup.pieces.multiplier and not dut.setup.pieces.multiplier
+    with pytest.raises(TypeError, match="fmt must be DELTAS or DELTAS_FAST"):
+        PolygonCore(config, fmt=WRITES)
     assert fast.setup_latency == dut.setup_latency + 1 - s
     assert fast.setup_interval == dut.setup_interval - s == R + 5
     assert dut.setup_latency == timing_model.setup_latency(config, DELTAS)
