@@ -92,11 +92,16 @@ class _Core(wiring.Component):
         unit gets its own), or None."""
         self._config = check_config(config)
         self._setup_units = check_setup_units(setup_units)
+        steps = self.format.lane_steps  # the setup lanes' steps a clock
         if setup_units == 1:
             part = None if pieces is None else pieces(config)
-            self.setup = EdgeSetupUnit(config, errors_bits=errors_bits, pieces=part)
+            self.setup = EdgeSetupUnit(
+                config, errors_bits=errors_bits, pieces=part, lane_steps=steps
+            )
         else:
-            self.setup = SetupArray(config, setup_units, errors_bits=errors_bits, pieces=pieces)
+            self.setup = SetupArray(
+                config, setup_units, errors_bits=errors_bits, pieces=pieces, lane_steps=steps
+            )
         self.stepper = stepper = stepper(config)
         for unit in getattr(self.setup, "units", [self.setup]):
             if unit.final_cycles != timing.final_cycles(config, self.format):
@@ -131,12 +136,12 @@ class _Core(wiring.Component):
     def run_cycles(self) -> int:
         """`edgeaa.model.timing.run_cycles`: clocks of RUN for an edge not clipped at its
         start."""
-        return timing.run_cycles(self._config)
+        return timing.run_cycles(self._config, fmt=self.format)
 
     @property
     def start_clip_cycles(self) -> int:
         """`edgeaa.model.timing.start_clip_cycles`: extra RUN clocks of a start-clipped edge."""
-        return timing.start_clip_cycles(self._config)
+        return timing.start_clip_cycles(self._config, self.format)
 
     @property
     def setup_latency(self) -> int:

@@ -62,7 +62,8 @@ class SetupArray(wiring.Component):
     ``units`` (the `EdgeSetupUnit` list), ``busy`` (one bit per unit), ``dispatch`` and
     ``collect`` (the two pointers) and ``in_idle`` (no command anywhere in the array) are
     attributes for tests and the core. `pieces`: the class of each unit's end-pieces part
-    (`edgeaa.hdl.pieces.EndPieces`, called with `config`), None for the line core.
+    (`edgeaa.hdl.pieces.EndPieces`, called with `config`), None for the line core;
+    `lane_steps`: each unit's lane steps a clock (`EdgeSetupUnit`).
     """
 
     def __init__(
@@ -72,6 +73,7 @@ class SetupArray(wiring.Component):
         *,
         errors_bits: int = ERRORS_BITS,
         pieces=None,
+        lane_steps: int = 1,
     ):
         self._config = check_config(config)
         count = check_setup_units(units)
@@ -81,6 +83,7 @@ class SetupArray(wiring.Component):
                 errors_bits=errors_bits,
                 pieces=None if pieces is None else pieces(config),
                 accept_in_hold=False,  # offered a command only when free (`busy`)
+                lane_steps=lane_steps,
             )
             for _ in range(count)
         ]

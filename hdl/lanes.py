@@ -1,7 +1,9 @@
 """The setup's multiply-divide lanes (`MulDivLane`) and their RUN schedule (`lane_plan`):
 lane A's start-row pass, fix-up and accumulator pass, lane B's slope pass, and the ``kq, kr``
-loads after lane B (`edgeaa.hdl.setup.EdgeSetupUnit` runs them; `edgeaa.model.timing` owns
-their clock counts, the unit checks them at construction).
+loads after lane B (`edgeaa.hdl.setup.EdgeSetupUnit` runs them). A lane takes one step a
+clock, or two (radix 4: ``EdgeSetupUnit(lane_steps=2)``, the fast core's); the schedule of
+their clocks and leading zero steps is `edgeaa.model.timing.run_schedule`, which the timing
+model's RUN length comes from.
 """
 
 from __future__ import annotations
@@ -10,7 +12,6 @@ import types
 
 from amaranth.hdl import Cat, Module, Mux, Signal, signed, unsigned
 
-from ..model import timing
 from ..model.config import EdgeConfig
 from .layouts import register_shape
 
@@ -21,11 +22,9 @@ def lane_plan(m, unit) -> types.SimpleNamespace:
     """The lanes' steps, lane A's fix-up (loads of its second pass) and the end of RUN."""
     config = unit.config
     s, F = config.subpixel_bits, config.F
-    I = config.intensity_bits  # noqa: E741
     S = 1 << s
     r, lane_a, lane_b = unit.regs, unit.lane_a, unit.lane_b
-    run_cycles = timing.run_cycles(config)  # pass 1, fix-up, pass 2 of lane A
-    long_run_cycles = timing.run_cycles(config, clipped_start=True)
+    plan = unit.schedule  # `edgeaa.model.timing.run_schedule`: clocks and leading zeros
     counter = r.counter
     # Fix-up (at counter s + 1, or W + s + 2 when start-clipped): lane A holds
     # q', r' = divmod(2 |e| dv, du) for e = first S - u0 (e > S/2 when start-clipped,
@@ -61,23 +60,30 @@ def lane_plan(m, unit) -> types.SimpleNamespace:
         khr_less.eq((lane_b.r << 1) + r.neg_du),
         k_bit.eq(~khr_less[-1]),  # 2 khr >= du
     ]
+    long, short = plan.pass1_long, plan.pass1  # the fix-up's counter, by start_clip
+    # the short first pass's last clock takes one step (the window did not move the start)
+    single = (~r.start_clip & (counter == short - 1)) if plan.pass1_single else None
+    ids, after = plan.id_clocks, plan.pass2 + plan.tail  # RUN's last, after the fix-up
     return types.SimpleNamespace(
         # The fix-up clock and the last RUN clock (constant compares, by start_clip).
-        fixup=Mux(r.start_clip, counter == unit.pass1_long, counter == unit.pass1_bits),
-        done=Mux(r.start_clip, counter == long_run_cycles - 1, counter == run_cycles - 1),
+        fixup=Mux(r.start_clip, counter == long, counter == short),
+        done=Mux(r.start_clip, counter == long + after, counter == short + after),
+        # lane A's tail (`RunSchedule.tail`): it holds after pass 2 (None: no tail)
+        a_holds=(
+            Mux(r.start_clip, counter > long + plan.pass2, counter > short + plan.pass2)
+            if plan.tail
+            else None
+        ),
         fixup_loads=[
             r.row0.eq(big_m >> (s + 1)),
-            *lane_a.load(r.i_d << (F - s - 1), unit.pass2_bits, *pass2),
+            *lane_a.load(r.i_d << (F - s - 1), unit.pass2_bits, *pass2, pad=plan.pass2_pad),
         ],
-        a_step=lane_a.step(m, r.neg_du, "lane_a"),
-        b_step=lane_b.step(m, r.neg_du, "lane_b"),
-        b_bits=I + F - 1,  # lane B is done at counter I + F - 1
-        # the first I clocks of pass 2 (or before the fix-up): |I_d|'s bits
-        id_bits=Mux(
-            r.start_clip,
-            counter <= unit.pass1_long + I,
-            counter <= unit.pass1_bits + I,
-        ),
+        a_step=lane_a.step(m, r.neg_du, "lane_a", plan.steps, single),
+        b_step=lane_b.step(m, r.neg_du, "lane_b", plan.steps),
+        b_clocks=plan.lane_b,  # lane B is done at this counter
+        # pass 2's clocks with |I_d|'s bits (its first), and the last of them
+        id_bits=Mux(r.start_clip, counter <= long + ids, counter <= short + ids),
+        id_last=Mux(r.start_clip, counter == long + ids, counter == short + ids),
         k_bit=k_bit,
         k_loads=[
             r.kq.eq((lane_b.q << 1) + k_bit),
@@ -117,14 +123,15 @@ class MulDivLane:
         self.x_2du = Signal(signed(du_bits + 2), name=f"{name}_x_2du")  # X - 2 du
         self.digit2 = Signal(unsigned(max(digit_bits, 1) + 1), name=f"{name}_digit2")
 
-    def load(self, a, a_bits: int, x, x_du, x_2du, digit=0, digit2=2):
-        """Start on the `a_bits`-bit multiplier `a` followed by ``self.a_bits - a_bits`` zero
-        bits: after ``self.a_bits`` steps ``q, r = divmod(a (digit du + x) 2**k, du)``.
+    def load(self, a, a_bits: int, x, x_du, x_2du, digit=0, digit2=2, pad: int = 0):
+        """Start on the `a_bits`-bit multiplier `a` after `pad` leading zero bits and followed
+        by ``self.a_bits - a_bits - pad`` zero bits: after ``self.a_bits`` steps ``q, r =
+        divmod(a (digit du + x) 2**k, du)`` (a leading zero step leaves ``q = r = 0``).
         `x_du`, `x_2du` and `digit2` must be ``x - du``, ``x - 2 du`` and ``digit + 2``."""
         return [
             self.q.eq(0),
             self.r.eq(0),
-            self.a.eq(a << (self.a_bits - a_bits)),
+            self.a.eq(a << (self.a_bits - a_bits - pad)),
             self.x.eq(x),
             self.x_du.eq(x_du),
             self.x_2du.eq(x_2du),
@@ -132,25 +139,47 @@ class MulDivLane:
             self.digit2.eq(digit2),
         ]
 
-    def step(self, m: Module, neg_du, name: str):
-        """Add the step's combinational logic to `m` (`neg_du` is ``-du``); return its
-        register updates."""
-        bit = self.a[-1]
-        width = len(self.r) + 3
-        total = Signal(unsigned(len(self.r) + 2), name=f"{name}_total")  # 2 R + b X
+    def step(self, m: Module, neg_du, name: str, steps: int = 1, single=None):
+        """Add `steps` (1 or 2) chained steps' combinational logic to `m` (`neg_du` is
+        ``-du``); return their register updates. With two, `single` (None: never) makes a
+        clock take the first step only. ``digits``: each step's quotient digit, ``(twice,
+        once)`` (d = 2, 1 or 0)."""
+        first = self._one_step(m, (self.r, self.q, self.a), neg_du, name)
+        self.digits = [first.digit]
+        after = first
+        if steps == 2:
+            held = (Signal.like(self.r, name=f"{name}_r1"), Signal.like(self.q, name=f"{name}_q1"))
+            m.d.comb += [held[0].eq(first.r), held[1].eq(first.q)]
+            second = self._one_step(m, (*held, first.a), neg_du, f"{name}_2")
+            self.digits.append(second.digit)
+            if single is None:
+                after = second
+            else:
+                after = types.SimpleNamespace(
+                    r=Mux(single, first.r, second.r),
+                    q=Mux(single, first.q, second.q),
+                    a=Mux(single, first.a, second.a),
+                )
+        return [self.a.eq(after.a), self.r.eq(after.r), self.q.eq(after.q)]
+
+    def _one_step(self, m: Module, state, neg_du, name: str) -> types.SimpleNamespace:
+        """One step from `state` (``r, q, a``): the next ``r, q, a`` and the digit."""
+        r, q, a = state
+        bit = a[-1]
+        width = len(r) + 3
+        total = Signal(unsigned(len(r) + 2), name=f"{name}_total")  # 2 R + b X
         less_du = Signal(signed(width), name=f"{name}_less_du")  # 2 R + b X - du
         less_2du = Signal(signed(width), name=f"{name}_less_2du")  # 2 R + b X - 2 du
         m.d.comb += [
-            total.eq((self.r << 1) + Mux(bit, self.x, 0)),
-            less_du.eq((self.r << 1) + Mux(bit, self.x_du, neg_du)),
-            less_2du.eq((self.r << 1) + Mux(bit, self.x_2du, neg_du << 1)),
+            total.eq((r << 1) + Mux(bit, self.x, 0)),
+            less_du.eq((r << 1) + Mux(bit, self.x_du, neg_du)),
+            less_2du.eq((r << 1) + Mux(bit, self.x_2du, neg_du << 1)),
         ]
         twice, once = ~less_2du[-1], ~less_du[-1]
-        self.twice, self.once = twice, once  # the step's quotient digit d (2, 1 or 0)
         # 2 Q + b digit + d: the low bits (where b digit + d lands) for each d, and the high
         # bits of 2 Q plus the carry out of the low bits (Q's high part, or it plus one).
         low_bits = len(self.digit2) + 1
-        q_low = self.q[: low_bits - 1] << 1
+        q_low = q[: low_bits - 1] << 1
         lows = [
             q_low + Mux(bit, self.digit, 0),
             q_low + Mux(bit, self.digit, 0) + 1,
@@ -158,9 +187,10 @@ class MulDivLane:
         ]
         low = Signal(unsigned(low_bits + 1), name=f"{name}_q_low")
         m.d.comb += low.eq(Mux(twice, lows[2], Mux(once, lows[1], lows[0])))
-        q_high = self.q[low_bits - 1 :]
-        return [
-            self.a.eq(self.a << 1),
-            self.r.eq(Mux(twice, less_2du, Mux(once, less_du, total))),
-            self.q.eq(Cat(low[:low_bits], Mux(low[low_bits], q_high + 1, q_high))),
-        ]
+        q_high = q[low_bits - 1 :]
+        return types.SimpleNamespace(
+            a=(a << 1)[: len(a)],
+            r=Mux(twice, less_2du, Mux(once, less_du, total)),
+            q=Cat(low[:low_bits], Mux(low[low_bits], q_high + 1, q_high)),
+            digit=(twice, once),
+        )

@@ -40,7 +40,7 @@ from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
 
 from ..model.config import EdgeConfig
 from .layouts import register_shape, signed_widened
-from .setup_fold import r_cut_end
+from .setup_fold import r_cut_end, r_start_clip
 
 __all__ = [
     "NO_END_PIECES",
@@ -49,6 +49,7 @@ __all__ = [
     "id_product_clear",
     "id_product_steps",
     "id_products",
+    "kq_multiplicands",
     "kq_product_steps",
     "kq_products",
     "pieces_registers",
@@ -79,7 +80,8 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         hs0_fp=Signal(height, name="pc_hs0_fp"),  # hs0 of a partial first column
         k_me=Signal(product, name="pc_k_me"),
         k_mg=Signal(product, name="pc_k_mg"),
-        m_me=Signal(unsigned(2 * s + 3), name="pc_m_me"),  # their multiplicands (comb)
+        # their multiplicands (comb; registers loaded by WINDOW with two lane steps a clock)
+        m_me=Signal(unsigned(2 * s + 3), name="pc_m_me"),
         m_mg=Signal(unsigned(2 * s + 3), name="pc_m_mg"),
         # (hs0 + he_first) w0 modulo 2**(bits of total0 + s + 2), and its multiplicand
         # (comb): total0 of a y-major edge is y_area0 >> (s + 2) (`total0_steps`)
@@ -95,13 +97,16 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
     return types.SimpleNamespace(**regs)
 
 
-def _end_widths(unit) -> types.SimpleNamespace:
+def _end_widths(unit, start_clip=None, cut_end=None) -> types.SimpleNamespace:
     """``mg``, ``me`` (the first and last columns' cut parts) and ``w1 = 2 S - me``: from
-    registers loaded by WINDOW, so constant through RUN."""
+    registers loaded by WINDOW, so constant through RUN (or in WINDOW, from the
+    `start_clip` and `cut_end` it loads)."""
     s = unit.config.subpixel_bits
     S = 1 << s
     r, cmd, pc = unit.regs, unit.cmd, unit.pieces
-    fp, lp = ~r.start_clip, ~pc.cut_end  # the first and last columns hold the vertices
+    start_clip = r.start_clip if start_clip is None else start_clip
+    cut_end = pc.cut_end if cut_end is None else cut_end
+    fp, lp = ~start_clip, ~cut_end  # the first and last columns hold the vertices
     p0, p1 = Mux(r.x_major, cmd.x0, cmd.y0), Mux(r.x_major, cmd.x1, cmd.y1)
     # 2 u + S = 2 (u + S // 2) + S % 2 (u = +-p): bit 0 is a constant (zero for s > 0),
     # the rest s bits (mg_h, me_h: even widths are twice them, a multiplier can take those).
@@ -113,16 +118,27 @@ def _end_widths(unit) -> types.SimpleNamespace:
     return types.SimpleNamespace(fp=fp, lp=lp, mg=mg, me=me, w1=w1, mg_h=mg_h, me_h=me_h)
 
 
-def kq_product_steps(unit, twice, once) -> list:
-    """One Horner step of the products by kq: ``P = 2 P + d M`` with ``d = 2 twice + once``
-    (lane B's quotient digit, or ``k_bit`` with ``twice = 0`` for the last step). After
-    lane B's ``I + F - 1`` digits and the ``k_bit`` step, ``k_me = kq Mux(x_major, me^2,
-    w1^2)`` and ``k_mg = kq (2 S - mg)^2`` exactly (``kq = 2 khq + k_bit``)."""
+def kq_product_steps(unit, digits, single=None) -> list:
+    """Horner steps of the products by kq, one a digit of `digits` (``(twice, once)``
+    each, ``d = 2 twice + once``): ``P = 2 P + d M`` (lane B's quotient digits, or ``k_bit``
+    with ``twice = 0`` for the last step; `single` keeps the first step only). After lane
+    B's ``I + F - 1`` digits and the ``k_bit`` step, ``k_me = kq Mux(x_major, me^2, w1^2)``
+    and ``k_mg = kq (2 S - mg)^2`` exactly (``kq = 2 khq + k_bit``)."""
     loads = []
     for product, value in kq_products(unit):
-        addend = Mux(twice, value << 1, Mux(once, value, 0))
-        loads.append(product.eq((product << 1) + addend))
+        addends = [Mux(twice, value << 1, Mux(once, value, 0)) for twice, once in digits]
+        loads.append(product.eq(_horner(product, addends, single)))
     return loads
+
+
+def _horner(product, addends, single=None):
+    """``P = 2 P + a`` for each of `addends` in turn (modulo `product`'s register: only the
+    low bits matter), `single` (None: never) keeping the first only."""
+    value = (product << 1) + addends[0]
+    for addend in addends[1:]:
+        more = (value << 1) + addend
+        value = more if single is None else Mux(single, value, more)
+    return value
 
 
 def kq_products(unit) -> list:
@@ -169,12 +185,15 @@ def _end_factors(unit) -> types.SimpleNamespace:
 ID_PRODUCTS = ("h0", "e1", "w1", "first", "end")  # `id_product_steps`: |I_d| times these
 
 
-def id_product_steps(unit, bit) -> list:
-    """One Horner step of the products by ``|I_d|``: ``P = 2 P + bit M`` for each
-    multiplicand of `ID_PRODUCTS`, `bit` the next bit of ``|I_d|`` (MSB first: lane A's
-    multiplier bit in the first ``I`` clocks of its second pass; `unit` clears them at the
-    fix-up)."""
-    return [product.eq((product << 1) + Mux(bit, value, 0)) for product, value in id_products(unit)]
+def id_product_steps(unit, bits, single=None) -> list:
+    """Horner steps of the products by ``|I_d|``: ``P = 2 P + bit M`` for each multiplicand
+    of `ID_PRODUCTS` and each of `bits` in turn (`single`: the first only), the next bits of
+    ``|I_d|`` (MSB first: lane A's multiplier bits in the first clocks of its second pass;
+    `unit` clears them at the fix-up)."""
+    return [
+        product.eq(_horner(product, [Mux(bit, value, 0) for bit in bits], single))
+        for product, value in id_products(unit)
+    ]
 
 
 def id_products(unit) -> list:
@@ -256,7 +275,6 @@ def final_pieces(m, unit) -> None:
     the first piece's squared width, is ``k_mg`` less ``k_me`` when one column holds both
     vertices), and the multiplicands of `kq_product_steps` and `total0_steps`."""
     s = unit.config.subpixel_bits
-    S, w = 1 << s, _end_widths(unit)
     r, cmd, pc, nb = unit.regs, unit.cmd, unit.pieces, unit.next_bank
     fp = ~r.start_clip
     borrow = nb.jr < nb.khr
@@ -281,10 +299,21 @@ def final_pieces(m, unit) -> None:
         nb.hs0.eq(hs0),
         nb.total0.eq(Mux(xm, k_area0 >> (2 * s + 3), pc.y_area0 >> (s + 2))),
         pc.m_area0.eq(hs0 + he_first),  # `total0_steps`
-        # `kq_product_steps`: me^2 (x-major) or w1^2 = (2 S - me)^2 (y-major); (2 S - mg)^2
-        pc.m_me.eq(Mux(xm, w.me * w.me, w.w1 * w.w1)),
-        pc.m_mg.eq((2 * S - w.mg) * (2 * S - w.mg)),
         *(nb[name].eq(getattr(pc, name)) for name in _EARLY),
+    ]
+    if unit.schedule.steps == 1:  # two lane steps a clock: registers (`EndPieces`)
+        m.d.comb += [reg.eq(value) for reg, value in kq_multiplicands(unit)]
+
+
+def kq_multiplicands(unit, start_clip=None, cut_end=None) -> list:
+    """(register, value) of the multiplicands of `kq_product_steps` (`_end_widths` of
+    `start_clip` and `cut_end`, the registers' if None): ``me^2`` (x-major) or ``w1^2 = (2 S
+    - me)^2`` (y-major), and ``(2 S - mg)^2``."""
+    S, pc = 1 << unit.config.subpixel_bits, unit.pieces
+    w = _end_widths(unit, start_clip, cut_end)
+    return [
+        (pc.m_me, Mux(unit.regs.x_major, w.me * w.me, w.w1 * w.w1)),
+        (pc.m_mg, (2 * S - w.mg) * (2 * S - w.mg)),
     ]
 
 
@@ -309,22 +338,34 @@ class EndPieces:
         return 2 if self.multiplier else len(self.w0)
 
     def window_loads(self, unit) -> list:
-        return [self.cut_end.eq(r_cut_end(unit.regs)), self.k_me.eq(0), self.k_mg.eq(0)]
+        """``cut_end``, the kq products cleared; with two lane steps a clock also their
+        multiplicands (squares: a DSP block each on the ECP5, off RUN's chained adds)."""
+        r = unit.regs
+        loads = [self.cut_end.eq(r_cut_end(r)), self.k_me.eq(0), self.k_mg.eq(0)]
+        if unit.schedule.steps > 1:
+            values = kq_multiplicands(unit, r_start_clip(r), r_cut_end(r))
+            loads += [reg.eq(value) for reg, value in values]
+        return loads
 
     def lane_a_steps(self, m, unit, lanes) -> None:
-        """The products by |I_d|: its bits lead lane A's pass 2."""
+        """The products by |I_d|: its bits lead lane A's pass 2, a bit a lane step (the
+        last of them, when `edgeaa.model.timing.RunSchedule.id_single`, one step)."""
+        plan = unit.schedule
+        bits = [unit.lane_a.a[-1 - k] for k in range(plan.steps)]
+        single = lanes.id_last if plan.id_single else None
         with m.If(lanes.fixup):
             m.d.sync += id_product_clear(unit)
         with m.Elif(lanes.id_bits):
-            m.d.sync += id_product_steps(unit, unit.lane_a.a[-1])
+            m.d.sync += id_product_steps(unit, bits, single)
 
     def lane_b_steps(self, m, unit, lanes, b_done) -> None:
-        """The products by kq, one quotient digit a clock, then k_bit (one adder each: the
-        digit is picked before it)."""
-        with m.If(unit.regs.counter <= lanes.b_bits):
-            twice = Mux(b_done, 0, unit.lane_b.twice)
-            once = Mux(b_done, lanes.k_bit, unit.lane_b.once)
-            m.d.sync += kq_product_steps(unit, twice, once)
+        """The products by kq, one quotient digit a lane step, then k_bit (one adder each:
+        the digit is picked before it)."""
+        with m.If(unit.regs.counter <= lanes.b_clocks):
+            (twice, once), *more = unit.lane_b.digits
+            first = (Mux(b_done, 0, twice), Mux(b_done, lanes.k_bit, once))
+            single = b_done if more else None  # k_bit's step alone
+            m.d.sync += kq_product_steps(unit, [first, *more], single)
 
     def run_end(self, m, unit) -> None:
         """RUN's last clock: kq, row0 and the column count are known."""

@@ -11,11 +11,12 @@ I_in == I_out, as the model's `validate`) gives no bank: it pulses ``error`` and
 inside the window gives no bank and is not an error.
 
 Latency: fixed per configuration, ``W + 1`` clocks longer for an edge whose start the window
-cuts (`edgeaa.model.timing` owns the numbers: `run_cycles`, `final_cycles`, `setup_interval`;
-the unit checks at construction that its lane passes add up to `run_cycles`). The arithmetic
-is two lanes of a sequential multiply-divide unit (Horner shift-add multiplication
-interleaved with radix-2 restoring division, one bit per clock); the states, clock by clock,
-and the derivation of each step: docs/hardware.md, "The setup unit, clock by clock".
+cuts (`edgeaa.model.timing` owns the numbers: `run_schedule`, `run_cycles`, `final_cycles`,
+`setup_interval`; the unit's RUN follows `run_schedule`). The arithmetic is two lanes of a
+sequential multiply-divide unit (Horner shift-add multiplication interleaved with radix-2
+restoring division, one bit per step; one step a clock, or two chained in the fast core,
+``lane_steps=2``); the states, clock by clock, and the derivation of each step:
+docs/hardware.md, "The setup unit, clock by clock".
 
 Parts: the FOLD and WINDOW loads (`edgeaa.hdl.setup_fold`), the lanes and their RUN schedule
 (`edgeaa.hdl.lanes`), and for the polygon core the end pieces (`EdgeSetupUnit(config,
@@ -71,12 +72,12 @@ def accept_values(config: EdgeConfig, command) -> dict:
     }
 
 
-def _registers(config: EdgeConfig) -> types.SimpleNamespace:
-    """The setup's registers besides the command, the lanes and the accepted deltas."""
+def _registers(config: EdgeConfig, long_run: int) -> types.SimpleNamespace:
+    """The setup's registers besides the command, the lanes and the accepted deltas
+    (`long_run`: RUN's clocks for a start-clipped edge, the counter's range)."""
     widths = config.register_widths()
     W, s, I = config.coord_bits, config.subpixel_bits, config.intensity_bits  # noqa: E741
     coord = W + s
-    long_run = timing.run_cycles(config, clipped_start=True)
 
     def reg(name, shape=1):
         return Signal(shape, name=name)
@@ -143,8 +144,10 @@ class EdgeSetupUnit(wiring.Component):
         errors_bits: int = ERRORS_BITS,
         pieces=None,
         accept_in_hold: bool = True,
+        lane_steps: int = 1,
     ):
         self._config = check_config(config)
+
         # A lone unit accepts its next command in the clock the stepper takes its bank; a
         # `SetupArray`'s never does (it is offered commands only when free), so its ready
         # need not wait for the stepper's: a long combinational path less.
@@ -152,6 +155,9 @@ class EdgeSetupUnit(wiring.Component):
         # The end pieces (`edgeaa.hdl.pieces.EndPieces`) extend the bank and hook into WINDOW,
         # RUN and FINAL; the line core's setup has none.
         self.pieces = NO_END_PIECES if pieces is None else pieces
+        # RUN's clocks: the lanes take `lane_steps` steps a clock (`edgeaa.hdl.lanes`; two in
+        # the fast core, `edgeaa.model.beat.DELTAS_FAST`)
+        self.schedule = timing.run_schedule(config, lane_steps, self.pieces.in_bank)
         bank = setup_layout(config, self.pieces.in_bank)
         if isinstance(errors_bits, bool) or not isinstance(errors_bits, int) or errors_bits < 1:
             raise TypeError(f"errors_bits must be a positive integer, not {errors_bits!r}")
@@ -173,19 +179,17 @@ class EdgeSetupUnit(wiring.Component):
             name: Signal(Value.cast(value).shape(), name=name)
             for name, value in accept_values(config, self.cmd).items()
         }
-        self.regs = _registers(config)
-        # The lane pass lengths (structure; their total is the timing model's RUN length).
+        plan = self.schedule
+        self.regs = _registers(config, plan.pass1_long + 1 + plan.pass2)
+        # The lane pass lengths in multiplier bits (`plan` has their clocks).
         self.pass1_bits = s + 1  # 2 |e| <= S
         self.pass1_long = W + s + 2  # 2 e < 2 du + S when the window moved the first column
         self.pass2_bits = I + F - s - 1  # |I_d| << (F - s - 1)
-        if self.pass1_bits + 1 + self.pass2_bits != timing.run_cycles(config):
-            raise ValueError("lane A's passes and fix-up are not the timing model's RUN")
-        if self.pass1_long - self.pass1_bits != timing.start_clip_cycles(config):
-            raise ValueError("lane A's long first pass is not the timing model's extra clocks")
         # Lane A's quotient holds floor(2 e dv / du) <= 2 e < 2**(W + s + 2) after pass 1.
-        a_bits = max(self.pass1_long, self.pass2_bits)
+        a_bits = max(plan.pass1_pad + self.pass1_long, plan.pass2_pad + self.pass2_bits)
         self.lane_a = MulDivLane("lane_a", config, a_bits, s + 1, q_bits=self.pass1_long)
-        self.lane_b = MulDivLane("lane_b", config, I + F - 1, 0)  # |I_d| << (F - 1)
+        b_bits = plan.lane_b_pad + I + F - 1  # |I_d| << (F - 1)
+        self.lane_b = MulDivLane("lane_b", config, b_bits, 0)
         for state in STATES:
             setattr(self, f"in_{state.lower()}", Signal(name=f"in_{state.lower()}"))
         self.next_bank = Signal(bank, name="next_bank")
@@ -327,12 +331,16 @@ class EdgeSetupUnit(wiring.Component):
             m.d.sync += r.columns.eq(r.last - r.first + 1)
         with m.If(lanes.fixup):
             m.d.sync += lanes.fixup_loads
-        with m.Else():
-            m.d.sync += lanes.a_step
+        if lanes.a_holds is None:
+            with m.Else():
+                m.d.sync += lanes.a_step
+        else:
+            with m.Elif(~lanes.a_holds):
+                m.d.sync += lanes.a_step
         self.pieces.lane_a_steps(m, self, lanes)
-        with m.If(counter < lanes.b_bits):
+        with m.If(counter < lanes.b_clocks):
             m.d.sync += lanes.b_step
-        b_done = counter == lanes.b_bits
+        b_done = counter == lanes.b_clocks
         with m.If(b_done):  # lane B is done
             m.d.sync += lanes.k_loads
         self.pieces.lane_b_steps(m, self, lanes, b_done)

@@ -85,7 +85,12 @@ def fold_loads(m, unit) -> list:
         r.counter.eq(0),
         # Lane B starts with X = dv (lane A copies X and its differences in WINDOW).
         *unit.lane_b.load(
-            f_id << (F - 1), I + F - 1, f.dv, f.dv + f.neg_du, f.dv + (f.neg_du << 1)
+            f_id << (F - 1),
+            I + F - 1,
+            f.dv,
+            f.dv + f.neg_du,
+            f.dv + (f.neg_du << 1),
+            pad=unit.schedule.lane_b_pad,
         ),
     ]
 
@@ -162,7 +167,7 @@ def window_loads(m, unit) -> list:
     r_q0 = Mux(r.x_major, cmd.y0, cmd.x0)
     r_v0 = Signal(signed(W + s + 1), name="v0")
     m.d.comb += [
-        w_start_clip.eq(r.first < r.lo),
+        w_start_clip.eq(r_start_clip(r)),
         w_cut_end.eq(r_cut_end(r)),
         offset.eq(lo_s + Mux(r.major_neg, w_p0, ~Cat(w_p0, 0))),
         r_v0.eq(Mux(r.minor_neg, -r_q0, r_q0)),
@@ -176,8 +181,21 @@ def window_loads(m, unit) -> list:
         r.start_clip.eq(w_start_clip),
         r.e_neg.eq(r.e_neg & ~w_start_clip),  # e > S/2 when the start moved
         r.v0_r.eq(r_v0),
-        *unit.lane_a.load(multiplier, unit.pass1_long, lane_b.x, lane_b.x_du, lane_b.x_2du),
+        *unit.lane_a.load(
+            multiplier,
+            unit.pass1_long,
+            lane_b.x,
+            lane_b.x_du,
+            lane_b.x_2du,
+            pad=unit.schedule.pass1_pad,
+        ),
     ]
+
+
+def r_start_clip(r):
+    """WINDOW's test that the window moves the edge's first column (c0 < lo), from FOLD's
+    registers."""
+    return r.first < r.lo
 
 
 def r_cut_end(r):

@@ -20,8 +20,12 @@ takes them):
   column, the offset then being up to the edge's length), one fix-up clock, then
   ``I + F - s - 1`` clocks for the initial accumulator. Lane B in parallel: ``I + F - 1``
   clocks for the slope. So ``R = I + F + 1``, plus ``W + 1`` for a start-clipped edge: fixed
-  per configuration otherwise. An edge with no column inside the window leaves RUN after its
-  second clock (``a + 4``) without writing the bank: back in IDLE in clock ``a + 5``.
+  per configuration otherwise (one more in the polygon core when ``F = s + 1``:
+  `run_schedule`).
+  The fast pipeline's core (`edgeaa.model.beat.DELTAS_FAST`) takes two lane steps a clock:
+  about half of each (R = 11, and 6 more when start-clipped, in the default configuration).
+  An edge with no column inside the window leaves RUN after its second clock (``a + 4``)
+  without writing the bank: back in IDLE in clock ``a + 5``.
 * FINAL (``Phi = final_cycles`` clocks, ``a + R + 3 .. a + R + 2 + Phi``): the bank's
   contents are complete in its last clock (combinational, from the registers). ``Phi = 1``
   for the line-writes core; ``s + 2`` for the deltas core, whose setup forms the y-major
@@ -68,11 +72,12 @@ own bank register could accept it in ``f[n] + 1`` and wait in FINAL for ``t[n - 
 While the stepper keeps up (``t[n] = f[n] + 1``) both give the same clocks; a setup that
 finishes while the stepper is still on a long edge waits for it.
 
-``R + 2 + Phi = L - D - 2``. ``L = I + F + 5 + Phi + D``: for the line-writes core 27 clocks
+``R + 2 + Phi = L - D - 2``. ``L = R + 4 + Phi + D`` (``I + F + 5 + Phi + D`` at one lane
+step a clock): for the line-writes core 27 clocks
 for the default configuration and its pw variant (F = 11), 28 for seg2 and seg4, 37 for the
 truncated accumulator (F = 21); 19 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 7);
-for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration; 30 for the fast
-pipeline's (`edgeaa.model.beat.DELTAS_FAST`: D = 4, Phi = 2).
+for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration; 21 for the fast
+pipeline's (`edgeaa.model.beat.DELTAS_FAST`: R = 11, D = 4, Phi = 2).
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
 at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 29 for its
@@ -116,7 +121,9 @@ __all__ = [
     "beat_cycles",
     "final_cycles",
     "pipeline_depth",
+    "RunSchedule",
     "run_cycles",
+    "run_schedule",
     "setup_interval",
     "setup_latency",
     "start_clip_cycles",
@@ -140,12 +147,95 @@ DEFAULT_SETUP_UNITS = 1
 MAX_SETUP_UNITS = 16
 
 
-def run_cycles(config: EdgeConfig, clipped_start: bool = False) -> int:
-    """Clocks of the RUN state: lane A's two bit-serial passes and its fix-up clock (the
-    first pass ``W + 1`` clocks longer when the clip window moved the first column)."""
-    return (
-        config.intensity_bits + config.F + 1 + (start_clip_cycles(config) if clipped_start else 0)
+@dataclass(frozen=True)
+class RunSchedule:
+    """RUN clock by clock, for lanes taking `steps` multiply-divide steps a clock
+    (`edgeaa.hdl.lanes`; one for `WRITES` and `DELTAS`, two for `DELTAS_FAST`). A pass of
+    ``n`` multiplier bits starts with ``pad`` zero steps (a leading zero bit leaves the
+    lane's quotient and remainder at zero, so the result is the same), making ``pad + n`` a
+    whole number of clocks. Lane A's first pass (``s + 1`` bits, or ``W + s + 2`` when the
+    window moved the first column: one loaded register, one pad) ends with a clock of one
+    step when ``pad + s + 1`` is not whole clocks (`pass1_single`); the fix-up clock
+    follows; then lane A's second pass (``I + F - s - 1`` bits, ``|I_d|``'s ``I`` first:
+    the products by ``|I_d|`` step over its first `id_clocks`, their last of one step when
+    `id_single`). Lane B (``I + F - 1`` bits) steps from RUN's first clock; ``kq`` is
+    registered in the clock after it. The polygon core's RUN ends reading ``kq`` and the
+    products by ``|I_d|`` in its last clock, so both are complete before it: if not, lane A
+    holds its result for `tail` clocks after pass 2 (at one step a clock only when ``F = s +
+    1``, where pass 2 is ``|I_d|``'s bits alone: RUN is ``I + F + 2`` there, ``I + F + 1``
+    otherwise)."""
+
+    steps: int
+    pass1_pad: int
+    pass1: int  # clocks of lane A's first pass (start not moved)
+    pass1_long: int  # ... when the window moved the first column
+    pass1_single: bool  # the short first pass's last clock takes one step
+    pass2_pad: int
+    pass2: int  # clocks of lane A's second pass
+    tail: int  # clocks lane A then holds before RUN ends
+    id_clocks: int  # clocks of the second pass that carry |I_d|'s bits
+    id_single: bool  # the last of them steps the products by |I_d| once
+    lane_b_pad: int
+    lane_b: int  # clocks of lane B
+
+    @property
+    def run(self) -> int:
+        """RUN's clocks (start not moved): pass 1, the fix-up, pass 2, the tail."""
+        return self.pass1 + 1 + self.pass2 + self.tail
+
+    @property
+    def start_clip(self) -> int:
+        """RUN's extra clocks when the window moved the first column."""
+        return self.pass1_long - self.pass1
+
+
+def run_schedule(config: EdgeConfig, steps: int = 1, pieces: bool = False) -> RunSchedule:
+    """RUN's schedule for lanes of `steps` (1 or 2) steps a clock (`RunSchedule`), of a
+    setup with the end pieces (`pieces`: the polygon core's, whose RUN ends reading the
+    products by ``|I_d|``) or without."""
+    if steps not in (1, 2):
+        raise ValueError(f"lane steps a clock must be 1 or 2, not {steps!r}")
+    W, s, F, I = config.coord_bits, config.subpixel_bits, config.F, config.intensity_bits  # noqa: E741
+
+    def clocks(bits: int) -> int:
+        return -(-bits // steps)
+
+    short, long, pass2, lane_b = s + 1, W + s + 2, I + F - s - 1, I + F - 1
+    pad1, pad_b = -long % steps, -lane_b % steps
+    pass1 = clocks(pad1 + short)
+    pad2 = -pass2 % steps
+    # RUN's last clock reads kq (registered the clock after lane B's last) and the products
+    # by |I_d| (formed in the clocks before): lane A holds for `tail` clocks if need be.
+    # (kq readable from lane B's clocks + 1; RUN's last at pass1 + pass2 + tail, the last
+    # product step at pass1 + ids)
+    ids, pass2_clocks = clocks(pad2 + I), clocks(pad2 + pass2)
+    tail = max(
+        0,
+        clocks(pad_b + lane_b) + 1 - pass1 - pass2_clocks,
+        ids + 1 - pass2_clocks if pieces else 0,
     )
+    return RunSchedule(
+        steps=steps,
+        pass1_pad=pad1,
+        pass1=pass1,
+        pass1_long=clocks(pad1 + long),
+        pass1_single=(pad1 + short) % steps != 0,
+        pass2_pad=pad2,
+        pass2=pass2_clocks,
+        tail=tail,
+        id_clocks=ids,
+        id_single=(pad2 + I) % steps != 0,
+        lane_b_pad=pad_b,
+        lane_b=clocks(pad_b + lane_b),
+    )
+
+
+def run_cycles(config: EdgeConfig, clipped_start: bool = False, fmt: BeatFormat = WRITES) -> int:
+    """Clocks of the RUN state (`run_schedule` of the format's lane steps): lane A's two
+    multiply-divide passes and its fix-up clock, ``I + F + 1`` at one step a clock (the
+    first pass ``W + 1`` clocks longer when the clip window moved the first column)."""
+    plan = run_schedule(config, fmt.lane_steps, fmt.pieces)
+    return plan.run + (plan.start_clip if clipped_start else 0)
 
 
 def final_cycles(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
@@ -156,9 +246,10 @@ def final_cycles(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
     return fmt.final_cycles(config)
 
 
-def start_clip_cycles(config: EdgeConfig) -> int:
-    """Extra setup clocks of an edge whose first column the clip window moved."""
-    return config.coord_bits + 1
+def start_clip_cycles(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
+    """Extra setup clocks of an edge whose first column the clip window moved (``W + 1`` at
+    one lane step a clock)."""
+    return run_schedule(config, fmt.lane_steps, fmt.pieces).start_clip
 
 
 def pipeline_depth(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
@@ -174,7 +265,7 @@ def setup_latency(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
     """Clocks from accepting an edge (idle core, not clipped at its start) to its first beat:
     accept, FOLD, WINDOW, RUN, FINAL (`final_cycles`), bank, stepper load, the step of
     column 0, then the output pipeline: ``R + 4 + Phi + D``."""
-    return run_cycles(config) + 4 + final_cycles(config, fmt) + pipeline_depth(config, fmt)
+    return run_cycles(config, fmt=fmt) + 4 + final_cycles(config, fmt) + pipeline_depth(config, fmt)
 
 
 def setup_interval(
@@ -199,7 +290,7 @@ def unit_cycles(
     to the load, the next accept in the load's clock), ``R + 4 + Phi`` in an array (accept
     to retirement, then free the clock after); the deltas core's units hold the edge ``C``
     clocks more while it steps."""
-    return run_cycles(config) + 3 + final_cycles(config, fmt) + (setup_units != 1)
+    return run_cycles(config, fmt=fmt) + 3 + final_cycles(config, fmt) + (setup_units != 1)
 
 
 @dataclass(frozen=True)
@@ -275,9 +366,10 @@ def schedule(
     latency = setup_latency(config, fmt) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, fmt)
     live = fmt.live_bank  # the stepper takes the bank at the edge's end
+    extra = start_clip_cycles(config, fmt)  # RUN's clocks more for a start-clipped edge
     if setup_units == 1:
-        return _schedule_one(config, shapes, edges, latency, depth, live, idle, sink_ready, holds)
-    timing = _Units(config, latency, depth, live, setup_units, sink_ready)
+        return _schedule_one(extra, shapes, edges, latency, depth, live, idle, sink_ready, holds)
+    timing = _Units(extra, latency, depth, live, setup_units, sink_ready)
     return [
         timing.command(shape, None if edges is None else edges[k], _idle(idle, k), _hold(holds, k))
         for k, shape in enumerate(shapes)
@@ -314,7 +406,7 @@ def load_clocks(config: EdgeConfig, columns, clipped_start, bad=None, fmt: BeatF
     drops = np.diff(before[idx], prepend=0)  # since the previous stepped edge
     c = columns[idx]
     setup = setup_latency(config, fmt) - pipeline_depth(config, fmt) - 1
-    setup = setup + np.where(clipped[idx], start_clip_cycles(config), 0) + drops
+    setup = setup + np.where(clipped[idx], start_clip_cycles(config, fmt), 0) + drops
     prev = np.concatenate([[0], c[:-1]])
     step = np.maximum(live * prev + setup, prev + live)
     if len(step):
@@ -375,7 +467,7 @@ class _Enabled:
 
 
 def _schedule_one(
-    config: EdgeConfig,
+    extra: int,
     shapes,
     edges,
     latency: int,
@@ -388,8 +480,7 @@ def _schedule_one(
     """`schedule` of the core with one setup unit: it holds an edge from its accept to the
     stepper's transfer of its bank and accepts the next command from that clock on. The
     transfer is the load (line writes), or with `live` (deltas) the step of the edge's last
-    column, the next edge starting in a later clock."""
-    extra = start_clip_cycles(config)
+    column, the next edge starting in a later clock. `extra`: `start_clip_cycles`."""
     out: list[EdgeTiming] = []
     accept = 0  # the setup's first free clock, then the accept
     prev_last = None  # the clock the stepper steps the previous good edge's last column
@@ -435,8 +526,8 @@ class _Units:
     (deltas) in the clock its last column is stepped, the next edge starting after it. A
     stalled sink freezes the stepper as with one unit (`_Enabled`); the units run on."""
 
-    def __init__(self, config, latency, depth, live, units, sink_ready):
-        self.extra = start_clip_cycles(config)
+    def __init__(self, extra, latency, depth, live, units, sink_ready):
+        self.extra = extra  # `start_clip_cycles`
         self.latency, self.depth, self.live = latency, depth, live
         self.free = [0] * units  # first clock each unit may accept in
         self.k, self.accept = 0, -1

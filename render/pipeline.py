@@ -387,7 +387,7 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
         return np.maximum(columns + 1, (unit + columns) / units)
 
     setup = unit / units
-    clipped = start_clip_cycles(config) / pipeline.setup_units
+    clipped = start_clip_cycles(config, pipeline.deltas) / pipeline.setup_units
     # a polygon's first edge, over its setup
     latency = setup_latency(config, pipeline.deltas) - setup
     owner = plan.polygon[sent]

@@ -158,6 +158,22 @@ def test_corpus_and_clipped_edges(name):
     run_and_check(config, edges, label=f"corpus {name}")
 
 
+# F = s + 1: lane A's second pass is |I_d|'s bits alone, so the products by |I_d| would end
+# in RUN's last clock, which reads them (RUN takes a tail clock: `run_schedule`).
+NO_SPARE_FRACTION = EdgeConfig(coord_bits=2, subpixel_bits=5, intensity_bits=1)
+
+
+@pytest.mark.parametrize("fmt", [DELTAS, DELTAS_FAST])
+def test_no_spare_fraction_bit(fmt):
+    """The end pieces where the products by |I_d| fill pass 2 (F = s + 1; before RUN's tail
+    clock the deltas core's banks differed from the model's here): deltas, banks, clocks."""
+    config = NO_SPARE_FRACTION
+    assert config.subpixel_bits + 1 == config.F
+    assert timing_model.run_schedule(config, fmt.lane_steps, pieces=True).tail >= 1
+    edges = random_edge_commands(config, random.Random(0), 30, 1 << config.coord_bits)
+    run_and_check(config, edges, label="F = s + 1", fmt=fmt)
+
+
 BACKPRESSURE = [
     ("default", 1, 0.5, 0.5),
     ("default", 2, 0.0, 0.8),

@@ -22,22 +22,29 @@ from hypothesis import strategies as st
 
 from edgeaa.hdl import (
     LineCore,
-    setup_layout,
+    PolygonCore,
 )
 from edgeaa.model import Edge, EdgeConfig
+from edgeaa.model.beat import DELTAS_FAST
 from edgeaa.sim.simulators.commands import edge_clip, edge_payload
 
 # -- (2) setup registers against setup() -----------------------------------------------------
 
 
-def simulate_setup(config: EdgeConfig, edges: list[Edge]) -> list[dict | None]:
+def fast_core(config: EdgeConfig) -> PolygonCore:
+    """The fast pipeline's core: its setup's lanes take two steps a clock (radix 4)."""
+    return PolygonCore(config, fmt=DELTAS_FAST)
+
+
+def simulate_setup(config: EdgeConfig, edges: list[Edge], core=LineCore) -> list[dict | None]:
     """The bank each edge's setup produces (None: dropped, or no column in the window),
-    resetting the core between edges so that long edges cost only their setup time."""
-    dut = LineCore(config)
+    resetting the core between edges so that long edges cost only their setup time.
+    `core`: the core's class, or a function of the configuration that builds it."""
+    dut = core(config)
     flush = Signal()
     top = Module()
     top.submodules.dut = ResetInserter(flush)(dut)
-    decode_bank = decoder(setup_layout(config))
+    decode_bank = decoder(dut.stepper.setup.payload.shape())
     bank = dut.stepper.setup
     results = []
 
@@ -66,12 +73,13 @@ def simulate_setup(config: EdgeConfig, edges: list[Edge]) -> list[dict | None]:
     return results
 
 
-def check_setup(config: EdgeConfig, edges: list[Edge]):
-    for edge, bank in zip(edges, simulate_setup(config, edges), strict=True):
+def check_setup(config: EdgeConfig, edges: list[Edge], core=LineCore):
+    pieces = core is not LineCore  # the polygon core's bank carries the end pieces
+    for edge, bank in zip(edges, simulate_setup(config, edges, core), strict=True):
         if not is_visible(config, edge):
             assert bank is None, f"{edge} (bad, or nothing in its window) produced a bank"
             continue
-        want = expected_bank(config, edge)
+        want = expected_bank(config, edge, pieces)
         assert bank == want, (
             f"{config} {edge}: bank differs from setup(): "
             f"{ {k: (bank[k], want[k]) for k in want if bank[k] != want[k]} }"
@@ -94,6 +102,22 @@ def test_setup_matches_model(name):
 def test_setup_corner_cases():
     for config in CORE_CONFIGS.values():
         check_setup(config, [edge for _, edge in corpus(config)] + longest_edges(config))
+
+
+@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+def test_radix4_setup_matches_model(name):
+    """The fast core's setup, two lane steps a clock (`edgeaa.model.timing.run_schedule`:
+    leading zero steps, a short first pass or a last |I_d| clock of one step in some
+    configurations), gives `setup()`'s bank with the end pieces, start-clipped edges too."""
+    config = CORE_CONFIGS[name]
+
+    @sim_settings(5)
+    @given(st.lists(edge_commands(config, 1 << config.coord_bits), min_size=8, max_size=12))
+    def check(edges):
+        check_setup(config, edges, fast_core)
+
+    check()
+    check_setup(config, [edge for _, edge in corpus(config)] + longest_edges(config), fast_core)
 
 
 @pytest.mark.slow

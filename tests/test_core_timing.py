@@ -14,12 +14,14 @@ from core_bench import (
     run_of,
 )
 from fixtures import CORE_CONFIGS
+from hypothesis import given
+from hypothesis import strategies as st
 
 from edgeaa.hdl import (
     LineCore,
     PolygonCore,
 )
-from edgeaa.model import Edge, setup
+from edgeaa.model import Edge, EdgeConfig, setup
 from edgeaa.model import timing as timing_model
 from edgeaa.model.beat import DELTAS, DELTAS_FAST, WRITES
 from edgeaa.sim.simulators.commands import edge_payload
@@ -68,8 +70,17 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     assert fast.setup.pieces.multiplier and not dut.setup.pieces.multiplier
     with pytest.raises(TypeError, match="fmt must be DELTAS or DELTAS_FAST"):
         PolygonCore(config, fmt=WRITES)
-    assert fast.setup_latency == dut.setup_latency + 1 - s
-    assert fast.setup_interval == dut.setup_interval - s == R + 5
+    # ... and two lane steps a clock: RUN about half as long (`run_schedule`)
+    fast_run = timing_model.run_cycles(config, fmt=DELTAS_FAST)
+    assert fast.run_cycles == fast_run == timing_model.run_schedule(config, 2).run
+    assert fast_run <= -(-R // 2) + 2  # leading zero steps and a tail: a clock each at most
+    assert fast.setup_latency == dut.setup_latency + 1 - s - (R - fast_run)
+    assert fast.setup_interval == dut.setup_interval - s - (R - fast_run) == fast_run + 5
+    assert fast.start_clip_cycles == timing_model.start_clip_cycles(config, DELTAS_FAST)
+    extra = config.coord_bits + 1  # W + 1 bits more, two a clock
+    assert extra // 2 <= fast.start_clip_cycles <= -(-extra // 2)
+    if name == "default":  # docs/hardware.md, "Two lane steps a clock"
+        assert (fast_run, fast.start_clip_cycles, fast.setup_latency) == (11, 6, 21)
     assert dut.setup_latency == timing_model.setup_latency(config, DELTAS)
     assert dut.setup_latency == config.intensity_bits + config.F + 5 + final + depth
     assert dut.setup_interval == timing_model.setup_interval(config, 1, DELTAS) == R + 3 + final
@@ -80,6 +91,46 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     rate = timing_model.sustained_rate(config, 10, fmt=DELTAS)
     assert rate == timing_model.sustained_rate(config, 10, dut.setup_latency, DELTAS)
     assert rate == 10 / (10 + dut.setup_interval)  # the setup and the stepping take turns
+
+
+@st.composite
+def edge_configs(draw) -> EdgeConfig:
+    config = EdgeConfig(
+        coord_bits=draw(st.integers(2, 16)),
+        subpixel_bits=draw(st.integers(0, 8)),
+        intensity_bits=draw(st.integers(1, 16)),
+        mode=draw(st.sampled_from(("paper", "pw", "seg2", "seg4"))),
+    )
+    frac_bits = draw(st.none() | st.integers(config.min_frac_bits, 40))
+    return config if frac_bits is None else config.with_(frac_bits=frac_bits)
+
+
+@given(edge_configs())
+def test_run_schedule_covers_every_bit(config):
+    """`run_schedule`: one step a clock is the bit-serial RUN (I + F + 1 clocks, W + 1 more
+    when start-clipped; with the end pieces one more when F = s + 1); at two, every pass's
+    clocks take exactly its leading zeros and its bits (the short first pass and the
+    products by |I_d| one step less in their last clock where flagged), and kq and the
+    products are complete before RUN's last clock."""
+    W, s, F, I = config.coord_bits, config.subpixel_bits, config.F, config.intensity_bits  # noqa: E741
+    lines = timing_model.run_schedule(config, 1)  # the line core's: no end pieces
+    assert (lines.run, lines.start_clip, lines.tail) == (I + F + 1, W + 1, 0)
+    one = timing_model.run_schedule(config, 1, pieces=True)
+    tail = int(s + 1 == F)  # pass 2 is |I_d|'s bits alone: the products end in its last clock
+    assert (one.run, one.start_clip, one.tail) == (I + F + 1 + tail, W + 1, tail)
+    assert (one.pass1_pad, one.pass2_pad, one.lane_b_pad) == (0, 0, 0)
+    two = timing_model.run_schedule(config, 2, pieces=True)
+    assert two.pass1_long * 2 == two.pass1_pad + W + s + 2
+    assert two.pass1 * 2 - two.pass1_single == two.pass1_pad + s + 1
+    assert two.pass2 * 2 == two.pass2_pad + I + F - s - 1
+    assert two.id_clocks * 2 - two.id_single == two.pass2_pad + I
+    assert two.lane_b * 2 == two.lane_b_pad + I + F - 1
+    assert max(two.pass1_pad, two.pass2_pad, two.lane_b_pad) <= 1
+    assert two.lane_b + 1 <= two.run - 1  # kq registered, then RUN's last clock reads it
+    assert two.id_clocks < two.pass2 + two.tail  # the products by |I_d| too
+    assert two.run <= -(-one.run // 2) + 2
+    with pytest.raises(ValueError, match="1 or 2"):
+        timing_model.run_schedule(config, 4)
 
 
 # -- (6) bad commands ------------------------------------------------------------------------

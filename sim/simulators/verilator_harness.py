@@ -76,7 +76,7 @@ def drain_clocks(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
     """Clocks with no beat, after the last command is accepted, before a run may end: more
     than the longest wait for the first beat of an edge (one clipped at its start) of the
     core whose output is `fmt`."""
-    return setup_latency(config, fmt) + start_clip_cycles(config) + 16
+    return setup_latency(config, fmt) + start_clip_cycles(config, fmt) + 16
 
 
 def stuck_limit(config: EdgeConfig, fmt: BeatFormat = WRITES, idle=0.0, stall=0.0) -> int:

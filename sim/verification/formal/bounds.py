@@ -28,10 +28,9 @@ import types
 
 from amaranth.hdl import Mux, Signal, Value, signed, unsigned
 
-from ....hdl.pieces import EndPieces, id_products, kq_products
+from ....hdl.pieces import EndPieces, id_products, kq_multiplicands, kq_products
 from ....hdl.setup import accept_values
 from ....hdl.stepper import LineStepper
-from ....model import timing
 from .spec import all_, axes, column, constants_ok, fields, fold, implies, major_ok, window
 
 
@@ -102,8 +101,8 @@ def _setup(ctx, add) -> types.SimpleNamespace:
         implies(cut, r.e_neg == ((f.e < 0) & ~win.start_clip)),
     ]
     add(all_(e_ok), "e registers")
-    run_cycles = timing.run_cycles(config)
-    long_run = timing.run_cycles(config, clipped_start=True)
+    plan = setup.schedule  # RUN's clocks (`edgeaa.model.timing.run_schedule`)
+    run_cycles, long_run = plan.run, plan.run + plan.start_clip
     add(implies(run, counter < Mux(r.start_clip, long_run, run_cycles)), "counter")
     return types.SimpleNamespace(fold=f, win=win, busy=busy, nb=nb, nb_axes=nb_axes)
 
@@ -151,13 +150,16 @@ def _fold_registers(config, r, f, nb, nb_axes) -> dict:
 # -- the setup: the multiply-divide lanes ------------------------------------------------------
 
 
-def _lane(ctx, lane, a_bits, multiplier, bits, steps, *, x_at_most, digit=None):
-    """Invariants of a lane after `steps` of its `bits`-bit multiplier, and whether its next
-    step's sums fit their registers."""
+def _lane(ctx, lane, multiplier, bits, done, *, x_at_most, digit=None, pad=0, single=None):
+    """Invariants of a lane after `done` steps of its `bits`-bit multiplier led by `pad`
+    zero bits (each leaves q = r = 0), and whether its next clock's steps (its
+    `edgeaa.model.timing.RunSchedule.steps`; the first only where `single`) fit their
+    registers."""
     s = ctx.config.subpixel_bits
     du = ctx.setup.regs.du
     q, r, a, x = lane.q, lane.r, lane.a, lane.x
-    wide = (Value.cast(multiplier).as_unsigned() << (a_bits - bits)) << steps
+    a_bits = len(a)
+    wide = (Value.cast(multiplier).as_unsigned() << (a_bits - bits - pad)) << done
     consumed = wide >> a_bits
     conds = [a == wide[:a_bits], r < du, x_at_most(x)]
     # The lane keeps X - du, X - 2 du and digit + 2 precomputed.
@@ -174,59 +176,93 @@ def _lane(ctx, lane, a_bits, multiplier, bits, steps, *, x_at_most, digit=None):
         ]
     else:
         conds.append((q < (consumed << (s + 1))) | ((consumed == 0) & (q == 0) & (r == 0)))
-    # The next step in full width (`MulDivLane.step`).
-    bit = a[-1]
-    total = (r << 1) + Mux(bit, x, 0)
-    quotient_digit = Mux(total >= (du << 1), 2, Mux(total >= du, 1, 0))
-    q_next = (q << 1) + quotient_digit
-    if digit is not None:
-        q_next = q_next + Mux(bit, digit, 0)
-    return all_(conds), (total < (1 << (len(r) + 2))) & (q_next < (1 << len(q)))
+    # The next clock's steps in full width (`MulDivLane.step`).
+    fits = []
+    for k in range(ctx.setup.schedule.steps):
+        bit = a[-1 - k]
+        total = (r << 1) + Mux(bit, x, 0)
+        quotient_digit = Mux(total >= (du << 1), 2, Mux(total >= du, 1, 0))
+        q = (q << 1) + quotient_digit
+        if digit is not None:
+            q = q + Mux(bit, digit, 0)
+        r = total - Mux(quotient_digit == 2, du << 1, Mux(quotient_digit == 1, du, 0))
+        step_fits = (total < (1 << (len(lane.r) + 2))) & (q < (1 << len(lane.q)))
+        fits.append(step_fits if k == 0 or single is None else implies(~single, step_fits))
+    return all_(conds), all_(fits)
+
+
+def _done(counter, start, clocks, steps):
+    """Steps a lane has taken `counter - start` clocks into a pass of `clocks` clocks of
+    `steps` each (all of them from its end on)."""
+    into = (counter - start)[: len(counter)]
+    return Mux(counter >= start + clocks, clocks * steps, into * steps)
 
 
 def _lanes(ctx, s, add):
     config, setup = ctx.config, ctx.setup
     F, I = config.F, config.intensity_bits  # noqa: E741
     sub = config.subpixel_bits
-    r, win = setup.regs, s.win
+    r, win, plan = setup.regs, s.win, setup.schedule
     run, final, counter = setup.in_run, setup.in_final, r.counter
+    steps = plan.steps
     pass1_bits, pass2_bits = sub + 1, I + F - sub - 1
-    fixup = Mux(r.start_clip, win.bits, pass1_bits)
+    fixup = Mux(r.start_clip, plan.pass1_long, plan.pass1)
 
     def dv_is(x):
         return x == r.dv
 
     # Lane B is loaded in FOLD and steps from the first RUN clock (counter 0).
-    steps_b = Mux(final | (counter >= I + F - 1), I + F - 1, counter)
     b_bits = I + F - 1
+    steps_b = Mux(final, plan.lane_b * steps, _done(counter, 0, plan.lane_b, steps))
     lane_b, lane_b_step = _lane(
-        ctx, setup.lane_b, b_bits, r.i_d << (F - 1), b_bits, steps_b, x_at_most=dv_is
+        ctx,
+        setup.lane_b,
+        r.i_d << (F - 1),
+        b_bits,
+        steps_b,
+        x_at_most=dv_is,
+        pad=plan.lane_b_pad,
     )
     add(implies(s.busy, lane_b), "lane_b")
-    add(implies(run & (counter < I + F - 1), lane_b_step), "lane_b step fits")
+    add(implies(run & (counter < plan.lane_b), lane_b_step), "lane_b step fits")
     # Lane A is loaded in WINDOW: pass 1 over the W + s + 2 bit multiplier (stopped after
-    # s + 1 bits when the start did not move), the fix-up at `fixup`, then pass 2.
-    a_bits = max(win.bits, pass2_bits)
+    # s + 1 bits when the start did not move: one step in its last clock if
+    # `RunSchedule.pass1_single`), the fix-up at `fixup`, then pass 2 (and the tail).
     lane_a = setup.lane_a
+    short_done = plan.pass1_pad + pass1_bits  # steps at the fix-up, start not moved
+    done1 = Mux(
+        r.start_clip | (counter < plan.pass1), (counter * steps)[: len(counter) + 1], short_done
+    )
+    single = (~r.start_clip & (counter == plan.pass1 - 1)) if plan.pass1_single else None
     pass1, pass1_step = _lane(
-        ctx, lane_a, a_bits, win.multiplier, win.bits, counter, x_at_most=dv_is
+        ctx,
+        lane_a,
+        win.multiplier,
+        win.bits,
+        done1,
+        x_at_most=dv_is,
+        pad=plan.pass1_pad,
+        single=single,
     )
     add(implies(run & (counter <= fixup), pass1), "lane_a pass 1")
     add(implies(run & (counter < fixup), pass1_step), "lane_a pass 1 step fits")
     in_pass2 = (run & (counter > fixup)) | final
-    steps_a = Mux(final, pass2_bits, (counter - (fixup + 1))[: len(counter)])
+    done2 = Mux(final, plan.pass2 * steps, _done(counter, fixup + 1, plan.pass2, steps))
     pass2, pass2_step = _lane(
         ctx,
         lane_a,
-        a_bits,
         r.i_d << (F - sub - 1),
         pass2_bits,
-        steps_a,
+        done2,
         x_at_most=lambda x: x < r.du,
         digit=lane_a.digit,
+        pad=plan.pass2_pad,
     )
     add(implies(in_pass2, pass2), "lane_a pass 2")
-    add(implies(run & (counter > fixup), pass2_step), "lane_a pass 2 step fits")
+    stepping2 = run & (counter > fixup) & (counter <= fixup + plan.pass2)  # not the tail
+    add(implies(stepping2, pass2_step), "lane_a pass 2 step fits")
+    # The multiplier bits of pass 2 consumed (past its leading zero steps).
+    steps_a = Mux(done2 > plan.pass2_pad, done2 - plan.pass2_pad, 0)[: len(done2)]
     # The start row is in the image. Not checked for an edge whose start the window moved:
     # there it follows from q' = floor(2 e dv / du) <= 2 dv + S - 1 with e up to du + S/2,
     # a product of two per-edge values that SAT-based induction cannot handle (with
@@ -241,7 +277,7 @@ def _lanes(ctx, s, add):
     # kq, kr are registered in the clock after lane B's last step.
     b_q, b_r = setup.lane_b.q, setup.lane_b.r
     k_bit = (b_r << 1) >= r.du
-    k_ready = final | (run & (counter > I + F - 1))
+    k_ready = final | (run & (counter > plan.lane_b))
     k_ok = (r.kq == (b_q << 1) + k_bit) & (r.kr == (b_r << 1) - Mux(k_bit, r.du, 0))
     add(implies(k_ready, k_ok), "kq, kr registered from lane B")
     return types.SimpleNamespace(in_pass2=in_pass2, steps_a=steps_a, k_ready=k_ready)
@@ -295,6 +331,9 @@ def _products(ctx, spec, lanes, add):
     id_ok["pc_id_first"] = r.x_major | (products["pc_id_first"][0] <= wide)
     for name, condition in id_ok.items():
         add(implies(lanes.in_pass2, condition), f"product {name}")
+    if setup.schedule.steps > 1:  # WINDOW registered the multiplicands: they stay its values
+        same = all_([reg == value for reg, value in kq_multiplicands(setup)])
+        add(implies(run | final, same), "kq multiplicands registered")
     formed = Mux(lanes.k_ready, r.kq, setup.lane_b.q) << (2 * s + 2)
     (k_me, m_me), (k_mg, m_mg) = kq_products(setup)
     square = 1 << (2 * s + 2)  # (2 S)**2

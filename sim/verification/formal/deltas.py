@@ -86,7 +86,7 @@ def _setup_pieces(ctx):
     # 2 v0 + S - 2 S row0 = (M mod 2 S) - q with |q| <= S (lane A's first pass over |e|
     # <= S / 2): the first piece's start in half sub-pixel steps, in [-S, 3 S).
     h0 = (r.v0_r << 1) + S - (r.row0 << (s + 1))
-    pass2 = (setup.in_run & (r.counter > s + 1)) | setup.in_final
+    pass2 = (setup.in_run & (r.counter > setup.schedule.pass1)) | setup.in_final
     ctx.emit(
         "dbounds",
         implies(pass2 & ~r.start_clip, (h0 >= -S) & (h0 < 3 * S)),
