@@ -450,11 +450,12 @@ def add_pipeline_option(parser: argparse.ArgumentParser, applies: str) -> None:
     (`edgeaa.model.pipeline.PIPELINES`); `applies` says when it applies."""
     from .model.pipeline import PIPELINES
 
+    fast = " and the fast core (a deeper stepper; a setup that multiplies, two steps a clock)"
     units = ", ".join(
         f"{name} {p['setup_units']} setup unit{'s' * (p['setup_units'] > 1)}, "
         f"{p['pixel_lanes']} pixel lane{'s' * (p['pixel_lanes'] > 1)} and "
         f"{p['scan_lanes']} scan lane{'s' * (p['scan_lanes'] > 1)}"
-        + (" and the fast core (a deeper stepper, a multiplying setup)" if p["fast_core"] else "")
+        + (fast if p["fast_core"] else "")
         for name, p in PIPELINES.items()
     )
     parser.add_argument(

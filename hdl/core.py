@@ -201,7 +201,7 @@ class PolygonCore(_Core):
     latency: the module docstring; ``setup`` (`EdgeSetupUnit` with `EndPieces`, or a
     `SetupArray` of them) and ``stepper`` (`DeltaStepper`) are its parts."""
 
-    format = DELTAS  # `fmt`: DELTAS, or DELTAS_FAST (the deeper stepper, the multiplying setup)
+    format = DELTAS  # `fmt`: DELTAS, or DELTAS_FAST (the deeper stepper, the faster setup)
 
     def __init__(
         self,

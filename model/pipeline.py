@@ -100,8 +100,8 @@ class PipelineConfig:
     @property
     def deltas(self) -> BeatFormat:
         """The core's output (`edgeaa.model.beat`): `DELTAS_FAST` with `fast_core` (the
-        deltas stepper one register deeper, p3, and a setup whose FINAL multiplies), else
-        `DELTAS`."""
+        deltas stepper one register deeper, p3, and a setup whose FINAL multiplies and whose
+        lanes take two steps a clock), else `DELTAS`."""
         return DELTAS_FAST if self.fast_core else DELTAS
 
     @classmethod
@@ -132,8 +132,8 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
 # knee of clocks over area), a flush of two pixels a clock, a scan of two cells a clock and
-# the fast core (`DELTAS_FAST`: its p3 does not fit compact's HX8K, which has no multipliers
-# for its FINAL).
+# the fast core (`DELTAS_FAST`: its p3 and its setup's second lane steps do not fit compact's
+# HX8K, which has no multipliers for its FINAL).
 PIPELINES = {
     "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "fast_core": False},
     "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "fast_core": True},
