@@ -8,7 +8,8 @@ per-edge constants derived from the bank (`derive`); it forms the one enable of 
 the pipeline behind it and ``J += K`` with the remainder carried (`_advance`). The two
 steppers add their column pipeline and their handover of the bank:
 `edgeaa.hdl.stepper.LineStepper` (the paper's intensity writes; it copies the bank) and
-`edgeaa.hdl.deltas.DeltaStepper` (the accumulation deltas; it reads the held bank live).
+`edgeaa.hdl.deltas.DeltaStepper` (the accumulation deltas; it reads the held bank live, or
+copies it in the fast pipeline's core).
 """
 
 from __future__ import annotations
@@ -156,6 +157,25 @@ class ColumnLoop(wiring.Component):
         )
         jr_next = Mux(carry, r_wrap[:w], r_plain)
         return types.SimpleNamespace(jq=j_next, jr=jr_next, row_step=row_step)
+
+    # -- the bank's copy ---------------------------------------------------------------------
+
+    def _load(self, m):
+        """Copy the bank when it is taken: each `bank_fields` register from its field, and
+        the derived constants (a stepper that copies the bank: the line stepper, and the
+        deltas stepper of a format without ``live_bank``)."""
+        bank = self.setup.payload
+        with m.If(self.setup.valid & self.setup.ready):
+            m.d.sync += self.active.eq(1)
+            for field in self.format.bank_fields(self._config):
+                reg = getattr(self, field.name)
+                if field.array is None:
+                    m.d.sync += reg.eq(bank[field.name])
+                else:
+                    m.d.sync += [r.eq(bank[field.name][j]) for j, r in enumerate(reg)]
+            fields = BankView(bank, self._config.segments)
+            for name, value in derived_values(self._config, fields).items():
+                m.d.sync += self.derived[name].eq(value)
 
     # -- the loop registers -----------------------------------------------------------------
 

@@ -64,15 +64,19 @@ DELTA_FORMATS = (DELTAS, DELTAS_FAST)  # the stepper's two depths
 class DeltaStepper(ColumnLoop):
     """The delta stepper: the accumulation deltas of `run_edge_deltas`, one beat per column.
 
-    ``setup`` (in stream, `setup_layout` with the end pieces): the stepper starts the edge
-    (``start``: loads its loop registers ``x, y, remaining, jq, jr`` and ``delta_regs``)
-    when the bank is valid and it is idle, reads every other field (wires of the same names)
-    and the derived constants from the payload, which the setup holds stable while it is
-    valid and not taken, and takes the bank in the clock it steps the edge's last column:
-    the transfer means "edge done". ``deltas`` (out stream, `delta_layout`, also ``out``):
-    one registered beat per column, ``latency`` = `fmt.pipeline_depth` clocks after the
-    column's step when nothing stalls: 3 for `edgeaa.model.beat.DELTAS` (p1, p2, the output
-    register), 4 for `DELTAS_FAST` (p1, p2, p3, the output register).
+    ``setup`` (in stream, `setup_layout` with the end pieces): with `DELTAS` (``live_bank``)
+    the stepper starts the edge (``start``: loads its loop registers ``x, y, remaining, jq,
+    jr`` and ``delta_regs``) when the bank is valid and it is idle, reads every other field
+    (wires of the same names) and the derived constants from the payload, which the setup
+    holds stable while it is valid and not taken, and takes the bank in the clock it steps
+    the edge's last column: the transfer means "edge done". With `DELTAS_FAST` it copies the
+    bank (every field and derived constant a register, `ColumnLoop._load`) as it starts the
+    edge, when it is idle or steps the last column of the one before: the transfer is the
+    start, and the setup unit is free ``C`` clocks sooner. ``deltas`` (out stream,
+    `delta_layout`, also ``out``): one registered beat per column, ``latency`` =
+    `fmt.pipeline_depth` clocks after the column's step when nothing stalls: 3 for
+    `edgeaa.model.beat.DELTAS` (p1, p2, the output register), 4 for `DELTAS_FAST` (p1, p2,
+    p3, the output register).
 
     Observation points (formal harness): `ColumnLoop`'s, ``delta_regs`` (name -> register),
     and, once elaborated, ``delta_he``, ``delta_stages`` and ``delta_cells`` (this module's
@@ -92,10 +96,16 @@ class DeltaStepper(ColumnLoop):
         return self.delta_stages
 
     def _handshake(self, last) -> list:
-        """Start an edge when idle; take its bank when its last column steps."""
+        """Reading the bank live: start an edge when idle, take its bank when its last column
+        steps. Copying it: take it (and start) when idle or stepping the last column."""
+        if self.format.live_bank:
+            return [
+                self.start.eq(self.setup.valid & ~self.active),
+                self.setup.ready.eq(self.step & last),
+            ]
         return [
-            self.start.eq(self.setup.valid & ~self.active),
-            self.setup.ready.eq(self.step & last),
+            self.setup.ready.eq(~self.active | (self.step & last)),
+            self.start.eq(self.setup.valid & self.setup.ready),
         ]
 
     def elaborate(self, platform):
@@ -105,7 +115,10 @@ class DeltaStepper(ColumnLoop):
         valids = delta_pipeline(m, self, en, last, advance)
         self._idle(m, valids)
         self._loop(m, advance, last)
-        self._live(m)
+        if self.format.live_bank:
+            self._live(m)
+        else:
+            self._load(m)  # `ColumnLoop`: the fields and derived constants are registers
         return m
 
     def _live(self, m):

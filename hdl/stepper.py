@@ -11,7 +11,7 @@ from amaranth.hdl import Cat, Const, Module, Mux, Signal, Value, signed, unsigne
 
 from ..model.beat import WRITES
 from ..model.config import EdgeConfig
-from .column_loop import BankView, ColumnLoop, derived_shapes, derived_values
+from .column_loop import ColumnLoop, derived_shapes
 from .layouts import const_mul, log2, register_shape, write_layout
 
 __all__ = ["LineStepper"]
@@ -259,24 +259,6 @@ class LineStepper(ColumnLoop):
                 beat.lane1_valid.eq(two),
                 beat.last.eq(c.last),
             ]
-
-    # -- the bank load ----------------------------------------------------------------------
-
-    def _load(self, m):
-        """Load the bank: each `bank_fields` register from its field, and the derived
-        constants."""
-        bank = self.setup.payload
-        with m.If(self.setup.valid & self.setup.ready):
-            m.d.sync += self.active.eq(1)
-            for field in self.format.bank_fields(self._config):
-                reg = getattr(self, field.name)
-                if field.array is None:
-                    m.d.sync += reg.eq(bank[field.name])
-                else:
-                    m.d.sync += [r.eq(bank[field.name][j]) for j, r in enumerate(reg)]
-            fields = BankView(bank, self._config.segments)
-            for name, value in derived_values(self._config, fields).items():
-                m.d.sync += self.derived[name].eq(value)
 
 
 # -- the triangle estimate (module functions of the stepper's stages) -------------------------

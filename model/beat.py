@@ -286,12 +286,15 @@ DELTAS_FAST = replace(
     final=lambda config: 2,
     # two multiply-divide steps a clock (radix 4): RUN in about half the clocks
     lane_steps=2,
+    # the stepper copies the bank as it starts an edge: the setup unit is free C clocks
+    # sooner, and the next edge starts as the last column of this one steps
+    live_bank=False,
 )
 """The fast pipeline's core output (`PipelineConfig.fast_core`): the same stream, beats and
 bank from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), one clock later, and a
 setup whose FINAL takes two clocks (its product by a multiplier: the ECP5's DSP blocks) and
 whose lanes take two steps a clock (`edgeaa.hdl.lanes`: RUN 11 clocks instead of 20 in the
-default configuration)."""
+default configuration); its stepper copies the bank as it starts an edge."""
 
 
 def format_of(stream: str) -> BeatFormat:

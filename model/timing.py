@@ -39,12 +39,13 @@ takes them):
   (the handover has no bubble). The deltas stepper (the polygon core's) starts the edge
   (loads its loop registers) in the first clock ``t`` where the bank is valid and it is
   idle, reads the per-edge constants from the held bank and takes it in the clock it steps
-  the edge's last column, ``t + C``: the setup works on the next edge only after that.
-  Column ``c`` of the edge is stepped in clock ``t + 1 + c``. Its writes are computed by a
-  pipeline behind the loop, ``D = pipeline_depth`` registers deep counting the output
-  register (D = 2 for N <= 1 segments, i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in
-  every mode for the polygon core's accumulation deltas, 4 with its deep stepper,
-  `DELTAS_FAST`): the beat is valid in
+  the edge's last column, ``t + C``: the setup works on the next edge only after that. The
+  fast pipeline's deltas stepper (`edgeaa.model.beat.DELTAS_FAST`, no ``live_bank``) copies
+  the bank as the line-writes stepper does. Column ``c`` of the edge is stepped in clock
+  ``t + 1 + c``. Its writes are computed by a pipeline behind the loop, ``D =
+  pipeline_depth`` registers deep counting the output register (D = 2 for N <= 1 segments,
+  i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in every mode for the polygon core's
+  accumulation deltas, 4 with its deep stepper, `DELTAS_FAST`): the beat is valid in
   clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
   clocks, FINAL's ``s + 2`` included: only D and Phi differ between the two outputs
   (`edgeaa.model.beat.WRITES` and `DELTAS` declare both, and whether the stepper holds the

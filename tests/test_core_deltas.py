@@ -94,9 +94,11 @@ def check_run(run: Run, *, exact_timing: bool) -> None:
     fmt = run.fmt
     timings = timing_model.write_cycles(config, run.edges, fmt=fmt, setup_units=run.setup_units)
     check_clocks(run, timings)
-    # The stepper takes the bank (edge done) in the clock it steps the edge's last column.
+    # The stepper takes the bank in the clock it steps the edge's last column (`live_bank`:
+    # edge done), or copies it as it loads it.
     depth = timing_model.pipeline_depth(config, fmt)
-    taken = [t.beats[-1] - depth for t in timings if not t.dropped]
+    good = [t for t in timings if not t.dropped]
+    taken = [t.beats[-1] - depth if fmt.live_bank else t.load for t in good]
     assert [clock for clock, _ in run.banks] == taken, f"{tag} bank transfer clocks"
 
 
