@@ -100,8 +100,8 @@ class PipelineConfig:
     @property
     def deltas(self) -> BeatFormat:
         """The core's output (`edgeaa.model.beat`): `DELTAS_FAST` with `fast_core` (the
-        deltas stepper one register deeper, p3, and a setup whose FINAL multiplies and whose
-        lanes take two steps a clock), else `DELTAS`."""
+        deltas stepper one register deeper, p3, copying the bank, and a setup whose FINAL
+        multiplies and whose lanes take two steps a clock), else `DELTAS`."""
         return DELTAS_FAST if self.fast_core else DELTAS
 
     @classmethod
