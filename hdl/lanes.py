@@ -26,7 +26,8 @@ def lane_plan(m, unit) -> types.SimpleNamespace:
     r, lane_a, lane_b = unit.regs, unit.lane_a, unit.lane_b
     plan = unit.schedule  # `edgeaa.model.timing.run_schedule`: clocks and leading zeros
     counter = r.counter
-    # Fix-up (at counter s + 1, or W + s + 2 when start-clipped): lane A holds
+    # Fix-up (at counter `plan.pass1`, or `plan.pass1_long` when start-clipped: s + 1 and
+    # W + s + 2 at one step a clock): lane A holds
     # q', r' = divmod(2 |e| dv, du) for e = first S - u0 (e > S/2 when start-clipped,
     # |e| <= S/2 otherwise). With 2 e dv = q du + r (floor division),
     # 2 num + den = du (2 v0 + S + q) + r, 0 <= r < du, so row0 = floor((2 v0 + S + q) / 2S)
@@ -53,7 +54,8 @@ def lane_plan(m, unit) -> types.SimpleNamespace:
     digit = big_m[: s + 1]
     pass2 = (r_fix, r_fix_du, r_fix_2du, digit, digit + 2)
     # kq, kr = divmod(|I_d| dv << F, du) from lane B's result, registered in the clock
-    # after lane B's last step (RUN, counter I + F - 1): FINAL reads the registers.
+    # after lane B's last step (RUN, counter `plan.lane_b`: I + F - 1 at one step a clock):
+    # RUN's last clock and FINAL read the registers.
     k_bit = Signal()
     khr_less = Signal(signed(widths["khr"].bits + 2))  # 2 khr - du
     m.d.comb += [
@@ -95,12 +97,12 @@ def lane_plan(m, unit) -> types.SimpleNamespace:
 class MulDivLane:
     """Registers of one lane of the sequential multiply-divide unit.
 
-    One clock of `step` performs ``V = 2 V + b X`` (b the next bit of the multiplier, MSB first)
+    Each step performs ``V = 2 V + b X`` (b the next bit of the multiplier, MSB first)
     while keeping ``V = Q du + R`` with ``0 <= R < du``: with ``R < du`` and ``X <= du`` the new
     remainder candidate ``2 R + b X`` is below ``3 du``, so the quotient digit is 0, 1 or 2.
     ``digit`` (when b is set) adds a known multiple of ``du`` to ``V``
     (``V = 2 V + b (digit du + X)``). Trailing zero multiplier bits make it a plain restoring
-    division, so ``n`` clocks give ``divmod(A X 2**k, du)`` for an ``n - k`` bit ``A``.
+    division, so ``n`` steps give ``divmod(A X 2**k, du)`` for an ``n - k`` bit ``A``.
 
     The three candidates ``2 R + b X - d du`` (d = 0, 1, 2) are formed in parallel from
     per-pass constants (``x_du = X - du``, ``x_2du = X - 2 du``; ``-du``, ``-2 du`` when b is

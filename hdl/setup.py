@@ -147,7 +147,6 @@ class EdgeSetupUnit(wiring.Component):
         lane_steps: int = 1,
     ):
         self._config = check_config(config)
-
         # A lone unit accepts its next command in the clock the stepper takes its bank; a
         # `SetupArray`'s never does (it is offered commands only when free), so its ready
         # need not wait for the stepper's: a long combinational path less.
@@ -180,7 +179,7 @@ class EdgeSetupUnit(wiring.Component):
             for name, value in accept_values(config, self.cmd).items()
         }
         plan = self.schedule
-        self.regs = _registers(config, plan.pass1_long + 1 + plan.pass2)
+        self.regs = _registers(config, plan.run + plan.start_clip)
         # The lane pass lengths in multiplier bits (`plan` has their clocks).
         self.pass1_bits = s + 1  # 2 |e| <= S
         self.pass1_long = W + s + 2  # 2 e < 2 du + S when the window moved the first column

@@ -73,7 +73,7 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     # ... and two lane steps a clock: RUN about half as long (`run_schedule`)
     fast_run = timing_model.run_cycles(config, fmt=DELTAS_FAST)
     assert fast.run_cycles == fast_run == timing_model.run_schedule(config, 2, pieces=True).run
-    assert fast_run <= -(-R // 2) + 2  # leading zero steps and a tail: a clock each at most
+    assert fast_run <= -(-R // 2) + 3  # two pads, a single step and a tail at most
     assert fast.setup_latency == dut.setup_latency + 1 - s - (R - fast_run)
     assert fast.setup_interval == dut.setup_interval - s - (R - fast_run) == fast_run + 5
     assert fast.start_clip_cycles == timing_model.start_clip_cycles(config, DELTAS_FAST)
@@ -128,7 +128,7 @@ def test_run_schedule_covers_every_bit(config):
     assert max(two.pass1_pad, two.pass2_pad, two.lane_b_pad) <= 1
     assert two.lane_b + 1 <= two.run - 1  # kq registered, then RUN's last clock reads it
     assert two.id_clocks < two.pass2 + two.tail  # the products by |I_d| too
-    assert two.run <= -(-one.run // 2) + 2
+    assert two.run <= -(-one.run // 2) + 3  # two pads, a single step and a tail at most
     with pytest.raises(ValueError, match="1 or 2"):
         timing_model.run_schedule(config, 4)
 
