@@ -58,7 +58,7 @@ __all__ = ["DeltaStepper", "delta_pipeline", "delta_registers"]
 # The bank fields the loop steps: registers loaded from the bank when an edge starts. The
 # delta stepper reads every other field from the bank payload while it steps the edge.
 _LOOP_FIELDS = ("x", "y", "remaining", "jq", "jr")
-DELTA_FORMATS = (DELTAS, DELTAS_FAST)  # the stepper's two depths
+DELTA_FORMATS = (DELTAS, DELTAS_FAST)  # compact's stepper and the fast one (p3, bank copied)
 
 
 class DeltaStepper(ColumnLoop):

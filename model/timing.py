@@ -277,8 +277,8 @@ def setup_interval(
     FINAL (``Phi`` clocks, `final_cycles`), then the load, in whose clock it accepts the next
     edge: ``R + 3 + Phi``. ``N >= 2`` units (`SetupArray`): each holds an edge from its
     accept to the stepper's load of its bank and retires it then, ``R + 4 + Phi`` clocks,
-    so ``ceil((R + 4 + Phi) / N)``. (The deltas core's setup also holds each edge while it
-    steps: `sustained_rate`.)"""
+    so ``ceil((R + 4 + Phi) / N)``. (A deltas core whose stepper reads the bank live,
+    `DELTAS`, also holds each edge while it steps: `sustained_rate`.)"""
     if setup_units == 1:
         return unit_cycles(config, 1, fmt)
     return -(-unit_cycles(config, setup_units, fmt) // setup_units)
@@ -289,8 +289,8 @@ def unit_cycles(
 ) -> int:
     """Clocks one setup unit spends per edge in steady state: ``R + 3 + Phi`` alone (accept
     to the load, the next accept in the load's clock), ``R + 4 + Phi`` in an array (accept
-    to retirement, then free the clock after); the deltas core's units hold the edge ``C``
-    clocks more while it steps."""
+    to retirement, then free the clock after); a deltas core reading the bank live (`DELTAS`,
+    not `DELTAS_FAST`) holds the edge ``C`` clocks more while it steps."""
     return run_cycles(config, fmt=fmt) + 3 + final_cycles(config, fmt) + (setup_units != 1)
 
 
@@ -586,9 +586,10 @@ def sustained_rate(
 ) -> float:
     """Steady-state columns per clock of an endless stream of edges of `columns` columns
     (`setup_latency_`, if given, is the core's: a unit spends ``L - D - 1`` clocks per edge
-    alone, ``L - D`` in an array): ``C / max(C, unit clocks / N)``. The deltas core's unit
-    also holds the edge while it steps (``C`` more clocks) and its stepper starts an edge
-    the clock after the previous one's last column: ``C / max(C + 1, unit clocks / N)``."""
+    alone, ``L - D`` in an array): ``C / max(C, unit clocks / N)``. With ``live_bank``
+    (`DELTAS`) the unit also holds the edge while it steps (``C`` more clocks) and its
+    stepper starts an edge the clock after the previous one's last column: ``C / max(C + 1,
+    unit clocks / N)``."""
     if setup_latency_ is None:
         per_unit = unit_cycles(config, setup_units, fmt)
     else:

@@ -383,7 +383,9 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
 
     def edge_clocks(columns):
         """An edge's clocks in a stream: its columns and a clock (the stepper), or its
-        unit's clocks over the units (a unit holds the edge while it is stepped)."""
+        unit's clocks over the units (a unit holds the edge while it is stepped). For the
+        fast core, which copies the bank, both terms count ``C`` or a clock too many: an
+        over-estimate, as the engines' clock limits want."""
         return np.maximum(columns + 1, (unit + columns) / units)
 
     setup = unit / units

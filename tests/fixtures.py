@@ -24,6 +24,7 @@ from dataclasses import replace
 from hypothesis import strategies as st
 
 from edgeaa.model import Clip, Edge, EdgeConfig
+from edgeaa.model.config import ACCUMULATORS, MODES
 from edgeaa.render import Polygon, Scene
 
 # -- configurations ----------------------------------------------------------------------------
@@ -75,6 +76,26 @@ def vector_config(name: str, mode: str = "paper", accumulator: str = "exact") ->
 
 
 # -- edges in all octants ----------------------------------------------------------------------
+
+
+ANY_SUBPIXEL_BITS, ANY_INTENSITY_BITS = st.integers(0, 8), st.integers(1, 16)
+
+
+@st.composite
+def edge_configs(
+    draw, subpixel_bits=ANY_SUBPIXEL_BITS, intensity_bits=ANY_INTENSITY_BITS
+) -> EdgeConfig:
+    """Any valid `EdgeConfig`: W 2 to 16, every mode and accumulator, the default or any
+    allowed fraction bits up to 48 (`subpixel_bits`, `intensity_bits`: their strategies)."""
+    config = EdgeConfig(
+        coord_bits=draw(st.integers(2, 16)),
+        subpixel_bits=draw(subpixel_bits),
+        intensity_bits=draw(intensity_bits),
+        mode=draw(st.sampled_from(MODES)),
+        accumulator=draw(st.sampled_from(ACCUMULATORS)),
+    )
+    frac_bits = draw(st.none() | st.integers(config.min_frac_bits, 48))
+    return config if frac_bits is None else config.with_(frac_bits=frac_bits)
 
 
 def _anchor(lo: int, hi: int):

@@ -13,15 +13,14 @@ from core_bench import (
     run_and_check,
     run_of,
 )
-from fixtures import CORE_CONFIGS
+from fixtures import CORE_CONFIGS, edge_configs
 from hypothesis import given
-from hypothesis import strategies as st
 
 from edgeaa.hdl import (
     LineCore,
     PolygonCore,
 )
-from edgeaa.model import Edge, EdgeConfig, setup
+from edgeaa.model import Edge, setup
 from edgeaa.model import timing as timing_model
 from edgeaa.model.beat import DELTAS, DELTAS_FAST, WRITES
 from edgeaa.sim.simulators.commands import edge_payload
@@ -91,18 +90,6 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     rate = timing_model.sustained_rate(config, 10, fmt=DELTAS)
     assert rate == timing_model.sustained_rate(config, 10, dut.setup_latency, DELTAS)
     assert rate == 10 / (10 + dut.setup_interval)  # the setup and the stepping take turns
-
-
-@st.composite
-def edge_configs(draw) -> EdgeConfig:
-    config = EdgeConfig(
-        coord_bits=draw(st.integers(2, 16)),
-        subpixel_bits=draw(st.integers(0, 8)),
-        intensity_bits=draw(st.integers(1, 16)),
-        mode=draw(st.sampled_from(("paper", "pw", "seg2", "seg4"))),
-    )
-    frac_bits = draw(st.none() | st.integers(config.min_frac_bits, 40))
-    return config if frac_bits is None else config.with_(frac_bits=frac_bits)
 
 
 @given(edge_configs())

@@ -10,7 +10,13 @@ from dataclasses import fields, replace
 
 import numpy as np
 import pytest
-from fixtures import random_any_length_edge, random_edge_commands, random_span_edge, window_near
+from fixtures import (
+    edge_configs,
+    random_any_length_edge,
+    random_edge_commands,
+    random_span_edge,
+    window_near,
+)
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -131,17 +137,9 @@ def test_setup_batch_equals_setup_seeded(mode, subpixel_bits, intensity_bits, ac
         assert_batch_equals_setup(config, random_edges(rng, config, 60), f"seed {seed}:")
 
 
-@st.composite
-def configs(draw) -> EdgeConfig:
-    config = EdgeConfig(
-        coord_bits=draw(st.integers(2, 16)),
-        subpixel_bits=draw(st.sampled_from(SUBPIXEL_BITS)),
-        intensity_bits=draw(st.sampled_from(INTENSITY_BITS)),
-        mode=draw(st.sampled_from(MODES)),
-        accumulator=draw(st.sampled_from(ACCUMULATORS)),
-    )
-    frac_bits = draw(st.none() | st.integers(config.min_frac_bits, 48))
-    return config if frac_bits is None else config.with_(frac_bits=frac_bits)
+def configs():
+    """`edge_configs` at the sub-pixel and intensity widths these tests sample."""
+    return edge_configs(st.sampled_from(SUBPIXEL_BITS), st.sampled_from(INTENSITY_BITS))
 
 
 @HYPOTHESIS
