@@ -69,7 +69,8 @@ class EdgePipeline(wiring.Component):
             tile.config, setup_units=self._pipeline.setup_units, fmt=self._pipeline.deltas
         )
         lanes, scan = self._pipeline.pixel_lanes, self._pipeline.scan_lanes
-        self.acc, self.res = TileAccumulator(tile, scan), TileResolve(tile, lanes, scan)
+        self.acc = TileAccumulator(tile, scan)
+        self.res = TileResolve(tile, lanes, scan, self._pipeline.product_stages)
         stats = data.StructLayout({name: unsigned(STATS_BITS) for name in STATS})
         super().__init__(
             {

@@ -3,7 +3,7 @@
 memory, the tile out on a flush. `edgeaa.model.tile` is the model and the cycle model.
 
 One beat of cells per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks (I + 4
-in colour) from taking a beat to writing its pixels. A beat is one cell, or with ``scan_lanes``
+in colour, one more with ``product_stages`` 2) from taking a beat to writing its pixels. A beat is one cell, or with ``scan_lanes``
 2 (`PipelineConfig.scan_lanes`, the fast pipeline's) two, the columns ``x`` and ``x + 1``:
 every stage below is then a lane per cell (the registers of lane 1 named ``_l1``; one
 prefix sum register, the second cell's sum the first's plus its own), and each lane reads
@@ -21,6 +21,10 @@ and writes its own pixel lane's memory (scan lanes equal pixel lanes):
 * s3: the intensity offset q (grey; colour: sa's q') and the unsigned numerator of
   `edgeaa.model.tile.composite_steps` (one I x I product per channel; the alpha channel's
   paint is full scale);
+* with ``product_stages`` 2 (`PipelineConfig.product_stages`, the fast pipeline's), sp before
+  s3: each product's shift-and-add rows of the low half of the difference's bits, q, the
+  high half and the sign; s3 adds the high half's rows (a clock's chain of carry chains
+  halved: the critical path of the one-clock form on the ECP5);
 * the I stages after s3: one quotient bit each, restoring division by 2 D (one register:
   every cell in flight is one polygon's), the partial remainder shifted left with the
   dividend's next bit, the quotient's bits shifting into the dividend's low bits as they
@@ -80,7 +84,7 @@ from amaranth.lib import data, memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..model.pipeline import PIXEL_LANES, SCAN_LANES
-from ..model.tile import RESOLVE_OPS, TileConfig, resolve_latency
+from ..model.tile import PRODUCT_STAGES, RESOLVE_OPS, TileConfig, resolve_latency
 from .layouts import cell_sum_fields, pixel_value_fields, tile_cell_layout, tile_pixel_layout
 
 __all__ = ["TileResolve"]
@@ -92,14 +96,21 @@ class TileResolve(wiring.Component):
     """Resolve and pixel memory of a `TileConfig` tile. ``cells`` (in, `tile_cell_layout`),
     ``pixels`` (out, `tile_pixel_layout`); ``flushing`` is high while a tile goes out."""
 
-    def __init__(self, tile: TileConfig, lanes: int = 1, scan_lanes: int = 1):
+    def __init__(
+        self, tile: TileConfig, lanes: int = 1, scan_lanes: int = 1, product_stages: int = 1
+    ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
         if lanes not in PIXEL_LANES:
             raise ValueError(f"lanes must be one of {PIXEL_LANES}, not {lanes!r}")
         if scan_lanes not in SCAN_LANES or scan_lanes not in (1, lanes):
             raise ValueError(f"scan_lanes must be 1 or the lanes ({lanes}), not {scan_lanes!r}")
+        if product_stages not in PRODUCT_STAGES:
+            raise ValueError(
+                f"product_stages must be one of {PRODUCT_STAGES}, not {product_stages!r}"
+            )
         self._tile, self._lanes, self._scan_lanes = tile, lanes, scan_lanes
+        self._product_stages = product_stages
         super().__init__(
             {
                 "cells": In(stream.Signature(tile_cell_layout(tile, scan_lanes))),
@@ -123,9 +134,14 @@ class TileResolve(wiring.Component):
         return self._scan_lanes
 
     @property
+    def product_stages(self) -> int:
+        """Clocks the composite's I x I products take (`PipelineConfig.product_stages`)."""
+        return self._product_stages
+
+    @property
     def latency(self) -> int:
         """Clocks from taking a cell to writing its pixel (`resolve_latency`)."""
-        return resolve_latency(self._tile)
+        return resolve_latency(self._tile, self._product_stages)
 
     def elaborate(self, platform):
         m = Module()
@@ -248,7 +264,7 @@ class TileResolve(wiring.Component):
         else:  # colour: the alpha stage
             pre, paints, belows = self._alpha_stage(m, s2, qs, lanes)
             qs, stages = [getattr(pre, f"q{n}") for n in lanes], [s1, s2, pre]
-        negs, nums, names = [[] for _ in lanes], [], []  # names: each lane's channels
+        negs, factors, names = [[] for _ in lanes], [], []  # names: each lane's channels
         for j, (lane, q) in enumerate(zip(lanes, qs, strict=True)):
             for k, (paint, below) in enumerate(zip(paints, belows[j], strict=True)):
                 if paint is None:  # towards full scale: never below, and full - below is ~below
@@ -257,9 +273,13 @@ class TileResolve(wiring.Component):
                     neg = paint < below
                     diff = Mux(neg, below - paint, paint - below)[:bits]
                 names.append(lane + ("" if k == 0 else f"_c{k}"))
-                product = _product(m, q, diff, names[-1])
                 negs[j].append(neg)
-                nums.append(((product << 1) + pre.d - neg)[: 2 * bits + 2])  # >= 0 unless q = 0
+                factors.append((q, diff, neg))
+        carried = len(stages)  # the stages up to `pre` (the carry line starts there)
+        nums = [  # >= 0 unless q = 0
+            ((product << 1) + d - neg)[: 2 * bits + 2]
+            for product, d, neg in self._products(m, pre, factors, names, stages)
+        ]
         # 2 D: one register, as every cell in flight is one polygon's (its first cell waits
         # for the pipeline to empty)
         d2 = Signal(bits + 1, name="d2")
@@ -272,7 +292,8 @@ class TileResolve(wiring.Component):
             carried_values[f"below{lane}"] = getattr(pre, f"below{lane}")
             carried_values[f"zero{lane}"] = q == 0
             carried_values[f"neg{lane}"] = Cat(*lane_negs)
-        carry = _delay_line(m, self.observe, "carry", ptr, bits, **carried_values)
+        delay = bits + self._product_stages - 1
+        carry = _delay_line(m, self.observe, "carry", ptr, delay, **carried_values)
         # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
         # bits) and the dividend's low bits, which the quotient's bits replace one a stage;
         # a pair per channel of each lane (lane 0's channel 0 named rem and low), one
@@ -280,12 +301,11 @@ class TileResolve(wiring.Component):
         s3 = _stage(
             m,
             "s3",
-            valid=pre.valid,
+            valid=stages[-1].valid,  # pre's, or sp's
             **{f"rem{n}": num[bits:][: bits + 1] for n, num in zip(names, nums, strict=True)},
             **{f"low{n}": num[:bits] for n, num in zip(names, nums, strict=True)},
         )
         stages.append(s3)
-        carried = len(stages) - 1  # the stages before s3 (the carry line starts there)
         for j in reversed(range(bits)):  # quotient bit j
             prev, fields = stages[-1], {}
             for n in names:
@@ -324,6 +344,33 @@ class TileResolve(wiring.Component):
         self._row_done_y = last.y
         assert len(stages) == self.latency, (len(stages), self.latency)
         return stages
+
+    def _products(self, m, pre, factors, names, stages):
+        """Each channel's ``q * diff``, with the D and sign it is read with (`factors`: q, diff
+        and the sign per channel of each lane, from stage `pre`; `names` their suffixes). With
+        two product stages, stage sp registers each product's rows of diff's low half (and
+        what the rest needs; appended to `stages`), and the high half's rows add to it after:
+        each clock's carry chains half as many (docs/hardware.md, "The resolve's product in
+        two clocks")."""
+        pairs = list(zip(factors, names, strict=True))
+        if self._product_stages == 1:
+            return [(_product(m, q, diff, n), pre.d, neg) for (q, diff, neg), n in pairs]
+        half = self._tile.config.intensity_bits // 2
+        fields = {}
+        for (q, diff, neg), n in pairs:
+            fields |= {f"part{n}": _product(m, q, diff[:half], n), f"q{n}": q}
+            fields |= {f"high{n}": diff[half:], f"neg{n}": neg}
+        sp = _stage(m, "sp", valid=pre.valid, d=pre.d, **fields)
+        stages.append(sp)
+        return [
+            (
+                _product(m, getattr(sp, f"q{n}"), getattr(sp, f"high{n}"), n,
+                         total=getattr(sp, f"part{n}"), shift=half),
+                sp.d,
+                getattr(sp, f"neg{n}"),
+            )
+            for n in names
+        ]  # fmt: skip
 
     def _alpha_stage(self, m, s2, qs, lanes):
         """Colour's stage sa: each lane's q' = round(q A / full) (`_alpha`; `qs` a q per
@@ -432,14 +479,20 @@ def _alpha(m, q, alpha, bits: int, suffix: str = ""):
     return ((y + (y >> bits) + 1) >> bits)[: bits + 1]
 
 
-def _product(m, a, b, suffix: str = ""):
-    """``a * b`` (unsigned) as shift-and-add rows, each row's sum a kept signal: so Yosys maps
-    each row to a carry chain rather than the whole product to a full-adder tree in LUT4s
-    (for the resolve's I x I product: 41 LUT4 fewer, 51 carries more)."""
-    total = Mux(b[0], a, 0)
-    for j in range(1, len(b)):
-        row = Signal(len(a) + j + 1, name=f"product_row{j}{suffix}", attrs={"keep": 1})
-        m.d.comb += row.eq(total + (Mux(b[j], a, 0) << j))
+def _product(m, a, b, suffix: str = "", total=None, shift: int = 0):
+    """``total + a * (b << shift)`` (unsigned; no `total`: ``a * b << shift``) as shift-and-add
+    rows, each row's sum a kept signal: so Yosys maps each row to a carry chain rather than
+    the whole product to a full-adder tree in LUT4s (for the resolve's I x I product: 41 LUT4
+    fewer, 51 carries more)."""
+    for j in range(len(b)):
+        term = Mux(b[j], a, 0)
+        term = term << (j + shift) if j + shift else term
+        if total is None:
+            total = term
+            continue
+        width = len(a) + j + shift + 1
+        row = Signal(width, name=f"product_row{j + shift}{suffix}", attrs={"keep": 1})
+        m.d.comb += row.eq(total + term)
         total = row
     return total
 

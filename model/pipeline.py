@@ -41,7 +41,16 @@ from .beat import DELTAS, DELTAS_FAST, BeatFormat, delta_column_beats
 from .config import EdgeConfig
 from .edge import Clip, Edge, EdgeError
 from .step import run_edge_deltas
-from .tile import PAINT, Beats, Flush, PolygonEnd, TileConfig, TileStart, unpack_paint
+from .tile import (
+    PAINT,
+    PRODUCT_STAGES,
+    Beats,
+    Flush,
+    PolygonEnd,
+    TileConfig,
+    TileStart,
+    unpack_paint,
+)
 from .timing import MAX_SETUP_UNITS
 
 __all__ = [
@@ -76,15 +85,18 @@ class PipelineConfig:
     cells its accumulator's scan reads and its resolve composites a clock, side by side in
     one beat of the ``cells`` stream (lane k the column ``x + k``; the accumulation memory
     banked by column modulo the lanes; more than one needs as many pixel lanes, whose
-    memories the resolve then reads and writes a lane each); and its core (`fast_core`, the
-    output `deltas`). The commands, the frames and the images do not depend on any of these but
-    the tile; only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
+    memories the resolve then reads and writes a lane each); the clocks the resolve's
+    composite products take (`product_stages`, `edgeaa.model.tile.resolve_latency`: two
+    halve each clock's carry chains there, for Fmax); and its core (`fast_core`, the output
+    `deltas`). The commands, the frames and the images do not depend on any of these but the
+    tile; only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
 
     tile: TileConfig = field(default_factory=TileConfig)
     setup_units: int = 1
     pixel_lanes: int = 1
     scan_lanes: int = 1
     fast_core: bool = False  # the core's output: DELTAS, or DELTAS_FAST (`deltas`)
+    product_stages: int = 1
 
     def __post_init__(self):
         if not isinstance(self.tile, TileConfig):
@@ -94,6 +106,7 @@ class PipelineConfig:
         scan = _check_count("scan_lanes", self.scan_lanes, SCAN_LANES)
         if scan > 1 and lanes != scan:  # the resolve reads and writes a pixel lane per cell
             raise ValueError(f"scan_lanes {scan} needs pixel_lanes {scan}, not {lanes}")
+        _check_count("product_stages", self.product_stages, PRODUCT_STAGES)
         if not isinstance(self.fast_core, bool):
             raise TypeError(f"fast_core must be True or False, not {self.fast_core!r}")
 
@@ -133,10 +146,23 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
 # knee of clocks over area), a flush of two pixels a clock, a scan of two cells a clock and
 # the fast core (`DELTAS_FAST`: its p3 and its setup's second lane steps do not fit compact's
-# HX8K, which has no multipliers for its FINAL).
+# HX8K, which has no multipliers for its FINAL), and the resolve's products over two clocks
+# (a clock of latency a polygon; compact's Fmax is not bound there).
 PIPELINES = {
-    "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "fast_core": False},
-    "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "fast_core": True},
+    "compact": {
+        "setup_units": 1,
+        "pixel_lanes": 1,
+        "scan_lanes": 1,
+        "fast_core": False,
+        "product_stages": 1,
+    },
+    "fast": {
+        "setup_units": 4,
+        "pixel_lanes": 2,
+        "scan_lanes": 2,
+        "fast_core": True,
+        "product_stages": 2,
+    },
 }
 
 

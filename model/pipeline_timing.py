@@ -71,7 +71,7 @@ class _Top:
         self.units = pipeline.setup_units
         self.deltas = pipeline.deltas  # the core's output: its depth
         self.model = TileModel(tile, pipeline.scan_lanes)
-        self.clock = TileClock(tile, pipeline.pixel_lanes)
+        self.clock = TileClock(tile, pipeline.pixel_lanes, pipeline.product_stages)
         self.taken = [0] * count
         self.offer = 0  # clock the next command is offered
         self.polygon: list | None = None  # the open polygon's (index, shape or OTHER)

@@ -413,10 +413,14 @@ EMPTY_END = 2  # end with no touched row taken in a: next op in a + 2
 FLUSH_START = 2  # flush taken by the resolve in f: pixel 0 out in f + 2
 
 
-def resolve_latency(tile: TileConfig) -> int:
+PRODUCT_STAGES = (1, 2)  # clocks the resolve's I x I products take (`resolve_latency`)
+
+
+def resolve_latency(tile: TileConfig, product_stages: int = 1) -> int:
     """Clocks from the resolve taking a cell to writing its pixel: prefix sum (with the pixel
-    read), fill, (colour: the alpha stage,) offset and product, one clock per quotient bit."""
-    return tile.config.intensity_bits + 3 + (tile.channels > 1)
+    read), fill, (colour: the alpha stage,) offset and product (`product_stages` clocks, of
+    `PRODUCT_STAGES`), one clock per quotient bit."""
+    return tile.config.intensity_bits + 2 + product_stages + (tile.channels > 1)
 
 
 @dataclass
@@ -443,10 +447,11 @@ class TileClock:
     non-beat op). `timing` collects the transfers; `acc_stall` and `resolve_busy` count
     clocks as the top's counters do (`edgeaa.hdl.pipeline.STATS`). `lanes`: the pixels a
     flush sends a clock (`edgeaa.model.pipeline.PipelineConfig.pixel_lanes`); a `Scan`'s
-    runs are in beats of its own lanes (`PipelineConfig.scan_lanes`), one a clock."""
+    runs are in beats of its own lanes (`PipelineConfig.scan_lanes`), one a clock;
+    `product_stages`: the resolve's (`resolve_latency`)."""
 
-    def __init__(self, tile: TileConfig, lanes: int = 1):
-        self.tile, self.latency = tile, resolve_latency(tile)
+    def __init__(self, tile: TileConfig, lanes: int = 1, product_stages: int = 1):
+        self.tile, self.latency = tile, resolve_latency(tile, product_stages)
         self.lanes = lanes
         self.timing = TileTiming()
         self.ready = 0
@@ -514,10 +519,11 @@ class TileClock:
         self.overlap += max(0, min(stop, self.free) - max(start, self.flush_from))
 
 
-def tile_cycles(tile: TileConfig, ops, lanes: int = 1) -> TileTiming:
+def tile_cycles(tile: TileConfig, ops, lanes: int = 1, product_stages: int = 1) -> TileTiming:
     """The clock of every transfer of the tile stages (and their frames, from `TileModel`)
-    for ops offered back to back, with `lanes` scan and pixel lanes."""
-    model, clock = TileModel(tile, lanes), TileClock(tile, lanes)
+    for ops offered back to back, with `lanes` scan and pixel lanes and the resolve's
+    `product_stages`."""
+    model, clock = TileModel(tile, lanes), TileClock(tile, lanes, product_stages)
     for op in ops:
         result = model.feed(op)
         if isinstance(op, (Beats, DeltaBeat)):

@@ -315,10 +315,22 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 def test_the_named_configurations():
     assert PIPELINES == {
-        "compact": {"setup_units": 1, "pixel_lanes": 1, "scan_lanes": 1, "fast_core": False},
-        "fast": {"setup_units": 4, "pixel_lanes": 2, "scan_lanes": 2, "fast_core": True},
+        "compact": {
+            "setup_units": 1,
+            "pixel_lanes": 1,
+            "scan_lanes": 1,
+            "fast_core": False,
+            "product_stages": 1,
+        },
+        "fast": {
+            "setup_units": 4,
+            "pixel_lanes": 2,
+            "scan_lanes": 2,
+            "fast_core": True,
+            "product_stages": 2,
+        },
     }
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2, True)
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2, True, 2)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
@@ -344,6 +356,10 @@ def test_the_named_configurations():
     # the fast core: the deltas stepper 4 deep, with p3; compact's 3
     assert fast.core.format is DELTAS_FAST and EdgePipeline(TILE).core.format is DELTAS
     assert fast.core.stepper.latency == DELTAS_FAST.pipeline_depth(TILE.config) == 4
+    assert (fast.res.product_stages, EdgePipeline(TILE).res.product_stages) == (2, 1)
+    for bad in (0, 3):
+        with pytest.raises(ValueError, match=r"product_stages must be one of \(1, 2\), not"):
+            PipelineConfig(TILE, product_stages=bad)
     assert EdgePipeline(TILE).core.stepper.latency == 3
     for bad in (1, 0, "yes", None):
         with pytest.raises(TypeError, match="fast_core must be True or False"):

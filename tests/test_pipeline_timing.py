@@ -218,8 +218,12 @@ def test_a_random_colour_command_stream_with_bad_commands_in_the_models_clocks(m
     commands = [c._replace(paint=rng.randrange(colours)) for c in random_commands(rng, COLOUR_TILE)]
     hw = run_transfers(COLOUR_TILE, commands)
     check_clock_for_clock(COLOUR_TILE, commands, hw, "colour seed 4")
+    fast = PipelineConfig.named("fast", COLOUR_TILE)  # lanes, alpha stage and products
+    check_clock_for_clock(fast, commands, run_transfers(fast, commands), "fast colour seed 4")
     assert tile_model.resolve_latency(COLOUR_TILE) == SMALL.intensity_bits + 4
-    monkeypatch.setattr(tile_model, "resolve_latency", lambda tile: tile.config.intensity_bits + 3)
+    monkeypatch.setattr(
+        tile_model, "resolve_latency", lambda tile, stages=1: tile.config.intensity_bits + 3
+    )
     with pytest.raises(AssertionError):
         check_clock_for_clock(COLOUR_TILE, commands, hw, "the grey latency in colour")
 
@@ -339,7 +343,7 @@ def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
         if wrong in WRONG_WAITS and hasattr(module, "beat_wait"):
             monkeypatch.setattr(module, "beat_wait", WRONG_WAITS[wrong])
         elif wrong == "resolve_latency" and hasattr(module, wrong):
-            monkeypatch.setattr(module, wrong, lambda tile: latency)
+            monkeypatch.setattr(module, wrong, lambda tile, stages=1: latency)
         elif wrong == "pipeline_depth" and hasattr(module, wrong):  # the deltas core's, + 1
             depth = getattr(module, wrong)
             monkeypatch.setattr(

@@ -13,7 +13,7 @@ import random
 import numpy as np
 import pytest
 from fixtures import TINY_SCENE
-from tile_bench import Stages, run_stages
+from tile_bench import StageRun, Stages, run_stages
 
 from edgeaa.hdl.accumulator import TileAccumulator
 from edgeaa.hdl.resolve import TileResolve
@@ -103,8 +103,9 @@ def random_ops(tile: TileConfig, config: EdgeConfig, seed: int) -> list:
     return ops
 
 
-def check_exact(tile: TileConfig, ops, lanes: int = 1) -> None:
-    run, want = run_stages(tile, ops, lanes=lanes), tile_cycles(tile, ops, lanes)
+def check_exact(tile: TileConfig, ops, lanes: int = 1, product_stages: int = 1) -> StageRun:
+    run = run_stages(tile, ops, lanes=lanes, product_stages=product_stages)
+    want = tile_cycles(tile, ops, lanes, product_stages)
     assert run.accepts == want.accepts, "op clocks differ from tile_cycles"
     assert run.cells == want.cells, "cell clocks differ from tile_cycles"
     assert [p[0] for p in run.pixels] == want.pixels, "pixel clocks differ from tile_cycles"
@@ -115,6 +116,7 @@ def check_exact(tile: TileConfig, ops, lanes: int = 1) -> None:
     coords = [(p[1], p[2]) for p in run.pixels[: tile.pixels]]
     assert coords == [(x, y) for y in range(tile.height) for x in range(tile.width)]
     assert [p[4] for p in run.pixels].count(1) == len(want.frames)
+    return run
 
 
 CASES = [
@@ -139,6 +141,16 @@ def test_random_beats_clock_for_clock(tile, seed):
         check_exact(tile, random_ops(tile, tile.config, 10 * seed + k))
 
 
+@pytest.mark.parametrize("tile", [TileConfig(SMALL, 8, 4), TileConfig(DEFAULT, 8, 4)])
+def test_the_product_over_two_clocks_gives_the_same_pixels_a_clock_later(tile):
+    """`product_stages` 2 (the fast pipeline's resolve: its I x I products' rows split over
+    two clocks): every pixel the model's and every transfer in `tile_cycles`' clocks, which
+    the one-clock product's latency does not match."""
+    ops = random_ops(tile, tile.config, 21)
+    run = check_exact(tile, ops, product_stages=2)
+    assert [p[0] for p in run.pixels] != tile_cycles(tile, ops).pixels
+
+
 @pytest.mark.parametrize("seed", [7, 8])
 def test_two_lanes_take_a_pair_of_cells_a_clock_clock_for_clock(seed):
     """Two lanes (a memory bank per column parity): a beat's cells go in by pairs, a clash
@@ -148,7 +160,7 @@ def test_two_lanes_take_a_pair_of_cells_a_clock_clock_for_clock(seed):
     seen = {"clash": 0, "one cell": 0}
     for k in range(3):
         ops = random_ops(tile, SMALL, 10 * seed + k)
-        check_exact(tile, ops, lanes=2)
+        check_exact(tile, ops, lanes=2, product_stages=2)  # the fast pipeline's stages
         for kind in _pair_kinds(tile, ops):
             seen[kind] = seen.get(kind, 0) + 1
     assert seen["clash"] and seen["one cell"], seen  # both cases were driven

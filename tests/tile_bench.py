@@ -56,10 +56,12 @@ def op_payloads(tile: TileConfig, ops) -> list:
 
 class Stages(wiring.Component):
     """The accumulator and the resolve, connected (the top's tile half, for tests), with
-    `lanes` scan and pixel lanes (the fast pipeline's 2: `PipelineConfig.scan_lanes`)."""
+    `lanes` scan and pixel lanes (the fast pipeline's 2: `PipelineConfig.scan_lanes`) and the
+    resolve's `product_stages` (the fast pipeline's 2)."""
 
-    def __init__(self, tile: TileConfig, lanes: int = 1):
-        self.acc, self.res = TileAccumulator(tile, lanes), TileResolve(tile, lanes, lanes)
+    def __init__(self, tile: TileConfig, lanes: int = 1, product_stages: int = 1):
+        self.acc = TileAccumulator(tile, lanes)
+        self.res = TileResolve(tile, lanes, lanes, product_stages)
         super().__init__(
             {
                 "ops": wiring.In(self.acc.ops.signature.flip()),
@@ -87,13 +89,15 @@ class StageRun:
         return list(values.reshape(-1, tile.height, tile.width))
 
 
-def run_stages(tile: TileConfig, ops, *, seed=None, idle=0.0, stall=0.0, lanes=1) -> StageRun:
+def run_stages(
+    tile: TileConfig, ops, *, seed=None, idle=0.0, stall=0.0, lanes=1, product_stages=1
+) -> StageRun:
     """Offer the ops' payloads in order and take the pixels (random idles and stalls with a
     seed, a stalled pixel must hold: `amaranth_runner.run_component`), observing the clock
     of every beat of cells the accumulator hands the resolve; stops once the pixels of every
     flush are out and a drain has passed. `lanes`: `Stages`'s (a pixel beat is split into
-    its pixels, each with the beat's clock)."""
-    dut = Stages(tile, lanes)
+    its pixels, each with the beat's clock); `product_stages`: the resolve's."""
+    dut = Stages(tile, lanes, product_stages)
     run = StageRun()
 
     def cell(clock, valid, ready, op):

@@ -503,7 +503,9 @@ def main(argv=None) -> int:
         description=__doc__,
         epilog="proofs: " + ", ".join(f"{p.name} ({p.description})" for p in PROOFS.values()),
     )
-    parser.add_argument("proofs", nargs="*", default=["stream", "count", "bounds"])
+    parser.add_argument(
+        "proofs", nargs="*", default=["stream", "count", "bounds"], choices=tuple(PROOFS)
+    )
     parser.add_argument("--fault", choices=FAULTS)
     parser.add_argument("--depth", type=int)
     parser.add_argument("--mode", choices=("prove", "bmc", "cover"))

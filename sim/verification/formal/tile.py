@@ -32,7 +32,8 @@ each other's places, or reads the banks the wrong way round).
 
 Scan lanes (``scan_lanes`` 2, `PipelineConfig.scan_lanes`): every group covers them (the
 accumulator's beats of two cells from its memories banked by column parity, the
-resolve's two cells a clock); `TILE_PROOFS` names those runs ``*_scan``.
+resolve's two cells a clock); `TILE_PROOFS` names those runs ``*_scan``, and their
+resolve has the fast pipeline's products over two clocks (``product_stages`` 2).
 
 All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
 the memories and registers at their initial values, no reset; the accumulator's from
@@ -99,6 +100,7 @@ class TileHarness(ClockedHarness):
         covers=False,
         lanes=1,
         scan_lanes=1,
+        product_stages=1,
     ):
         if not isinstance(tile, TileConfig):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
@@ -124,7 +126,7 @@ class TileHarness(ClockedHarness):
         if stage == "accumulator":
             self.dut = TileAccumulator(tile, scan_lanes)
         else:
-            self.dut = TileResolve(tile, lanes, scan_lanes)
+            self.dut = TileResolve(tile, lanes, scan_lanes, product_stages)
 
     def elaborate(self, platform):
         m = Module()
@@ -241,6 +243,7 @@ class TileProof:
     description: str = ""
     lanes: int = 1  # the resolve's pixel lanes (`PipelineConfig.pixel_lanes`)
     scan_lanes: int = 1  # both stages' scan lanes (`PipelineConfig.scan_lanes`)
+    product_stages: int = 1  # the resolve's (`PipelineConfig.product_stages`)
 
 
 TILE_PROOFS: dict[str, TileProof] = {
@@ -305,9 +308,11 @@ TILE_PROOFS: dict[str, TileProof] = {
             reset=True,
             memory_map=False,
             description="pixels hold rule with two scan lanes and two pixel lanes (the fast "
-            "pipeline's resolve), any reachable state (k-induction), default tile",
+            "pipeline's resolve, its products over two clocks), any reachable state "
+            "(k-induction), default tile",
             lanes=2,
             scan_lanes=2,
+            product_stages=2,
         ),
         TileProof(
             "acc_deltas",
@@ -388,12 +393,13 @@ TILE_PROOFS: dict[str, TileProof] = {
             "resolve",
             ("pixels",),
             "prove",
-            resolve_latency(SMALL_TILE) + 1,
-            description="res_pixels_lanes with two scan lanes (the fast pipeline's): the "
-            "resolve takes a beat of two cells a clock, each composited in its lane and "
-            "written to its pixel lane's memory",
+            resolve_latency(SMALL_TILE, 2) + 1,
+            description="res_pixels_lanes with two scan lanes and the products over two "
+            "clocks (the fast pipeline's resolve): it takes a beat of two cells a clock, each "
+            "composited in its lane and written to its pixel lane's memory",
             lanes=2,
             scan_lanes=2,
+            product_stages=2,
         ),
         *(
             TileProof(
@@ -408,15 +414,16 @@ TILE_PROOFS: dict[str, TileProof] = {
                 "accumulator)",
                 lanes=lanes,
                 scan_lanes=scan,
+                product_stages=stages,
             )
-            for name, stage, check, depth, lanes, scan in (
-                ("acc_deltas", "accumulator", "deltas", 16, 1, 1),
-                ("acc_sums", "accumulator", "sums", 16, 1, 1),
-                ("acc_deltas_scan", "accumulator", "deltas", 16, 1, 2),
-                ("acc_sums_scan", "accumulator", "sums", 16, 1, 2),
-                ("res_pixels", "resolve", "pixels", 14, 1, 1),
-                ("res_pixels_lanes", "resolve", "pixels", 14, 2, 1),
-                ("res_pixels_scan", "resolve", "pixels", 14, 2, 2),
+            for name, stage, check, depth, lanes, scan, stages in (
+                ("acc_deltas", "accumulator", "deltas", 16, 1, 1, 1),
+                ("acc_sums", "accumulator", "sums", 16, 1, 1, 1),
+                ("acc_deltas_scan", "accumulator", "deltas", 16, 1, 2, 1),
+                ("acc_sums_scan", "accumulator", "sums", 16, 1, 2, 1),
+                ("res_pixels", "resolve", "pixels", 14, 1, 1, 1),
+                ("res_pixels_lanes", "resolve", "pixels", 14, 2, 1, 1),
+                ("res_pixels_scan", "resolve", "pixels", 14, 2, 2, 2),
             )
         ),
     )
@@ -463,6 +470,7 @@ def run_tile_proof(
         covers=mode == "cover",
         lanes=proof.lanes,
         scan_lanes=proof.scan_lanes,
+        product_stages=proof.product_stages,
     )
     script = sby_script(mode, depth, solver=solver)
     if proof.memory_map:  # the memories as flip-flops: faster for the small tiles
@@ -481,7 +489,7 @@ def main(argv=None) -> int:
         description="Formal proofs of the tile stages.",
         epilog="proofs: " + ", ".join(f"{p.name} ({p.description})" for p in TILE_PROOFS.values()),
     )
-    parser.add_argument("proofs", nargs="*", default=list(TILE_PROOFS))
+    parser.add_argument("proofs", nargs="*", default=list(TILE_PROOFS), choices=tuple(TILE_PROOFS))
     parser.add_argument("--fault", choices=tuple(TILE_FAULTS))
     parser.add_argument("--depth", type=int)
     parser.add_argument("--mode", choices=("prove", "bmc", "cover"))
