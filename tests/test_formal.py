@@ -34,6 +34,8 @@ from edgeaa.sim.verification.formal import (
     run_proof,
     sby_script,
 )
+from edgeaa.sim.verification.formal import run as formal_run
+from edgeaa.sim.verification.formal import tile as formal_tile
 
 # The slow proofs take minutes (more with the pipelined stepper); a run that does not finish
 # in this time reports TIMEOUT and fails.
@@ -322,6 +324,16 @@ def test_harness_rejects_unknown_options():
         FormalHarness(fault="nonsense")
     with pytest.raises(ValueError, match="proof must be one of"):
         run_proof("nonsense")
+
+
+@pytest.mark.parametrize("module", [formal_run, formal_tile])
+def test_the_proof_commands_refuse_an_unknown_proof_in_one_line(module, capsys):
+    """(argparse's usage, then one line of error, exit status 2; before, a traceback.)"""
+    with pytest.raises(SystemExit) as exit_:
+        module.main(["nonsense"])
+    err = capsys.readouterr().err.strip()
+    assert exit_.value.code == 2 and "Traceback" not in err, err
+    assert "error: no proof named 'nonsense'" in err.splitlines()[-1], err
 
 
 def test_harness_clock_is_a_port():
