@@ -3,8 +3,9 @@
 memory, the tile out on a flush. `edgeaa.model.tile` is the model and the cycle model.
 
 One beat of cells per clock through a fixed pipeline, `resolve_latency` = I + 3 clocks (I + 4
-in colour, one more with ``product_stages`` 2) from taking a beat to writing its pixels. A beat is one cell, or with ``scan_lanes``
-2 (`PipelineConfig.scan_lanes`, the fast pipeline's) two, the columns ``x`` and ``x + 1``:
+in colour, one more with ``product_stages`` 2) from taking a beat to writing its pixels. A
+beat is one cell, or with ``scan_lanes`` 2 (`PipelineConfig.scan_lanes`, the fast
+pipeline's) two, the columns ``x`` and ``x + 1``:
 every stage below is then a lane per cell (the registers of lane 1 named ``_l1``; one
 prefix sum register, the second cell's sum the first's plus its own), and each lane reads
 and writes its own pixel lane's memory (scan lanes equal pixel lanes):
