@@ -40,11 +40,12 @@ from amaranth.hdl import Cat, Const, Mux, Signal, signed, unsigned
 
 from ..model.config import EdgeConfig
 from .layouts import register_shape, signed_widened
-from .setup_fold import r_cut_end, r_start_clip
+from .setup_fold import r_cut_end, r_start_clip, w_v0
 
 __all__ = [
     "NO_END_PIECES",
     "EndPieces",
+    "end_multiplicand",
     "final_pieces",
     "id_product_clear",
     "id_product_steps",
@@ -83,6 +84,9 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         # their multiplicands (comb; registers loaded by WINDOW with two lane steps a clock)
         m_me=Signal(unsigned(2 * s + 3), name="pc_m_me"),
         m_mg=Signal(unsigned(2 * s + 3), name="pc_m_mg"),
+        # the multiplicand of id_end (`end_multiplicand`; loaded by WINDOW with two lane
+        # steps a clock)
+        m_end=Signal(unsigned(2 * s + 3), name="pc_m_end"),
         # (hs0 + he_first) w0 modulo 2**(bits of total0 + s + 2), and its multiplicand
         # (comb): total0 of a y-major edge is y_area0 >> (s + 2) (`total0_steps`)
         y_area0=Signal(unsigned(height.width + s + 2), name="pc_y_area0"),
@@ -154,7 +158,7 @@ def _end_factors(unit) -> types.SimpleNamespace:
     S = 1 << s
     r, w = unit.regs, _end_widths(unit)
     single = (r.columns == 1) & w.fp & w.lp
-    v1_2 = ((r.v0_r + r.dv) << 1) + S  # 2 v1 + S
+    v1_2 = _v1_2(unit, r.v0_r)
     e1 = v1_2[: s + 1]  # P1's height in its row, half sub-pixel steps
     # h0 = 2 v0 - (2 row0 - 1) S = m - q in [-S, 3 S) when the first column holds P0 (row0's
     # digit m in [0, 2 S), |q| <= S): s + 3 bits; it is used only then (mg = 0 otherwise).
@@ -162,11 +166,9 @@ def _end_factors(unit) -> types.SimpleNamespace:
     w0 = 2 * S - w.mg - Mux(single, w.me, 0)
     xm = r.x_major
     neg_h0 = Mux(h0 < 0, -h0, 0)[: s + 1]  # max(-h0, 0) <= S
-    if s:  # mg, e1, me and w1 are even: products of their halves (narrower multipliers)
-        first_x = (neg_h0 * w.mg_h) << 1
-        end = (e1[1:] * Mux(xm, w.me_h, S - w.me_h)[: s + 1]) << 2
-    else:
-        first_x, end = neg_h0 * w.mg, e1 * Mux(xm, w.me, w.w1)
+    # mg, e1, me and w1 are even for s > 0: products of their halves (narrower multipliers)
+    first_x = (neg_h0 * w.mg_h) << 1 if s else neg_h0 * w.mg
+    end = _end_product(unit, e1, w)
     return types.SimpleNamespace(
         single=single,
         v1_2=v1_2,
@@ -180,6 +182,30 @@ def _end_factors(unit) -> types.SimpleNamespace:
         # x: e1 me (rect1); y: e1 w1 (the first term of total1)
         end=end,
     )
+
+
+def _v1_2(unit, v0):
+    """``2 v1 + S`` from `v0` (``v0_r``, or in WINDOW the value it loads)."""
+    return ((v0 + unit.regs.dv) << 1) + (1 << unit.config.subpixel_bits)
+
+
+def _end_product(unit, e1, w):
+    """x-major ``e1 me`` (rect1), y-major ``e1 w1`` (total1's first term); `w` from
+    `_end_widths`. For ``s > 0`` both factors are even: a product of halves."""
+    s = unit.config.subpixel_bits
+    xm = unit.regs.x_major
+    if s:
+        return (e1[1:] * Mux(xm, w.me_h, (1 << s) - w.me_h)[: s + 1]) << 2
+    return e1 * Mux(xm, w.me, w.w1)
+
+
+def end_multiplicand(unit, v0=None, start_clip=None, cut_end=None):
+    """`_end_product` of the registers WINDOW loads (``v0_r``, ``start_clip``, ``cut_end``),
+    or in WINDOW of the values it loads: constant through RUN, so WINDOW registers it
+    (``m_end``) with two lane steps a clock, off RUN's chained Horner adds."""
+    s = unit.config.subpixel_bits
+    e1 = _v1_2(unit, unit.regs.v0_r if v0 is None else v0)[: s + 1]
+    return _end_product(unit, e1, _end_widths(unit, start_clip, cut_end))
 
 
 ID_PRODUCTS = ("h0", "e1", "w1", "first", "end")  # `id_product_steps`: |I_d| times these
@@ -198,8 +224,11 @@ def id_product_steps(unit, bits, single=None) -> list:
 
 def id_products(unit) -> list:
     """(register, multiplicand) of each product by ``|I_d|`` (`ID_PRODUCTS`; the
-    multiplicands are combinational, constant from the clock after the fix-up)."""
+    multiplicands are combinational, constant from the clock after the fix-up; ``end``'s
+    the register ``m_end`` with two lane steps a clock)."""
     f, pc = _end_factors(unit), unit.pieces
+    if unit.schedule.steps > 1:
+        f.end = pc.m_end
     return [(getattr(pc, f"id_{name}"), getattr(f, name)) for name in ID_PRODUCTS]
 
 
@@ -339,12 +368,14 @@ class EndPieces:
 
     def window_loads(self, unit) -> list:
         """``cut_end``, the kq products cleared; with two lane steps a clock also their
-        multiplicands (squares: a DSP block each on the ECP5, off RUN's chained adds)."""
+        multiplicands (squares: a DSP block each on the ECP5, off RUN's chained adds) and
+        id_end's (`end_multiplicand`, a DSP product too)."""
         r = unit.regs
         loads = [self.cut_end.eq(r_cut_end(r)), self.k_me.eq(0), self.k_mg.eq(0)]
         if unit.schedule.steps > 1:
-            values = kq_multiplicands(unit, r_start_clip(r), r_cut_end(r))
-            loads += [reg.eq(value) for reg, value in values]
+            clip, cut = r_start_clip(r), r_cut_end(r)
+            loads += [reg.eq(value) for reg, value in kq_multiplicands(unit, clip, cut)]
+            loads.append(self.m_end.eq(end_multiplicand(unit, w_v0(unit), clip, cut)))
         return loads
 
     def lane_a_steps(self, m, unit, lanes) -> None:

@@ -164,13 +164,12 @@ def window_loads(m, unit) -> list:
     # bits), the + 1 in lo S's low bit, which is zero.
     step_up = ~r.major_neg
     lo_s = Cat(step_up, Const(0, s - 1), r.lo) if s else r.lo + step_up
-    r_q0 = Mux(r.x_major, cmd.y0, cmd.x0)
     r_v0 = Signal(signed(W + s + 1), name="v0")
     m.d.comb += [
         w_start_clip.eq(r_start_clip(r)),
         w_cut_end.eq(r_cut_end(r)),
         offset.eq(lo_s + Mux(r.major_neg, w_p0, ~Cat(w_p0, 0))),
-        r_v0.eq(Mux(r.minor_neg, -r_q0, r_q0)),
+        r_v0.eq(w_v0(unit)),
     ]
     # Lane A's pass-1 multiplier, W + s + 2 bits: 2 (lo S - u0), or 2 |e| followed by
     # W + 1 zero bits (which the fix-up at counter s + 1 leaves unused).
@@ -190,6 +189,13 @@ def window_loads(m, unit) -> list:
             pad=unit.schedule.pass1_pad,
         ),
     ]
+
+
+def w_v0(unit):
+    """WINDOW's v0 (``v0_r``, which it loads): the start's minor coordinate, folded."""
+    r, cmd = unit.regs, unit.cmd
+    q0 = Mux(r.x_major, cmd.y0, cmd.x0)
+    return Mux(r.minor_neg, -q0, q0)
 
 
 def r_start_clip(r):

@@ -28,7 +28,13 @@ import types
 
 from amaranth.hdl import Mux, Signal, Value, signed, unsigned
 
-from ....hdl.pieces import EndPieces, id_products, kq_multiplicands, kq_products
+from ....hdl.pieces import (
+    EndPieces,
+    end_multiplicand,
+    id_products,
+    kq_multiplicands,
+    kq_products,
+)
 from ....hdl.setup import accept_values
 from ....hdl.stepper import LineStepper
 from .spec import all_, axes, column, constants_ok, fields, fold, implies, major_ok, window
@@ -334,6 +340,8 @@ def _products(ctx, spec, lanes, add):
     if setup.schedule.steps > 1:  # WINDOW registered the multiplicands: they stay its values
         same = all_([reg == value for reg, value in kq_multiplicands(setup)])
         add(implies(run | final, same), "kq multiplicands registered")
+        end = setup.pieces.m_end == end_multiplicand(setup)
+        add(implies(run | final, end), "id_end multiplicand registered")
     formed = Mux(lanes.k_ready, r.kq, setup.lane_b.q) << (2 * s + 2)
     (k_me, m_me), (k_mg, m_mg) = kq_products(setup)
     square = 1 << (2 * s + 2)  # (2 S)**2
