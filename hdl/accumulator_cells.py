@@ -100,16 +100,21 @@ def route_pair(m, unit, free) -> types.SimpleNamespace:
     (x0, y0), cells, done, pending = _beat_source(m, unit)
     first = pending[0] | pending[1]  # the pair taken: (0, 1), then (2, 3)
     wait = Mux(first, pending[:2], pending[2:])
+    # Every cell's place in the tile and each pair's bank clash are formed from the beat's
+    # coordinates alone, beside its nonzero flags, and `first` picks the pair's last: its
+    # flags are not in front of the subtractions on the way to ``ops.ready`` (Fmax).
+    places = [_place(m, tile, c, x0, y0, k) for k, c in enumerate(cells)]
+    clashes = [_clash(places[j], places[j + 1]) for j in (0, 2)]
     pair = []
     for j in range(2):
-        a, b = cells[j], cells[j + 2]
-        tx, ty = Mux(first, a.x, b.x) - x0, Mux(first, a.y, b.y) - y0
-        inside = (ty >= 0) & (ty < tile.height) & (tx < tile.width)
+        (in_a, x_a, y_a), (in_b, x_b, y_b) = places[j], places[j + 2]
         col = Signal(tile.x_bits, name=f"pair{j}_x")
-        m.d.comb += col.eq(Mux(tx < 0, 0, tx))
-        pair.append((wait[j] & inside, col, ty[: tile.y_bits], Mux(first, a.delta, b.delta)))
-    (k0, x_0, y_0, _), (k1, x_1, y_1, _) = pair
-    clash = k0 & k1 & (x_0[0] == x_1[0]) & ((x_0 != x_1) | (y_0 != y_1))
+        m.d.comb += col.eq(Mux(first, x_a, x_b))
+        inside, row = Mux(first, in_a, in_b), Mux(first, y_a, y_b)
+        delta = Mux(first, cells[j].delta, cells[j + 2].delta)
+        pair.append((wait[j] & inside, col, row, delta))
+    (k0, _, _, _), (k1, _, _, _) = pair
+    clash = k0 & k1 & Mux(first, clashes[0], clashes[1])
     take = Cat(wait[0], wait[1] & ~clash)
     sel = Cat(Mux(first, take, 0), Mux(first, 0, take))
     last = (pending & ~sel) == 0
@@ -135,6 +140,23 @@ def route_pair(m, unit, free) -> types.SimpleNamespace:
     )
     unit.observe.__dict__.update(origin=(x0, y0), cell=out)
     return out
+
+
+def _place(m, tile, cell, x0, y0, k: int):
+    """Cell `k` of a beat in the tile: (inside: not right of, above or below it; its column,
+    one left of the tile moved into column 0; its row)."""
+    tx, ty = cell.x - x0, cell.y - y0
+    col = Signal(tile.x_bits, name=f"cell{k}_x")
+    m.d.comb += col.eq(Mux(tx < 0, 0, tx))
+    inside = (ty >= 0) & (ty < tile.height) & (tx < tile.width)
+    return inside, col, ty[: tile.y_bits]
+
+
+def _clash(a, b):
+    """Two `_place`d cells in one bank (column parity) but not one cell: they take two
+    clocks when both are kept."""
+    (_, x_a, y_a), (_, x_b, y_b) = a, b
+    return (x_a[0] == x_b[0]) & ((x_a != x_b) | (y_a != y_b))
 
 
 def read_modify_write(m, unit, rd, wr, cell):
