@@ -27,8 +27,9 @@ by ``|I_d|`` (times ``h0``, ``e1``, ``w1`` and two products of them) are formed 
 clock (`id_product_steps`) over the first ``I`` clocks of lane A's second pass, whose
 multiplier bits are ``|I_d|``'s, MSB first; their multiplicands are constant from the clock
 after the fix-up (``h0`` reads ``row0``), and with two lane steps a clock WINDOW registers
-the one that is a product (``end``: `end_multiplicand`), as it does kq's squares. For ``s > 0`` ``mg``, ``me``, ``w1`` and ``e1``
-are even, and the two products among them multiply their halves. The proofs' invariants of
+the one that is a product (``end``: `end_multiplicand`), as it does kq's squares. For
+``s > 0`` ``mg``, ``me``, ``w1`` and ``e1`` are even, and the two products among them
+multiply their halves. The proofs' invariants of
 the half-formed products are `edgeaa.sim.verification.formal.bounds`' ``_products`` (FINAL's
 product needs none: see there).
 """
