@@ -168,8 +168,6 @@ def _end_factors(unit) -> types.SimpleNamespace:
     w0 = 2 * S - w.mg - Mux(single, w.me, 0)
     xm = r.x_major
     neg_h0 = Mux(h0 < 0, -h0, 0)[: s + 1]  # max(-h0, 0) <= S
-    # mg, e1, me and w1 are even for s > 0: products of their halves (narrower multipliers)
-    first_x = (neg_h0 * w.mg_h) << 1 if s else neg_h0 * w.mg
     end = _end_product(unit, e1, w)
     return types.SimpleNamespace(
         single=single,
@@ -179,11 +177,18 @@ def _end_factors(unit) -> types.SimpleNamespace:
         h0=h0,
         e1=e1,
         w1=w.w1,
-        # x: max(-h0, 0) mg (rect0); y: w0 (band0)
-        first=Mux(xm, first_x, w0),
+        # x: max(-h0, 0) mg (rect0; with a multiplier formed at RUN's end, `run_end_loads`);
+        # y: w0 (band0)
+        first=w0 if unit.pieces.multiplier else Mux(xm, _first_x(unit, neg_h0, w), w0),
         # x: e1 me (rect1); y: e1 w1 (the first term of total1)
         end=end,
     )
+
+
+def _first_x(unit, neg_h0, w):
+    """``neg_h0 mg`` (`neg_h0` times ``max(-h0, 0)``, or at RUN's end ``|I_d| max(-h0, 0)``
+    = ``max(-id_h0, 0)``); for ``s > 0`` mg is even: a product of its half."""
+    return (neg_h0 * w.mg_h) << 1 if unit.config.subpixel_bits else neg_h0 * w.mg
 
 
 def _v1_2(unit, v0):
@@ -249,6 +254,10 @@ def run_end_loads(unit) -> list:
     r, pc, f = unit.regs, unit.pieces, _end_factors(unit)
     xm = r.x_major
     first_rect = pc.id_first << k  # x: rect0 << (s + 1); y: band0
+    rect0 = first_rect
+    if pc.multiplier:  # x: |I_d| max(-h0, 0) = max(-id_h0, 0), times mg by a DSP block here
+        neg = Mux(pc.id_h0 < 0, -pc.id_h0, 0)[: len(pc.id_h0) - 1]
+        rect0 = _first_x(unit, neg, _end_widths(unit)) << k
     end_rect = (pc.id_end << k) >> (s + 1)  # x: rect1; y: the first term of total1
     sq = 2 * s + 3  # K w^2 / 2 with w over 2 S: (kq w^2) >> (2 s + 3)
     # kq (4 S^2 - me^2) for x-major, kq w1^2 for y-major (`kq_product_steps`)
@@ -260,7 +269,7 @@ def run_end_loads(unit) -> list:
         pc.end_row.eq(f.v1_2 >> (s + 1)),
         pc.end_height.eq(pc.id_e1 << k),
         pc.total1.eq(Mux(xm, slope_area, end_rect - slope_area)),
-        pc.rect0.eq(Mux(xm, first_rect >> (s + 1), 0)),
+        pc.rect0.eq(Mux(xm, rect0 >> (s + 1), 0)),
         pc.rect1.eq(Mux(xm, end_rect, 0)),
         pc.band0.eq(Mux(xm, 0, first_rect)),
         pc.band1.eq(Mux(xm, 0, pc.id_w1 << k)),

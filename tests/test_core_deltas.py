@@ -336,11 +336,16 @@ def test_deltas_setup_has_no_wide_product(name):
     small = config.subpixel_bits + 3
     assert widths and all(max(a, b) <= small for a, b in widths), widths
     assert len(widths) <= 5, widths
-    # The fast core's FINAL: one more, the height sum by the first piece's width (s + 2 bits)
+    # The fast core's (a DSP block each): one more, FINAL's height sum by the first piece's
+    # width (s + 2 bits); and the x-major first rectangle's max(-h0, 0) mg formed at RUN's
+    # end from |I_d| max(-h0, 0) = max(-id_h0, 0) (I + s + 3 bits) by mg's half, instead of
+    # max(-h0, 0) by it before RUN's Horner steps
     fast = _mul_widths(EdgeSetupUnit(config, pieces=EndPieces(config, multiplier=True)))
-    wide = sorted(set(fast) - set(widths))
-    assert len(fast) == len(widths) + 1 and len(wide) == 1, fast
-    assert min(wide[0]) == config.subpixel_bits + 2 and max(wide[0]) > small, wide
+    wide = sorted(set(fast) - set(widths), key=min)
+    s, i = config.subpixel_bits, config.intensity_bits
+    assert len(fast) == len(widths) + 1 and len(wide) == 2, fast
+    assert wide[0] == (i + s + 3, max(s, 1)), wide
+    assert min(wide[1]) == s + 2 and max(wide[1]) > small, wide
 
 
 def test_the_line_core_keeps_its_bank():
