@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Const, Module, Mux, Signal, signed
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
 from amaranth.lib import memory, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -158,10 +158,13 @@ class TileAccumulator(wiring.Component):
         rsum = Signal(signed(tile.cell_bits))  # the row's sum through the cells sent
         total = Signal(signed(tile.cell_bits))  # ... and through the cell waiting
         sums = [self.cells.payload[name] for name in cell_sum_fields(self._lanes)]
-        m.d.comb += total.eq(Mux(o["start"], 0, rsum) + sum(sums[1:], start=sums[0]))
+        base = Mux(o["start"], 0, rsum)
+        m.d.comb += total.eq(base + sum(sums[1:], start=sums[0]))
         with m.If(advance & o_valid & (o["op"] == CELL_OP["cell"])):
             m.d.sync += rsum.eq(total)
         self.observe.__dict__.update(rsum=rsum, total=total)
+        if self._lanes > 1:  # the scan's row-stop test, total == 0, with no carry chain
+            self.observe.cancels = _sum_is(sums[0], sums[1], (-base)[: tile.cell_bits])
         with m.FSM() as fsm:
             with m.State("ACC"):
                 m.d.comb += [
@@ -206,3 +209,17 @@ class TileAccumulator(wiring.Component):
             out.background.eq(background),
             *(out[name].eq(reg) for name, reg in params.items()),
         ]
+
+
+def _sum_is(a, b, t):
+    """``a + b == t`` modulo ``2**len(t)`` (`a`, `b` of that width) bit by bit, with no carry
+    chain: when the sum is `t`, the carry into bit i is ``c_i = a_i ^ b_i ^ t_i`` and the
+    carry out of it ``(a_i & b_i) | ((a_i | b_i) & ~t_i)``; the sum is `t` exactly when
+    each bit's carry in is the carry out of the bit below (0 into bit 0). The scan's stop
+    test on the memory's read data (a + b + base == 0, ``t = -base`` from registers) was
+    the fast pipeline's critical path with two adders in front of the compare."""
+    width = len(t)
+    a, b = a.as_unsigned()[:width], b.as_unsigned()[:width]
+    into = a ^ b ^ t
+    out = (a & b) | ((a | b) & ~t)
+    return (into == Cat(Const(0, 1), out[:-1])).as_unsigned()

@@ -76,7 +76,7 @@ def scan_states(m, unit, o, o_valid, advance, first):
             # the cell waiting is the row's hi and the sum through it is 0: the row stops,
             # and this clock's read (hi + 1, a zero cell: its clear changes nothing) is
             # not sent
-            stop = decide & (total == 0)
+            stop = decide & ((total == 0) if lanes == 1 else obs.cancels)
             m.d.comb += unit._clear.eq(1)
             m.d.sync += [
                 o_valid.eq(~stop),
