@@ -360,7 +360,7 @@ def test_the_line_core_keeps_its_bank():
         assert {str(name) for name, _ in layout} == names, top
 
 
-@pytest.mark.parametrize("name", ["default", "seg4", "small"])
+@pytest.mark.parametrize("name", ["default", "seg4", pytest.param("small", marks=pytest.mark.slow)])
 def test_verilog_lints(name):
     """verilator --lint-only -Wall with the documented waivers, like the writes core."""
     from edgeaa.sim.simulators.verilator import lint

@@ -215,6 +215,7 @@ def test_silent_drop_is_caught(tools):
     assert "count: bad commands in flight (basecase)" in result.failed, _explain(result)
 
 
+@pytest.mark.slow  # (the default run keeps the deltas core's: test_deltas_false_invariant_...)
 def test_false_invariant_is_not_proved(tools):
     """jq < ifix / 2 is false: the induction finds a counterexample (status UNKNOWN)."""
     result = run_proof("bounds", fault="tight_jq", depth=1)
