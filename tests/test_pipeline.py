@@ -315,22 +315,12 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 
 def test_the_named_configurations():
-    assert PIPELINES == {
-        "compact": {
-            "setup_units": 1,
-            "pixel_lanes": 1,
-            "scan_lanes": 1,
-            "fast_core": False,
-            "product_stages": 1,
-        },
-        "fast": {
-            "setup_units": 4,
-            "pixel_lanes": 2,
-            "scan_lanes": 2,
-            "fast_core": True,
-            "product_stages": 2,
-        },
+    fields = ("setup_units", "pixel_lanes", "scan_lanes", "fast_core", "product_stages")
+    want = {
+        "compact": dict(zip(fields, (1, 1, 1, False, 1), strict=True)),
+        "fast": dict(zip(fields, (4, 2, 2, True, 2), strict=True)),
     }
+    assert want == PIPELINES
     assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2, True, 2)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
