@@ -76,6 +76,8 @@ def scan_states(m, unit, o, o_valid, advance, first):
             # the cell waiting is the row's hi and the sum through it is 0: the row stops,
             # and this clock's read (hi + 1, a zero cell: its clear changes nothing) is
             # not sent
+            # (two lanes: `_sum_is`, carry-free for the ECP5's Fmax; compact keeps the
+            # compare, its HX8K fit measured with it)
             stop = decide & ((total == 0) if lanes == 1 else obs.cancels)
             m.d.comb += unit._clear.eq(1)
             m.d.sync += [

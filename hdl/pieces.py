@@ -168,7 +168,8 @@ def _end_factors(unit) -> types.SimpleNamespace:
     w0 = 2 * S - w.mg - Mux(single, w.me, 0)
     xm = r.x_major
     neg_h0 = Mux(h0 < 0, -h0, 0)[: s + 1]  # max(-h0, 0) <= S
-    end = _end_product(unit, e1, w)
+    # WINDOW's register with two lane steps a clock (`end_multiplicand`)
+    end = unit.pieces.m_end if unit.schedule.steps > 1 else _end_product(unit, e1, w)
     return types.SimpleNamespace(
         single=single,
         v1_2=v1_2,
@@ -234,8 +235,6 @@ def id_products(unit) -> list:
     multiplicands are combinational, constant from the clock after the fix-up; ``end``'s
     the register ``m_end`` with two lane steps a clock)."""
     f, pc = _end_factors(unit), unit.pieces
-    if unit.schedule.steps > 1:
-        f.end = pc.m_end
     return [(getattr(pc, f"id_{name}"), getattr(f, name)) for name in ID_PRODUCTS]
 
 
