@@ -104,8 +104,11 @@ class TileResolve(wiring.Component):
             raise TypeError(f"tile must be a TileConfig, not {tile!r}")
         if lanes not in PIXEL_LANES:
             raise ValueError(f"lanes must be one of {PIXEL_LANES}, not {lanes!r}")
-        if scan_lanes not in SCAN_LANES or scan_lanes not in (1, lanes):
-            raise ValueError(f"scan_lanes must be 1 or the lanes ({lanes}), not {scan_lanes!r}")
+        if scan_lanes not in SCAN_LANES or scan_lanes > lanes:
+            raise ValueError(
+                f"scan_lanes must be one of {SCAN_LANES} and at most the lanes ({lanes}), "
+                f"not {scan_lanes!r}"
+            )
         if product_stages not in PRODUCT_STAGES:
             raise ValueError(
                 f"product_stages must be one of {PRODUCT_STAGES}, not {product_stages!r}"
@@ -178,21 +181,25 @@ class TileResolve(wiring.Component):
         pairs = list(zip(*reads, strict=True))  # (bank 0's, bank 1's) read port of each lane
         frd.lanes = [frd.data, *(Mux(bank, r0.data, r1.data) for r0, r1 in pairs[1:])]
         wr = types.SimpleNamespace(addr=Signal(range(tile.pixels)), data=Signal(value), en=Signal())
-        scan = self._scan_lanes  # a beat of `scan` cells: a pixel of each lane's memory
+        # a beat of `scan` cells: a pixel of each of `scan` lanes' memories, the group of
+        # lanes its column picks (all of them when the scan is as wide as the flush)
+        scan = self._scan_lanes
+        scan_bits = scan.bit_length() - 1
         wr.lanes = [wr.data, *(Signal(value, name=f"wr_data_l{j}") for j in range(1, scan))]
-        if scan > 1:  # the resolve reads and writes a beat's pixels, a lane each
-            rd.lanes = [Mux(bank, r1.data, r0.data) for r0, r1 in pairs]
-        elif lanes > 1:  # the resolve's read: the lane of the column it read a clock ago
-            read_lane = Signal(lane_bits, name="read_lane")
-            m.d.sync += read_lane.eq(rd.addr[:lane_bits])
-            rd.data = Array(Mux(bank, r1.data, r0.data) for r0, r1 in pairs)[read_lane]
-        if scan == 1:
-            rd.lanes = [rd.data]
+        resolve_reads = [Mux(bank, r1.data, r0.data) for r0, r1 in pairs]
+        if scan == lanes:
+            rd.lanes = resolve_reads
+        else:  # the resolve's read: the group of the column it read a clock ago
+            read_group = Signal(lane_bits - scan_bits, name="read_lane")
+            m.d.sync += read_group.eq(rd.addr[scan_bits:lane_bits])
+            groups = [resolve_reads[g : g + scan] for g in range(0, lanes, scan)]
+            rd.lanes = [Array(group[k] for group in groups)[read_group] for k in range(scan)]
+        rd.data = rd.lanes[0]
         for k, j in itertools.product(range(2), range(lanes)):
             mine = bank == k
             write = wr.en & mine
-            if lanes > 1 and scan == 1:
-                write = write & (wr.addr[:lane_bits] == j)
+            if scan < lanes:
+                write = write & (wr.addr[scan_bits:lane_bits] == j >> scan_bits)
             m.d.comb += [
                 reads[k][j].addr.eq(Mux(mine, rd.addr, frd.addr)[lane_bits:]),
                 reads[k][j].en.eq(mine | advance),

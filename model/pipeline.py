@@ -84,8 +84,9 @@ class PipelineConfig:
     its pixel memories banked by column modulo the lanes); the scan lanes, the accumulated
     cells its accumulator's scan reads and its resolve composites a clock, side by side in
     one beat of the ``cells`` stream (lane k the column ``x + k``; the accumulation memory
-    banked by column modulo the lanes; more than one needs as many pixel lanes, whose
-    memories the resolve then reads and writes a lane each); the clocks the resolve's
+    banked by column modulo the lanes; more than one needs at least as many pixel lanes,
+    whose memories the resolve then reads and writes a lane a cell, the group of lanes the
+    beat's column picks); the clocks the resolve's
     composite products take (`product_stages`, `edgeaa.model.tile.resolve_latency`: two
     halve each clock's carry chains there, for Fmax); and its core (`fast_core`, the output
     `deltas`). The commands, the frames and the images do not depend on any of these but the
@@ -104,8 +105,8 @@ class PipelineConfig:
         _check_count("setup_units", self.setup_units, range(1, MAX_SETUP_UNITS + 1))
         lanes = _check_count("pixel_lanes", self.pixel_lanes, PIXEL_LANES)  # a row: whole beats
         scan = _check_count("scan_lanes", self.scan_lanes, SCAN_LANES)
-        if scan > 1 and lanes != scan:  # the resolve reads and writes a pixel lane per cell
-            raise ValueError(f"scan_lanes {scan} needs pixel_lanes {scan}, not {lanes}")
+        if scan > lanes:  # the resolve reads and writes a pixel lane per cell
+            raise ValueError(f"scan_lanes {scan} needs at least {scan} pixel_lanes, not {lanes}")
         _check_count("product_stages", self.product_stages, PRODUCT_STAGES)
         if not isinstance(self.fast_core, bool):
             raise TypeError(f"fast_core must be True or False, not {self.fast_core!r}")
@@ -144,7 +145,7 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # The named configurations, built from the same components (docs/hardware.md, "Display
 # rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
-# knee of clocks over area), a flush of two pixels a clock, a scan of two cells a clock and
+# knee of clocks over area), a flush of four pixels a clock, a scan of two cells a clock and
 # the fast core (`DELTAS_FAST`: its p3 and its setup's second lane steps do not fit compact's
 # HX8K, which has no multipliers for its FINAL), and the resolve's products over two clocks
 # (a clock of latency a polygon; compact's Fmax is not bound there).
@@ -158,7 +159,7 @@ PIPELINES = {
     },
     "fast": {
         "setup_units": 4,
-        "pixel_lanes": 2,
+        "pixel_lanes": 4,
         "scan_lanes": 2,
         "fast_core": True,
         "product_stages": 2,

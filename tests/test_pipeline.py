@@ -318,10 +318,10 @@ def test_the_named_configurations():
     fields = ("setup_units", "pixel_lanes", "scan_lanes", "fast_core", "product_stages")
     want = {
         "compact": dict(zip(fields, (1, 1, 1, False, 1), strict=True)),
-        "fast": dict(zip(fields, (4, 2, 2, True, 2), strict=True)),
+        "fast": dict(zip(fields, (4, 4, 2, True, 2), strict=True)),
     }
     assert want == PIPELINES
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 2, 2, True, 2)
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 4, 2, True, 2)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
@@ -339,9 +339,10 @@ def test_the_named_configurations():
     for bad, error in [(0, ValueError), (4, ValueError), (True, TypeError), (2.0, TypeError)]:
         with pytest.raises(error, match="scan_lanes"):
             PipelineConfig(TILE, 1, 2, bad)
-    for lanes in (1, 4):  # two scan lanes read and write two pixel lanes
-        with pytest.raises(ValueError, match=f"scan_lanes 2 needs pixel_lanes 2, not {lanes}"):
-            PipelineConfig(TILE, 1, lanes, 2)
+    # two scan lanes read and write two pixel lanes (of two, or the pair of four they pick)
+    with pytest.raises(ValueError, match="scan_lanes 2 needs at least 2 pixel_lanes, not 1"):
+        PipelineConfig(TILE, 1, 1, 2)
+    assert EdgePipeline(PipelineConfig(TILE, 1, 4, 2)).res.scan_lanes == 2
     with pytest.raises(ValueError, match="no pipeline named"):
         PipelineConfig.named("quick")
     # the fast core: the deltas stepper 4 deep, with p3; compact's 3
@@ -381,9 +382,9 @@ def test_the_fast_pipeline_renders_every_builtin_to_the_renderers_image(name):
 
 
 # Each configuration is a Verilator build (about 15 s of CPU): the tests below share them.
-# Four units with two pixel lanes and two scan lanes (fast), one unit with four pixel lanes,
+# Four units with four pixel lanes and two scan lanes (fast), one unit with four pixel lanes,
 # one with two pixel lanes and one scan lane.
-LANE_BUILDS = [(4, 2, 2), (1, 4, 1), (1, 2, 1)]  # (setup units, pixel lanes, scan lanes)
+LANE_BUILDS = [(4, 4, 2), (1, 4, 1), (1, 2, 1)]  # (setup units, pixel lanes, scan lanes)
 
 
 @settings(max_examples=15, deadline=None, database=None)
@@ -575,11 +576,11 @@ def test_the_amaranth_engine_renders_a_small_scene_through_the_pipeline():
     assert np.array_equal(result.image, render_scene(plan).image)
 
 
-def test_the_amaranth_engine_renders_through_two_pixel_lanes_under_back_pressure():
-    """The Amaranth runner reads the fast pipeline's beats of two pixels (`pixel_rows`)."""
+def test_the_amaranth_engine_renders_through_four_pixel_lanes_under_back_pressure():
+    """The Amaranth runner reads the fast pipeline's beats of four pixels (`pixel_rows`)."""
     plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
     fast = PipelineConfig.named("fast", TileConfig(DEFAULT, 16, 8))
-    assert fast.pixel_lanes == 2
+    assert (fast.pixel_lanes, fast.scan_lanes) == (4, 2)
     result = render_pipeline(plan, "amaranth", fast, seed=5, idle=0.2, stall=0.4)
     assert result.mismatches == 0 and result.pipeline.engine == "amaranth"
     assert np.array_equal(result.image, render_scene(plan).image)

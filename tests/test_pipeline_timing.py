@@ -243,11 +243,11 @@ def test_several_setup_units_in_the_models_clocks(units, seed):
 
 @pytest.mark.parametrize(
     ("units", "lanes", "scan", "seed"),
-    [(1, 2, 1, 2), (4, 2, 1, 7), (2, 4, 1, 10), (1, 2, 2, 2), (4, 2, 2, 7), (2, 2, 2, 10)],
+    [(1, 2, 1, 2), (4, 2, 1, 7), (2, 4, 1, 10), (1, 2, 2, 2), (4, 4, 2, 7), (2, 2, 2, 10)],
 )
 def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed):
     """A flush of `lanes` pixels a clock and a scan of `scan` cells a clock (the fast
-    pipeline's two and two; two scan lanes also take a beat's cells into the accumulator by
+    pipeline's four and two; two scan lanes also take a beat's cells into the accumulator by
     pairs), with the bad commands and the stalls: each pixel in its beat's clock, each beat
     of cells in its clock."""
     pipeline = PipelineConfig(SMALL_TILE, units, lanes, scan)
@@ -257,7 +257,8 @@ def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed)
     check_clock_for_clock(pipeline, commands, hw, label)
     assert hw.stats["acc_stall"] > 0  # the stall is exercised
     # the model of a flush of one pixel a clock, or of a scan of one cell a clock, does not fit
-    wrongs = [{"pixel_lanes": 1, "scan_lanes": 1}] + [{"scan_lanes": 3 - scan}] * (lanes == 2)
+    wrongs = [{"pixel_lanes": 1, "scan_lanes": 1}] + [{"scan_lanes": 3 - scan}] * (lanes > 1)
+    wrongs += [{"pixel_lanes": 2}] * (lanes == 4 and scan == 2)
     for wrong in wrongs:
         with pytest.raises(AssertionError):
             check_clock_for_clock(replace(pipeline, **wrong), commands, hw, f"{wrong}")

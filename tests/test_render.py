@@ -1286,8 +1286,8 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
 
 @pytest.mark.parametrize("name", ["starburst", "text", "hatch"])
 def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
-    """Two pixel lanes and two scan lanes (the fast pipeline): the estimate stays above the
-    cycle model's clocks, with the flush at two pixels a clock and the scan two cells a
+    """Four pixel lanes and two scan lanes (the fast pipeline): the estimate stays above the
+    cycle model's clocks, with the flush at four pixels a clock and the scan two cells a
     clock (the accumulator takes a beat's cells two a clock too), and within 2.1 times."""
     from edgeaa.model.pipeline import PipelineConfig
     from edgeaa.model.pipeline_timing import pipeline_cycles
@@ -1296,7 +1296,7 @@ def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
 
     p = plan(builtin(name, DEFAULT), DEFAULT)
     fast = PipelineConfig.named("fast", TileConfig(DEFAULT))
-    assert fast.pixel_lanes == fast.scan_lanes == 2
+    assert (fast.pixel_lanes, fast.scan_lanes) == (4, 2)
     exact = pipeline_cycles(fast, pipeline.scene_commands(p, fast.tile)).clocks
     estimate, _ = pipeline.clock_estimate(p, fast)
     assert exact <= estimate <= 2.1 * exact, (exact, estimate)

@@ -307,10 +307,10 @@ TILE_PROOFS: dict[str, TileProof] = {
             TileConfig(),
             reset=True,
             memory_map=False,
-            description="pixels hold rule with two scan lanes and two pixel lanes (the fast "
+            description="pixels hold rule with two scan lanes and four pixel lanes (the fast "
             "pipeline's resolve, its products over two clocks), any reachable state "
             "(k-induction), default tile",
-            lanes=2,
+            lanes=4,
             scan_lanes=2,
             product_stages=2,
         ),
@@ -394,10 +394,11 @@ TILE_PROOFS: dict[str, TileProof] = {
             ("pixels",),
             "prove",
             resolve_latency(SMALL_TILE, 2) + 1,
-            description="res_pixels_lanes with two scan lanes and the products over two "
-            "clocks (the fast pipeline's resolve): it takes a beat of two cells a clock, each "
-            "composited in its lane and written to its pixel lane's memory",
-            lanes=2,
+            description="res_pixels with four pixel lanes, two scan lanes and the products "
+            "over two clocks (the fast pipeline's resolve): it takes a beat of two cells a "
+            "clock, each composited in its lane and written to its pixel lane's memory (of the "
+            "pair its column picks), and a flush sends four pixels a beat",
+            lanes=4,
             scan_lanes=2,
             product_stages=2,
         ),
@@ -423,7 +424,7 @@ TILE_PROOFS: dict[str, TileProof] = {
                 ("acc_sums_scan", "accumulator", "sums", 16, 1, 2, 1),
                 ("res_pixels", "resolve", "pixels", 14, 1, 1, 1),
                 ("res_pixels_lanes", "resolve", "pixels", 14, 2, 1, 1),
-                ("res_pixels_scan", "resolve", "pixels", 14, 2, 2, 2),
+                ("res_pixels_scan", "resolve", "pixels", 14, 4, 2, 2),
             )
         ),
     )
