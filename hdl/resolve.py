@@ -302,27 +302,7 @@ class TileResolve(wiring.Component):
             carried_values[f"neg{lane}"] = Cat(*lane_negs)
         delay = bits + self._product_stages - 1
         carry = _delay_line(m, self.observe, "carry", ptr, delay, **carried_values)
-        # the division's partial remainder (num's top bits: below 2 D, as the quotient has I
-        # bits) and the dividend's low bits, which the quotient's bits replace one a stage;
-        # a pair per channel of each lane (lane 0's channel 0 named rem and low), one
-        # divisor 2 D
-        s3 = _stage(
-            m,
-            "s3",
-            valid=stages[-1].valid,  # pre's, or sp's
-            **{f"rem{n}": num[bits:][: bits + 1] for n, num in zip(names, nums, strict=True)},
-            **{f"low{n}": num[:bits] for n, num in zip(names, nums, strict=True)},
-        )
-        stages.append(s3)
-        for j in reversed(range(bits)):  # quotient bit j
-            prev, fields = stages[-1], {}
-            for n in names:
-                rem, low = getattr(prev, f"rem{n}"), getattr(prev, f"low{n}")
-                trial = Cat(low[-1], rem)  # rem << 1 | the dividend's next bit
-                fits = trial >= d2
-                fields[f"rem{n}"] = Mux(fits, trial - d2, trial)[: bits + 1]
-                fields[f"low{n}"] = Cat(fits, low[:-1])
-            stages.append(_stage(m, f"q{j}", valid=prev.valid, **fields))
+        stages += _divide(m, dict(zip(names, nums, strict=True)), stages[-1].valid, d2, bits)
         for k, st in enumerate(stages[:-1], start=1):  # where stage k's values are now
             st.delayed = {"xy": ptr - k} | ({"carry": ptr - (k - carried)} if k > carried else {})
         last = stages[-1]
@@ -477,6 +457,33 @@ class TileResolve(wiring.Component):
                 for name, data in zip(pixel_value_fields(self._lanes), frd.lanes, strict=True)
             ),
         ]
+
+
+def _divide(m, nums: dict, valid, d2, bits: int) -> list:
+    """s3 and the quotient's stages q(I - 1) .. q0: each numerator of `nums` (by its lane's and
+    channel's name) over the divisor `d2` = 2 D, a restoring step a stage. s3 holds the
+    partial remainder (num's top bits: below 2 D, as the quotient has I bits) and the
+    dividend's low bits, which the quotient's bits replace one a stage (lane 0's channel 0
+    named rem and low)."""
+    stages = [
+        _stage(
+            m,
+            "s3",
+            valid=valid,
+            **{f"rem{n}": num[bits:][: bits + 1] for n, num in nums.items()},
+            **{f"low{n}": num[:bits] for n, num in nums.items()},
+        )
+    ]
+    for j in reversed(range(bits)):  # quotient bit j
+        prev, fields = stages[-1], {}
+        for n in nums:
+            rem, low = getattr(prev, f"rem{n}"), getattr(prev, f"low{n}")
+            trial = Cat(low[-1], rem)  # rem << 1 | the dividend's next bit
+            fits = trial >= d2
+            fields[f"rem{n}"] = Mux(fits, trial - d2, trial)[: bits + 1]
+            fields[f"low{n}"] = Cat(fits, low[:-1])
+        stages.append(_stage(m, f"q{j}", valid=prev.valid, **fields))
+    return stages
 
 
 def _alpha(m, q, alpha, bits: int, suffix: str = ""):
