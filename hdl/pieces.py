@@ -117,11 +117,23 @@ def _end_widths(unit, start_clip=None, cut_end=None) -> types.SimpleNamespace:
     # 2 u + S = 2 (u + S // 2) + S % 2 (u = +-p): bit 0 is a constant (zero for s > 0),
     # the rest s bits (mg_h, me_h: even widths are twice them, a multiplier can take those).
     half = S // 2
-    mg_h = Mux(fp, Mux(r.major_neg, half - p0, p0 + half)[:s], 0)
-    me_h = Mux(lp, Mux(r.major_neg, half + p1, half - p1)[:s], 0)
+    mg_in_h = Mux(r.major_neg, half - p0, p0 + half)[:s]  # the halves with the vertex in
+    me_in_h = Mux(r.major_neg, half + p1, half - p1)[:s]
+    mg_h, me_h = Mux(fp, mg_in_h, 0), Mux(lp, me_in_h, 0)
     mg, me = Cat(fp & (S % 2), mg_h)[: s + 1], Cat(lp & (S % 2), me_h)[: s + 1]
     w1 = (2 * S - me)[: s + 2]
-    return types.SimpleNamespace(fp=fp, lp=lp, mg=mg, me=me, w1=w1, mg_h=mg_h, me_h=me_h)
+    return types.SimpleNamespace(
+        fp=fp,
+        lp=lp,
+        mg=mg,
+        me=me,
+        w1=w1,
+        mg_h=mg_h,
+        me_h=me_h,
+        # mg and me when the column holds the vertex (what fp and lp pick, or 0)
+        mg_in=Cat(Const(S % 2, 1), mg_in_h)[: s + 1],
+        me_in=Cat(Const(S % 2, 1), me_in_h)[: s + 1],
+    )
 
 
 def kq_product_steps(unit, digits, single=None) -> list:
@@ -348,11 +360,16 @@ def kq_multiplicands(unit, start_clip=None, cut_end=None) -> list:
     """(register, value) of the multiplicands of `kq_product_steps` (`_end_widths` of
     `start_clip` and `cut_end`, the registers' if None): ``me^2`` (x-major) or ``w1^2 = (2 S
     - me)^2`` (y-major), and ``(2 S - mg)^2``."""
-    S, pc = 1 << unit.config.subpixel_bits, unit.pieces
+    s = unit.config.subpixel_bits
+    S, pc, xm = 1 << s, unit.pieces, unit.regs.x_major
     w = _end_widths(unit, start_clip, cut_end)
+    # squared before the window's cut picks them (a cut vertex: me = mg = 0, w1 = 2 S), so
+    # the cut's compare runs beside the multipliers, not in front of them
+    me, w1 = w.me_in, (2 * S - w.me_in)[: s + 2]
+    g1 = (2 * S - w.mg_in)[: s + 2]
     return [
-        (pc.m_me, Mux(unit.regs.x_major, w.me * w.me, w.w1 * w.w1)),
-        (pc.m_mg, (2 * S - w.mg) * (2 * S - w.mg)),
+        (pc.m_me, Mux(w.lp, Mux(xm, me * me, w1 * w1), Mux(xm, 0, 4 * S * S))),
+        (pc.m_mg, Mux(w.fp, g1 * g1, 4 * S * S)),
     ]
 
 
