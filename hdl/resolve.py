@@ -234,6 +234,9 @@ class TileResolve(wiring.Component):
         for name in cell_sum_fields(len(lanes)):  # each lane's prefix sum, one adder each
             total = (total + c[name])[: tile.cell_bits].as_signed()
             totals.append(total)
+        # D = |I - I_out|, the polygon's: formed from the cell as it is taken, so that s1's
+        # register cuts its carry chain from the fill rule's (an Fmax path in s2)
+        scale = c.intensity if tile.channels == 1 else c.intensity[:bits]
         s1 = _stage(
             m,
             "s1",
@@ -241,15 +244,13 @@ class TileResolve(wiring.Component):
             **{f"sum{n}": t for n, t in zip(lanes, totals, strict=True)},
             written=written.bit_select(c.y, 1),
             intensity=c.intensity,
-            i_out=c.i_out,
+            d=Mux(scale >= c.i_out, scale - c.i_out, c.i_out - scale)[:bits],
             evenodd=c.evenodd,
         )
         with m.If(take):
             m.d.sync += acc.eq(total)
         self.observe.acc = acc
-        d = Signal(bits, name="d")
-        scale = s1.intensity if tile.channels == 1 else s1.intensity[:bits]
-        m.d.comb += d.eq(Mux(scale >= s1.i_out, scale - s1.i_out, s1.i_out - scale))
+        d = s1.d
         ifix = d << F
         s2 = _stage(
             m,
