@@ -211,12 +211,16 @@ def _v1_2(unit, v0):
 
 def _end_product(unit, e1, w):
     """x-major ``e1 me`` (rect1), y-major ``e1 w1`` (total1's first term); `w` from
-    `_end_widths`. For ``s > 0`` both factors are even: a product of halves."""
+    `_end_widths`. For ``s > 0`` both factors are even: a product of halves. Formed with the
+    vertex in the last column and then picked by the window's cut (``me = 0``, ``w1 = 2 S``),
+    so that the cut's compare runs beside the multiplier, not in front of it."""
     s = unit.config.subpixel_bits
     xm = unit.regs.x_major
     if s:
-        return (e1[1:] * Mux(xm, w.me_h, (1 << s) - w.me_h)[: s + 1]) << 2
-    return e1 * Mux(xm, w.me, w.w1)
+        product = (e1[1:] * Mux(xm, w.me_in[1:], (1 << s) - w.me_in[1:])[: s + 1]) << 2
+        return Mux(w.lp, product, Mux(xm, 0, e1[1:] << (s + 2)))
+    product = e1 * Mux(xm, w.me_in, (2 - w.me_in)[:2])
+    return Mux(w.lp, product, Mux(xm, 0, e1 << 1))
 
 
 def end_multiplicand(unit, v0=None, start_clip=None, cut_end=None):
