@@ -202,7 +202,7 @@ def _reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result):
         ctx.set(domain.rst, 0)
         result["pixels"] = []
         await offer(ctx, second)
-        for _ in range(4 * tile.pixels + 200):
+        for _ in range(6 * tile.pixels + 300):
             *_, valid, pixel = await ctx.tick().sample(
                 dut.commands.ready, dut.pixels.valid, dut.pixels.payload
             )
@@ -214,22 +214,40 @@ def _reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result):
 
 @pytest.mark.parametrize("scan", [1, 2], ids=["one scan lane", "two scan lanes"])
 @pytest.mark.parametrize(
-    "ended, wait",
-    [(False, 200), (True, 6)],
-    ids=["open polygon, its beats in the memory", "in the end's scan"],
+    "tail, wait",
+    [([], 200), (["end"], 6), (["end"], 200), (["end", "flush"], 12), (["end", "flush"], 200)],
+    ids=[
+        "open polygon, its beats in the memory",
+        "in the end's scan",
+        "resolved, its pixels in the memory",
+        "in the flush",
+        "resolved in both pixel memories",
+    ],
 )
-def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(ended, wait, scan):
+def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(tail, wait, scan):
     """A reset while a polygon's deltas are in the accumulation memory (the polygon open, or
     its scan under way): they are cleared (with two scan lanes, a beat of the banked
-    memory a clock), so the next scene is the model's image of that scene alone."""
+    memory a clock); while its pixels are in a pixel memory (resolved, or being flushed):
+    none of them shows in the next scene, whose first tile starts with no tile command (the
+    reset's tile, background 0). So the next scene is the model's image of that scene alone
+    (its polygons cover fewer pixels than the first's)."""
     tile = TileConfig(CONFIG, 8, 4)
     tri = [(1, 0, 7, 3), (7, 3, 0, 3), (0, 3, 1, 0)]
     first = [Command.tile(0, 0, 3), Command.begin(15, 3)]
-    first += [Command.edge(*e) for e in tri] + [Command.end()] * ended
-    second = [Command.tile(0, 0, 2), Command.begin(12, 2)]
-    second += [Command.edge(*e) for e in [(2, 0, 6, 3), (6, 3, 2, 3), (2, 3, 2, 0)]]
-    second += [Command.end(), Command.flush()]
-    (frame,) = TileModel(tile).run(command_ops(tile, second).ops)
+    first += [Command.edge(*e) for e in tri] + [getattr(Command, op)() for op in tail]
+    if tail == ["end", "flush"] and wait > 100:  # the other memory written too
+        first += [Command.tile(0, 0, 4), Command.begin(9, 4)]
+        first += [Command.edge(*e) for e in tri] + [Command.end()]
+    # two tiles: the first with no tile command (the reset's: background 0), the second in
+    # the memory the first scene's flush side had
+    second = []
+    for background, box in [(0, (2, 0, 6, 3)), (5, (3, 1, 5, 2))]:
+        x0, y0, x1, y1 = box
+        second += [Command.tile(0, 0, background)] * (background > 0)
+        second += [Command.begin(12, background)]
+        second += [Command.edge(x0, y0, x1, y1), Command.edge(x1, y1, x0, y1)]
+        second += [Command.edge(x0, y1, x0, y0), Command.end(), Command.flush()]
+    frames = TileModel(tile).run(command_ops(tile, second).ops)
     dut = EdgePipeline(PipelineConfig(tile, 1, scan, scan))
     top, domain = _with_domain(dut)
     result = {"pixels": []}
@@ -237,7 +255,7 @@ def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(ended, wait, scan):
     sim.add_clock(1e-6)
     sim.add_testbench(_reset_mid_polygon_bench(dut, domain, tile, first, wait, second, result))
     sim.run()
-    assert result["pixels"] == [int(v) for v in frame.ravel()]
+    assert result["pixels"] == [int(v) for frame in frames for v in frame.ravel()]
 
 
 # -- clip port values past 2**W --------------------------------------------------------------
