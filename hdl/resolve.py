@@ -8,12 +8,14 @@ beat is one cell, or with ``scan_lanes`` 2 (`PipelineConfig.scan_lanes`, the fas
 pipeline's) two, the columns ``x`` and ``x + 1``:
 every stage below is then a lane per cell (the registers of lane 1 named ``_l1``; one
 prefix sum register, the second cell's sum the first's plus its own), and each lane reads
-and writes its own pixel lane's memory (scan lanes equal pixel lanes):
+and writes its own pixel lane's memory (with more pixel lanes than scan lanes, of the group
+of lanes the beat's column picks: the fast pipeline's four and two):
 
 * take (clock r): the pixel's read is issued;
-* s1: the row's prefix sum (restarting at the row's first cell, ``start``) and whether
-  the pixel row was written since the tile started (a row is first written whole, so one
-  bit per row: rows never written read as the background and no clear pass is needed);
+* s1: the row's prefix sum (restarting at the row's first cell, ``start``), D =
+  ``|I - I_out|`` (formed as the cell is taken) and whether the pixel row was written since
+  the tile started (a row is first written whole, so one bit per row: rows never written
+  read as the background and no clear pass is needed);
 * s2: the fill rule (`edgeaa.model.accumulate.fill`; even-odd by h + 1 compare-subtract
   steps, exact within the cells' range) and the pixel below;
 * colour only, sa: the intensity offset q (a shift; 0 when I_in == I_out) times the paint's
@@ -50,7 +52,7 @@ with the other, the tile the background again (no row written). The flush side r
 memory row by row, ``lanes`` pixels a clock while the ``pixels`` stream advances (its read
 ports' enable is the advance, so a stalled beat stays in the memories' output registers):
 a beat of the stream is lane k the pixel at column ``x + k`` (`PipelineConfig.pixel_lanes`;
-1 in the compact pipeline, 2 in the fast one). Each pixel memory is a memory per lane,
+1 in the compact pipeline, 4 in the fast one). Each pixel memory is a memory per lane,
 banked by column modulo the lanes (a pixel's word is its address without the low bits), so
 a beat is one word of each lane's memory; the resolve reads and writes the memory of its
 pixel's lane (its read data chosen by the lane read a clock before). The flush goes on
