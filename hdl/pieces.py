@@ -122,6 +122,7 @@ def _end_widths(unit, start_clip=None, cut_end=None) -> types.SimpleNamespace:
     mg_h, me_h = Mux(fp, mg_in_h, 0), Mux(lp, me_in_h, 0)
     mg, me = Cat(fp & (S % 2), mg_h)[: s + 1], Cat(lp & (S % 2), me_h)[: s + 1]
     w1 = (2 * S - me)[: s + 2]
+    me_in = Cat(Const(S % 2, 1), me_in_h)[: s + 1]
     return types.SimpleNamespace(
         fp=fp,
         lp=lp,
@@ -129,10 +130,10 @@ def _end_widths(unit, start_clip=None, cut_end=None) -> types.SimpleNamespace:
         me=me,
         w1=w1,
         mg_h=mg_h,
-        me_h=me_h,
-        # mg and me when the column holds the vertex (what fp and lp pick, or 0)
+        # mg, me and w1 when the column holds the vertex (what fp and lp pick, or 0 and 2 S)
         mg_in=Cat(Const(S % 2, 1), mg_in_h)[: s + 1],
-        me_in=Cat(Const(S % 2, 1), me_in_h)[: s + 1],
+        me_in=me_in,
+        w1_in=(2 * S - me_in)[: s + 2],
     )
 
 
@@ -219,7 +220,7 @@ def _end_product(unit, e1, w):
     if s:
         product = (e1[1:] * Mux(xm, w.me_in[1:], (1 << s) - w.me_in[1:])[: s + 1]) << 2
         return Mux(w.lp, product, Mux(xm, 0, e1[1:] << (s + 2)))
-    product = e1 * Mux(xm, w.me_in, (2 - w.me_in)[:2])
+    product = e1 * Mux(xm, w.me_in, w.w1_in)
     return Mux(w.lp, product, Mux(xm, 0, e1 << 1))
 
 
@@ -369,7 +370,7 @@ def kq_multiplicands(unit, start_clip=None, cut_end=None) -> list:
     w = _end_widths(unit, start_clip, cut_end)
     # squared before the window's cut picks them (a cut vertex: me = mg = 0, w1 = 2 S), so
     # the cut's compare runs beside the multipliers, not in front of them
-    me, w1 = w.me_in, (2 * S - w.me_in)[: s + 2]
+    me, w1 = w.me_in, w.w1_in
     g1 = (2 * S - w.mg_in)[: s + 2]
     return [
         (pc.m_me, Mux(w.lp, Mux(xm, me * me, w1 * w1), Mux(xm, 0, 4 * S * S))),
