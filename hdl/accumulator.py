@@ -21,11 +21,11 @@ polygon touched in ascending order, one beat of ``lanes`` cells per clock while 
 advances (`edgeaa.model.pipeline.PipelineConfig.scan_lanes`: 1 in the compact pipeline, the
 memory then one; 2 in the fast one, a memory per lane, banked by column modulo the lanes,
 so a beat is a word of each, and the input side writes each cell's lane; ``start`` marks a
-row's first beat, where the resolve's prefix sum restarts), each read clearing its cells; a
-row already scanned in this tile is read over the polygon's scan span only, widened to
-whole beats (`edgeaa.model.tile`, "Scan span", where it is shown exact). A cell read in clock s is
-offered in s + 1 (the end's first in a + 3), and a stalled cell holds. Tile and flush ops go
-out through the same output register, in order.
+row's first beat, where the resolve's prefix sum restarts), each read clearing its cells;
+a row is read over the polygon's scan span only, widened to whole beats (`edgeaa.model.tile`,
+"Scan span", where it is shown exact: the resolve's pixels hold a written flag each). A cell
+read in clock s is offered in s + 1 (the end's first in a + 3), and a stalled cell holds. Tile
+and flush ops go out through the same output register, in order.
 
 Reset clears the registers, not the memory: a memory holding deltas of an unfinished polygon
 (``dirty``, kept through reset) is cleared, a beat a clock, ``width x height / lanes`` clocks,
@@ -121,11 +121,10 @@ class TileAccumulator(wiring.Component):
         m.d.comb += [self._read_en.eq(advance), self.cells.valid.eq(o_valid)]
         with m.If(advance):
             m.d.sync += o_valid.eq(0)
-        # the polygon's kept columns (lo > hi: none yet) and rows; rows scanned since the tile
-        # started (the resolve has written them whole)
+        # the polygon's kept columns (lo > hi: none yet) and rows
         lo = Signal(tile.x_bits, init=tile.width - 1)
         hi = Signal(tile.x_bits)
-        touched, seen = Signal(tile.height), Signal(tile.height)
+        touched = Signal(tile.height)
         # kept deltas not yet scanned, through reset; the first clock after a reset
         dirty, check = Signal(reset_less=True), Signal(init=1)
         m.d.sync += check.eq(0)
@@ -140,13 +139,10 @@ class TileAccumulator(wiring.Component):
                 new_hi = Mux(c.keep & (c.x > new_hi), c.x, new_hi)
         with m.If(cell.keep):
             m.d.sync += [dirty.eq(1), touched.eq(rows), lo.eq(new_lo), hi.eq(new_hi)]
-        with m.If(accept & ((p.op == TILE_OP["tile"]) | (p.op == TILE_OP["flush"]))):
-            m.d.sync += seen.eq(0)
         self.observe.__dict__.update(
             o_valid=o_valid,
             o=o,
             touched=touched,
-            seen=seen,
             lo=lo,
             hi=hi,
             dirty=dirty,

@@ -10,7 +10,7 @@ clock by clock.
 
 from __future__ import annotations
 
-from amaranth.hdl import Cat, Const, Mux, Signal
+from amaranth.hdl import Cat, Const, Signal
 
 from .layouts import CELL_OP, log2
 
@@ -29,12 +29,12 @@ def lowest_set(bits: Signal, width: int):
 
 
 def scan_states(m, unit, o, o_valid, advance, first):
-    """WAIT and SCAN: the touched rows in ascending order, a row seen since the tile
-    started from ``lo`` to ``hi`` and on to the last column when its sum through ``hi``
-    is nonzero (`edgeaa.model.tile`, "Scan span"), a row not seen yet whole; in beats of
-    ``unit.lanes`` cells (``scan_x`` a multiple of the lanes, the span widened to them)."""
+    """WAIT and SCAN: the touched rows in ascending order, each from ``lo`` to ``hi`` and on
+    to the last column when its sum through ``hi`` is nonzero (`edgeaa.model.tile`, "Scan
+    span"); in beats of ``unit.lanes`` cells (``scan_x`` a multiple of the lanes, the span
+    widened to them)."""
     tile, obs, lanes = unit.tile, unit.observe, unit.lanes
-    lo, hi, touched, seen = obs.lo, obs.hi, obs.touched, obs.seen
+    lo, hi, touched = obs.lo, obs.hi, obs.touched
     last = tile.width - 1
     last_beat = tile.width - lanes  # the row's last beat (its first column)
     if lanes > 1:  # lo and hi down to their beats' first columns
@@ -42,23 +42,18 @@ def scan_states(m, unit, o, o_valid, advance, first):
         lo, hi = Cat(Const(0, low), lo[low:]), Cat(Const(0, low), hi[low:])
     scan_x, scan_y = Signal(tile.x_bits), Signal(tile.y_bits)
     scan_addr = Cat(scan_x, scan_y)
-    partial = Signal()  # the row is read from lo (it was seen)
     row_start = Signal()  # the next read is the row's first
     decide = Signal()  # the cell waiting is the row's hi: the row may stop there
     total = obs.total
     # the next row to scan and its bit, taken out of `touched` when it is chosen
     next_y, next_bit = lowest_set(touched, tile.height)
-    next_seen = (seen & next_bit).any()
-    next_x = Mux(next_seen, lo, 0)
 
     def choose():
         m.d.sync += [
-            scan_x.eq(next_x),
+            scan_x.eq(lo),
             scan_y.eq(next_y),
-            partial.eq(next_seen),
             row_start.eq(1),
             touched.eq(touched & ~next_bit),
-            seen.eq(seen | next_bit),
         ]
 
     def done():
@@ -90,7 +85,7 @@ def scan_states(m, unit, o, o_valid, advance, first):
                 first.eq(0),
                 row_start.eq(0),
                 scan_x.eq(scan_x + lanes),
-                decide.eq(partial & (scan_x == hi) & (hi != last_beat)),
+                decide.eq((scan_x == hi) & (hi != last_beat)),
             ]
             with m.If(stop | (scan_x == last_beat)):
                 choose()
@@ -104,6 +99,4 @@ def scan_states(m, unit, o, o_valid, advance, first):
             with m.If(scan_y == tile.height - 1):
                 m.d.sync += [scan_x.eq(0), scan_y.eq(0), obs.dirty.eq(0)]
                 m.next = "ACC"
-    obs.__dict__.update(
-        scan_x=scan_x, scan_y=scan_y, partial=partial, row_start=row_start, decide=decide
-    )
+    obs.__dict__.update(scan_x=scan_x, scan_y=scan_y, row_start=row_start, decide=decide)

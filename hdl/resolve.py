@@ -154,11 +154,14 @@ class TileResolve(wiring.Component):
         tile, lanes = self._tile, self._lanes
         # two pixel memories: the resolve writes one (``bank``) while a flush reads the other;
         # each is a memory per lane, banked by column modulo the lanes (word: the pixel's
-        # address without its low bits), so a flush reads a beat's pixels in one clock
+        # address without its low bits), so a flush reads a beat's pixels in one clock. A
+        # word is the pixel and its flag, written since the tile started (its top bit): a
+        # pixel not written reads as the background, and the flush clears the flags
         value = unsigned(tile.config.intensity_bits * tile.channels)  # a value per channel
+        word = unsigned(value.width + 1)
         depth, lane_bits = tile.pixels // lanes, lanes.bit_length() - 1
         mems = [
-            [memory.Memory(shape=value, depth=depth, init=[]) for _ in range(lanes)]
+            [memory.Memory(shape=word, depth=depth, init=[]) for _ in range(lanes)]
             for _ in range(2)
         ]
         for k, j in itertools.product(range(2), range(lanes)):
@@ -166,8 +169,14 @@ class TileResolve(wiring.Component):
         reads = [[mem.read_port() for mem in bank_mems] for bank_mems in mems]
         writes = [[mem.write_port() for mem in bank_mems] for bank_mems in mems]
         bank = Signal()
-        self.observe = types.SimpleNamespace(memories=mems, reads=reads, bank=bank)
-        written = Signal(tile.height)  # rows written since the tile started
+        # each memory written since its last flush or sweep, through reset (a reset then
+        # sweeps it: `_control`)
+        dirty = [Signal(name=f"dirty{k}", reset_less=True) for k in range(2)]
+        self.observe = types.SimpleNamespace(memories=mems, reads=reads, bank=bank, dirty=dirty)
+        # the flush side's clear: the words it read a clock before, written back with no flag
+        clear = types.SimpleNamespace(addr=Signal(range(tile.pixels), name="clear_addr"))
+        clear.en = Signal(name="clear_en")
+        self.observe.clear = clear
         background = Signal(value)
         p_valid = Signal()
         advance = ~p_valid | self.pixels.ready
@@ -205,19 +214,19 @@ class TileResolve(wiring.Component):
             m.d.comb += [
                 reads[k][j].addr.eq(Mux(mine, rd.addr, frd.addr)[lane_bits:]),
                 reads[k][j].en.eq(mine | advance),
-                writes[k][j].addr.eq(wr.addr[lane_bits:]),
-                writes[k][j].data.eq(wr.lanes[j % scan]),
-                writes[k][j].en.eq(write),
+                writes[k][j].addr.eq(Mux(mine, wr.addr, clear.addr)[lane_bits:]),
+                writes[k][j].data.eq(Mux(mine, Cat(wr.lanes[j % scan], 1), 0)),
+                writes[k][j].en.eq(Mux(mine, write, clear.en)),
             ]
-        stages = self._pipeline(m, rd, wr, written, background)
+            with m.If(write):
+                m.d.sync += dirty[k].eq(1)
+        stages = self._pipeline(m, rd, wr, background)
         busy = sum((s.valid for s in stages), start=0) != 0
-        self.observe.__dict__.update(
-            stages=stages, written=written, background=background, p_valid=p_valid
-        )
-        self._control(m, rd, frd, bank, written, background, p_valid, advance, busy)
+        self.observe.__dict__.update(stages=stages, background=background, p_valid=p_valid)
+        self._control(m, rd, frd, bank, dirty, clear, background, p_valid, advance, busy)
         return m
 
-    def _pipeline(self, m, rd, wr, written, background) -> list:
+    def _pipeline(self, m, rd, wr, background) -> list:
         """s1 .. s(I + 3) (module docstring); returns the stages (each with ``valid``)."""
         tile, c = self._tile, self.cells.payload
         F, bits = tile.config.F, tile.config.intensity_bits
@@ -244,7 +253,6 @@ class TileResolve(wiring.Component):
             "s1",
             valid=take,
             **{f"sum{n}": t for n, t in zip(lanes, totals, strict=True)},
-            written=written.bit_select(c.y, 1),
             intensity=c.intensity,
             d=Mux(scale >= c.i_out, scale - c.i_out, c.i_out - scale)[:bits],
             evenodd=c.evenodd,
@@ -259,8 +267,8 @@ class TileResolve(wiring.Component):
             "s2",
             valid=s1.valid,
             **{f"cov{n}": self._fill(getattr(s1, f"sum{n}"), ifix, s1.evenodd) for n in lanes},
-            **{
-                f"below{n}": Mux(s1.written, data, background)
+            **{  # the word's flag: written since the tile started
+                f"below{n}": Mux(data[-1], data[:-1], background)
                 for n, data in zip(lanes, rd.lanes, strict=True)
             },
             intensity=s1.intensity,
@@ -331,8 +339,6 @@ class TileResolve(wiring.Component):
             wr.en.eq(last.valid),
             *(port.eq(data) for port, data in zip(wr.lanes[1:], writes[1:], strict=True)),
         ]
-        self._row_done = last.valid & (last.x == tile.width - len(lanes))
-        self._row_done_y = last.y
         assert len(stages) == self.latency, (len(stages), self.latency)
         return stages
 
@@ -401,65 +407,92 @@ class TileResolve(wiring.Component):
         x = Mux(evenodd, r, mag)
         return Mux(x > ifix, Mux(evenodd, (ifix << 1) - r, ifix), x)[:width]
 
-    def _control(self, m, rd, frd, bank, written, background, p_valid, advance, busy):
+    def _control(self, m, rd, frd, bank, dirty, clear, background, p_valid, advance, busy):
         """Taking cells and ops, and the flush (of the other memory: the bank flips as a
-        flush is taken, which waits until the last flush's last pixel goes)."""
+        flush is taken, which waits until the last flush's last pixel goes). A sweep is a
+        flush that sends nothing (``silent``): it clears the flags of a memory written since
+        its last flush, handed over by a tile op (`_sweeps`)."""
         tile, c = self._tile, self.cells.payload
         out = self.pixels.payload
         fx, fy = Signal(tile.x_bits), Signal(tile.y_bits)
-        px, py, plast, pwritten = (Signal.like(out.x), Signal.like(out.y), Signal(), Signal())
-        fwritten = Signal(tile.height)  # the flushed tile's written rows and background
-        fbackground = Signal.like(background)
+        px, py, plast = Signal.like(out.x), Signal.like(out.y), Signal()
+        fbackground = Signal.like(background)  # the flushed tile's
+        silent = Signal()
         gate = (c.op != OP["cell"]) | c.first  # waits for no cell in flight
         is_flush = c.op == OP["flush"]
-        self.observe.p = types.SimpleNamespace(x=px, y=py, last=plast, written=pwritten)
-        self.observe.__dict__.update(fx=fx, fy=fy, fwritten=fwritten, fbackground=fbackground)
+        mine_dirty = Mux(bank, dirty[1], dirty[0])
+        # the ops that hand the resolve's memory to the flush side: a flush, and a tile op
+        # on written pixels (a sweep: `edgeaa.model.tile.TileClock.take`)
+        flips = is_flush | ((c.op == OP["tile"]) & mine_dirty)
+        sweep_starts = Signal()  # a sweep after a reset starts this clock (`_sweeps`)
+        self.observe.p = types.SimpleNamespace(x=px, y=py, last=plast)
+        self.observe.__dict__.update(fx=fx, fy=fy, fbackground=fbackground, silent=silent)
         take = self.cells.valid & self.cells.ready
+        stuck = self._sweeps(m, bank, dirty, fx, fy, silent, advance, sweep_starts)
         m.d.comb += [
-            self.cells.ready.eq(~(gate & busy) & ~(is_flush & (self.flushing | ~advance))),
+            self.cells.ready.eq(
+                ~stuck & ~(gate & busy) & ~(flips & (self.flushing | sweep_starts | ~advance))
+            ),
             rd.addr.eq(Cat(c.x, c.y)),
             frd.addr.eq(Cat(fx, fy)),
         ]
-        with m.If(self._row_done):
-            m.d.sync += written.eq(
-                written | (Const(1, tile.height) << self._row_done_y)[: tile.height]
-            )
         with m.If(take & (c.op == OP["tile"])):
-            m.d.sync += [background.eq(c.background), written.eq(0)]
-        with m.If(take & is_flush):
+            m.d.sync += background.eq(c.background)
+        with m.If(take & flips):
             m.d.sync += [
                 fx.eq(0),
                 fy.eq(0),
-                fwritten.eq(written),
                 fbackground.eq(background),
-                written.eq(0),
                 bank.eq(~bank),
                 self.flushing.eq(1),
+                silent.eq(~is_flush),
             ]
         with m.If(advance):
             m.d.sync += p_valid.eq(0)
+        m.d.sync += [clear.en.eq(self.flushing & advance), clear.addr.eq(Cat(fx, fy))]
         with m.If(self.flushing & advance):
             end = (fx == tile.width - self._lanes) & (fy == tile.height - 1)
             m.d.sync += [
-                p_valid.eq(1),
+                p_valid.eq(~silent),
                 px.eq(fx),
                 py.eq(fy),
                 plast.eq(end),
-                pwritten.eq(fwritten.bit_select(fy, 1)),
                 Cat(fx, fy).eq(Cat(fx, fy) + self._lanes),
             ]
-            with m.If(end):
+            with m.If(end):  # the flushed memory is clean (its last clear the next clock)
                 m.d.sync += self.flushing.eq(0)
+                for k in range(2):
+                    with m.If(bank != k):
+                        m.d.sync += dirty[k].eq(0)
         m.d.comb += [
             self.pixels.valid.eq(p_valid),
             out.x.eq(px),
             out.y.eq(py),
             out.last.eq(plast),
             *(
-                out[name].eq(Mux(pwritten, data, fbackground))
+                out[name].eq(Mux(data[-1], data[:-1], fbackground))
                 for name, data in zip(pixel_value_fields(self._lanes), frd.lanes, strict=True)
             ),
         ]
+
+    def _sweeps(self, m, bank, dirty, fx, fy, silent, advance, starts) -> Value:
+        """After a reset the registers no longer know what the memories hold: each memory
+        written since its last flush (``dirty``, kept through reset) is swept before the
+        resolve takes anything (returns that wait), the flush side's first, then the
+        resolve's, handed over. At power-on neither is dirty: no clock is lost. `starts` is
+        high in the clock a sweep starts."""
+        recover = Signal(init=1)  # since the last reset, until both memories are clean
+        self.observe.recover = recover
+        stuck = recover & (dirty[0] | dirty[1])
+        m.d.sync += recover.eq(stuck)
+        mine_dirty, other_dirty = Mux(bank, dirty[1], dirty[0]), Mux(bank, dirty[0], dirty[1])
+        # (with the output free, as a flush: the bank picks the waiting beat's memory)
+        m.d.comb += starts.eq(~self.flushing & advance & (other_dirty | (stuck & mine_dirty)))
+        with m.If(starts):
+            m.d.sync += [fx.eq(0), fy.eq(0), self.flushing.eq(1), silent.eq(1)]
+            with m.If(~other_dirty):  # the resolve's memory: handed to the flush side
+                m.d.sync += bank.eq(~bank)
+        return stuck
 
 
 def _divide(m, nums: dict, valid, d2, bits: int) -> list:

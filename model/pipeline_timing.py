@@ -174,7 +174,10 @@ class _Top:
             "core_stall": self.stall,
             "acc_busy": len(tile.accepts) + clock.holding + clock.scanning,
             "acc_stall": clock.acc_stall,
-            "resolve_busy": clock.resolve_ops + len(tile.pixels) // clock.lanes - clock.overlap,
+            "resolve_busy": clock.resolve_ops
+            + len(tile.pixels) // clock.lanes
+            + clock.swept
+            - clock.overlap,
             "resolve_stall": 0,
         }
         return PipelineTiming(self.taken, self.beats, tile, stats)

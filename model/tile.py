@@ -41,14 +41,15 @@ quotient is at most ``|I - b|``, so ``intensity_bits`` restoring-division steps 
 A polygon with ``D = 0`` changes no pixel.
 
 Scan span (`TileModel.span`). ``lo`` and ``hi`` are the least and greatest column of the
-polygon's kept cells (over all its rows). A row *seen* since the tile started (or the last
-flush) is read from ``lo`` to ``hi``, and on to ``width - 1`` when its sum through ``hi``
-is nonzero (modulo ``2**cell_bits``, as the cells hold it); a row not seen yet is read
-whole. Exact: left of ``lo`` the row has no delta, so its prefix sum is 0; right of ``hi``
-it has none either, so the prefix sum is the sum through ``hi`` there; a prefix sum of 0
-gives coverage 0 under both fill rules and ``composite`` leaves the pixel as it is. A row
-not seen yet is read whole because the resolve marks a pixel row written only once all its
-pixels are (its unwritten rows read as the background, so a tile start costs one clock).
+polygon's kept cells (over all its rows). A touched row is read from ``lo`` to ``hi``, and on
+to ``width - 1`` when its sum through ``hi`` is nonzero (modulo ``2**cell_bits``, as the
+cells hold it). Exact: left of ``lo`` the row has no delta, so its prefix sum is 0; right of
+``hi`` it has none either, so the prefix sum is the sum through ``hi`` there; a prefix sum of
+0 gives coverage 0 under both fill rules and ``composite`` leaves the pixel as it is. The
+pixels a scan does not reach keep their value: each pixel word holds a flag, written since
+the tile started, and one not written reads as the background (`edgeaa.hdl.resolve`; the
+flush clears the flags, so a tile start costs one clock, unless pixels were written since the
+last flush: then it sweeps them, as a flush that sends nothing, `TileClock.take`).
 A scan of ``lanes`` cells a clock (`edgeaa.model.pipeline.PipelineConfig.scan_lanes`) reads
 whole beats of ``lanes`` columns (``x`` a multiple of ``lanes``): the span widened to them,
 ``lo`` down and ``hi`` up (exact for the same reasons), and a row stops at ``hi``'s beat only
@@ -290,7 +291,7 @@ class TileModel:
         self._dtype = object if big else np.int64
         self.cells = np.zeros((tile.height, tile.width), dtype=self._dtype)
         self.touched = np.zeros(tile.height, dtype=bool)
-        self.seen = np.zeros(tile.height, dtype=bool)  # rows scanned since the tile started
+        self.written = False  # the resolve wrote pixels since the last flush (`feed`)
         self.lo, self.hi = tile.width - 1, 0  # the polygon's kept columns (lo > hi: none)
         self.origin = (0, 0)
         self.background = 0
@@ -307,15 +308,15 @@ class TileModel:
             return None
         if isinstance(op, PolygonEnd):
             return self._resolve(op)
-        if isinstance(op, TileStart):
+        if isinstance(op, TileStart):  # returns whether it clears written pixels (a sweep)
             self.origin, self.background = (op.x0, op.y0), op.background
             self.pixels[:] = op.background
-            self.seen[:] = False
-            return None
+            swept, self.written = self.written, False
+            return swept
         if isinstance(op, Flush):
             frame = self.pixels.copy()
             self.pixels[:] = self.background
-            self.seen[:] = False
+            self.written = False
             return frame
         raise TypeError(f"not a tile op: {op!r}")
 
@@ -339,8 +340,6 @@ class TileModel:
         """The columns `first .. last` an end reads of touched `row` (module docstring: whole
         beats of `scan_lanes`) and whether the read stops at ``hi``'s beat for a zero sum."""
         last, lanes = self.tile.width - 1, self.scan_lanes
-        if not self.seen[row]:
-            return 0, last, False
         first, end = self.lo - self.lo % lanes, self.hi | (lanes - 1)
         if end == last:
             return first, last, False
@@ -380,7 +379,7 @@ class TileModel:
             for k, value in enumerate(targets):  # each channel, the same coverage
                 below = self._planes[row, read, k]
                 self._planes[row, read, k] = composite(below, q, value, d)
-        self.seen |= self.touched
+        self.written |= bool(runs)
         self.touched[:] = False
         self.lo, self.hi = self.tile.width - 1, 0
         return Scan(tuple(runs), self.scan_lanes)
@@ -461,6 +460,7 @@ class TileClock:
         self.scanning = self.acc_stall = self.resolve_ops = 0
         self.overlap = 0  # clocks the resolve took a cell or op while flushing
         self.holding = 0  # clocks a beat's cells were taken before its transfer
+        self.swept = 0  # clocks of sweeps (a tile start's reads of written pixels)
 
     def beats(self, clocks, holds) -> None:
         """Beats transferred in `clocks` (ascending), beat k taken over its ``holds[k]``
@@ -501,15 +501,21 @@ class TileClock:
             self.resolve_ops += result.beats
             return a
         flush = isinstance(op, Flush)
-        r = max(a + 1, self.free if flush else 0, self.quiet)  # tile or flush: output register
+        sweep = flush or result is True  # a tile start on written pixels sweeps them
+        r = max(a + 1, self.free if sweep else 0, self.quiet)  # tile or flush: output register
         self.ready = r
         self.acc_stall += r - a - 1
         self.resolve_ops += 1
         self._overlap(r, r + 1)
-        if flush:
+        if sweep:  # the pixels' reads (and flags cleared), sent only by a flush
             beats = tile.pixels // self.lanes
-            out.pixels.extend(np.repeat(np.arange(beats) + r + FLUSH_START, self.lanes).tolist())
-            out.frames.append(result)
+            if flush:
+                out.pixels.extend(
+                    np.repeat(np.arange(beats) + r + FLUSH_START, self.lanes).tolist()
+                )
+                out.frames.append(result)
+            else:
+                self.swept += beats
             self.flush_from, self.free = r + 1, r + beats + 1
         return a
 

@@ -229,8 +229,8 @@ def test_pipeline_reset_mid_polygon_leaves_no_delta_behind(tail, wait, scan):
     its scan under way): they are cleared (with two scan lanes, a beat of the banked
     memory a clock); while its pixels are in a pixel memory (resolved, or being flushed):
     none of them shows in the next scene, whose first tile starts with no tile command (the
-    reset's tile, background 0). So the next scene is the model's image of that scene alone
-    (its polygons cover fewer pixels than the first's)."""
+    reset's tile, background 0): their written flags are swept. So the next scene is the
+    model's image of that scene alone (its polygons cover fewer pixels than the first's)."""
     tile = TileConfig(CONFIG, 8, 4)
     tri = [(1, 0, 7, 3), (7, 3, 0, 3), (0, 3, 1, 0)]
     first = [Command.tile(0, 0, 3), Command.begin(15, 3)]

@@ -204,7 +204,8 @@ def test_a_flush_goes_out_while_the_next_tile_resolves():
     timing = tile_cycles(tile, ops)
     first, second = timing.pixels[: tile.pixels], timing.pixels[tile.pixels :]
     resolved = [c for c in timing.cells if first[0] <= c <= first[-1]]
-    assert len(resolved) == 2 * tile.width  # the second polygon's rows, within the flush
+    # the second polygon's two rows over its span (columns 1 and 2), within the flush
+    assert len(resolved) == 2 * 2
     assert second[0] == first[-1] + FLUSH_START
     assert timing.frames[0][0, 1] == 15 and timing.frames[1][0, 1] == 9
 
@@ -217,9 +218,10 @@ def _block(x, y, deltas):
 
 
 def test_the_scan_stops_at_the_polygons_last_column_on_a_zero_sum():
-    """Rows seen before read from lo to hi, on to the last column when the sum through hi is
-    nonzero: a stop in a middle row, on the last row (a clock later), at lo == hi, cells left
-    of the tile, a flush making rows unseen again."""
+    """Touched rows read from lo to hi, on to the last column when the sum through hi is
+    nonzero (a tile's first scan of a row too: the pixels hold their written flags): a stop
+    in a middle row, on the last row (a clock later), at lo == hi, cells left of the tile,
+    after a flush."""
     tile = TileConfig(SMALL, 8, 4)
     a, b = 15 << SMALL.F, 7 << SMALL.F
     closed = Beats(np.array([_block(3, 0, [a, -a, b, -b])]))
@@ -232,8 +234,10 @@ def test_the_scan_stops_at_the_polygons_last_column_on_a_zero_sum():
     check_exact(tile, ops)
     model = TileModel(tile)
     scans = [model.feed(op) for op in ops]
-    assert [s.cells for s in scans if isinstance(s, Scan)] == [16, 4, 14, 1, 2, 4, 16, 4]
-    assert [s.runs[-1][1] for s in scans if isinstance(s, Scan)] == [0, 1, 0, 1, 1, 1, 0, 1]
+    stop, on = (2, True), (6, False)  # columns 1 and 2, stopping; columns 2 to 7
+    assert [s.runs for s in scans if isinstance(s, Scan)] == [
+        *[(stop, stop)] * 2, (on, stop), ((1, True),), ((1, True),) * 2, *[(stop, stop)] * 3
+    ]
 
 
 def test_a_scene_through_the_stages_is_the_renderers_image():

@@ -67,7 +67,7 @@ from ....hdl.layouts import TILE_OP as OP
 from ....model.beat import CELLS
 from ....model.tile import RESOLVE_OPS
 from .spec import all_, implies
-from .tile_common import When, any_, bit, follows, state_checks, track_rows
+from .tile_common import When, any_, follows, state_checks, track_rows
 
 __all__ = ["check_cells"]
 
@@ -169,8 +169,6 @@ def _accumulator_deltas(m, tile, dut, src, cells, checks):
         owed=Signal(name="owed"),
         may=Signal(name="may_send"),  # (X, Y) not sent since the last end, no op taken since
         first=Signal(name="first_due"),
-        seen=Signal(tile.height, name="rows_seen"),  # rows begun since the tile or flush op
-        open=Signal(name="row_open"),  # a row's first pass, not yet at its last column
         row_sum=Signal(tile.cell_bits, name="row_sum"),  # the row's sums sent, from its start
         params={n: Signal.like(src[n], name=f"end_{n}") for n in ("intensity", "i_out", "evenodd")},
         passing=Signal(name="pass_pending"),
@@ -216,7 +214,6 @@ def _accumulator_deltas(m, tile, dut, src, cells, checks):
     with m.If(passing):
         code = Mux(src.op == OP["tile"], CELL_OP["tile"], CELL_OP["flush"])
         m.d.sync += [s.passing.eq(1), s.code.eq(code), s.background.eq(src.background)]
-        m.d.sync += s.seen.eq(0)
     return s
 
 
@@ -301,7 +298,7 @@ def _scan_state(m, tile, dut, s, covers):
     obs, o = dut.observe, dut.observe.o
     scan, last = dut.scanning, tile.width - s.lanes  # the row's last beat
     touched, scan_x, scan_y, lo, hi = obs.touched, obs.scan_x, obs.scan_y, obs.lo, obs.hi
-    row_start, partial, decide = obs.row_start, obs.partial, obs.decide
+    row_start, decide = obs.row_start, obs.decide
     pending = obs.o_valid & (o["op"] == CELL_OP["cell"])
     passing = obs.o_valid & (o["op"] != CELL_OP["cell"])
     row_left = touched.bit_select(s.Y, 1)
@@ -309,15 +306,11 @@ def _scan_state(m, tile, dut, s, covers):
     ahead = (scan_y == s.Y) & (scan_x <= s.X)
     waiting = pending & (o["x"] == s.bx) & (o["y"] == s.Y)
     above = all_(~touched[r] | (scan_y < r) for r in range(tile.height))
-    due = Mux(scan & row_start, bit(tile, scan_y), 0) | Mux(
-        pending & o["start"], bit(tile, o["y"]), 0
-    )
-    current = scan & ~row_start & (scan_y == o["y"]) & ~decide  # the waiting cell's row goes on
     done, src = obs.cell.done, dut.ops
     # the ghost and the accumulator as a reset leaves them: nothing kept, owed or waiting
     quiet = all_(
-        [~s.hit, ~s.any, ~s.owed, ~s.first, ~s.passing, ~s.open, done == 0, ~obs.o_valid]
-        + [touched == 0, obs.seen == 0, s.seen == 0, _closed(tile, s)]
+        [~s.hit, ~s.any, ~s.owed, ~s.first, ~s.passing, done == 0, ~obs.o_valid]
+        + [touched == 0, _closed(tile, s)]
     )
     checks = [
         (When(obs.check, quiet & obs.in_acc & (scan_x == 0) & (scan_y == 0)), "after a reset"),
@@ -348,7 +341,6 @@ def _scan_state(m, tile, dut, s, covers):
                 decide,
                 scan
                 & pending
-                & partial
                 & (o["x"] == _beat_of(hi, s.lanes))
                 & (_beat_of(hi, s.lanes) != last),
             ),
@@ -357,14 +349,7 @@ def _scan_state(m, tile, dut, s, covers):
         (When(scan & obs.first, ~obs.o_valid & s.first & row_start), "SCAN start"),
         (When(scan & ~obs.first, pending | (~obs.o_valid & row_start)), "SCAN output"),
         (When(scan & ~obs.o_valid & ~obs.first, scan_y > s.last[1]), "scan after a stop"),
-        (
-            When(
-                scan & row_start,
-                (scan_x == Mux(partial, _beat_of(lo, s.lanes), 0))
-                & (partial == s.seen.bit_select(scan_y, 1)),
-            ),
-            "row start",
-        ),
+        (When(scan & row_start, scan_x == _beat_of(lo, s.lanes)), "row start"),
         (
             When(
                 scan & pending,
@@ -376,7 +361,6 @@ def _scan_state(m, tile, dut, s, covers):
             ),
             "scan after the output",
         ),
-        (obs.seen == (s.seen | due), "rows seen"),
         (obs.rsum.as_unsigned() == s.row_sum, "row sum"),
         (When(obs.in_acc & pending, o["x"] == last), "the scan's last cell at the last column"),
         (
@@ -390,26 +374,8 @@ def _scan_state(m, tile, dut, s, covers):
         (When(pending, o["first"] == s.first), "output first"),
         (When(pending & o["first"], o["start"]), "output first starts a row"),
         (
-            When(
-                pending & o["start"] & ~s.seen.bit_select(o["y"], 1),
-                (o["x"] == 0) & current & ~partial,
-            ),
-            "first pass from column 0",
-        ),
-        (
             When(pending & ~o["first"], follows(o["x"], o["y"], o["start"], *s.last, s.lanes)),
             "output after the last sent",
-        ),
-        (
-            When(
-                s.open,
-                pending
-                & ~o["start"]
-                & (o["y"] == s.last[1])
-                & (o["x"] == s.last[0] + s.lanes)
-                & implies(o["x"] != last, current & ~partial),
-            ),
-            "first pass goes on",
         ),
         (all_(obs.params[n] == r for n, r in s.params.items()), "polygon fields"),
         (When(obs.o_valid, o["op"] < len(RESOLVE_OPS)), "output op"),
@@ -433,19 +399,14 @@ def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
     `check`), and the ghost's record of it."""
     is_cell = sent & (out.op == CELL_OP["cell"])
     after_last = follows(out.x, out.y, out.start, *s.last, s.lanes)
-    seen = s.seen.bit_select(out.y, 1)
     checks = [
         (implies(tracked, s.may), "deltas: a cell sent twice or not after an end"),
         (implies(is_cell, out.first == s.first), "deltas: first flag"),
         (implies(is_cell & out.first, out.start), "deltas: first cell not a row's first"),
         (implies(is_cell & ~out.first, after_last), "deltas: cells out of order"),
-        (
-            implies(is_cell & out.start, ~s.open & (seen | (out.x == 0))),
-            "deltas: a row's first pass not whole",
-        ),
         (implies(is_cell, all_(out[k] == r for k, r in s.params.items())), "deltas: fields"),
         (
-            implies(sent & ~is_cell, s.passing & ~s.owed & ~s.open),
+            implies(sent & ~is_cell, s.passing & ~s.owed),
             "deltas: tile or flush not taken",
         ),
         (
@@ -461,7 +422,7 @@ def _accumulator_outputs(m, tile, s, out, sent, tracked, check):
     ]
     for condition, message in checks if check else ():
         m.d.comb += Assert(condition, message)
-    track_rows(m, tile, out, is_cell, s.last, s.seen, s.open, s.lanes)
+    track_rows(m, out, is_cell, s.last)
     with m.If(is_cell):
         m.d.sync += s.first.eq(0)
         m.d.sync += s.row_sum.eq(Mux(out.start, 0, s.row_sum) + _beat_sum(out, s.lanes))

@@ -85,27 +85,23 @@ def _resolve_source(m, tile, cells, src, wide, scan=1):
     is_cell = c.op == CELL_OP["cell"]
     last = [Signal(tile.x_bits, name="last_x"), Signal(tile.y_bits, name="last_y")]
     params = {n: Signal.like(c[n], name=f"poly_{n}") for n in ("intensity", "i_out", "evenodd")}
-    seen = Signal(tile.height, name="rows_seen")  # rows passed since the tile or flush op
-    row_open = Signal(name="row_open")  # a row's first pass, not yet at its last column
     need_first = Signal(init=1, name="need_first")
     well_formed = [
         c.op < len(RESOLVE_OPS),
         implies(is_cell, c.first | (~need_first & follows(c.x, c.y, c.start, *last, scan))),
         implies(is_cell, (c.x & (scan - 1)) == 0),
         implies(is_cell & c.first, c.start),
-        implies(is_cell & c.start, ~row_open & (seen.bit_select(c.y, 1) | (c.x == 0))),
         implies(is_cell & ~c.first, all_(c[n] == r for n, r in params.items())),
-        implies(~is_cell, ~row_open),
     ]
     with m.If(cells.valid):
         m.d.comb += Assume(all_(well_formed), "source: cells as the accumulator sends them")
-    track_rows(m, tile, c, take & is_cell, last, seen, row_open, scan)
+    track_rows(m, c, take & is_cell, last)
     with m.If(take & is_cell):
         m.d.sync += need_first.eq(0)
         with m.If(c.first):
             m.d.sync += [r.eq(c[n]) for n, r in params.items()]
     with m.If(take & ~is_cell):
-        m.d.sync += [need_first.eq(1), seen.eq(0)]
+        m.d.sync += need_first.eq(1)
     n = tile.cell_bits
     prev = Signal(signed(n + 4), name="exact_prev")
     exact = [Signal(signed(n + 4), name="exact" + (f"{k}" if k else "")) for k in range(scan)]
@@ -122,9 +118,7 @@ def _resolve_source(m, tile, cells, src, wide, scan=1):
     with m.If(take & is_cell):
         m.d.sync += prev.eq(exact[-1])
     exact = exact if scan > 1 else exact[0]
-    ghost = types.SimpleNamespace(
-        last=last, seen=seen, row_open=row_open, need_first=need_first, prev=prev, exact=exact
-    )
+    ghost = types.SimpleNamespace(last=last, need_first=need_first, prev=prev, exact=exact)
     return ghost, d, take & is_cell
 
 
@@ -200,32 +194,31 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
     """Invariants of the resolve's state against the ``pixels`` ghost (what makes the group
     inductive, with k above the pipeline's latency: a cell in flight is written within it)."""
     obs = dut.observe
-    stages, written = _resolve_stages(m, dut), obs.written
+    stages = _resolve_stages(m, dut)
     busy = any_(st.valid for st in stages)
-    flush = dut.flushing
+    flush, silent = dut.flushing, obs.silent
     last_pos = Cat(*g.last)
     tracked = Cat(g.X, g.Y)
-    scan = g.scan
-    # the beat of cells holding (X, Y): its first column
-    beat_x = g.X if scan == 1 else Cat(Const(0, 1), g.X[1:])
-    tracked_beat = Cat(beat_x, g.Y)
+    scan, count, lanes = g.scan, g.count, g.lanes
+    # the beat of cells holding (X, Y), and the flush's beat holding it: their first columns
+    tracked_beat = Cat(g.X if scan == 1 else Cat(Const(0, 1), g.X[1:]), g.Y)
+    lane_bits = lanes.bit_length() - 1
+    flush_beat = Cat(Const(0, lane_bits), tracked[lane_bits:]) if lanes > 1 else tracked
 
     def in_flight(position):
         return any_(st.valid & (Cat(st.x, st.y) == position) for st in stages)
 
-    written_y = written.bit_select(g.Y, 1)
-    pixel = read(tracked, obs.bank)  # the memory the resolve writes
-    shown = Mux(written_y, pixel, obs.background)  # what a read of (X, Y) gives
-    # what the flush reads of (X, Y): the other memory, the flushed tile's rows and background
-    flushed = Mux(obs.fwritten.bit_select(g.Y, 1), read(tracked, ~obs.bank), obs.fbackground)
-    row_end = Cat(Const(tile.width - scan, tile.x_bits), g.Y)  # the row's last beat
-    # written in this pass of its row, the row not yet marked written: the row's end is in
-    # flight, or the row is still open and (X, Y) was taken
-    row_open = (g.last[1] == g.Y) & g.row_open & ~g.need_first
-    done = in_flight(row_end) | (row_open & (g.last[0] >= beat_x))
-    seen_y = g.seen.bit_select(g.Y, 1)
-    n = tile.cell_bits
-    count, lanes = g.count, g.lanes
+    def flag(bank):  # (X, Y)'s written flag in memory `bank`
+        return read(tracked, bank)[-1]
+
+    word = read(tracked, obs.bank)  # the memory the resolve writes
+    shown = Mux(word[-1], word[:-1], obs.background)  # what a read of (X, Y) gives
+    # what the flush reads of (X, Y): the other memory, the flushed tile's background
+    fword = read(tracked, ~obs.bank)
+    flushed = Mux(fword[-1], fword[:-1], obs.fbackground)
+    position = Cat(obs.fx, obs.fy)
+    # the clear of (X, Y)'s beat, read a clock ago, still to be written (the other memory)
+    clearing = obs.clear.en & (obs.clear.addr == flush_beat)
     p = obs.p
     beat = Cat(p.x, p.y)
     waiting = [  # (X, Y) in lane k of the waiting beat: its value is the frame
@@ -239,27 +232,32 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
         waiting.append((count[: lanes.bit_length() - 1] == 0, "whole beats"))
     checks = [
         (g.background == obs.background, "background"),
-        (obs.acc[:n] == g.prev[:n], "row prefix sum"),
-        (g.flushing == (flush | obs.p_valid), "flushing"),
+        (obs.acc[: tile.cell_bits] == g.prev[: tile.cell_bits], "row prefix sum"),
+        (g.flushing == ((flush & ~silent) | obs.p_valid), "flushing"),
+        (When(flush & silent, ~obs.p_valid), "a sweep sends nothing"),
         (When(g.need_first, ~busy), "nothing in flight"),
-        (When(g.row_open, ~g.need_first & (g.last[0] != tile.width - scan)), "open row"),
-        (When(~g.need_first, g.seen.bit_select(g.last[1], 1)), "last row seen"),
-        (When(seen_y & ~row_open & ~in_flight(row_end), written_y), "seen row written"),
+        (~obs.recover | ~(obs.dirty[0] | obs.dirty[1]), "no sweep after power-on"),
+        (When(obs.clear.en, (obs.clear.addr + lanes)[: len(position)] == position), "clear"),
+        *(
+            (When(~obs.dirty[k] & ~(clearing & (obs.bank != k)), ~flag(k)), f"clean {k}")
+            for k in range(2)
+        ),
+        (When(flush & (flush_beat < position) & ~clearing, ~flag(~obs.bank)), "swept"),
         (
             When(obs.p_valid, (beat == count) & (p.last == (count == tile.pixels - lanes))),
             "output position",
         ),
         (When(obs.p_valid, p.last == ~flush), "the last pixel waits after the flush"),
         (
-            When(flush, Cat(obs.fx, obs.fy) == (count + lanes * obs.p_valid)[: len(count)]),
+            When(flush & ~silent, position == (count + lanes * obs.p_valid)[: len(count)]),
             "flush position",
         ),
         (
-            When(flush & (tracked >= Cat(obs.fx, obs.fy)), g.frame == flushed),
+            When(flush & ~silent & (tracked >= position), g.frame == flushed),
             "frame not yet read",
         ),
         *waiting,
-        (When(~in_flight(tracked_beat), g.value == Mux(done, pixel, shown)), "value"),
+        (When(~in_flight(tracked_beat), g.value == shown), "value"),
     ]
     for i, st in enumerate(stages):
         position = Cat(st.x, st.y)

@@ -115,14 +115,8 @@ def follows(x, y, start, last_x, last_y, step=1):
     return Mux(start, y > last_y, (x == last_x + step) & (y == last_y))
 
 
-def track_rows(m, tile, cell, took, last, seen, row_open, step=1):
-    """The ghost's record of the rows of cells sent: with a cell (a beat of `step` cells)
-    taken (`took`), its position (`last`), the rows begun since the tile or flush op
-    (`seen`, on a row's ``start``) and whether the row's first pass is open (begun at a row
-    not seen, not yet at its last column)."""
+def track_rows(m, cell, took, last):
+    """The ghost's record of the cells sent: with a cell (a beat) taken (`took`), its position
+    (`last`)."""
     with m.If(took):
         m.d.sync += [last[0].eq(cell.x), last[1].eq(cell.y)]
-        whole = Mux(cell.start, ~seen.bit_select(cell.y, 1), row_open)
-        m.d.sync += row_open.eq(whole & (cell.x != tile.width - step))
-        with m.If(cell.start):
-            m.d.sync += seen.eq(seen | bit(tile, cell.y))
