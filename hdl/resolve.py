@@ -12,10 +12,9 @@ and writes its own pixel lane's memory (with more pixel lanes than scan lanes, o
 of lanes the beat's column picks: the fast pipeline's four and two):
 
 * take (clock r): the pixel's read is issued;
-* s1: the row's prefix sum (restarting at the row's first cell, ``start``), D =
-  ``|I - I_out|`` (formed as the cell is taken) and whether the pixel row was written since
-  the tile started (a row is first written whole, so one bit per row: rows never written
-  read as the background and no clear pass is needed);
+* s1: the row's prefix sum (restarting at the row's first cell, ``start``) and D =
+  ``|I - I_out|``, formed as the cell is taken (the pixel's word carries its own written
+  flag: a pixel not written since the tile started reads as the background);
 * s2: the fill rule (`edgeaa.model.accumulate.fill`; even-odd by h + 1 compare-subtract
   steps, exact within the cells' range) and the pixel below;
 * colour only, sa: the intensity offset q (a shift; 0 when I_in == I_out) times the paint's
@@ -47,8 +46,8 @@ docs/hardware.md, "Polygon pipeline", Resolve.
 The pipeline never stalls: nothing leaves it but the write. A polygon's first cell, a tile op
 and a flush are taken only when no cell is in flight (the pixels they read must be written
 first). Two pixel memories (ping-pong): the resolve reads and writes one (``bank``); a flush
-hands it, with its written rows and background, to the flush side and the resolve goes on
-with the other, the tile the background again (no row written). The flush side reads its
+hands it, with its background, to the flush side and the resolve goes on with the other,
+the tile the background again (no pixel's flag set). The flush side reads its
 memory row by row, ``lanes`` pixels a clock while the ``pixels`` stream advances (its read
 ports' enable is the advance, so a stalled beat stays in the memories' output registers):
 a beat of the stream is lane k the pixel at column ``x + k`` (`PipelineConfig.pixel_lanes`;
@@ -58,22 +57,29 @@ a beat is one word of each lane's memory; the resolve reads and writes the memor
 pixel's lane (its read data chosen by the lane read a clock before). The flush goes on
 while the resolve takes the next tile's ops and cells; its first beat is offered two
 clocks after the flush is taken, and the next flush waits until the last beat has gone
-(its memory is then the resolve's again). A memory's read port is the resolve's or the
+(its memory is then the resolve's again). A memory's ports are the resolve's or the
 flush's as ``bank`` says; each memory is one block RAM port pair, so the second memory
-costs the pixel memory's block RAMs again and a multiplexer per port.
+costs the pixel memory's block RAMs again and a multiplexer per port. The flush side
+clears each word's flag the clock after reading it, through the write port the resolve
+is not using; so a flushed memory is clean with no pass of its own. A memory written since
+its last flush (``dirty``, a bit each kept through reset) is swept, read and cleared with
+nothing sent (``silent``), when a tile op finds the resolve's memory dirty (it flips the
+bank as a flush does) and after a reset (`TileResolve._sweeps`).
 
 Observation points for the formal harness (``observe``, a namespace set when the resolve is
 elaborated; no logic of their own): ``memories`` the two pixel memories (each a list of a
 `Memory` per lane), ``reads`` their read ports (likewise), ``bank`` the one the resolve
-writes, ``fwritten`` and ``fbackground`` the flushed tile's written rows and background,
+writes, ``dirty``, ``recover`` (a reset's sweeps due), ``clear`` (``addr``, ``en``: the
+flush side's clear of the beat read a clock before), ``fbackground`` the flushed tile's
+background, ``silent`` (the flush side sweeps),
 ``stages`` the pipeline's stages (s1 first; namespaces
 of registers, each with ``valid``; the values a stage carries are in the delay lines,
 ``delays`` (their `Memory` by name, ``"xy"`` and ``"carry"``), at the address its
 ``delayed`` names per line (a value, no logic); the last stage's are its fields ``x``,
 ``y``, ``below``, ``zero`` and ``neg``, with two scan lanes lane 1's ``below_l1``,
 ``zero_l1`` and ``neg_l1`` too, the read ports' data), ``acc`` the row's prefix
-sum, ``d2``, ``written``, ``background``, ``p_valid`` and ``p`` the output register (``x``,
-``y``, ``last``, ``written``), ``fx`` and ``fy`` the flush position (the flush side reads
+sum, ``d2``, ``background``, ``p_valid`` and ``p`` the output register (``x``, ``y``,
+``last``), ``fx`` and ``fy`` the flush position (the flush side reads
 while ``flushing``).
 """
 

@@ -359,13 +359,13 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     over the setup units if more (`start_clip_cycles` more for a start-clipped one); each
     polygon a setup latency and a scan of the rows its edges reach, from its least cell
     to its greatest (to the tile's last column if it has edges outside the tile), at least
-    the rows read whole; per tile its work or its flush, whichever is more (the flush runs
-    beside the next tile's work); and the clear pass after reset. 1.2 to
-    2.1 times the cycle model's clocks on the built-ins, the HUD, serif text and the 1080p
-    scene of `benchmarks/bench_pipeline.py`, compact and fast with one scan lane; with the
-    fast pipeline's two (the scan a beat of two cells a clock: the accumulator also takes
-    a beat's cells two a clock) 1.09 to 1.90 times (docs/scenes.md; counting the scan a
-    cell a clock, as before the accumulator took two, gave 2.03 to 2.69).
+    the rows read whole (a margin); per tile its work or its flush, whichever is more (the
+    flush runs beside the next tile's work); and the clear pass after reset. On the scenes
+    of `benchmarks/bench_pipeline.py` (the built-ins, the HUD, serif text, the 1080p
+    scene) 1.15 to 1.99 times the cycle model's clocks for compact and 1.19 to 2.77 for
+    fast (2026-12-07, after each pixel's written flag cut the exact clocks and not this
+    estimate; 1.09 to 2.1 before: docs/hardware.md, "A written flag in each pixel
+    word").
     `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
     and needs the commands."""
     pipeline = pipeline_config(pipeline)
@@ -420,7 +420,9 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             sent_edges = int(crossing.sum() + n_merged.sum())
             # each polygon scans the rows its edges reach, from its least to its greatest
             # cell, on to the tile's last column if it goes on outside the tile (a sum);
-            # a row not seen since the flush is read whole (the tile's rows at most)
+            # at least the rows read whole, as the hardware read a row's first scan in a tile
+            # until each pixel held its written flag: kept as margin, as without it the
+            # estimate fell below the simulated clocks of the small board's random pages
             k = mine[crossing]
             scan_rows = np.zeros(n, dtype=np.int64)
             # (the write box's margin less one: the deltas of a row lie well within it)

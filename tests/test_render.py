@@ -1268,8 +1268,9 @@ def test_a_scene_past_an_engines_clock_limit_is_refused_before_it_runs(
 def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice(name, units):
     """The estimate that the engines' limits apply to is an upper one on the built-ins, as
     the pipeline's cycle model (checked against the simulated clocks in test_pipeline.py)
-    counts them, compact and fast, and a tight one: at most 2.1 times (the estimate that
-    charged every edge in every tile right of it was 3.2 to 9.5 times)."""
+    counts them, compact and fast, and a tight one: at most 2.3 times (the estimate that
+    charged every edge in every tile right of it was 3.2 to 9.5 times; 2.1 before the pixels'
+    written flags cut the exact clocks)."""
     from edgeaa.model.pipeline import PipelineConfig
     from edgeaa.model.pipeline_timing import pipeline_cycles
     from edgeaa.model.tile import TileConfig
@@ -1280,7 +1281,7 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
     commands = pipeline.scene_commands(p, tile.tile)
     exact = pipeline_cycles(tile, commands).clocks
     estimate, count = pipeline.clock_estimate(p, tile)
-    assert exact <= estimate <= 2.1 * exact, (exact, estimate)
+    assert exact <= estimate <= 2.3 * exact, (exact, estimate)
     assert len(commands) <= count <= 1.1 * len(commands)
 
 
@@ -1288,7 +1289,9 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
 def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
     """Four pixel lanes and two scan lanes (the fast pipeline): the estimate stays above the
     cycle model's clocks, with the flush at four pixels a clock and the scan two cells a
-    clock (the accumulator takes a beat's cells two a clock too), and within 2.1 times."""
+    clock (the accumulator takes a beat's cells two a clock too), and within 2.7 times (2.1
+    before each pixel held its written flag, which cut the exact clocks, not the estimate's:
+    the scan is not where it counts too many)."""
     from edgeaa.model.pipeline import PipelineConfig
     from edgeaa.model.pipeline_timing import pipeline_cycles
     from edgeaa.model.tile import TileConfig
@@ -1299,7 +1302,7 @@ def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
     assert (fast.pixel_lanes, fast.scan_lanes) == (4, 2)
     exact = pipeline_cycles(fast, pipeline.scene_commands(p, fast.tile)).clocks
     estimate, _ = pipeline.clock_estimate(p, fast)
-    assert exact <= estimate <= 2.1 * exact, (exact, estimate)
+    assert exact <= estimate <= 2.7 * exact, (exact, estimate)
 
 
 def test_a_comb_is_swept_and_the_engine_refuses_work_past_its_limit(monkeypatch):

@@ -236,7 +236,11 @@ def test_the_scan_stops_at_the_polygons_last_column_on_a_zero_sum():
     scans = [model.feed(op) for op in ops]
     stop, on = (2, True), (6, False)  # columns 1 and 2, stopping; columns 2 to 7
     assert [s.runs for s in scans if isinstance(s, Scan)] == [
-        *[(stop, stop)] * 2, (on, stop), ((1, True),), ((1, True),) * 2, *[(stop, stop)] * 3
+        *[(stop, stop)] * 2,
+        (on, stop),
+        ((1, True),),
+        ((1, True),) * 2,
+        *[(stop, stop)] * 3,
     ]
 
 

@@ -11,8 +11,7 @@
     `tile_cells`: the origin of the last tile op subtracted, a cell left of the tile moved
     into column 0), and at most once per end (nothing lost, nothing doubled); the cells come
     in rows, each row's cells in consecutive columns from its first (``start``), the rows
-    ascending; a row's first pass since the last tile or flush op starts at column 0 and goes
-    on to the last column (what the resolve's written rows need); a row stops before its
+    ascending; a row stops before its
     last column only when the sums it sent add to zero (modulo ``2**cell_bits``), so right
     of it the prefix sum is zero; ``first`` on the polygon's first cell only, a row's first,
     with the end's intensity, I_out and fill rule; each tile and flush op comes out once, in
@@ -42,13 +41,10 @@ row still to scan or ahead of the scan in the current row (SCAN), and a cell sti
 has not been sent since the end; the rows left to scan are above the scan row; SCAN's first
 read has not happened exactly while the ``first`` register is set (nothing in the output
 register, a row's start due), else a cell waits there or, after a row stopped at ``hi``, the
-next row's start is due above the last cell sent; a row's start is at ``lo`` if the row was
-seen (the ghost's rows begun since the tile or flush op), else at column 0; the scan
+next row's start is due above the last cell sent; a row's start is at ``lo``; the scan
 position follows the waiting cell; ``decide`` only with that cell at ``hi`` below the last
-column; the accumulator's ``seen`` is the ghost's rows plus the row whose start is still to
-send; the waiting cell's ``first`` is the ghost's, a row's start, and follows the last cell
-sent; a row's first pass goes on (the waiting cell is the next column, and the scan stays in
-that row and reads it whole); ``rsum`` is the ghost's sum of the row's cells sent, and the
+column; the waiting cell's ``first`` is the ghost's, a row's start, and follows the last
+cell sent; ``rsum`` is the ghost's sum of the row's cells sent, and the
 last row sent is closed (at its last column, or that sum zero) whenever no cell of it is
 still to come; the end's fields are the ghost's; a tile or flush op waits exactly when the
 ghost's does, with its code and background. Both: the origin is the ghost's. Each follows
@@ -290,10 +286,8 @@ def _scan_state(m, tile, dut, s, covers):
     accumulator takes ops, a cell hit lies in a touched row and in the span ``lo .. hi``;
     after an end, an owed cell waits in the output register or lies in the span of a row still
     to scan or ahead of the scan in the current row, and a cell still to read has not been
-    sent; the scan moves up through the rows in order, a row from column 0 (not seen since the
-    tile started) or from ``lo`` (seen), the output register holding the cell before the scan
-    position; a row's first pass goes on to the last column; ``seen`` is the ghost's rows
-    plus a row whose first cell is still to send; a tile or flush op waiting there is the
+    sent; the scan moves up through the rows in order, each from ``lo``, the output register
+    holding the cell before the scan position; a tile or flush op waiting there is the
     ghost's. Each follows from all of them in the clock before."""
     obs, o = dut.observe, dut.observe.o
     scan, last = dut.scanning, tile.width - s.lanes  # the row's last beat

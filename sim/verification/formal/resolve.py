@@ -3,8 +3,8 @@
 
 ``resolve`` ``pixels``
     The resolve's input is assumed to be what the accumulator is proved to send (rows of
-    consecutive cells from a ``start``, ascending, a row's first pass since the tile or flush
-    op whole, ``first`` on a polygon's first, the polygon's fields constant). Each cell's
+    consecutive cells from a ``start``, ascending, ``first`` on a polygon's first, the
+    polygon's fields constant). Each cell's
     sum is the residue modulo ``2**cell_bits`` of a difference of two exact prefix sums
     chosen by the harness (``AnySeq``): the exact prefix sum of the row up to the cell (from
     the row's ``start``), assumed within the documented range ``[-L, L)``, ``L = 2**(h + 1) ifix``
@@ -27,22 +27,21 @@
     beat's cell in its column.
 
 Invariants (`_resolve_invariants`): (X, Y) not in flight holds the shadow: its word in the
-pixel memory the resolve writes (``bank``) if its row was written since the tile started or
-in the row's first pass ((X, Y) taken while the row is open, or the row's end in flight),
-else the background; a row begun since the tile or flush op is written unless its first
-pass is open or its end in flight, and the last cell's row was begun; in a flush the frame
-equals what the flush side reads of (X, Y) (the other memory's word if the flushed tile
-wrote its row, else that tile's background; with lanes, the word of (X, Y)'s lane memory)
-until (X, Y) is read, the flush reads whole beats, and the waiting pixel (X, Y) equals the
-frame; the row's prefix sum register is the exact prefix modulo
-``2**cell_bits``; the pipeline's cells in taken order, none after the last taken and none
-before a polygon's first cell (a cell's position as read from the resolve's delay memory at
-the address its stage names, the last stage's the delay line's read port data:
-`_resolve_stages`); the flush and output positions and ``last`` follow the pixel count; the
-background is the shadow's. A cell in flight has no invariant of its own: with k above the
-resolve's latency every cell the induction step sees written was taken within the k clocks
-it assumes, from a state where the invariants held (the delay lines' words it reads were
-written in them too).
+pixel memory the resolve writes (``bank``) if the word's written flag is set, else the
+background; in a flush (not a sweep, which sends nothing) the frame equals what the flush
+side reads of (X, Y) (the other memory's word if its flag is set, else the flushed tile's
+background; with lanes, the word of (X, Y)'s lane memory) until (X, Y) is read, the flush
+reads whole beats, and the waiting pixel (X, Y) equals the frame; a memory not written since
+its last flush or sweep holds no flag for (X, Y), nor do the beats a flush or sweep has
+read, but for the clear of the beat read the clock before; no sweep after power-on; the
+row's prefix sum register is the exact prefix modulo ``2**cell_bits``; the pipeline's cells
+in taken order, none after the last taken and none before a polygon's first cell (a cell's
+position as read from the resolve's delay memory at the address its stage names, the last
+stage's the delay line's read port data: `_resolve_stages`); the flush and output positions
+and ``last`` follow the pixel count; the background is the shadow's. A cell in flight has no
+invariant of its own: with k above the resolve's latency every cell the induction step sees
+written was taken within the k clocks it assumes, from a state where the invariants held
+(the delay lines' words it reads were written in them too).
 """
 
 from __future__ import annotations
