@@ -176,7 +176,7 @@ class TileResolve(wiring.Component):
         writes = [[mem.write_port() for mem in bank_mems] for bank_mems in mems]
         bank = Signal()
         # each memory written since its last flush or sweep, through reset (a reset then
-        # sweeps it: `_control`)
+        # sweeps it: `_sweeps`)
         dirty = [Signal(name=f"dirty{k}", reset_less=True) for k in range(2)]
         self.observe = types.SimpleNamespace(memories=mems, reads=reads, bank=bank, dirty=dirty)
         # the flush side's clear: the words it read a clock before, written back with no flag
