@@ -30,6 +30,7 @@ from .accumulator import TileAccumulator
 from .core import ERRORS_BITS, PolygonCore, flat_verilog
 from .layouts import tile_pixel_layout
 from .resolve import TileResolve
+from .skid import SkidBuffer
 
 __all__ = ["STATS", "EdgePipeline", "command_const", "command_layout", "pipeline_verilog"]
 
@@ -71,6 +72,9 @@ class EdgePipeline(wiring.Component):
         lanes, scan = self._pipeline.pixel_lanes, self._pipeline.scan_lanes
         self.acc = TileAccumulator(tile, scan)
         self.res = TileResolve(tile, lanes, scan, self._pipeline.product_stages)
+        # between the core and the accumulator (`beat_skid`): the core's ready a register
+        beats = self.core.deltas.payload.shape()
+        self.skid = SkidBuffer(beats) if self._pipeline.beat_skid else None
         stats = data.StructLayout({name: unsigned(STATS_BITS) for name in STATS})
         super().__init__(
             {
@@ -94,10 +98,14 @@ class EdgePipeline(wiring.Component):
         m = Module()
         core, acc, res = self.core, self.acc, self.res
         m.submodules.core, m.submodules.acc, m.submodules.res = core, acc, res
+        beats, self._core_idle = core.deltas, core.idle
+        if self.skid is not None:  # idle: every beat of the polygon taken from the buffer
+            m.submodules.skid = self.skid
+            wiring.connect(m, core.deltas, self.skid.sink)
+            beats, self._core_idle = self.skid.source, core.idle & ~self.skid.held
         wiring.connect(m, acc.cells, res.cells)
         wiring.connect(m, res.pixels, wiring.flipped(self.pixels))
         op_valid, op, code = self._commands(m)
-        beats = core.deltas
         # The core's beats or the command stage's op (only when the core is idle).
         m.d.comb += [
             acc.ops.valid.eq(beats.valid | op_valid),
@@ -159,7 +167,7 @@ class EdgePipeline(wiring.Component):
         good_tile = (c.x0 <= top) & (c.y0 <= top)
         with m.FSM(name="commands"):
             with m.State("OUT"):
-                send = valid & core.idle & ((is_["tile"] & good_tile) | is_["flush"])
+                send = valid & self._core_idle & ((is_["tile"] & good_tile) | is_["flush"])
                 m.d.comb += [
                     op_valid.eq(send),
                     code.eq(Mux(is_["tile"], OPS.index("tile"), OPS.index("flush"))),
@@ -181,13 +189,13 @@ class EdgePipeline(wiring.Component):
                 known = Mux(c.op < len(CODE), 1, 0)
                 m.d.comb += [
                     core.edges.valid.eq(valid & is_["edge"]),
-                    op_valid.eq(ending & known & core.idle),
+                    op_valid.eq(ending & known & self._core_idle),
                     code.eq(OPS.index("end")),
                 ]
                 with m.If(is_["edge"]):
                     m.d.comb += self.commands.ready.eq(core.edges.ready)
                 with m.Elif(is_["end"]):
-                    m.d.comb += self.commands.ready.eq(core.idle & self.acc.ops.ready)
+                    m.d.comb += self.commands.ready.eq(self._core_idle & self.acc.ops.ready)
                 with m.Elif(~known):
                     m.d.comb += [self.commands.ready.eq(1), error.eq(valid)]
                 with m.If(op_valid & self.acc.ops.ready):
@@ -202,7 +210,7 @@ class EdgePipeline(wiring.Component):
     def _stats(self, m):
         core, acc, res = self.core, self.acc, self.res
         events = {
-            "core_busy": ~core.idle,
+            "core_busy": ~self._core_idle,
             "core_stall": core.deltas.valid & ~core.deltas.ready,
             "acc_busy": acc.busy,
             "acc_stall": acc.cells.valid & ~acc.cells.ready,

@@ -88,8 +88,10 @@ class PipelineConfig:
     whose memories the resolve then reads and writes a lane a cell, the group of lanes the
     beat's column picks); the clocks the resolve's
     composite products take (`product_stages`, `edgeaa.model.tile.resolve_latency`: two
-    halve each clock's carry chains there, for Fmax); and its core (`fast_core`, the output
-    `deltas`). The commands, the frames and the images do not depend on any of these but the
+    halve each clock's carry chains there, for Fmax); its core (`fast_core`, the output
+    `deltas`); and whether a skid buffer sits between the core and the accumulator
+    (`beat_skid`, `edgeaa.hdl.skid.SkidBuffer`: the core's ready is then a register, for
+    Fmax). The commands, the frames and the images do not depend on any of these but the
     tile; only the clocks (`edgeaa.model.pipeline_timing`) and the area do."""
 
     tile: TileConfig = field(default_factory=TileConfig)
@@ -98,6 +100,7 @@ class PipelineConfig:
     scan_lanes: int = 1
     fast_core: bool = False  # the core's output: DELTAS, or DELTAS_FAST (`deltas`)
     product_stages: int = 1
+    beat_skid: bool = False
 
     def __post_init__(self):
         if not isinstance(self.tile, TileConfig):
@@ -108,8 +111,9 @@ class PipelineConfig:
         if scan > lanes:  # the resolve reads and writes a pixel lane per cell
             raise ValueError(f"scan_lanes {scan} needs at least {scan} pixel_lanes, not {lanes}")
         _check_count("product_stages", self.product_stages, PRODUCT_STAGES)
-        if not isinstance(self.fast_core, bool):
-            raise TypeError(f"fast_core must be True or False, not {self.fast_core!r}")
+        for name in ("fast_core", "beat_skid"):
+            if not isinstance(getattr(self, name), bool):
+                raise TypeError(f"{name} must be True or False, not {getattr(self, name)!r}")
 
     @property
     def deltas(self) -> BeatFormat:
@@ -148,7 +152,8 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # knee of clocks over area), a flush of four pixels a clock, a scan of two cells a clock and
 # the fast core (`DELTAS_FAST`: its p3 and its setup's second lane steps do not fit compact's
 # HX8K, which has no multipliers for its FINAL), and the resolve's products over two clocks
-# (a clock of latency a polygon; compact's Fmax is not bound there).
+# (a clock of latency a polygon; compact's Fmax is not bound there), and a skid buffer before
+# the accumulator (its ready chain was fast's critical path; compact's is its stepper's).
 PIPELINES = {
     "compact": {
         "setup_units": 1,
@@ -156,6 +161,7 @@ PIPELINES = {
         "scan_lanes": 1,
         "fast_core": False,
         "product_stages": 1,
+        "beat_skid": False,
     },
     "fast": {
         "setup_units": 4,
@@ -163,6 +169,7 @@ PIPELINES = {
         "scan_lanes": 2,
         "fast_core": True,
         "product_stages": 2,
+        "beat_skid": True,
     },
 }
 

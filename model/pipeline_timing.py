@@ -25,7 +25,11 @@ with two scan lanes a pair of cells with a nonzero one, `TileModel.beat_clocks`)
 the core sees a sink first ready in clock T that holds each beat that long:
 `schedule(..., sink_ready=T, holds=...)`. The stepper's one enable freezes the loop and its
 pipeline while a beat waits (`edgeaa.model.timing.beat_wait`), while the setup runs on until
-its bank waits and the stepper loads a bank in a freeze only while its loop is idle.
+its bank waits and the stepper loads a bank in a freeze only while its loop is idle. With
+`PipelineConfig.beat_skid` a skid buffer sits between the core and the accumulator
+(`schedule(..., skid=True)`, `edgeaa.model.timing.SinkClock`): a beat waits in the stepper
+only while the buffer holds the beat before it, the beats' clocks are the accumulator's
+takes, and the core is idle once the accumulator took its last beat.
 """
 
 from __future__ import annotations
@@ -35,7 +39,7 @@ from dataclasses import dataclass, field
 from .edge import EdgeError, setup
 from .pipeline import Decoded, PipelineConfig, decode_commands, pipeline_config
 from .tile import PolygonEnd, TileClock, TileConfig, TileModel, TileTiming
-from .timing import pipeline_depth, schedule
+from .timing import schedule
 
 __all__ = ["PipelineTiming", "pipeline_cycles"]
 
@@ -70,6 +74,7 @@ class _Top:
         self.tile = tile = pipeline.tile
         self.units = pipeline.setup_units
         self.deltas = pipeline.deltas  # the core's output: its depth
+        self.skid = pipeline.beat_skid  # a skid buffer between the core and the accumulator
         self.model = TileModel(tile, pipeline.scan_lanes)
         self.clock = TileClock(tile, pipeline.pixel_lanes, pipeline.product_stages)
         self.taken = [0] * count
@@ -137,9 +142,10 @@ class _Top:
                 idle=idle,
                 sink_ready=self.clock.ready,
                 holds=holds,
+                skid=self.skid,
             )
         )
-        last, free, stalled, first_beat = self.first - 1, 0, 0, True
+        last, free, stalled = self.first - 1, 0, 0
         edge_holds = iter(holds)
         for k, shape, _ in items:
             if shape is OTHER:
@@ -151,12 +157,7 @@ class _Top:
                 stop = t.beats[-1] + 1
                 self.clock.beats(t.beats, hold)
                 self.beats.extend(t.beats)
-                # each beat waits hold - 1 clocks; the polygon's first until the sink is ready
-                stalled += int(sum(hold)) - len(hold)
-                if first_beat:
-                    depth = pipeline_depth(config, self.deltas)
-                    stalled += t.beats[0] - hold[0] + 1 - (t.load + 1 + depth)
-                    first_beat = False
+                stalled += t.waits
             else:  # dropped: the core is idle once its unit is free
                 stop = t.released
             self.busy += max(0, stop - max(t.accepted + 1, free))  # the union of busy spans

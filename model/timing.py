@@ -93,8 +93,9 @@ setup and stepping take turns: one edge of ``C`` columns per ``C + P`` clocks wi
 unit. A stalled sink delays the stepper and its pipeline (and, once its bank waits, the
 setup) clock for clock; nothing else depends on the data. `schedule`'s ``sink_ready`` and
 ``holds`` model the polygon pipeline's accumulator: first ready in clock T (after a scan),
-then taking each beat over ``holds`` clocks, a nonzero cell a clock (`beat_wait`); its
-``idle`` a source that idles before some commands.
+then taking each beat over ``holds`` clocks, a nonzero cell a clock (`beat_wait`), with
+``skid`` behind a skid buffer (`edgeaa.hdl.skid.SkidBuffer`, `SinkClock`); its ``idle`` a
+source that idles before some commands.
 
 Clipping. A window that cuts the end of an edge costs nothing: the column count is smaller.
 One that cuts its start costs ``W + 1`` setup clocks (the long start-row pass) and saves one
@@ -129,6 +130,7 @@ __all__ = [
     "setup_latency",
     "start_clip_cycles",
     "beat_wait",
+    "SinkClock",
     "load_clocks",
     "stream_cycles",
     "stream_rate",
@@ -303,10 +305,11 @@ class EdgeTiming:
     accepted: int  # clock the command was accepted
     bank: int | None  # clock of FINAL (the bank is valid from the next clock)
     load: int | None  # clock the stepper loaded the bank (deltas: started the edge)
-    beats: tuple[int, ...]  # clock of each column's beat (valid and ready)
+    beats: tuple[int, ...]  # clock of each column's beat (valid and ready; the sink's take)
     # the first clock its setup unit is free again (may accept; an array's unit: the clock
     # after it retired the command, when the array may be idle)
     released: int = 0
+    waits: int = 0  # clocks its beats waited in the stepper's output register
 
     @property
     def dropped(self) -> bool:
@@ -353,6 +356,7 @@ def schedule(
     idle=None,
     sink_ready: int = 0,
     holds=None,
+    skid: bool = False,
 ) -> list[EdgeTiming]:
     """`write_cycles` from each edge's (columns, clipped_start) as setup gives them (None for
     a command the core drops as bad), for callers that hold the setups already
@@ -362,15 +366,17 @@ def schedule(
     ``idle[k]`` clocks after the clock following command k - 1's accept, the first in clock
     ``idle[0]`` (default: back to back from clock 0). `sink_ready`: the sink is not ready
     before this clock and ready from it (`beat_wait`). `holds`: per command, the clocks the
-    sink takes each of its beats (`beat_wait`; default one).
+    sink takes each of its beats (`beat_wait`; default one). `skid`: a skid buffer sits
+    before the sink (`SinkClock`); each timing's beats are then the sink's takes.
     """
     latency = setup_latency(config, fmt) if setup_latency_ is None else setup_latency_
     depth = pipeline_depth(config, fmt)
     live = fmt.live_bank  # the stepper takes the bank at the edge's end
     extra = start_clip_cycles(config, fmt)  # RUN's clocks more for a start-clipped edge
     if setup_units == 1:
-        return _schedule_one(extra, shapes, edges, latency, depth, live, idle, sink_ready, holds)
-    timing = _Units(extra, latency, depth, live, setup_units, sink_ready)
+        sink = SinkClock(sink_ready, skid)
+        return _schedule_one(extra, shapes, edges, latency, depth, live, idle, sink, holds)
+    timing = _Units(extra, latency, depth, live, setup_units, SinkClock(sink_ready, skid))
     return [
         timing.command(shape, None if edges is None else edges[k], _idle(idle, k), _hold(holds, k))
         for k, shape in enumerate(shapes)
@@ -437,6 +443,32 @@ def beat_wait(valid: int, sink_ready: int, hold: int) -> int:
     return max(0, sink_ready - valid) + hold - 1
 
 
+class SinkClock:
+    """The sink as the stepper's output register meets it, beat by beat (`take`): first
+    ready in clock `ready`, taking each beat over its ``hold`` clocks (`beat_wait`). With
+    `skid`, a skid buffer (`edgeaa.hdl.skid.SkidBuffer`) sits before it: the buffer takes a
+    beat in the first clock it is valid and the buffer empty (the sink took the beat before
+    it), and the sink starts on it that clock (the buffer adds no latency) or once ready,
+    so the stepper no longer waits out the sink's hold of each beat, only the previous
+    beat's when its next comes sooner."""
+
+    def __init__(self, ready: int = 0, skid: bool = False):
+        self.ready, self.skid = ready, skid
+        self.empty = 0  # first clock the buffer is empty again
+
+    def take(self, valid: int, hold: int) -> tuple[int, int]:
+        """A beat valid in the stepper's output register from clock `valid`: (the clocks it
+        waits there, the clock the sink takes it)."""
+        if not self.skid:
+            wait = beat_wait(valid, self.ready, hold)
+            self.ready = 0
+            return wait, valid + wait
+        handed = max(valid, self.empty)
+        taken = max(handed, self.ready) + hold - 1
+        self.ready, self.empty = 0, taken + 1
+        return handed - valid, taken
+
+
 class _Enabled:
     """The stepper's clocks: its one enable (``~out.valid | out.ready``) is low while a beat
     waits in the output register, which freezes the loop and the pipeline (the setup runs on
@@ -475,7 +507,7 @@ def _schedule_one(
     depth: int,
     live: bool,
     idle=None,
-    sink_ready=0,
+    sink: SinkClock | None = None,
     holds=None,
 ):
     """`schedule` of the core with one setup unit: it holds an edge from its accept to the
@@ -485,7 +517,7 @@ def _schedule_one(
     out: list[EdgeTiming] = []
     accept = 0  # the setup's first free clock, then the accept
     prev_last = None  # the clock the stepper steps the previous good edge's last column
-    enabled, ready = _Enabled(), sink_ready  # the sink first ready (for the first beat)
+    enabled, sink = _Enabled(), sink or SinkClock()
     for k, shape in enumerate(shapes):
         edge = None if edges is None else edges[k]
         if idle is not None:
@@ -500,16 +532,11 @@ def _schedule_one(
         bank = accept + latency - depth - 2 + (extra if clipped_start else 0)
         load = bank + 1 if prev_last is None else max(bank + 1, prev_last + live)
         first = enabled.index(load + 1)  # column c stepped at enabled index first + c
-        beats = []
-        for c in range(columns):  # the beat of column c: valid depth enabled clocks later
-            j = first + c + depth
-            hold = 1 if holds is None else int(holds[k][c])
-            enabled.wait(j, beat_wait(enabled.clock(j), ready, hold))
-            beats.append(enabled.clock(j))
-            ready = 0
+        hold = None if holds is None else holds[k]
+        beats, waits = _beats(enabled, sink, first + depth, columns, hold)
         prev_last = enabled.clock(first + columns - 1)
         released = prev_last if live else load
-        out.append(EdgeTiming(edge, accept, bank, load, tuple(beats), released))
+        out.append(EdgeTiming(edge, accept, bank, load, beats, released, waits))
         accept = released
     return out
 
@@ -527,14 +554,14 @@ class _Units:
     (deltas) in the clock its last column is stepped, the next edge starting after it. A
     stalled sink freezes the stepper as with one unit (`_Enabled`); the units run on."""
 
-    def __init__(self, extra, latency, depth, live, units, sink_ready):
+    def __init__(self, extra, latency, depth, live, units, sink: SinkClock):
         self.extra = extra  # `start_clip_cycles`
         self.latency, self.depth, self.live = latency, depth, live
         self.free = [0] * units  # first clock each unit may accept in
         self.k, self.accept = 0, -1
         self.collector = 0  # first clock the collector points at the next command's unit
         self.stepper_free = 0  # first clock the stepper may load in (idle, or its last column)
-        self.enabled, self.ready = _Enabled(), sink_ready
+        self.enabled, self.sink = _Enabled(), sink
 
     def command(self, shape, edge, idle: int, hold) -> EdgeTiming:
         unit = self.k % len(self.free)
@@ -550,19 +577,28 @@ class _Units:
             load = max(bank + 1, self.collector, self.stepper_free)
             enabled = self.enabled
             first = enabled.index(load + 1)  # column c stepped at enabled index first + c
-            beats = []
-            for c in range(columns):  # the beat of column c: valid depth enabled clocks later
-                j = first + c + self.depth
-                wait = beat_wait(enabled.clock(j), self.ready, 1 if hold is None else int(hold[c]))
-                enabled.wait(j, wait)
-                beats.append(enabled.clock(j))
-                self.ready = 0
+            beats, waits = _beats(enabled, self.sink, first + self.depth, columns, hold)
             last = enabled.clock(first + columns - 1)
             retire = last if self.live else load
             self.stepper_free = last + self.live
-            timing = EdgeTiming(edge, accept, bank, load, tuple(beats), retire + 1)
+            timing = EdgeTiming(edge, accept, bank, load, beats, retire + 1, waits)
         self.collector = self.free[unit] = retire + 1
         return timing
+
+
+def _beats(enabled: _Enabled, sink: SinkClock, start: int, columns: int, hold):
+    """An edge's beats: column c's valid in the stepper's output register at enabled index
+    ``start + c`` (its step's index and the pipeline's depth), waiting there for the sink
+    (`SinkClock.take`, `hold` the sink's clocks for each, None: one). Returns the clocks the
+    sink takes them and the clocks they waited."""
+    beats, waits = [], 0
+    for c in range(columns):
+        valid = enabled.clock(start + c)
+        wait, taken = sink.take(valid, 1 if hold is None else int(hold[c]))
+        enabled.wait(start + c, wait)
+        beats.append(taken)
+        waits += wait
+    return tuple(beats), waits
 
 
 def beat_cycles(

@@ -24,7 +24,7 @@ from edgeaa.model import tile as tile_model
 from edgeaa.model.beat import DELTAS
 from edgeaa.model.pipeline import Command, PipelineConfig
 from edgeaa.model.pipeline_timing import pipeline_cycles
-from edgeaa.model.tile import RESOLVE_OPS, TileConfig
+from edgeaa.model.tile import OPS, RESOLVE_OPS, TileConfig
 from edgeaa.render import parse_scene, plan_scene
 from edgeaa.render.paint import Canvas, coverage_scene
 from edgeaa.render.pipeline import scene_commands
@@ -53,7 +53,7 @@ def run_transfers(tile: TileConfig | PipelineConfig, commands: list[Command]) ->
     payloads = [command_const(tile, c) for c in commands]
     expected = expected_pixels(tile, commands)
     out = Transfers([], [], [], [], {}, 0)
-    beats, cells = dut.core.deltas, dut.acc.cells
+    beats, cells = dut.acc.ops, dut.acc.cells  # beats: the accumulator's beat ops
     logs = [out.commands, out.pixels, out.beats, out.cells]
 
     async def bench(ctx):
@@ -71,13 +71,15 @@ def run_transfers(tile: TileConfig | PipelineConfig, commands: list[Command]) ->
                 dut.pixels.valid,
                 beats.valid,
                 beats.ready,
+                beats.payload.op,
                 cells.valid,
                 cells.ready,
                 cells.payload.op,
             )
-            b_valid, b_ready, c_valid, c_ready, op = handshakes
+            b_valid, b_ready, b_op, c_valid, c_ready, op = handshakes
+            beat = b_valid and b_ready and b_op == OPS.index("beat")
             cell = c_valid and c_ready and op == RESOLVE_OPS.index("cell")
-            moved = [offer and taken, pixel, b_valid and b_ready, cell]
+            moved = [offer and taken, pixel, beat, cell]
             for hit, log in zip(moved, logs, strict=True):
                 if hit:  # a pixel beat: its lanes' pixels, each in the beat's clock
                     log.extend([clock] * (lanes if log is out.pixels else 1))
@@ -267,6 +269,24 @@ def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed)
         monkeypatch.setattr(tile_model.TileModel, "beat_clocks", lambda self, cells: one(cells))
         with pytest.raises(AssertionError):
             check_clock_for_clock(pipeline, commands, hw, "a cell a clock in")
+
+
+@pytest.mark.parametrize(
+    ("units", "lanes", "scan", "seed"), [(1, 1, 1, 3), (4, 4, 2, 3), (2, 2, 2, 10)]
+)
+def test_a_skid_buffer_before_the_accumulator_in_the_models_clocks(units, lanes, scan, seed):
+    """The core's beats through a skid buffer (`beat_skid`, the fast pipeline's), with the
+    bad commands and the stalls: the stepper hands each beat to the buffer while the
+    accumulator takes the one before, and waits only while the buffer holds one. The model of
+    the beats straight into the accumulator does not fit."""
+    pipeline = PipelineConfig(SMALL_TILE, units, lanes, scan, beat_skid=True)
+    commands = random_commands(random.Random(seed), SMALL_TILE)
+    hw = run_transfers(pipeline, commands)
+    label = f"a skid buffer, {units} units, {lanes} lanes, {scan} scan lanes, seed {seed}"
+    check_clock_for_clock(pipeline, commands, hw, label)
+    assert hw.stats["core_stall"] > 0 and hw.stats["acc_stall"] > 0  # the stall is exercised
+    with pytest.raises(AssertionError):
+        check_clock_for_clock(replace(pipeline, beat_skid=False), commands, hw, "no buffer")
 
 
 @pytest.mark.parametrize("seed", [4, 11])
