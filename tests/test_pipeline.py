@@ -316,12 +316,17 @@ def test_edgeaa_verilog_channels(tmp_path, capsys):
 
 def test_the_named_configurations():
     fields = ("setup_units", "pixel_lanes", "scan_lanes", "fast_core", "product_stages")
+    fields += ("beat_skid",)
     want = {
-        "compact": dict(zip(fields, (1, 1, 1, False, 1), strict=True)),
-        "fast": dict(zip(fields, (4, 4, 2, True, 2), strict=True)),
+        "compact": dict(zip(fields, (1, 1, 1, False, 1, False), strict=True)),
+        "fast": dict(zip(fields, (4, 4, 2, True, 2, True), strict=True)),
     }
     assert want == PIPELINES
-    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 4, 2, True, 2)
+    assert PipelineConfig.named("fast", TILE) == PipelineConfig(TILE, 4, 4, 2, True, 2, True)
+    assert EdgePipeline(PipelineConfig.named("fast", TILE)).skid is not None
+    assert EdgePipeline(TILE).skid is None
+    with pytest.raises(TypeError, match="beat_skid"):
+        PipelineConfig(TILE, beat_skid=1)
     assert PipelineConfig(TILE) == PipelineConfig.named("compact", TILE)
     assert EdgePipeline(PipelineConfig(TILE, 3)).core.setup_units == 3
     assert EdgePipeline(TILE).core.setup_units == 1
