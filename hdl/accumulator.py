@@ -131,12 +131,13 @@ class TileAccumulator(wiring.Component):
         if self._lanes == 1:
             rows = touched | (Const(1, tile.height) << cell.y)
             new_lo, new_hi = Mux(cell.x < lo, cell.x, lo), Mux(cell.x > hi, cell.x, hi)
-        else:  # a cell a bank this clock, each kept or not
+        else:  # a cell a bank this clock, each kept or not (``want``: if taken; the
+            # registers load only when one is)
             rows, new_lo, new_hi = touched, lo, hi
             for c in cell.banks:
-                rows = rows | Mux(c.keep, Const(1, tile.height) << c.y, 0)
-                new_lo = Mux(c.keep & (c.x < new_lo), c.x, new_lo)
-                new_hi = Mux(c.keep & (c.x > new_hi), c.x, new_hi)
+                rows = rows | Mux(c.want, Const(1, tile.height) << c.y, 0)
+                new_lo = Mux(c.want & (c.x < new_lo), c.x, new_lo)
+                new_hi = Mux(c.want & (c.x > new_hi), c.x, new_hi)
         with m.If(cell.keep):
             m.d.sync += [dirty.eq(1), touched.eq(rows), lo.eq(new_lo), hi.eq(new_hi)]
         self.observe.__dict__.update(

@@ -124,11 +124,16 @@ def route_pair(m, unit, free) -> types.SimpleNamespace:
         hits = [taking & take[j] & kept & (x[0] == k) for j, (kept, x, _, _) in enumerate(pair)]
         cell = types.SimpleNamespace(
             keep=Signal(name=f"bank{k}_keep"),
+            # kept if the beat is taken this clock: the payload's alone (no ``taking``, so
+            # the sink's ready is not in front of the span's compares: Fmax)
+            want=Signal(name=f"bank{k}_want"),
             x=Signal(tile.x_bits, name=f"bank{k}_x"),
             y=Signal(tile.y_bits, name=f"bank{k}_y"),
             delta=Signal(signed(tile.cell_bits), name=f"bank{k}_delta"),
         )
+        wants = [take[j] & kept & (x[0] == k) for j, (kept, x, _, _) in enumerate(pair)]
         m.d.comb += [
+            cell.want.eq(wants[0] | wants[1]),
             cell.keep.eq(hits[0] | hits[1]),
             cell.x.eq(Mux(hits[0], pair[0][1], pair[1][1])),
             cell.y.eq(Mux(hits[0], pair[0][2], pair[1][2])),
