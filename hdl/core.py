@@ -47,8 +47,8 @@ Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
   ``cell0`` .. ``cell3``, each ``x, y`` signed ``W + 2`` and ``delta`` signed ``I + F + 2``,
   and ``last``: the accumulation deltas of `edgeaa.model.step.run_edge_deltas`, zeros
   included, in its order. Same setup (with the end pieces, in the same clocks) and loop; the
-  column pipeline is 3 registers deep in every mode, 4 with `DELTAS_FAST`
-  (`edgeaa.hdl.deltas`).
+  column pipeline is 4 registers deep (`edgeaa.hdl.deltas`: p3 cuts the cells' carry
+  chains).
 * ``errors`` (out, ``errors_bits`` = 16 bits by default): bad commands dropped so far,
   saturating at ``2**errors_bits - 1``.
 * ``error`` (out): high for one clock when a bad command is dropped.

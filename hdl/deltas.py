@@ -17,15 +17,14 @@ column per clock:
   nothing after the stepping clock reads the bank);
 * p2: the clamped triangle estimate of the depth (`triangle_estimate`, shift-adds by the
   small odd constants) and the piece's cover in each row;
-* p3 (`DELTAS_FAST`, the fast pipeline's, only): the areas of the column's upper and lower
+* p3: the areas of the column's upper and lower
   rows (`column_deltas`' r_up and r_low, or a_up and a_low), the total less the lower and
   the middle row's bound (one register each for the x-major and the y-major value): the
   cut that splits the cells' chain of carry chains (about six from p2) over two clocks, for
   Fmax;
 * the output register: the cells of `column_deltas` and their screen cells (`delta_cells`):
-  from p2, each value and then its sign (`_cells`, `DELTAS`: the fewest LUTs, compact's),
-  or from p3, the middle row's area and each delta one subtraction with the winding's sign
-  folded in (`_fast_cells`, `DELTAS_FAST`: the fewest carry chains after p3).
+  from p3, the middle row's area and each delta one subtraction with the winding's sign
+  folded in (`_fast_cells`: the fewest carry chains after p3).
 
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
 intermediate wraps; a value is cut narrower only where its operands' shapes bound it (a
@@ -37,7 +36,7 @@ shifts.
 
 Observation points for the formal harness (attributes of the stepper, set when it is
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
-registers of p1, p2 and (fast) p3 (namespaces, each with ``valid`` and ``last``),
+registers of p1, p2 and p3 (namespaces, each with ``valid`` and ``last``),
 ``delta_cells`` the four ``(x, y, delta)`` values the output register loads (before the
 payload's cut).
 """
@@ -58,7 +57,7 @@ __all__ = ["DeltaStepper", "delta_pipeline", "delta_registers"]
 # The bank fields the loop steps: registers loaded from the bank when an edge starts. The
 # delta stepper reads every other field from the bank payload while it steps the edge.
 _LOOP_FIELDS = ("x", "y", "remaining", "jq", "jr")
-DELTA_FORMATS = (DELTAS, DELTAS_FAST)  # compact's stepper and the fast one (p3, bank copied)
+DELTA_FORMATS = (DELTAS, DELTAS_FAST)  # compact's stepper and the fast one (bank copied)
 
 
 class DeltaStepper(ColumnLoop):
@@ -74,9 +73,8 @@ class DeltaStepper(ColumnLoop):
     edge, when it is idle or steps the last column of the one before: the transfer is the
     start, and the setup unit is free ``C`` clocks sooner. ``deltas`` (out stream,
     `delta_layout`, also ``out``): one registered beat per column, ``latency`` =
-    `fmt.pipeline_depth` clocks after the column's step when nothing stalls: 3 for
-    `edgeaa.model.beat.DELTAS` (p1, p2, the output register), 4 for `DELTAS_FAST` (p1, p2,
-    p3, the output register).
+    `fmt.pipeline_depth` = 4 clocks after the column's step when nothing stalls (p1, p2, p3,
+    the output register).
 
     Observation points (formal harness): `ColumnLoop`'s, ``delta_regs`` (name -> register),
     and, once elaborated, ``delta_he``, ``delta_stages`` and ``delta_cells`` (this module's
@@ -185,12 +183,9 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     _loop(m, st, he, advance.row_step)
     p1 = _stage(m, en, "d1", _stage0(st, last, he))
     p2 = _stage(m, en, "d2", _covers(st.config, p1))
-    stages = [p1, p2]
-    if st.latency == 4:  # p3 registers the rows' areas; one subtraction a cell after it
-        stages.append(_stage(m, en, "d3", _ends(p2)))
-        cells = _output(m, st, en, stages[-1], _fast_cells(stages[-1]))
-    else:  # the fewest LUTs: the cells from p2 in one stage
-        cells = _output(m, st, en, p2, _cells(p2))
+    p3 = _stage(m, en, "d3", _ends(p2))  # the rows' areas; one subtraction a cell after it
+    stages = [p1, p2, p3]
+    cells = _output(m, st, en, p3, _fast_cells(p3))
     # Observation points (formal harness): no logic of their own.
     st.delta_he, st.delta_stages, st.delta_cells = he, stages, cells
     return [stage.valid for stage in stages]
@@ -363,34 +358,8 @@ def _y_major_ends(p2):
     return a_low, a_up
 
 
-def _cells(p2) -> list:
-    """The four cells on screen from p2's registers, signed by the winding (`_cell_at`): each
-    value (`_deltas_x_major`: r_a, cov_a - r_a, r_b, cov_b - r_b, the column pair swapped
-    when ``neg``; `_deltas_y_major`: band - q0, q0 - q1, q1, 0), then its sign."""
-    total, band, up = p2.total, p2.band_rect, p2.up
-    r_low, r_up = _x_major_ends(p2)
-    r_mid = _clamp(total - r_low - r_up, p2.cov_mid)
-    r_a, cov_a = Mux(up, r_up, r_mid), Mux(up, p2.cov_up, p2.cov_mid)
-    r_b, cov_b = Mux(up, r_mid, r_low), Mux(up, p2.cov_mid, p2.cov_low)
-    cx = (r_a, cov_a - r_a, r_b, cov_b - r_b)
-    a_low, a_up = _y_major_ends(p2)
-    a_mid = _clamp(total + band - a_up - a_low, band)
-    cy = _y_major_values(band, Mux(up, a_up, a_mid), Mux(up, a_mid, a_low))
-    cells = []
-    for k in range(4):
-        pair, right = divmod(k, 2)  # x-major: row a or b, column x or x + 1
-        value = Mux(p2.x_major, Mux(p2.neg, cx[2 * pair + 1 - right], cx[k]), cy[k])
-        cells.append(_cell_at(p2, k, Mux(p2.sigma_neg, -value, value)))
-    return cells
-
-
-def _y_major_values(band, q0, q1) -> tuple:
-    """`_deltas_y_major`'s cells: band - q0, q0 - q1, q1, 0."""
-    return band - q0, q0 - q1, q1, 0
-
-
 def _ends(p2) -> dict:
-    """What the deep stepper's p3 loads: the column's areas in its lower and upper rows
+    """What p3 loads: the column's areas in its lower and upper rows
     (``lo``, ``hi``), the total less the lower (``rest``: the middle row's area is rest - hi
     clamped to ``bound``) and the middle row's bound (x-major: the cover of row r; y-major:
     the band). An edge is x-major or y-major: one register for each pair (the cut that
@@ -411,9 +380,10 @@ def _ends(p2) -> dict:
 
 
 def _fast_cells(p3) -> list:
-    """The four cells on screen from the deep stepper's p3 (`_cells`' values), each one
-    subtraction ``a - b`` with the winding's sign folded in (-(a - b) = b - a swaps the
-    operands): the fewest carry chains after p3."""
+    """The four cells on screen from p3 (`_deltas_x_major`: r_a, cov_a - r_a, r_b, cov_b -
+    r_b, the column pair swapped when ``neg``; `_deltas_y_major`: band - q0, q0 - q1, q1,
+    0), each one subtraction ``a - b`` with the winding's sign folded in (-(a - b) = b - a
+    swaps the operands): the fewest carry chains after p3."""
     up = p3.up
     mid = _clamp(p3.rest - p3.hi, p3.bound)  # r_mid or a_mid
     r_a, r_b = Mux(up, p3.hi, mid), Mux(up, mid, p3.lo)

@@ -270,8 +270,9 @@ DELTAS = BeatFormat(
     run_edge_deltas,
     pieces=True,
     live_bank=True,
-    # p1 (the piece's depth), p2 (the estimate and covers), the output register (the cells)
-    depth=lambda config: 3,
+    # p1 (the piece's depth), p2 (the estimate and covers), p3 (the upper and lower rows'
+    # areas: the cut of the cells' carry chains, for Fmax), the output register (the cells)
+    depth=lambda config: 4,
     # FINAL forms the y-major total0 product one bit of w0 (s + 2 bits) a clock
     final=lambda config: config.subpixel_bits + 2,
 )
@@ -279,9 +280,6 @@ DELTAS = BeatFormat(
 
 DELTAS_FAST = replace(
     DELTAS,
-    # p1, p2, p3 (the upper and lower rows' areas: the cut of the cells' carry chains, for
-    # Fmax), the output register
-    depth=lambda config: 4,
     # FINAL registers the y-major total0's multiplicand, then multiplies (`edgeaa.hdl.pieces`)
     final=lambda config: 2,
     # two multiply-divide steps a clock (radix 4): RUN in about half the clocks
@@ -291,10 +289,9 @@ DELTAS_FAST = replace(
     live_bank=False,
 )
 """The fast pipeline's core output (`PipelineConfig.fast_core`): the same stream, beats and
-bank from a stepper one register deeper (`edgeaa.hdl.deltas`: p3), one clock later, and a
-setup whose FINAL takes two clocks (its product by a multiplier: the ECP5's DSP blocks) and
-whose lanes take two steps a clock (`edgeaa.hdl.lanes`: RUN 11 clocks instead of 20 in the
-default configuration); its stepper copies the bank as it starts an edge."""
+bank from a setup whose FINAL takes two clocks (its product by a multiplier: the ECP5's DSP
+blocks) and whose lanes take two steps a clock (`edgeaa.hdl.lanes`: RUN 11 clocks instead of
+20 in the default configuration); its stepper copies the bank as it starts an edge."""
 
 
 def format_of(stream: str) -> BeatFormat:

@@ -118,8 +118,8 @@ class PipelineConfig:
     @property
     def deltas(self) -> BeatFormat:
         """The core's output (`edgeaa.model.beat`): `DELTAS_FAST` with `fast_core` (the
-        deltas stepper one register deeper, p3, copying the bank, and a setup whose FINAL
-        multiplies and whose lanes take two steps a clock), else `DELTAS`."""
+        deltas stepper copying the bank, and a setup whose FINAL multiplies and whose lanes
+        take two steps a clock), else `DELTAS`."""
         return DELTAS_FAST if self.fast_core else DELTAS
 
     @classmethod
@@ -150,10 +150,10 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
 # knee of clocks over area), a flush of four pixels a clock, a scan of two cells a clock and
-# the fast core (`DELTAS_FAST`: its p3 and its setup's second lane steps do not fit compact's
-# HX8K, which has no multipliers for its FINAL), and the resolve's products over two clocks
-# (a clock of latency a polygon; compact's Fmax is not bound there), and a skid buffer before
-# the accumulator (its ready chain was fast's critical path; compact's is its stepper's).
+# the fast core (`DELTAS_FAST`: its copied bank and its setup's second lane steps do not fit
+# compact's HX8K, which has no multipliers for its FINAL), and the resolve's products over two
+# clocks (a clock of latency a polygon), and a skid buffer before the accumulator (its ready
+# chain was fast's critical path).
 PIPELINES = {
     "compact": {
         "setup_units": 1,
