@@ -60,8 +60,8 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     assert dut.setup.final_cycles == final == s + 2
     assert timing_model.final_cycles(config) == LineCore(config).setup.final_cycles == 1
     depth = timing_model.pipeline_depth(config, DELTAS)
-    assert dut.stepper.latency == depth == 3  # p1, p2, the output register
-    # The fast core: p3 (one clock later) and a FINAL of two clocks (by a multiplier).
+    assert dut.stepper.latency == depth == 4  # p1, p2, p3, the output register
+    # The fast core: the same depth and a FINAL of two clocks (by a multiplier).
     fast = PolygonCore(config, fmt=DELTAS_FAST)
     assert fast.stepper.latency == timing_model.pipeline_depth(config, DELTAS_FAST) == 4
     assert fast.setup.final_cycles == timing_model.final_cycles(config, DELTAS_FAST) == 2
@@ -73,7 +73,7 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     fast_run = timing_model.run_cycles(config, fmt=DELTAS_FAST)
     assert fast.run_cycles == fast_run == timing_model.run_schedule(config, 2, pieces=True).run
     assert fast_run <= -(-R // 2) + 3  # two pads, a single step and a tail at most
-    assert fast.setup_latency == dut.setup_latency + 1 - s - (R - fast_run)
+    assert fast.setup_latency == dut.setup_latency - s - (R - fast_run)
     assert fast.setup_interval == dut.setup_interval - s - (R - fast_run) == fast_run + 5
     assert fast.start_clip_cycles == timing_model.start_clip_cycles(config, DELTAS_FAST)
     extra = config.coord_bits + 1  # W + 1 bits more, two a clock

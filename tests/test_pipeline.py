@@ -350,14 +350,14 @@ def test_the_named_configurations():
     assert EdgePipeline(PipelineConfig(TILE, 1, 4, 2)).res.scan_lanes == 2
     with pytest.raises(ValueError, match="no pipeline named"):
         PipelineConfig.named("quick")
-    # the fast core: the deltas stepper 4 deep, with p3; compact's 3
+    # the fast core and compact's: both deltas steppers 4 deep, with p3
     assert fast.core.format is DELTAS_FAST and EdgePipeline(TILE).core.format is DELTAS
     assert fast.core.stepper.latency == DELTAS_FAST.pipeline_depth(TILE.config) == 4
     assert (fast.res.product_stages, EdgePipeline(TILE).res.product_stages) == (2, 1)
     for bad in (0, 3):
         with pytest.raises(ValueError, match=r"product_stages must be one of \(1, 2\), not"):
             PipelineConfig(TILE, product_stages=bad)
-    assert EdgePipeline(TILE).core.stepper.latency == 3
+    assert EdgePipeline(TILE).core.stepper.latency == DELTAS.pipeline_depth(TILE.config) == 4
     for bad in (1, 0, "yes", None):
         with pytest.raises(TypeError, match="fast_core must be True or False"):
             PipelineConfig(TILE, fast_core=bad)
