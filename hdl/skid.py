@@ -1,6 +1,6 @@
 """A skid buffer (`SkidBuffer`): a stream passed through with no clock of latency, its
-``sink.ready`` a register, so a long ``ready`` path downstream ends here and goes no further
-upstream.
+``sink.ready`` the complement of a register (``held``), so a long ``ready`` path downstream
+ends here and goes no further upstream.
 
 While the buffer is empty a beat goes straight through (``source`` is ``sink``), and
 ``sink.ready`` is high. A beat offered and not taken downstream is still taken from the
