@@ -426,7 +426,7 @@ class TileResolve(wiring.Component):
         silent = Signal()
         gate = (c.op != OP["cell"]) | c.first  # waits for no cell in flight
         is_flush = c.op == OP["flush"]
-        mine_dirty = Mux(bank, dirty[1], dirty[0])
+        mine_dirty, other_dirty = Mux(bank, dirty[1], dirty[0]), Mux(bank, dirty[0], dirty[1])
         # the ops that hand the resolve's memory to the flush side: a flush, and a tile op
         # on written pixels (a sweep: `edgeaa.model.tile.TileClock.take`)
         flips = is_flush | ((c.op == OP["tile"]) & mine_dirty)
@@ -434,7 +434,8 @@ class TileResolve(wiring.Component):
         self.observe.p = types.SimpleNamespace(x=px, y=py, last=plast)
         self.observe.__dict__.update(fx=fx, fy=fy, fbackground=fbackground, silent=silent)
         take = self.cells.valid & self.cells.ready
-        stuck = self._sweeps(m, bank, dirty, fx, fy, silent, advance, sweep_starts)
+        dirties = (dirty, mine_dirty, other_dirty)
+        stuck = self._sweeps(m, bank, dirties, fx, fy, silent, advance, sweep_starts)
         m.d.comb += [
             self.cells.ready.eq(
                 ~stuck & ~(gate & busy) & ~(flips & (self.flushing | sweep_starts | ~advance))
@@ -481,17 +482,18 @@ class TileResolve(wiring.Component):
             ),
         ]
 
-    def _sweeps(self, m, bank, dirty, fx, fy, silent, advance, starts) -> Value:
+    def _sweeps(self, m, bank, dirties, fx, fy, silent, advance, starts) -> Value:
         """After a reset the registers no longer know what the memories hold: each memory
         written since its last flush (``dirty``, kept through reset) is swept before the
         resolve takes anything (returns that wait), the flush side's first, then the
         resolve's, handed over. At power-on neither is dirty: no clock is lost. `starts` is
-        high in the clock a sweep starts."""
+        high in the clock a sweep starts; `dirties` the two memories' ``dirty``, then the
+        resolve's and the flush side's (as ``bank`` picks them)."""
+        dirty, mine_dirty, other_dirty = dirties
         recover = Signal(init=1)  # since the last reset, until both memories are clean
         self.observe.recover = recover
         stuck = recover & (dirty[0] | dirty[1])
         m.d.sync += recover.eq(stuck)
-        mine_dirty, other_dirty = Mux(bank, dirty[1], dirty[0]), Mux(bank, dirty[0], dirty[1])
         # (with the output free, as a flush: the bank picks the waiting beat's memory)
         m.d.comb += starts.eq(~self.flushing & advance & (other_dirty | (stuck & mine_dirty)))
         with m.If(starts):
