@@ -2,11 +2,11 @@
 """Several setup units feeding the stepper in command order (`SetupArray`).
 
 One `edgeaa.hdl.setup.EdgeSetupUnit` accepts an edge every ``P = R + 3 + Phi`` clocks
-(`edgeaa.model.timing.setup_interval`: 24 by default, 29 in the deltas core, whose FINAL
-takes ``Phi = s + 2`` clocks); short edges leave the stepper idle. `SetupArray` holds ``N``
-units and hands the edge commands to them in turn (round robin, every command, bad ones
-included) and takes their banks in the same turn, so the stepper sees the banks in command
-order.
+(`edgeaa.model.timing.setup_interval`: 24 by default, 26 in the deltas core, whose FINAL
+takes ``Phi = ceil((s + 2) / 2)`` clocks); short edges leave the stepper idle. `SetupArray`
+holds ``N`` units and hands the edge commands to them in turn (round robin, every command,
+bad ones included) and takes their banks in the same turn, so the stepper sees the banks in
+command order.
 
 * **Dispatch**: a pointer ``d`` names the unit the next command goes to; ``edges.ready`` is
   high when that unit is free (``busy[d]`` low). Accepting a command sets ``busy[d]`` and

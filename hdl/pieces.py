@@ -7,11 +7,11 @@ result are registered in RUN's last clock (``kq``, ``row0`` and the column count
 by then) and ``next_bank`` forms the two that need the accumulator's start ``jq`` (``hs0``
 of a whole first column, ``total0`` of a y-major edge) from FINAL on. The y-major
 ``total0`` is ``(hs0 + he_first) w0 >> (s + 2)``: its product is formed in FINAL, which
-takes ``s + 2`` clocks in this setup (`edgeaa.model.timing.final_cycles`), one bit of the
-first piece's width ``w0`` (``s + 2`` bits, at most ``2 S``) a clock, MSB first
-(`total0_steps`: ``P = 2 P + bit (hs0 + he_first)``, the multiplicand constant once the
+takes ``ceil((s + 2) / 2)`` clocks in this setup (`edgeaa.model.timing.final_cycles`), two
+bits of the first piece's width ``w0`` (``s + 2`` bits, at most ``2 S``) a clock, MSB first
+(`total0_steps`: ``P = 4 P + d (hs0 + he_first)``, the multiplicand constant once the
 lanes are done), so ``next_bank`` reads a register in HOLD, not a multiplier (its cost:
-docs/hardware.md, "FINAL of `s + 2` clocks").
+docs/hardware.md, "FINAL of `s + 2` clocks" and "A radix-4 FINAL").
 
 Everything is in half sub-pixel steps as in the model (``2 S`` per pixel, so a pixel's edges
 are whole numbers): ``mg`` (from the first column's start to P0) and ``me`` (from P1 to the
@@ -93,6 +93,7 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         # (comb): total0 of a y-major edge is y_area0 >> (s + 2) (`total0_steps`)
         y_area0=Signal(unsigned(height.width + s + 2), name="pc_y_area0"),
         m_area0=Signal(unsigned(height.width + s + 2), name="pc_m_area0"),
+        m_held=Signal(unsigned(height.width + s + 2), name="pc_m_held"),  # m_area0, registered
         # |I_d| times h0, e1, w1, first, end (`id_product_steps`)
         id_h0=Signal(signed(I + s + 4), name="pc_id_h0"),  # h0 in [-S, 3 S)
         id_e1=Signal(unsigned(I + s + 1), name="pc_id_e1"),  # e1 < 2 S
@@ -300,17 +301,32 @@ def _not(value):
 
 
 def total0_steps(unit) -> list:
-    """One clock of FINAL in the deltas setup: ``y_area0 = 2 y_area0 + bit (hs0 +
-    he_first)``, `bit` the next bit of ``w0`` (MSB first, the counter's: cleared at the end
-    of RUN), and the counter's step. After FINAL's ``s + 2`` clocks ``y_area0 = (hs0 +
-    he_first) w0`` (modulo the register: enough bits for ``total0 = y_area0 >> (s + 2)``);
-    the multiplicand reads registers the setup holds from RUN's end until the load."""
+    """One clock of FINAL in the deltas setup, radix 4: ``y_area0 = 4 y_area0 + d M``, `d`
+    the next two bits of ``w0`` (MSB first, the counter's: cleared at the end of RUN; ``w0``
+    widened to whole digits), ``M = hs0 + he_first``, and the counter's step. The first
+    clock takes ``M`` as formed (``y_area0`` is zero then: one add after it, as a radix-2
+    step) and registers it (``m_held``); the others take the register, so their two adds
+    start at registers. After FINAL's ``ceil((s + 2) / 2)`` clocks ``y_area0 = M w0``
+    (modulo the register: enough bits for ``total0 = y_area0 >> (s + 2)``); ``M`` reads
+    registers the setup holds from RUN's end until the load."""
     pc, counter = unit.pieces, unit.regs.counter
-    bit = Cat(*reversed(list(pc.w0))).bit_select(counter, 1)
+    digits = _final_digits(len(pc.w0))
+    w0 = Cat(pc.w0, Const(0, 2 * digits - len(pc.w0)))
+    # each digit's low and high bit, MSB first (bit selects: a word select multiplies)
+    low, high = (Cat(*(w0[2 * k + j] for k in reversed(range(digits)))) for j in (0, 1))
+    digit = Cat(low.bit_select(counter, 1), high.bit_select(counter, 1))
+    m = Mux(counter == 0, pc.m_area0, pc.m_held)
+    once, twice = Mux(digit[0], m, 0), Mux(digit[1], m << 1, 0)
     return [
-        pc.y_area0.eq((pc.y_area0 << 1) + Mux(bit, pc.m_area0, 0)),
+        pc.y_area0.eq((pc.y_area0 << 2) + once + twice),
+        pc.m_held.eq(pc.m_area0),
         counter.eq(counter + 1),
     ]
+
+
+def _final_digits(bits: int) -> int:
+    """Clocks of the radix-4 FINAL (`total0_steps`): a digit of two bits of ``w0`` each."""
+    return (bits + 1) // 2
 
 
 def total0_product(unit) -> list:
@@ -383,9 +399,10 @@ class EndPieces:
     and the hooks the unit calls. The bank gains the `edgeaa.model.bank` fields marked
     ``pieces`` (``in_bank``); WINDOW loads ``cut_end`` and clears the kq products; RUN forms
     the products by ``|I_d|`` beside lane A's pass 2 and by kq beside lane B, and loads
-    `run_end_loads` in its last clock; FINAL takes ``s + 2`` clocks (`total0_steps`), or two
-    with `multiplier` (`total0_product`: a DSP block of the fast pipeline's ECP5);
-    ``next_bank`` gets `final_pieces`. One instance per setup unit (its registers)."""
+    `run_end_loads` in its last clock; FINAL takes ``ceil((s + 2) / 2)`` clocks
+    (`total0_steps`), or two with `multiplier` (`total0_product`: a DSP block of the fast
+    pipeline's ECP5); ``next_bank`` gets `final_pieces`. One instance per setup unit (its
+    registers)."""
 
     in_bank = True
 
@@ -395,8 +412,8 @@ class EndPieces:
 
     @property
     def final_cycles(self) -> int:
-        # one a bit of w0 (`total0_steps`), or the multiplicand then the product
-        return 2 if self.multiplier else len(self.w0)
+        # two bits of w0 a clock (`total0_steps`), or the multiplicand then the product
+        return 2 if self.multiplier else _final_digits(len(self.w0))
 
     def window_loads(self, unit) -> list:
         """``cut_end``, the kq products cleared; with two lane steps a clock also their
@@ -435,7 +452,7 @@ class EndPieces:
         m.d.sync += run_end_loads(unit)
 
     def final(self, m, unit) -> None:
-        """FINAL: the y-major total0 product, one bit of w0 a clock or by a multiplier."""
+        """FINAL: the y-major total0 product, two bits of w0 a clock or by a multiplier."""
         m.d.sync += total0_product(unit) if self.multiplier else total0_steps(unit)
         with m.If(unit.regs.counter == self.final_cycles - 1):
             m.next = "HOLD"

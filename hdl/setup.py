@@ -21,8 +21,8 @@ docs/hardware.md, "The setup unit, clock by clock".
 Parts: the FOLD and WINDOW loads (`edgeaa.hdl.setup_fold`), the lanes and their RUN schedule
 (`edgeaa.hdl.lanes`), and for the polygon core the end pieces (`EdgeSetupUnit(config,
 pieces=EndPieces(config))`, `edgeaa.hdl.pieces`), which add their fields to the bank and hook
-into WINDOW, RUN and FINAL (``s + 2`` clocks instead of one); `EdgeSetupUnit(config)` is the
-line core's setup.
+into WINDOW, RUN and FINAL (``ceil((s + 2) / 2)`` clocks instead of one);
+`EdgeSetupUnit(config)` is the line core's setup.
 """
 
 from __future__ import annotations
@@ -192,7 +192,7 @@ class EdgeSetupUnit(wiring.Component):
         for state in STATES:
             setattr(self, f"in_{state.lower()}", Signal(name=f"in_{state.lower()}"))
         self.next_bank = Signal(bank, name="next_bank")
-        # FINAL's clocks: one, or one a bit of w0 for the end pieces' total0 product (the
+        # FINAL's clocks: one, or one per two bits of w0 for the end pieces' total0 product (the
         # core checks them against the timing model of its output).
         self.final_cycles = self.pieces.final_cycles
 

@@ -273,8 +273,8 @@ DELTAS = BeatFormat(
     # p1 (the piece's depth), p2 (the estimate and covers), p3 (the upper and lower rows'
     # areas: the cut of the cells' carry chains, for Fmax), the output register (the cells)
     depth=lambda config: 4,
-    # FINAL forms the y-major total0 product one bit of w0 (s + 2 bits) a clock
-    final=lambda config: config.subpixel_bits + 2,
+    # FINAL forms the y-major total0 product two bits of w0 (s + 2 bits) a clock
+    final=lambda config: (config.subpixel_bits + 3) // 2,
 )
 """The polygon core's output: the accumulation deltas, four cells a column."""
 

@@ -28,8 +28,8 @@ takes them):
   without writing the bank: back in IDLE in clock ``a + 5``.
 * FINAL (``Phi = final_cycles`` clocks, ``a + R + 3 .. a + R + 2 + Phi``): the bank's
   contents are complete in its last clock (combinational, from the registers). ``Phi = 1``
-  for the line-writes core; ``s + 2`` for the deltas core, whose setup forms the y-major
-  ``total0`` product there, one bit of the first piece's width a clock; 2 for the fast
+  for the line-writes core; ``ceil((s + 2) / 2)`` for the deltas core, whose setup forms the
+  y-major ``total0`` product there, two bits of the first piece's width a clock; 2 for the fast
   pipeline's deltas core (`edgeaa.model.beat.DELTAS_FAST`), whose setup multiplies.
 * HOLD (from clock ``a + R + 3 + Phi``): the bank is valid, the registers hold, until the
   stepper takes it; in that clock the setup accepts the next command if one is offered (IDLE
@@ -47,7 +47,7 @@ takes them):
   i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in every mode for the polygon core's
   accumulation deltas, 4 with its deep stepper, `DELTAS_FAST`): the beat is valid in
   clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
-  clocks, FINAL's ``s + 2`` included: only D and Phi differ between the two outputs
+  clocks, FINAL's included: only D and Phi differ between the two outputs
   (`edgeaa.model.beat.WRITES` and `DELTAS` declare both, and whether the stepper holds the
   bank live; every function here takes the output's format, `WRITES` by default).
 
@@ -77,8 +77,8 @@ finishes while the stepper is still on a long edge waits for it.
 step a clock): for the line-writes core 27 clocks
 for the default configuration and its pw variant (F = 11), 28 for seg2 and seg4, 37 for the
 truncated accumulator (F = 21); 19 for coord_bits=4 subpixel_bits=0 intensity_bits=4 (F = 7);
-for the deltas core (D = 3, Phi = s + 2) 33 in the default configuration; 21 for the fast
-pipeline's (`edgeaa.model.beat.DELTAS_FAST`: R = 11, D = 4, Phi = 2).
+for the deltas core (D = 4, Phi = ceil((s + 2) / 2)) 31 in the default configuration; 21 for
+the fast pipeline's (`edgeaa.model.beat.DELTAS_FAST`: R = 11, D = 4, Phi = 2).
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
 at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 29 for its
@@ -144,8 +144,8 @@ EMPTY_EDGE_CYCLES = 5  # accept, FOLD, WINDOW, two RUN clocks: an edge with no v
 # Setup units of the core by default (`edgeaa.hdl.dispatch.SetupArray`). One: the smallest
 # core (the polygon pipeline must fit an iCE40 HX8K). With R = 20 RUN clocks (the default
 # configuration, F = 11) nine units accept an edge every ceil(25 / 9) = 3 clocks, at about
-# six times the line core's area (docs/hardware.md, "Setup throughput"); ceil(30 / 9) = 4
-# for the deltas core, whose FINAL takes s + 2 = 6 clocks.
+# six times the line core's area (docs/hardware.md, "Setup throughput"); ceil(27 / 9) = 3
+# for the deltas core, whose FINAL takes ceil((s + 2) / 2) = 3 clocks.
 DEFAULT_SETUP_UNITS = 1
 MAX_SETUP_UNITS = 16
 
@@ -242,10 +242,10 @@ def run_cycles(config: EdgeConfig, clipped_start: bool = False, fmt: BeatFormat 
 
 
 def final_cycles(config: EdgeConfig, fmt: BeatFormat = WRITES) -> int:
-    """Clocks of the FINAL state (`BeatFormat.final_cycles`): one for the line core; ``s +
-    2`` for the polygon core, whose setup forms the y-major ``total0`` product there one bit
-    of the first piece's width ``w0`` (``s + 2`` bits) a clock
-    (`edgeaa.hdl.pieces.total0_steps`)."""
+    """Clocks of the FINAL state (`BeatFormat.final_cycles`): one for the line core;
+    ``ceil((s + 2) / 2)`` for the polygon core, whose setup forms the y-major ``total0``
+    product there two bits of the first piece's width ``w0`` (``s + 2`` bits) a clock
+    (`edgeaa.hdl.pieces.total0_steps`); two for the fast core's, which multiplies."""
     return fmt.final_cycles(config)
 
 

@@ -49,15 +49,15 @@ def test_setup_latency_is_the_timing_model(name):
 
 @pytest.mark.parametrize("name", list(CORE_CONFIGS))
 def test_deltas_setup_latency_is_the_timing_model(name):
-    """The deltas core's setup spends ``s + 2`` clocks in FINAL (the y-major total0
-    product, one bit of w0 a clock): latency and interval grow by ``s + 1`` over the line
-    core's FINAL clock; its beats' clocks are checked against the model in
+    """The deltas core's setup spends ``ceil((s + 2) / 2)`` clocks in FINAL (the y-major
+    total0 product, two bits of w0 a clock): latency and interval grow by that less one over
+    the line core's FINAL clock; its beats' clocks are checked against the model in
     tests/test_core_deltas.py."""
     config = CORE_CONFIGS[name]
     s, R = config.subpixel_bits, timing_model.run_cycles(config)
     dut = PolygonCore(config)
     final = timing_model.final_cycles(config, DELTAS)
-    assert dut.setup.final_cycles == final == s + 2
+    assert dut.setup.final_cycles == final == -(-(s + 2) // 2)
     assert timing_model.final_cycles(config) == LineCore(config).setup.final_cycles == 1
     depth = timing_model.pipeline_depth(config, DELTAS)
     assert dut.stepper.latency == depth == 4  # p1, p2, p3, the output register
@@ -65,7 +65,7 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     fast = PolygonCore(config, fmt=DELTAS_FAST)
     assert fast.stepper.latency == timing_model.pipeline_depth(config, DELTAS_FAST) == 4
     assert fast.setup.final_cycles == timing_model.final_cycles(config, DELTAS_FAST) == 2
-    # the format says which (with s = 0 the serial product takes two clocks too)
+    # the format says which (with s <= 2 the serial product takes two clocks too)
     assert fast.setup.pieces.multiplier and not dut.setup.pieces.multiplier
     with pytest.raises(TypeError, match="fmt must be DELTAS or DELTAS_FAST"):
         PolygonCore(config, fmt=WRITES)
@@ -73,8 +73,9 @@ def test_deltas_setup_latency_is_the_timing_model(name):
     fast_run = timing_model.run_cycles(config, fmt=DELTAS_FAST)
     assert fast.run_cycles == fast_run == timing_model.run_schedule(config, 2, pieces=True).run
     assert fast_run <= -(-R // 2) + 3  # two pads, a single step and a tail at most
-    assert fast.setup_latency == dut.setup_latency - s - (R - fast_run)
-    assert fast.setup_interval == dut.setup_interval - s - (R - fast_run) == fast_run + 5
+    fewer = final - 2 + R - fast_run  # FINAL by a multiplier, and RUN's clocks
+    assert fast.setup_latency == dut.setup_latency - fewer
+    assert fast.setup_interval == dut.setup_interval - fewer == fast_run + 5
     assert fast.start_clip_cycles == timing_model.start_clip_cycles(config, DELTAS_FAST)
     extra = config.coord_bits + 1  # W + 1 bits more, two a clock
     assert extra // 2 <= fast.start_clip_cycles <= -(-extra // 2)
