@@ -68,9 +68,12 @@ def route_cell(m, unit, free) -> types.SimpleNamespace:
     sel = (pending & -pending)[:4]  # the lowest (as `lowest_set`; fewer LUT4s here)
     last = (pending & ~sel) == 0
     taking = _take(m, unit, free, done, sel, last)
-    x, y = _select(sel, [c.x for c in cells]), _select(sel, [c.y for c in cells])
-    tx, ty = x - x0, y - y0
-    keep = taking & (sel != 0) & (ty >= 0) & (ty < tile.height) & (tx < tile.width)
+    # every cell's place in the tile is formed from the beat's coordinates beside its
+    # nonzero flags, and `sel` picks one: the subtractions and compares are not behind the
+    # pick (Fmax: compact's critical path ran flags, pick, subtraction, compare)
+    places = [_place(m, tile, c, x0, y0, k) for k, c in enumerate(cells)]
+    inside, col, row = (_select(sel, [p[j] for p in places]) for j in range(3))
+    keep = taking & inside  # zero when `sel` picks none
     cell = types.SimpleNamespace(
         keep=Signal(name="cell_keep"),
         x=Signal(tile.x_bits, name="cell_x"),
@@ -81,8 +84,8 @@ def route_cell(m, unit, free) -> types.SimpleNamespace:
     )
     m.d.comb += [
         cell.keep.eq(keep),
-        cell.x.eq(Mux(tx < 0, 0, tx)),
-        cell.y.eq(ty),
+        cell.x.eq(col),
+        cell.y.eq(row),
         cell.delta.eq(Mux(keep, _select(sel, [c.delta for c in cells]), 0)),
     ]
     unit.observe.__dict__.update(origin=(x0, y0), cell=cell)
