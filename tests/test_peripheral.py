@@ -108,7 +108,7 @@ def test_the_reset_bit_drops_what_was_running_and_the_next_scene_is_whole():
     plan = plan_scene(parse_scene(TINY_SCENE), DEFAULT)
     commands = scene_commands(plan, TILE)
     fb = Framebuffer(base=64, stride=20, width=20, height=14)
-    first = commands[: len(commands) // 2]  # a tile's flush in flight when the reset comes
+    first = commands[: len(commands) // 2]  # a tile's flush: the reset comes during its writes
     run = run_peripheral(TILE, commands, fb, seed=3, stall=0.7, latency=6, before_reset=first)
     assert run.aborted > 0, "no framebuffer write was in flight at the reset"
     image = np.array(fb.image(run.memory))

@@ -284,7 +284,8 @@ def run_peripheral(
     command's words), then the status polled until not busy; the framebuffer writes
     collected. `idle`: the CPU's chance of an idle clock before each request; `stall`,
     `latency`: the memory's; a run past `max_clocks` is a hang. `before_reset`: commands
-    written first, then the control register's reset bit (whatever they were doing is
+    written first, then, once a framebuffer write is taken and not yet answered (they must
+    flush a tile), the control register's reset bit (whatever they were doing is
     dropped). `errors`: byte addresses the memory answers with err. `display_list`: after
     `commands`, its base and length written and the list started (its interrupt enabled
     too), ``status`` polled until the list is done, then its `after` commands written."""
@@ -328,6 +329,8 @@ def run_peripheral(
         await cpu.request(ctx, REGISTERS["irq_enable"], 1 if dl is None else 0b101)
         if before_reset:
             await write_commands(ctx, before_reset)
+            while not memory.queue:  # the reset comes with a framebuffer write unanswered
+                await cpu.tick(ctx)
             await cpu.request(ctx, REGISTERS["ctrl"], 1)
             await cpu.request(ctx, REGISTERS["irq_status"], 0b11)
         await write_commands(ctx, commands)
