@@ -8,7 +8,8 @@ It prints the figures the two documents quote and exits with status 1 if any che
 Part A checks the real-valued geometry by dense sampling (numpy) and exact rationals; part B
 runs the bit-accurate model (edgeaa.model.run_edge) against the exact reference
 (edgeaa.model.exact_coverage*); part C checks the register widths and the rules of
-docs/model.md; part D the accumulation of docs/algorithm.md section 13. Everything is
+docs/model.md; part D the accumulation of docs/algorithm.md section 13 (and, D8, the bound
+on a beat's accumulator clocks that docs/hardware.md's clock estimate uses). Everything is
 seeded and deterministic; it takes well under a minute.
 """
 
@@ -1049,6 +1050,45 @@ def part_d_units_per_edge() -> None:
     check("pixels no edge crosses: exact", uncrossed < 1e-9, f"max {uncrossed:.2g} units")
 
 
+def part_d_beat_clocks() -> None:
+    section("D8. the accumulator's clocks of an edge's beats (docs/hardware.md, clock estimate)")
+    from edgeaa.model.beat import delta_beats_to_array, delta_column_beats
+    from edgeaa.model.step import run_edge_deltas
+    from edgeaa.model.tile import TileConfig, beat_clocks
+
+    config, tile = EdgeConfig(), TileConfig()
+    S, top = config.subpixel_scale, config.max_vertex
+    rng = random.Random(8)
+    worst = {1: 0.0, 2: 0.0}
+    edges = 0
+    for _ in range(3000):
+        length = rng.choice((1, 3, 10, 60, 400)) * S
+        x0, y0 = rng.randrange(length, top - length), rng.randrange(length, top - length)
+        angle = rng.uniform(0, 2 * math.pi)
+        x1, y1 = round(x0 + length * math.cos(angle)), round(y0 + length * math.sin(angle))
+        edge = Edge(x0, y0, x1, y1, rng.choice(("left", "right")), rng.randrange(1, 256))
+        try:
+            columns = run_edge_deltas(config, edge)
+        except EdgeError:
+            continue
+        if not columns:
+            continue
+        cells = delta_beats_to_array(delta_column_beats(columns))[:, :12].reshape(-1, 4, 3)
+        dx, dy = abs(x1 - x0), abs(y1 - y0)
+        minor = math.ceil(len(columns) * min(dx, dy) / max(dx, dy, 1))
+        origin = (min(x0, x1) // S - 1, min(y0, y1) // S - 1)
+        for lanes in (1, 2):
+            clocks = int(beat_clocks(cells, lanes, tile, origin).sum())
+            worst[lanes] = max(worst[lanes], clocks / ((2 // lanes) * (len(columns) + minor)))
+        edges += 1
+    for lanes in (1, 2):
+        check(
+            f"{lanes} scan lane(s): clocks <= {2 // lanes} (beats + ceil(beats * slope))",
+            worst[lanes] <= 1,
+            f"max {worst[lanes]:.3f} of the bound over {edges} edges",
+        )
+
+
 def part_d() -> None:
     part_d_split_tables()
     part_d_no_leak()
@@ -1057,6 +1097,7 @@ def part_d() -> None:
     part_d_two_edges()
     part_d_units_per_edge()
     part_d_fill()
+    part_d_beat_clocks()
 
 
 def main() -> int:

@@ -31,6 +31,7 @@ from ..model import Clip, Edge
 from ..model.pipeline import Command, PipelineConfig, pipeline_config
 from ..model.tile import (
     EMPTY_END,
+    SCAN_START,
     Beats,
     Flush,
     PolygonEnd,
@@ -38,6 +39,7 @@ from ..model.tile import (
     TileModel,
     TileStart,
     pack_paint,
+    resolve_latency,
 )
 from ..model.timing import EMPTY_EDGE_CYCLES, setup_latency, start_clip_cycles, unit_cycles
 from .engines import EngineUnavailable, run_deltas
@@ -352,41 +354,56 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     number of those commands, from the plan without making them (numpy, per row of tiles;
     no cycle model), counting what `tile_jobs` sends each tile: the edges crossing it, and
     for each polygon with edges wholly left of it at most as many merged vertical edges as
-    it has edges on either side (`_merged_projection`: one per rise of the winding of the
-    left edges, which is minus the rest's; none for a polygon wholly left of the tile).
-    Each sent edge costs its columns in the tile (an x-major one's in the tile's rows; a
-    merged one's its polygon's rows) and a clock, or its unit's `unit_cycles` with them
-    over the setup units if more (`start_clip_cycles` more for a start-clipped one); each
-    polygon a setup latency and a scan of the rows its edges reach, from its least cell
-    to its greatest (to the tile's last column if it has edges outside the tile), at least
-    the rows read whole (a margin); per tile its work or its flush, whichever is more (the
-    flush runs beside the next tile's work); and the clear pass after reset. On the scenes
-    of `benchmarks/bench_pipeline.py` (the built-ins, the HUD, serif text, the 1080p
-    scene) 1.15 to 1.99 times the cycle model's clocks for compact and 1.19 to 2.77 for
-    fast (2026-12-07, after each pixel's written flag cut the exact clocks and not this
-    estimate; 1.09 to 2.1 before: docs/hardware.md, "A written flag in each pixel
-    word").
+    it has edges on either side, those culled right of the image included
+    (`_merged_projection`: one per rise of the winding of the left edges, which is minus the
+    rest's; none for a polygon wholly left of the tile). Each sent edge costs its beats'
+    clocks in the accumulator (`edge_clocks`: an x-major edge steps every column from its
+    start to the tile's right side, a y-major one its rows in the tile) and a clock, or its
+    unit's `unit_cycles` with them over the setup units if more (`start_clip_cycles` more
+    for a start-clipped one); each polygon a setup latency and a scan of its rows in the
+    band, from its least cell to its greatest (to the tile's last column if an edge crosses
+    the tile's right side); each tile with a polygon the last scan's way through the resolve,
+    and its work or the flush before, whichever is more (a flush runs beside the next tile's
+    work); then the last flush, and the clear pass after reset. docs/hardware.md, "The
+    clock estimate, an upper bound": on the scenes of `benchmarks/bench_pipeline.py` but the
+    1080p one, 1.52 to 2.08 times the cycle model's clocks for compact and 1.89 to 2.72 for
+    fast; on 200 random pages in each of 8 x 4, 16 x 8, 32 x 16 and 64 x 32 tiles, compact
+    and fast, at least 1.12.
     `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
     and needs the commands."""
     pipeline = pipeline_config(pipeline)
     tile, config = pipeline.tile, plan.config
     sent = edges_to_send(plan, skip=True)["sent"]
-    lo_x, lo_y, hi_x, hi_y = (
-        box[sent] for box in _write_boxes(plan.coords, plan.offset, S_of(plan))
+    boxes = _write_boxes(plan.coords, plan.offset, S_of(plan))
+    lo_x, lo_y, hi_x, hi_y = (box[sent] for box in boxes)
+    # edges culled right of the image: not sent, but they take part in the winding that
+    # the merged edges carry into a tile (a polygon wider than the image)
+    beyond = np.flatnonzero(plan.boundary & plan.culled & (boxes[0] >= plan.scene.width))
+    beyond_lo_y, beyond_hi_y, beyond_owner = (
+        boxes[1][beyond],
+        boxes[3][beyond],
+        plan.polygon[beyond],
     )
     c = plan.coords[sent]
     dx, dy = abs(c[:, 2] - c[:, 0]), abs(c[:, 3] - c[:, 1])
     x_major = dx >= dy
-    run = dx / np.maximum(dy, 1)  # columns per row (of an x-major edge)
+    slope = np.minimum(dx, dy) / np.maximum(np.maximum(dx, dy), 1)  # minor over major
     units = pipeline.setup_units
     unit = unit_cycles(config, units, pipeline.deltas)  # a unit's clocks per edge, but its columns
 
-    def edge_clocks(columns):
-        """An edge's clocks in a stream: its columns and a clock (the stepper), or its
-        unit's clocks over the units (a unit holds the edge while it is stepped). For the
-        fast core, which copies the bank, both terms count ``C`` or a clock too many: an
-        over-estimate, as the engines' clock limits want."""
-        return np.maximum(columns + 1, (unit + columns) / units)
+    per_cell = 2 // pipeline.scan_lanes  # accumulator clocks per minor line a beat touches
+
+    def edge_clocks(columns, slope):
+        """An edge's clocks in a stream: its beats' clocks in the accumulator and a clock
+        (the stepper waits for each), or its unit's clocks and those over the units (a unit
+        holds the edge while it is stepped). A beat (a column of the major axis) has nonzero
+        cells in one line of the minor axis, two a line (one accumulator clock each; a pair
+        a clock with two scan lanes), and in two lines where the edge steps along the minor
+        axis, at most ``ceil(columns * slope)`` times: docs/hardware.md, "The clock
+        estimate, an upper bound". For the fast core, which copies the bank, both terms count
+        ``C`` or a clock too many: an over-estimate, as the engines' clock limits want."""
+        holds = per_cell * (columns + np.ceil(columns * slope))
+        return np.maximum(holds + 1, (unit + holds) / units)
 
     setup = unit / units
     clipped = start_clip_cycles(config, pipeline.deltas) / pipeline.setup_units
@@ -396,70 +413,75 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     width, height = plan.scene.width, plan.scene.height
     tiles_x = np.arange(0, width, tile.width)
     clocks, commands = float(tile.pixels), 0  # the clear pass after a reset: a cell a clock
+    flush = tile.pixels // pipeline.pixel_lanes + 8  # a flush's beats and its latency
     for ty in range(0, height, tile.height):
         band = np.flatnonzero((hi_y >= ty) & (lo_y < ty + tile.height))
-        b_lo_x, b_hi_x, b_major = lo_x[band], hi_x[band], x_major[band]
+        b_lo_x, b_hi_x, b_major, b_slope = lo_x[band], hi_x[band], x_major[band], slope[band]
         rows = np.minimum(hi_y[band], ty + tile.height - 1) - np.maximum(lo_y[band], ty) + 1
-        # an x-major edge's columns in the band's rows (the setup cuts it to them)
-        run_b = np.maximum(run[band], 1)  # 1 for a y-major edge (not used)
-        in_band = np.where(x_major[band], np.ceil((rows + 1) * run_b) + 1, 0)
         starts_above = ~b_major & (lo_y[band] < ty)  # y-major, its start cut by the tile
+        ahead = beyond_owner[(beyond_hi_y >= ty) & (beyond_lo_y < ty + tile.height)]
         mine, total, merged, extent = _band_polygons(
-            owner[band], b_hi_x, lo_y[band], hi_y[band], tile, ty, len(tiles_x)
+            owner[band], b_hi_x, lo_y[band], hi_y[band], tile, ty, len(tiles_x), ahead
         )
         n = len(total)  # polygons in the band
         for t, tx in enumerate(tiles_x):
             right = tx + tile.width - 1
             crossing = (b_lo_x <= right) & (b_hi_x >= tx)
             span = np.minimum(b_hi_x, right) - b_lo_x + 1
-            columns = np.where(b_major, np.minimum(span, in_band), rows)
-            # and the rows of an x-major edge's columns in the tile
-            width_in = np.minimum(b_hi_x, right) - np.maximum(b_lo_x, tx) + 1
-            reach = np.where(b_major, np.minimum(rows, np.ceil(width_in / run_b) + 4), rows)
+            # an x-major edge steps every column from its start (or the image's left) to
+            # the tile's right, those outside the band's rows too (their cells dropped, a
+            # clock each); a y-major edge its rows in the band (the window cuts both ends)
+            columns = np.where(b_major, span, rows)
             n_merged = merged[:, t]
             sent_edges = int(crossing.sum() + n_merged.sum())
-            # each polygon scans the rows its edges reach, from its least to its greatest
-            # cell, on to the tile's last column if it goes on outside the tile (a sum);
-            # at least the rows read whole, as the hardware read a row's first scan in a tile
-            # until each pixel held its written flag: kept as margin, as without it the
-            # estimate fell below the simulated clocks of the small board's random pages
+            # each polygon present scans its rows in the band, from its least to its greatest
+            # cell, on to the tile's last column if its interior may (the row's sum goes
+            # on); with merged edges (its winding from the left) from the tile's first column
             k = mine[crossing]
-            scan_rows = np.zeros(n, dtype=np.int64)
-            # (the write box's margin less one: the deltas of a row lie well within it)
-            np.maximum.at(scan_rows, k, np.maximum(reach[crossing].astype(np.int64) - 2, 1))
+            present_in = np.zeros(n, dtype=bool)
+            present_in[k] = True
+            projected = n_merged > 0
+            present_in |= projected
+            scan_rows = np.where(present_in, extent, 0)
             first = np.full(n, right + 1, dtype=np.int64)
             np.minimum.at(first, k, np.maximum(b_lo_x[crossing] + 1, tx))
             last = np.full(n, tx - 1, dtype=np.int64)
             np.maximum.at(last, k, np.minimum(b_hi_x[crossing] - 1, right))
-            inside = np.bincount(k, minlength=n)
-            last[inside < total] = right  # edges outside the tile's columns
-            projected = n_merged > 0
-            scan_rows[projected] = extent[projected]
-            first[projected], last[projected] = tx, right
+            # an edge across the tile's right side: the interior may go on past it (a
+            # contour wholly left or right of that side leaves the winding there zero)
+            last[np.unique(mine[crossing & (b_hi_x > right)])] = right
+            first[projected] = tx
             present = (scan_rows > 0).sum()
-            work = edge_clocks(columns[crossing]).sum() + (edge_clocks(extent) * n_merged).sum()
+            work = edge_clocks(columns[crossing], b_slope[crossing]).sum()
+            work += (edge_clocks(extent, 0) * n_merged).sum()  # vertical: no minor step
             work += clipped * (crossing & starts_above).sum()
-            scanned = (scan_rows * (last + 1 - first)).sum()
-            whole = max(scanned, tile.width * min(tile.height, scanned))
-            work += (latency + 8) * present + whole / pipeline.scan_lanes
+            scanned = (scan_rows * np.maximum(last + 1 - first, 0)).sum()
+            work += (latency + 8) * present + scanned / pipeline.scan_lanes
+            if present:  # the last scan's cells through the resolve before the flush reads
+                work += SCAN_START + resolve_latency(tile, pipeline.product_stages)
             # the flush (its beats) runs beside the next tile's work
-            clocks += max(work, tile.pixels // pipeline.pixel_lanes + 8)
+            clocks += max(work, flush)
             commands += sent_edges + 2 * int(present) + 2
-    return int(clocks), commands
+    return int(clocks + flush), commands  # and the last tile's flush, after all the work
 
 
-def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: int):
+def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: int, ahead=()):
     """Per edge of a band of tiles its polygon's index among the band's (`mine`), and per
     polygon: its edges in the band (`total`), for each tile at most how many merged edges
     it gets there (`merged`, polygons x tiles: as many as its edges wholly left of the tile
-    or as the others, whichever is fewer) and its rows in the band (`extent`)."""
+    or as the others, with those culled right of the image (their polygons `ahead`),
+    whichever is fewer) and its rows in the band (`extent`)."""
     polygons, mine = np.unique(owner, return_inverse=True)
-    left_of = np.minimum(hi_x // tile.width + 1, tiles)  # the first tile it is wholly left of
+    ahead = np.asarray(ahead, dtype=np.int64)
+    ahead = ahead[np.isin(ahead, polygons)]
+    beyond = np.bincount(np.searchsorted(polygons, ahead), minlength=len(polygons))
+    # the first tile it is wholly left of (0 for an edge left of the image)
+    left_of = np.clip(hi_x // tile.width + 1, 0, tiles)
     left = np.zeros((len(polygons), tiles + 1), dtype=np.int64)
     np.add.at(left, (mine, left_of), 1)
     left = np.cumsum(left, axis=1)[:, :tiles]
     total = np.bincount(mine, minlength=len(polygons))
-    merged = np.minimum(left, total[:, None] - left)
+    merged = np.minimum(left, (total + beyond)[:, None] - left)
     top = np.full(len(polygons), ty + tile.height, dtype=np.int64)
     np.minimum.at(top, mine, np.maximum(lo_y, ty))
     bottom = np.full(len(polygons), ty - 1, dtype=np.int64)
