@@ -420,10 +420,9 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
         rows = np.minimum(hi_y[band], ty + tile.height - 1) - np.maximum(lo_y[band], ty) + 1
         starts_above = ~b_major & (lo_y[band] < ty)  # y-major, its start cut by the tile
         ahead = beyond_owner[(beyond_hi_y >= ty) & (beyond_lo_y < ty + tile.height)]
-        mine, total, merged, extent = _band_polygons(
+        mine, _, merged, extent = _band_polygons(
             owner[band], b_hi_x, lo_y[band], hi_y[band], tile, ty, len(tiles_x), ahead
         )
-        n = len(total)  # polygons in the band
         for t, tx in enumerate(tiles_x):
             right = tx + tile.width - 1
             crossing = (b_lo_x <= right) & (b_hi_x >= tx)
@@ -434,28 +433,12 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             columns = np.where(b_major, span, rows)
             n_merged = merged[:, t]
             sent_edges = int(crossing.sum() + n_merged.sum())
-            # each polygon present scans its rows in the band, from its least to its greatest
-            # cell, on to the tile's last column if its interior may (the row's sum goes
-            # on); with merged edges (its winding from the left) from the tile's first column
-            k = mine[crossing]
-            present_in = np.zeros(n, dtype=bool)
-            present_in[k] = True
-            projected = n_merged > 0
-            present_in |= projected
-            scan_rows = np.where(present_in, extent, 0)
-            first = np.full(n, right + 1, dtype=np.int64)
-            np.minimum.at(first, k, np.maximum(b_lo_x[crossing] + 1, tx))
-            last = np.full(n, tx - 1, dtype=np.int64)
-            np.maximum.at(last, k, np.minimum(b_hi_x[crossing] - 1, right))
-            # an edge across the tile's right side: the interior may go on past it (a
-            # contour wholly left or right of that side leaves the winding there zero)
-            last[np.unique(mine[crossing & (b_hi_x > right)])] = right
-            first[projected] = tx
-            present = (scan_rows > 0).sum()
+            present, scanned = _tile_scans(
+                mine[crossing], b_lo_x[crossing], b_hi_x[crossing], n_merged > 0, extent, tx, right
+            )
             work = edge_clocks(columns[crossing], b_slope[crossing]).sum()
             work += (edge_clocks(extent, 0) * n_merged).sum()  # vertical: no minor step
             work += clipped * (crossing & starts_above).sum()
-            scanned = (scan_rows * np.maximum(last + 1 - first, 0)).sum()
             work += (latency + 8) * present + scanned / pipeline.scan_lanes
             if present:  # the last scan's cells through the resolve before the flush reads
                 work += SCAN_START + resolve_latency(tile, pipeline.product_stages)
@@ -463,6 +446,27 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             clocks += max(work, flush)
             commands += sent_edges + 2 * int(present) + 2
     return int(clocks + flush), commands  # and the last tile's flush, after all the work
+
+
+def _tile_scans(k, lo_x, hi_x, projected, extent, tx: int, right: int) -> tuple[int, int]:
+    """The polygons a tile scans and the cells they scan, at most: the band's polygons with
+    an edge crossing the tile (`k`, their indices, and the edges' write boxes `lo_x`,
+    `hi_x`) or a merged edge in it (`projected`), each over its rows in the band (`extent`),
+    from its least cell to its greatest, on to the tile's last column if its interior may go
+    on there (an edge crosses the tile's right side: a contour wholly left or right of that
+    side leaves the winding there zero), from the tile's first column if merged edges carry
+    its winding in from the left."""
+    n = len(extent)
+    present = projected.copy()
+    present[k] = True
+    first = np.full(n, right + 1, dtype=np.int64)
+    np.minimum.at(first, k, np.maximum(lo_x + 1, tx))
+    last = np.full(n, tx - 1, dtype=np.int64)
+    np.maximum.at(last, k, np.minimum(hi_x - 1, right))
+    last[np.unique(k[hi_x > right])] = right
+    first[projected] = tx
+    rows = np.where(present, extent, 0)
+    return int((rows > 0).sum()), int((rows * np.maximum(last + 1 - first, 0)).sum())
 
 
 def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: int, ahead=()):
