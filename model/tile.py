@@ -79,6 +79,7 @@ __all__ = [
     "Scan",
     "TileOverflow",
     "TileStart",
+    "Sweep",
     "alpha_steps",
     "beat_clocks",
     "composite_steps",
@@ -195,6 +196,13 @@ class Flush(NamedTuple):
     pass
 
 
+class Sweep(NamedTuple):
+    """What `TileModel.feed` returns for a `TileStart`: whether it clears pixels written
+    since the last flush (``written``: the resolve then sweeps them, a beat a clock)."""
+
+    written: bool
+
+
 assert len(CELLS) == 4 and len(CELL_FIELDS) == 3  # the shape of `Beats.cells`
 
 
@@ -300,7 +308,8 @@ class TileModel:
         self._planes = self.pixels.reshape(tile.height, tile.width, tile.channels)  # a view
 
     def feed(self, op):
-        """Apply one op; a `Flush` returns the frame, a `PolygonEnd` the rows it scanned."""
+        """Apply one op; a `Flush` returns the frame, a `PolygonEnd` the rows it scanned, a
+        `TileStart` its `Sweep`."""
         if isinstance(op, DeltaBeat):
             op = Beats.of([op])
         if isinstance(op, Beats):
@@ -308,10 +317,10 @@ class TileModel:
             return None
         if isinstance(op, PolygonEnd):
             return self._resolve(op)
-        if isinstance(op, TileStart):  # returns whether it clears written pixels (a sweep)
+        if isinstance(op, TileStart):
             self.origin, self.background = (op.x0, op.y0), op.background
             self.pixels[:] = op.background
-            swept, self.written = self.written, False
+            swept, self.written = Sweep(self.written), False
             return swept
         if isinstance(op, Flush):
             frame = self.pixels.copy()
@@ -501,7 +510,7 @@ class TileClock:
             self.resolve_ops += result.beats
             return a
         flush = isinstance(op, Flush)
-        sweep = flush or result is True  # a tile start on written pixels sweeps them
+        sweep = flush or (isinstance(result, Sweep) and result.written)
         r = max(a + 1, self.free if sweep else 0, self.quiet)  # tile or flush: output register
         self.ready = r
         self.acc_stall += r - a - 1
