@@ -13,15 +13,19 @@ second memory's own costs (which memory a beat or a scan reads, a clock to switc
 in it.
 
     python benchmarks/what_if_second_memory.py [--pipeline fast] [--scenes text,HUD]
+        [--setup-units N]
 
 Prints, per scene of `benchmarks/bench_pipeline.py`, the exact clocks and the clocks with
-the second memory.
+the second memory. --setup-units gives the pipeline that many setup units in both runs (16,
+the most: each holds an edge 17 clocks and more, so about an edge a clock, the issue's
+"setup of one edge every one or two clocks").
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import replace
 from unittest import mock
 
 from bench_pipeline import scenes  # this folder: the rate table's scenes
@@ -55,11 +59,15 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--pipeline", default="fast", choices=list(PIPELINES))
     parser.add_argument("--scenes", default="", help="only the scenes whose name holds one")
+    parser.add_argument("--setup-units", type=int, help="setup units (the pipeline's if not)")
     args = parser.parse_args()
     tile = TileConfig()
     pipeline = PipelineConfig.named(args.pipeline, tile)
+    if args.setup_units is not None:
+        pipeline = replace(pipeline, setup_units=args.setup_units)
     wanted = [word for word in args.scenes.split(",") if word]
-    print(f"| scene | {args.pipeline}: clocks | with a second memory | fewer clocks |")
+    name = f"{args.pipeline}, {pipeline.setup_units} setup units"
+    print(f"| scene | {name}: clocks | with a second memory | fewer clocks |")
     print("|---|---:|---:|---:|")
     for scene in scenes(tile.config):
         if wanted and not any(word in scene.name for word in wanted):
