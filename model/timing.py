@@ -44,8 +44,8 @@ takes them):
   the bank as the line-writes stepper does. Column ``c`` of the edge is stepped in clock
   ``t + 1 + c``. Its writes are computed by a pipeline behind the loop, ``D =
   pipeline_depth`` registers deep counting the output register (D = 2 for N <= 1 segments,
-  i.e. pw and paper; D = 3 for seg2 and seg4; D = 3 in every mode for the polygon core's
-  accumulation deltas, 4 with its deep stepper, `DELTAS_FAST`): the beat is valid in
+  i.e. pw and paper; D = 3 for seg2 and seg4; D = 4 in every mode for the polygon core's
+  accumulation deltas, `DELTAS` and `DELTAS_FAST`): the beat is valid in
   clock ``t + 1 + D + c``. The deltas core's setup computes the end pieces in the same
   clocks, FINAL's included: only D and Phi differ between the two outputs
   (`edgeaa.model.beat.WRITES` and `DELTAS` declare both, and whether the stepper holds the
@@ -81,7 +81,7 @@ for the deltas core (D = 4, Phi = ceil((s + 2) / 2)) 31 in the default configura
 the fast pipeline's (`edgeaa.model.beat.DELTAS_FAST`: R = 11, D = 4, Phi = 2).
 
 Sustained rate. The setup accepts one edge every ``P = setup_interval = R + 3 + Phi`` clocks
-at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 29 for its
+at most (``P = L - D - 1``: 24 for the default configuration's line-writes core, 26 for its
 deltas core; accept to load, the next accept in the load's clock); the stepper takes ``C``
 clocks per edge. A stream of edges of ``C`` columns therefore sustains ``C / max(C, P)``
 columns per clock: exactly one column per clock (no gap between edges) when every edge has

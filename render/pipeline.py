@@ -361,12 +361,12 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     start to the tile's right side, a y-major one its rows in the tile) and a clock, or its
     unit's `unit_cycles` with them over the setup units if more (`start_clip_cycles` more
     for a start-clipped one); each polygon a setup latency and a scan of its rows in the
-    band, from its least cell to its greatest (to the tile's last column if an edge crosses
-    the tile's right side); each tile with a polygon the last scan's way through the resolve,
+    band, from its least cell to its greatest (to the tile's last column if it has an edge
+    right of the tile); each tile with a polygon the last scan's way through the resolve,
     and its work or the flush before, whichever is more (a flush runs beside the next tile's
     work); then the last flush, and the clear pass after reset. docs/hardware.md, "The
     clock estimate, an upper bound": on the scenes of `benchmarks/bench_pipeline.py` but the
-    1080p one, 1.52 to 2.08 times the cycle model's clocks for compact and 1.89 to 2.72 for
+    1080p one, 1.52 to 2.24 times the cycle model's clocks for compact and 1.89 to 3.10 for
     fast; on 200 random pages in each of 8 x 4, 16 x 8, 32 x 16 and 64 x 32 tiles, compact
     and fast, at least 1.12.
     `edgeaa.model.pipeline_timing.pipeline_cycles` is exact, but takes about 20 us a clock
@@ -420,7 +420,7 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
         rows = np.minimum(hi_y[band], ty + tile.height - 1) - np.maximum(lo_y[band], ty) + 1
         starts_above = ~b_major & (lo_y[band] < ty)  # y-major, its start cut by the tile
         ahead = beyond_owner[(beyond_hi_y >= ty) & (beyond_lo_y < ty + tile.height)]
-        mine, _, merged, extent = _band_polygons(
+        mine, wider, merged, extent = _band_polygons(
             owner[band], b_hi_x, lo_y[band], hi_y[band], tile, ty, len(tiles_x), ahead
         )
         for t, tx in enumerate(tiles_x):
@@ -433,8 +433,18 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             columns = np.where(b_major, span, rows)
             n_merged = merged[:, t]
             sent_edges = int(crossing.sum() + n_merged.sum())
+            # a polygon with an edge right of the tile's left side in the band's rows
+            on_right = wider.copy()
+            on_right[mine[b_hi_x > right]] = True
             present, scanned = _tile_scans(
-                mine[crossing], b_lo_x[crossing], b_hi_x[crossing], n_merged > 0, extent, tx, right
+                mine[crossing],
+                b_lo_x[crossing],
+                b_hi_x[crossing],
+                n_merged > 0,
+                on_right,
+                extent,
+                tx,
+                right,
             )
             work = edge_clocks(columns[crossing], b_slope[crossing]).sum()
             work += (edge_clocks(extent, 0) * n_merged).sum()  # vertical: no minor step
@@ -448,14 +458,14 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     return int(clocks + flush), commands  # and the last tile's flush, after all the work
 
 
-def _tile_scans(k, lo_x, hi_x, projected, extent, tx: int, right: int) -> tuple[int, int]:
+def _tile_scans(k, lo_x, hi_x, projected, on_right, extent, tx: int, right: int):
     """The polygons a tile scans and the cells they scan, at most: the band's polygons with
     an edge crossing the tile (`k`, their indices, and the edges' write boxes `lo_x`,
     `hi_x`) or a merged edge in it (`projected`), each over its rows in the band (`extent`),
     from its least cell to its greatest, on to the tile's last column if its interior may go
-    on there (an edge crosses the tile's right side: a contour wholly left or right of that
-    side leaves the winding there zero), from the tile's first column if merged edges carry
-    its winding in from the left."""
+    on there (`on_right`: it has an edge right of the tile's right side in the band's rows;
+    without one the winding there is zero), from the tile's first column if merged edges
+    carry its winding in from the left."""
     n = len(extent)
     present = projected.copy()
     present[k] = True
@@ -463,18 +473,20 @@ def _tile_scans(k, lo_x, hi_x, projected, extent, tx: int, right: int) -> tuple[
     np.minimum.at(first, k, np.maximum(lo_x + 1, tx))
     last = np.full(n, tx - 1, dtype=np.int64)
     np.maximum.at(last, k, np.minimum(hi_x - 1, right))
-    last[np.unique(k[hi_x > right])] = right
+    last[on_right] = right
     first[projected] = tx
     rows = np.where(present, extent, 0)
     return int((rows > 0).sum()), int((rows * np.maximum(last + 1 - first, 0)).sum())
 
 
-def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: int, ahead=()):
+def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: int, ahead):
     """Per edge of a band of tiles its polygon's index among the band's (`mine`), and per
-    polygon: its edges in the band (`total`), for each tile at most how many merged edges
-    it gets there (`merged`, polygons x tiles: as many as its edges wholly left of the tile
-    or as the others, with those culled right of the image (their polygons `ahead`),
-    whichever is fewer) and its rows in the band (`extent`)."""
+    polygon: whether it has edges culled right of the image in the band (`wider`), for each
+    tile at most how many merged edges it gets there (`merged`, polygons x tiles) and its
+    rows in the band (`extent`). Merged
+    edges carry the winding of the edges wholly left of a tile, one at most for each of
+    them and for each of the others (those culled right of the image included: their
+    polygons `ahead`)."""
     polygons, mine = np.unique(owner, return_inverse=True)
     ahead = np.asarray(ahead, dtype=np.int64)
     ahead = ahead[np.isin(ahead, polygons)]
@@ -490,7 +502,7 @@ def _band_polygons(owner, hi_x, lo_y, hi_y, tile: TileConfig, ty: int, tiles: in
     np.minimum.at(top, mine, np.maximum(lo_y, ty))
     bottom = np.full(len(polygons), ty - 1, dtype=np.int64)
     np.maximum.at(bottom, mine, np.minimum(hi_y, ty + tile.height - 1))
-    return mine, total, merged, bottom - top + 1
+    return mine, beyond > 0, merged, bottom - top + 1
 
 
 def check_clocks(plan: Plan, tile: PipelineConfig | TileConfig, engine: str) -> None:

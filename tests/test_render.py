@@ -1268,9 +1268,10 @@ def test_a_scene_past_an_engines_clock_limit_is_refused_before_it_runs(
 def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice(name, units):
     """The estimate that the engines' limits apply to is an upper one on the built-ins, as
     the pipeline's cycle model (checked against the simulated clocks in test_pipeline.py)
-    counts them, compact and fast, and a tight one: at most 2.3 times (the estimate that
-    charged every edge in every tile right of it was 3.2 to 9.5 times; 2.1 before the pixels'
-    written flags cut the exact clocks)."""
+    counts them, compact and fast, and a fair one: at most 2.5 times (2.01 to 2.39 measured;
+    the estimate that charged every edge in every tile right of it was 3.2 to 9.5 times; 2.3
+    before it counted what it had missed: docs/hardware.md, "The clock estimate, an upper
+    bound")."""
     from edgeaa.model.pipeline import PipelineConfig
     from edgeaa.model.pipeline_timing import pipeline_cycles
     from edgeaa.model.tile import TileConfig
@@ -1281,7 +1282,7 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
     commands = pipeline.scene_commands(p, tile.tile)
     exact = pipeline_cycles(tile, commands).clocks
     estimate, count = pipeline.clock_estimate(p, tile)
-    assert exact <= estimate <= 2.3 * exact, (exact, estimate)
+    assert exact <= estimate <= 2.5 * exact, (exact, estimate)
     assert len(commands) <= count <= 1.1 * len(commands)
 
 
@@ -1320,9 +1321,10 @@ def test_the_clock_estimate_is_above_the_clocks_of_random_pages(pipeline, width,
 def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
     """Four pixel lanes and two scan lanes (the fast pipeline): the estimate stays above the
     cycle model's clocks, with the flush at four pixels a clock and the scan two cells a
-    clock (the accumulator takes a beat's cells two a clock too), and within 2.7 times (2.1
-    before each pixel held its written flag, which cut the exact clocks, not the estimate's:
-    the scan is not where it counts too many)."""
+    clock (the accumulator takes a beat's cells two a clock too), and within 3 times (1.93
+    to 2.88 measured: its scans, over each polygon's rows in the band and on to the tile's
+    last column when the polygon has an edge right of it, count the most; 2.7 before it
+    counted what it had missed)."""
     from edgeaa.model.pipeline import PipelineConfig
     from edgeaa.model.pipeline_timing import pipeline_cycles
     from edgeaa.model.tile import TileConfig
@@ -1333,7 +1335,7 @@ def test_the_clock_estimate_of_the_fast_pipeline_counts_the_flushs_beats(name):
     assert (fast.pixel_lanes, fast.scan_lanes) == (4, 2)
     exact = pipeline_cycles(fast, pipeline.scene_commands(p, fast.tile)).clocks
     estimate, _ = pipeline.clock_estimate(p, fast)
-    assert exact <= estimate <= 2.7 * exact, (exact, estimate)
+    assert exact <= estimate <= 3.0 * exact, (exact, estimate)
 
 
 def test_a_comb_is_swept_and_the_engine_refuses_work_past_its_limit(monkeypatch):
