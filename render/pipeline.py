@@ -394,16 +394,7 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     per_cell = 2 // pipeline.scan_lanes  # accumulator clocks per minor line a beat touches
 
     def edge_clocks(columns, slope):
-        """An edge's clocks in a stream: its beats' clocks in the accumulator and a clock
-        (the stepper waits for each), or its unit's clocks and those over the units (a unit
-        holds the edge while it is stepped). A beat (a column of the major axis) has nonzero
-        cells in one line of the minor axis, two a line (one accumulator clock each; a pair
-        a clock with two scan lanes), and in two lines where the edge steps along the minor
-        axis, at most ``ceil(columns * slope)`` times: docs/hardware.md, "The clock
-        estimate, an upper bound". For the fast core, which copies the bank, both terms count
-        ``C`` or a clock too many: an over-estimate, as the engines' clock limits want."""
-        holds = per_cell * (columns + np.ceil(columns * slope))
-        return np.maximum(holds + 1, (unit + holds) / units)
+        return _edge_clocks(columns, slope, per_cell, unit, units)
 
     setup = unit / units
     clipped = start_clip_cycles(config, pipeline.deltas) / pipeline.setup_units
@@ -456,6 +447,20 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             clocks += max(work, flush)
             commands += sent_edges + 2 * int(present) + 2
     return int(clocks + flush), commands  # and the last tile's flush, after all the work
+
+
+def _edge_clocks(columns, slope, per_cell: int, unit: float, units: int):
+    """An edge's clocks in a stream (`clock_estimate`): its beats' clocks in the accumulator
+    and a clock (the stepper waits for each), or its unit's clocks (`unit`) and those over
+    the `units` (a unit holds the edge while it is stepped). A beat (a column of the major
+    axis) has nonzero cells in one line of the minor axis, two a line (`per_cell`: one
+    accumulator clock each, or a pair a clock with two scan lanes), and in two lines where
+    the edge steps along the minor axis, at most ``ceil(columns * slope)`` times:
+    docs/hardware.md, "The clock estimate, an upper bound". For the fast core, which copies
+    the bank, both terms count ``C`` or a clock too many: an over-estimate, as the engines'
+    clock limits want."""
+    holds = per_cell * (columns + np.ceil(columns * slope))
+    return np.maximum(holds + 1, (unit + holds) / units)
 
 
 def _tile_scans(k, lo_x, hi_x, projected, on_right, extent, tx: int, right: int):
