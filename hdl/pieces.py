@@ -304,9 +304,11 @@ def total0_steps(unit) -> list:
     """One clock of FINAL in the deltas setup, radix 4: ``y_area0 = 4 y_area0 + d M``, `d`
     the next two bits of ``w0`` (MSB first, the counter's: cleared at the end of RUN; ``w0``
     widened to whole digits), ``M = hs0 + he_first``, and the counter's step. The first
-    clock takes ``M`` as formed (``y_area0`` is zero then: one add after it, as a radix-2
-    step) and registers it (``m_held``); the others take the register, so their two adds
-    start at registers. After FINAL's ``ceil((s + 2) / 2)`` clocks ``y_area0 = M w0``
+    clock takes ``M`` as formed (``y_area0`` is zero then) and registers it (``m_held``);
+    the others take the register. (The select is a mux in front of both adds, so static
+    timing still sees ``M``'s carry chains followed by two adds; none of compact's critical
+    paths runs there: docs/hardware.md, "A radix-4 FINAL".) After FINAL's
+    ``ceil((s + 2) / 2)`` clocks ``y_area0 = M w0``
     (modulo the register: enough bits for ``total0 = y_area0 >> (s + 2)``); ``M`` reads
     registers the setup holds from RUN's end until the load."""
     pc, counter = unit.pieces, unit.regs.counter
