@@ -64,7 +64,10 @@ def main() -> int:
     tile = TileConfig()
     pipeline = PipelineConfig.named(args.pipeline, tile)
     if args.setup_units is not None:
-        pipeline = replace(pipeline, setup_units=args.setup_units)
+        try:
+            pipeline = replace(pipeline, setup_units=args.setup_units)
+        except ValueError as error:  # one line: what was wrong and what is allowed
+            parser.error(str(error))
     wanted = [word for word in args.scenes.split(",") if word]
     name = f"{args.pipeline}, {pipeline.setup_units} setup units"
     print(f"| scene | {name}: clocks | with a second memory | fewer clocks |")

@@ -392,10 +392,6 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     unit = unit_cycles(config, units, pipeline.deltas)  # a unit's clocks per edge, but its columns
 
     per_cell = 2 // pipeline.scan_lanes  # accumulator clocks per minor line a beat touches
-
-    def edge_clocks(columns, slope):
-        return _edge_clocks(columns, slope, per_cell, unit, units)
-
     setup = unit / units
     clipped = start_clip_cycles(config, pipeline.deltas) / pipeline.setup_units
     # a polygon's first edge, over its setup
@@ -437,8 +433,9 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
                 tx,
                 right,
             )
-            work = edge_clocks(columns[crossing], b_slope[crossing]).sum()
-            work += (edge_clocks(extent, 0) * n_merged).sum()  # vertical: no minor step
+            costs = per_cell, unit, units
+            work = _edge_clocks(columns[crossing], b_slope[crossing], *costs).sum()
+            work += (_edge_clocks(extent, 0, *costs) * n_merged).sum()  # vertical: no minor step
             work += clipped * (crossing & starts_above).sum()
             work += (latency + 8) * present + scanned / pipeline.scan_lanes
             if present:  # the last scan's cells through the resolve before the flush reads

@@ -289,6 +289,14 @@ TINY_SCENE = {
 }
 
 
+def frame_polygon(width: int, height: int, config: EdgeConfig) -> Polygon:
+    """A one-pixel frame around a `width` x `height` page (an outer and an inner contour, full
+    scale): it reaches every side of the page, so a page's tiles get merged edges."""
+    outer = ((0, 0), (width, 0), (width, height), (0, height))
+    inner = ((1, 1), (1, height - 1), (width - 1, height - 1), (width - 1, 1))
+    return Polygon((outer, inner), config.full_scale, "nonzero", "frame")
+
+
 @st.composite
 def small_scenes(draw, config: EdgeConfig):
     """Scenes of 1 to 3 polygons (1 or 2 contours of 3 to 6 vertices on the 1/16 px grid,

@@ -12,6 +12,7 @@ import random
 import numpy as np
 import pytest
 from amaranth.sim import Simulator
+from fixtures import frame_polygon
 
 from edgeaa.hdl.board import (
     SETTLE_CLOCKS,
@@ -208,16 +209,13 @@ def small_board():
     from edgeaa.hdl.board import BoardCore
     from edgeaa.render.pipeline import scene_commands
     from edgeaa.render.render import plan_scene
-    from edgeaa.render.scene import Polygon
     from edgeaa.sim.verification.workloads import random_scene
 
     width, height = SMALL_SCREEN.width, SMALL_SCREEN.height
-    frame = ((0, 0), (width, 0), (width, height), (0, height))
-    inner = ((1, 1), (1, height - 1), (width - 1, height - 1), (width - 1, 1))
+    border = frame_polygon(width, height, EdgeConfig())
     plans = []
     for seed in (11, 24):  # seeds whose scenes reach equally far out (one origin)
         scene = random_scene(EdgeConfig(), seed)
-        border = Polygon((frame, inner), EdgeConfig().full_scale, "nonzero", "frame")
         scene = replace(scene, width=width, height=height, polygons=(border, *scene.polygons))
         plans.append(plan_scene(scene, EdgeConfig()))
     assert len({plan.offset for plan in plans}) == 1

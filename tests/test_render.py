@@ -15,7 +15,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from fixtures import TINY_SCENE
+from fixtures import TINY_SCENE, frame_polygon
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -1302,14 +1302,11 @@ def test_the_clock_estimate_is_above_the_clocks_of_random_pages(pipeline, width,
     from edgeaa.sim.verification.workloads import random_scene
 
     page_w, page_h = 5 * width, 6 * height
-    frame = ((0, 0), (page_w, 0), (page_w, page_h), (0, page_h))
-    inner = ((1, 1), (1, page_h - 1), (page_w - 1, page_h - 1), (page_w - 1, 1))
+    frame = frame_polygon(page_w, page_h, DEFAULT)
     config = PipelineConfig.named(pipeline, TileConfig(DEFAULT, width, height))
     for seed in range(12):
         scene = random_scene(DEFAULT, seed)
-        polygons = scene.polygons
-        if seed % 2:
-            polygons = (Polygon((frame, inner), DEFAULT.full_scale, "nonzero", "frame"), *polygons)
+        polygons = (frame, *scene.polygons) if seed % 2 else scene.polygons
         scene = replace(scene, width=page_w, height=page_h, polygons=polygons)
         p = plan(scene, DEFAULT)
         exact = pipeline_cycles(config, tiler.scene_commands(p, config.tile)).clocks
