@@ -357,7 +357,7 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     it has edges on either side, those culled right of the image included
     (`_merged_projection`: one per rise of the winding of the left edges, which is minus the
     rest's; none for a polygon wholly left of the tile). Each sent edge costs its beats'
-    clocks in the accumulator (`edge_clocks`: an x-major edge steps every column from its
+    clocks in the accumulator (`_edge_clocks`: an x-major edge steps every column from its
     start to the tile's right side, a y-major one its rows in the tile) and a clock, or its
     unit's `unit_cycles` with them over the setup units if more (`start_clip_cycles` more
     for a start-clipped one); each polygon a setup latency and a scan of its rows in the
