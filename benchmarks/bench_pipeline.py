@@ -71,9 +71,9 @@ ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "hardware.md"
 # Each configuration's device and measured Fmax (MHz, the median over nextpnr seeds: 1 to 5
 # for compact on the iCE40 HX8K, 1 to 3 for fast on the ECP5 25F; docs/hardware.md, "A
-# written flag in each pixel word", "A skid buffer before the accumulator", "The stepper's p3
-# in compact too").
-FMAX = {"compact": ("iCE40 HX8K", 40.3), "fast": ("ECP5 25F", 56.8)}
+# written flag in each pixel word", "A skid buffer before the accumulator", "Three cuts of
+# compact's long paths").
+FMAX = {"compact": ("iCE40 HX8K", 43.0), "fast": ("ECP5 25F", 56.8)}
 SERIF_FONTS = ("STIXGeneral", "DejaVuSerif", "cmr10")
 FONT_SIZES = (9, 12, 16, 24, 32)
 

@@ -66,7 +66,10 @@ def route_cell(m, unit, free) -> types.SimpleNamespace:
     tile = unit.tile
     (x0, y0), cells, done, pending = _beat_source(m, unit)
     sel = (pending & -pending)[:4]  # the lowest (as `lowest_set`; fewer LUT4s here)
-    last = (pending & ~sel) == 0
+    # at most one cell waits: a function of `pending` alone, not behind `sel`'s carry chain
+    # (Fmax: ``last`` is on the way to ``ops.ready`` and the core's enable)
+    p0, p1, p2, p3 = pending
+    last = ~((p0 & (p1 | p2 | p3)) | (p1 & (p2 | p3)) | (p2 & p3))
     taking = _take(m, unit, free, done, sel, last)
     # every cell's place in the tile is formed from the beat's coordinates beside its
     # nonzero flags, and `sel` picks one: the subtractions and compares are not behind the

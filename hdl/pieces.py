@@ -94,6 +94,7 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         y_area0=Signal(unsigned(height.width + s + 2), name="pc_y_area0"),
         m_area0=Signal(unsigned(height.width + s + 2), name="pc_m_area0"),
         m_held=Signal(unsigned(height.width + s + 2), name="pc_m_held"),  # m_area0, registered
+        m3_held=Signal(unsigned(height.width + s + 2), name="pc_m3_held"),  # 3 m_area0, too
         # |I_d| times h0, e1, w1, first, end (`id_product_steps`)
         id_h0=Signal(signed(I + s + 4), name="pc_id_h0"),  # h0 in [-S, 3 S)
         id_e1=Signal(unsigned(I + s + 1), name="pc_id_e1"),  # e1 < 2 S
@@ -304,24 +305,30 @@ def total0_steps(unit) -> list:
     """One clock of FINAL in the deltas setup, radix 4: ``y_area0 = 4 y_area0 + d M``, `d`
     the next two bits of ``w0`` (MSB first, the counter's: cleared at the end of RUN; ``w0``
     widened to whole digits), ``M = hs0 + he_first``, and the counter's step. The first
-    clock takes ``M`` as formed (``y_area0`` is zero then) and registers it (``m_held``);
-    the others take the register. (The select is a mux in front of both adds, so static
-    timing still sees ``M``'s carry chains followed by two adds; none of compact's critical
-    paths runs there: docs/hardware.md, "A radix-4 FINAL".) After FINAL's
-    ``ceil((s + 2) / 2)`` clocks ``y_area0 = M w0``
-    (modulo the register: enough bits for ``total0 = y_area0 >> (s + 2)``); ``M`` reads
-    registers the setup holds from RUN's end until the load."""
+    clock selects ``d M`` (``y_area0`` is zero then) from ``M`` as formed and ``3 M``, its
+    one add, and registers both (``m_held``, ``m3_held``); the others select from the
+    registers and add ``4 y_area0``. So ``M``'s carry chains are followed by one add, not two
+    (Fmax: compact's critical path in two seeds of five). After FINAL's ``ceil((s + 2) / 2)``
+    clocks ``y_area0 = M w0`` (modulo the register: enough bits for
+    ``total0 = y_area0 >> (s + 2)``); ``M`` reads registers the setup holds from RUN's end
+    until the load."""
     pc, counter = unit.pieces, unit.regs.counter
     digits = _final_digits(len(pc.w0))
     w0 = Cat(pc.w0, Const(0, 2 * digits - len(pc.w0)))
     # each digit's low and high bit, MSB first (bit selects: a word select multiplies)
     low, high = (Cat(*(w0[2 * k + j] for k in reversed(range(digits)))) for j in (0, 1))
     digit = Cat(low.bit_select(counter, 1), high.bit_select(counter, 1))
-    m = Mux(counter == 0, pc.m_area0, pc.m_held)
-    once, twice = Mux(digit[0], m, 0), Mux(digit[1], m << 1, 0)
+
+    def times_digit(m, thrice):
+        return Mux(digit[1], Mux(digit[0], thrice, m << 1), Mux(digit[0], m, 0))
+
+    thrice = pc.m_area0 + (pc.m_area0 << 1)
+    first = times_digit(pc.m_area0, thrice)
+    later = (pc.y_area0 << 2) + times_digit(pc.m_held, pc.m3_held)
     return [
-        pc.y_area0.eq((pc.y_area0 << 2) + once + twice),
+        pc.y_area0.eq(Mux(counter == 0, first, later)),
         pc.m_held.eq(pc.m_area0),
+        pc.m3_held.eq(thrice),
         counter.eq(counter + 1),
     ]
 

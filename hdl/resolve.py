@@ -227,7 +227,7 @@ class TileResolve(wiring.Component):
             with m.If(write):
                 m.d.sync += dirty[k].eq(1)
         stages = self._pipeline(m, rd, wr, background)
-        busy = sum((s.valid for s in stages), start=0) != 0
+        busy = Cat(*(s.valid for s in stages)).any()  # an OR, not a sum's carry chain (Fmax)
         self.observe.__dict__.update(stages=stages, background=background, p_valid=p_valid)
         self._control(m, rd, frd, bank, dirty, clear, background, p_valid, advance, busy)
         return m
