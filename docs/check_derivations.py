@@ -1089,6 +1089,59 @@ def part_d_beat_clocks() -> None:
         )
 
 
+def booth_final(s: int, w0: int, m: int, width: int) -> tuple[int, int]:
+    """FINAL's ``y_area0`` after its clocks (`edgeaa.hdl.pieces.total0_steps`, Booth radix
+    4, modulo ``2**width``) and the first clock's multiplier."""
+    digits = (s + 3) // 2
+    bits = [0] + [(w0 >> i) & 1 for i in range(2 * digits)]  # b[-1] = 0 at index 0
+    mask, y, first = (1 << width) - 1, 0, None
+    for clock in range(digits):
+        j = digits - 1 - clock
+        low, mid, top = bits[2 * j], bits[2 * j + 1], bits[2 * j + 2]
+        if clock == 0:  # 2 t + h + l, selected from 0, M, 2 M
+            first = 2 * top + mid + low
+            y = ((m << 1) if top or (mid and low) else (m if mid ^ low else 0)) & mask
+            continue
+        twice = (not mid and not low) if top else (mid and low)
+        magnitude = ((m << 1) if twice else (m if mid ^ low else 0)) & mask
+        y = ((y << 2) + ((~magnitude & mask) if top else magnitude) + top) & mask
+    return y, first
+
+
+def part_d_exact_rewrites() -> None:
+    section("D9. exact rewrites in the hardware (docs/hardware.md, compact's long paths)")
+    rng = random.Random(9)
+    bad, firsts, cases = 0, set(), 0
+    for s in range(7):
+        for w0 in range(2 * (1 << s) + 1):  # 0 <= w0 <= 2 S
+            for _ in range(8):
+                width = rng.randrange(s + 3, 40)
+                m = rng.randrange(1 << width)
+                y, first = booth_final(s, w0, m, width)
+                bad += y != (m * w0) % (1 << width)
+                firsts.add(first)
+                cases += 1
+    check(
+        "Booth FINAL: y_area0 = M w0 mod 2^width, s = 0..6, every w0 <= 2 S",
+        bad == 0,
+        f"{cases} cases",
+    )
+    check(
+        "Booth FINAL: the first clock's multiplier is 0, 1 or 2",
+        firsts <= {0, 1, 2},
+        f"seen {sorted(firsts)}",
+    )
+    bad = 0
+    for _ in range(20000):
+        bits, wa, wb = rng.randrange(1, 20), rng.randrange(1, 24), rng.randrange(1, 24)
+        a, b = rng.randrange(-(1 << wa), 1 << wa), rng.randrange(-(1 << wb), 1 << wb)
+        if rng.random() < 0.3:
+            b = a + rng.choice((0, 1 << bits, -(1 << bits)))
+        nonzero = ((a ^ b) & ((1 << bits) - 1)) != 0  # a ^ b's low bits
+        bad += nonzero != (((a - b) % (1 << bits)) != 0)
+    check("nonzero flag: a ^ b in the payload's bits <=> (a - b) mod 2^bits != 0", bad == 0)
+
+
 def part_d() -> None:
     part_d_split_tables()
     part_d_no_leak()
@@ -1098,6 +1151,7 @@ def part_d() -> None:
     part_d_units_per_edge()
     part_d_fill()
     part_d_beat_clocks()
+    part_d_exact_rewrites()
 
 
 def main() -> int:

@@ -45,10 +45,10 @@ Ports (``W = coord_bits``, ``s = subpixel_bits``, ``I = intensity_bits``):
   is 0.
 * ``deltas`` (`PolygonCore`'s out stream; one beat per column, `edgeaa.model.beat.DeltaBeat`):
   ``cell0`` .. ``cell3``, each ``x, y`` signed ``W + 2`` and ``delta`` signed ``I + F + 2``,
-  and ``last``: the accumulation deltas of `edgeaa.model.step.run_edge_deltas`, zeros
-  included, in its order. Same setup (with the end pieces, in the same clocks) and loop; the
-  column pipeline is 4 registers deep (`edgeaa.hdl.deltas`: p3 cuts the cells' carry
-  chains).
+  ``nonzero`` (bit k: cell k's delta is not zero) and ``last``: the accumulation deltas of
+  `edgeaa.model.step.run_edge_deltas`, zeros included, in its order. Same setup (with the
+  end pieces, in the same clocks) and loop; the column pipeline is 4 registers deep
+  (`edgeaa.hdl.deltas`: p3 cuts the cells' carry chains).
 * ``errors`` (out, ``errors_bits`` = 16 bits by default): bad commands dropped so far,
   saturating at ``2**errors_bits - 1``.
 * ``error`` (out): high for one clock when a bad command is dropped.

@@ -24,7 +24,9 @@ column per clock:
   Fmax;
 * the output register: the cells of `column_deltas` and their screen cells (`delta_cells`):
   from p3, the middle row's area and each delta one subtraction with the winding's sign
-  folded in (`_fast_cells`: the fewest carry chains after p3).
+  folded in (`_fast_cells`: the fewest carry chains after p3); and ``nonzero``, a cell's
+  delta not zero, as its operands differ in the payload's bits (beside the subtraction, not
+  after it).
 
 Every pipeline register takes the shape of its value (Amaranth widens adds by a bit), so no
 intermediate wraps; a value is cut narrower only where its operands' shapes bound it (a
@@ -38,14 +40,14 @@ Observation points for the formal harness (attributes of the stepper, set when i
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
 registers of p1, p2 and p3 (namespaces, each with ``valid`` and ``last``),
 ``delta_cells`` the four ``(x, y, delta)`` values the output register loads (before the
-payload's cut).
+payload's cut) and ``delta_nonzero`` the ``nonzero`` flags it loads.
 """
 
 from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Module, Mux, Signal, Value, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, Value, signed
 
 from ..model.beat import DELTAS, DELTAS_FAST, BeatFormat
 from ..model.config import EdgeConfig
@@ -185,9 +187,11 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     p2 = _stage(m, en, "d2", _covers(st.config, p1))
     p3 = _stage(m, en, "d3", _ends(p2))  # the rows' areas; one subtraction a cell after it
     stages = [p1, p2, p3]
-    cells = _output(m, st, en, p3, _fast_cells(p3))
+    cells, nonzero = _fast_cells(p3, st.config.register_widths()["delta"].bits)
+    _output(m, st, en, p3, cells, nonzero)
     # Observation points (formal harness): no logic of their own.
     st.delta_he, st.delta_stages, st.delta_cells = he, stages, cells
+    st.delta_nonzero = nonzero
     return [stage.valid for stage in stages]
 
 
@@ -379,17 +383,19 @@ def _ends(p2) -> dict:
     )
 
 
-def _fast_cells(p3) -> list:
+def _fast_cells(p3, delta_bits: int) -> tuple[list, Value]:
     """The four cells on screen from p3 (`_deltas_x_major`: r_a, cov_a - r_a, r_b, cov_b -
     r_b, the column pair swapped when ``neg``; `_deltas_y_major`: band - q0, q0 - q1, q1,
     0), each one subtraction ``a - b`` with the winding's sign folded in (-(a - b) = b - a
-    swaps the operands): the fewest carry chains after p3."""
+    swaps the operands): the fewest carry chains after p3. And the beat's ``nonzero``: bit k
+    is ``a != b`` in the low `delta_bits` (the payload's), which is ``(a - b) mod 2**bits !=
+    0``: cell k's delta as sent is not zero, formed beside its subtraction."""
     up = p3.up
     mid = _clamp(p3.rest - p3.hi, p3.bound)  # r_mid or a_mid
     r_a, r_b = Mux(up, p3.hi, mid), Mux(up, mid, p3.lo)
     cov_a, cov_b = Mux(up, p3.cov_up, p3.bound), Mux(up, p3.bound, p3.cov_low)
     y_major = _y_major_operands(p3, r_a, r_b)
-    cells = []
+    cells, nonzero = [], []
     for k in range(4):
         pair, right = divmod(k, 2)
         r, cov = (r_a, cov_a) if pair == 0 else (r_b, cov_b)
@@ -398,7 +404,11 @@ def _fast_cells(p3) -> list:
         b = Mux(p3.x_major, Mux(covered, r, 0), y_major[k][1])
         sigma_neg = p3.sigma_neg
         cells.append(_cell_at(p3, k, Mux(sigma_neg, b, a) - Mux(sigma_neg, a, b)))
-    return cells
+        # a ^ b in their common shape (each extended exactly): its bits above the narrower
+        # operand's repeat that operand's top bit, so its low bits up to the payload's decide
+        differ = a ^ b
+        nonzero.append(differ[: min(delta_bits, len(differ))].any())
+    return cells, Cat(*nonzero)
 
 
 def _y_major_operands(p3, q0, q1) -> list:
@@ -419,15 +429,18 @@ def _cell_at(stage, k: int, delta) -> tuple:
     return stage.x + dx, stage.y + dy, delta
 
 
-def _output(m, st, en, stage, cells) -> list:
+def _output(m, st, en, stage, cells, nonzero) -> None:
     """`delta_cells`: `cells` (of the stage before the output register, signed by the
-    winding) into the payload; returns them (the values the payload loads)."""
+    winding) and their `nonzero` flags into the payload."""
     widths = st.config.register_widths()
     beat = st.out.payload
     with m.If(en):
-        m.d.sync += [st.out.valid.eq(stage.valid), beat.last.eq(stage.last)]
+        m.d.sync += [
+            st.out.valid.eq(stage.valid),
+            beat.last.eq(stage.last),
+            beat.nonzero.eq(nonzero),
+        ]
         for k, (x, y, delta) in enumerate(cells):
             cell = beat[f"cell{k}"]
             m.d.sync += [cell.x.eq(x), cell.y.eq(y), cell.delta.eq(delta)]
     assert len(cell.delta) == widths["delta"].bits
-    return cells

@@ -16,7 +16,15 @@ from amaranth.hdl import Cat, Const, signed, unsigned
 from amaranth.lib import data
 
 from ..model.bank import bank_fields
-from ..model.beat import CELL_FIELDS, CELLS, DELTA_PAYLOAD_PATHS, LANES, PAYLOAD_PATHS, PIXEL_FIELDS
+from ..model.beat import (
+    CELL_FIELDS,
+    CELLS,
+    DELTA_FLAG_BITS,
+    DELTA_PAYLOAD_PATHS,
+    LANES,
+    PAYLOAD_PATHS,
+    PIXEL_FIELDS,
+)
 from ..model.config import EdgeConfig, RegisterWidth
 from ..model.tile import OPS, PAINT, RESOLVE_OPS, TileConfig
 
@@ -122,11 +130,13 @@ def write_layout(config: EdgeConfig) -> data.StructLayout:
 
 def delta_layout(config: EdgeConfig) -> data.StructLayout:
     """One beat of the deltas core: the `CELLS` (each `CELL_FIELDS`, sized by the register of
-    the same name), then the one-bit flag of `DELTA_PAYLOAD_PATHS` (``last``)."""
+    the same name), then the flags of `DELTA_PAYLOAD_PATHS` (``nonzero``, a bit a cell, and
+    ``last``: `DELTA_FLAG_BITS`)."""
     widths = config.register_widths()
     cell = data.StructLayout({name: register_shape(widths[name]) for name in CELL_FIELDS})
     fields = {name: cell for name in CELLS}
-    fields.update({path[0]: unsigned(1) for path in DELTA_PAYLOAD_PATHS if len(path) == 1})
+    flags = [path[0] for path in DELTA_PAYLOAD_PATHS if len(path) == 1]
+    fields.update({name: unsigned(DELTA_FLAG_BITS[name]) for name in flags})
     return data.StructLayout(fields)
 
 

@@ -94,7 +94,6 @@ def pieces_registers(config: EdgeConfig) -> types.SimpleNamespace:
         y_area0=Signal(unsigned(height.width + s + 2), name="pc_y_area0"),
         m_area0=Signal(unsigned(height.width + s + 2), name="pc_m_area0"),
         m_held=Signal(unsigned(height.width + s + 2), name="pc_m_held"),  # m_area0, registered
-        m3_held=Signal(unsigned(height.width + s + 2), name="pc_m3_held"),  # 3 m_area0, too
         # |I_d| times h0, e1, w1, first, end (`id_product_steps`)
         id_h0=Signal(signed(I + s + 4), name="pc_id_h0"),  # h0 in [-S, 3 S)
         id_e1=Signal(unsigned(I + s + 1), name="pc_id_e1"),  # e1 < 2 S
@@ -302,33 +301,36 @@ def _not(value):
 
 
 def total0_steps(unit) -> list:
-    """One clock of FINAL in the deltas setup, radix 4: ``y_area0 = 4 y_area0 + d M``, `d`
-    the next two bits of ``w0`` (MSB first, the counter's: cleared at the end of RUN; ``w0``
-    widened to whole digits), ``M = hs0 + he_first``, and the counter's step. The first
-    clock selects ``d M`` (``y_area0`` is zero then) from ``M`` as formed and ``3 M``, its
-    one add, and registers both (``m_held``, ``m3_held``); the others select from the
-    registers and add ``4 y_area0``. So ``M``'s carry chains are followed by one add, not two
-    (Fmax: compact's critical path in two seeds of five). After FINAL's ``ceil((s + 2) / 2)``
-    clocks ``y_area0 = M w0`` (modulo the register: enough bits for
-    ``total0 = y_area0 >> (s + 2)``); ``M`` reads registers the setup holds from RUN's end
-    until the load."""
+    """One clock of FINAL in the deltas setup, radix 4 with Booth digits: ``y_area0 = 4
+    y_area0 + d M`` for the digits ``d`` in ``{-2, ..., 2}`` of ``w0`` (MSB first, the
+    counter's: cleared at the end of RUN), ``M = hs0 + he_first``, and the counter's step.
+    ``w0 <= 2 S`` (its bits above ``s + 1`` clear, the top one only for ``2 S``), so the top
+    digit and its carry out, ``2 b[2D-1] + b[2D-2] + b[2D-3]``, are ``0``, ``1`` or ``2``:
+    the first clock selects ``0``, ``M`` or ``2 M`` (``y_area0`` is zero then) and registers
+    ``M`` (``m_held``); each later clock adds ``4 y_area0`` and ``M`` or ``2 M`` of the
+    register, inverted with a carry in for a negative digit. So no ``3 M`` is formed and
+    ``M``'s carry chains are followed by a select (Fmax: compact's critical path in two
+    seeds of five). After FINAL's ``ceil((s + 2) / 2)`` clocks ``y_area0 = M w0`` (modulo
+    the register: enough bits for ``total0 = y_area0 >> (s + 2)``); ``M`` reads registers
+    the setup holds from RUN's end until the load. Derivation: docs/hardware.md, "A Booth
+    FINAL"."""
     pc, counter = unit.pieces, unit.regs.counter
     digits = _final_digits(len(pc.w0))
-    w0 = Cat(pc.w0, Const(0, 2 * digits - len(pc.w0)))
-    # each digit's low and high bit, MSB first (bit selects: a word select multiplies)
-    low, high = (Cat(*(w0[2 * k + j] for k in reversed(range(digits)))) for j in (0, 1))
-    digit = Cat(low.bit_select(counter, 1), high.bit_select(counter, 1))
-
-    def times_digit(m, thrice):
-        return Mux(digit[1], Mux(digit[0], thrice, m << 1), Mux(digit[0], m, 0))
-
-    thrice = pc.m_area0 + (pc.m_area0 << 1)
-    first = times_digit(pc.m_area0, thrice)
-    later = (pc.y_area0 << 2) + times_digit(pc.m_held, pc.m3_held)
+    # b[-1] = 0, then w0 to 2 D bits: digit j reads bits 2 j - 1, 2 j and 2 j + 1 of w0
+    bits = Cat(Const(0, 1), pc.w0, Const(0, 2 * digits - len(pc.w0)))
+    # each digit's three bits, MSB first (bit selects: a word select multiplies)
+    low, mid, top = (Cat(*(bits[2 * j + i] for j in reversed(range(digits)))) for i in range(3))
+    l, h, t = (part.bit_select(counter, 1) for part in (low, mid, top))  # noqa: E741
+    # later clocks: d = -2 t + h + l; |d| = 2 for 011 and 100, 1 for h != l; t the sign
+    # (-a = ~a + 1 in the register's width: the sum is taken modulo 2**width throughout)
+    twice = Mux(t, ~h & ~l, h & l)
+    magnitude = Mux(twice, pc.m_held << 1, Mux(h ^ l, pc.m_held, 0))[: len(pc.y_area0)]
+    later = (pc.y_area0 << 2) + Mux(t, ~magnitude, magnitude) + t
+    # first clock: 2 t + h + l (t set only with h and l clear: w0 = 2 S)
+    first = Mux(t | (h & l), pc.m_area0 << 1, Mux(h ^ l, pc.m_area0, 0))
     return [
         pc.y_area0.eq(Mux(counter == 0, first, later)),
         pc.m_held.eq(pc.m_area0),
-        pc.m3_held.eq(thrice),
         counter.eq(counter + 1),
     ]
 

@@ -132,9 +132,12 @@ def beats_from_array(rows: np.ndarray) -> list[Beat]:
 # -- the accumulation-delta beat (the polygon core's) ------------------------------------------
 #
 # One beat per stepped column: the four cells of `edgeaa.model.step.run_edge_deltas`, in the
-# order `edgeaa.model.column.delta_cells` gives them (zeros included), and ``last`` on the
-# edge's last column. The core's payload (`edgeaa.hdl.delta_layout`) is the struct
-# ``cell0 {x, y, delta}`` .. ``cell3 {...}``, ``last``; its Verilog ports are
+# order `edgeaa.model.column.delta_cells` gives them (zeros included), ``nonzero`` (bit k:
+# cell k's delta is not zero) and ``last`` on the edge's last column. ``nonzero`` is a
+# function of the deltas, sent so that the accumulator, which takes the nonzero cells, does
+# not form it behind the beat's register (Fmax: docs/hardware.md, "The nonzero flags").
+# The core's payload (`edgeaa.hdl.delta_layout`) is the struct
+# ``cell0 {x, y, delta}`` .. ``cell3 {...}``, ``nonzero``, ``last``; its Verilog ports are
 # ``port_name(path, DELTA_STREAM)``. Array rows: `DELTA_BEAT_COLUMNS` (`DELTA_RUN_COLUMNS` with
 # the clock in front).
 
@@ -143,8 +146,10 @@ CELLS = ("cell0", "cell1", "cell2", "cell3")
 CELL_FIELDS = ("x", "y", "delta")  # each signed, sized by the register of the same name
 DELTA_PAYLOAD_PATHS: tuple[tuple[str, ...], ...] = (
     *((cell, name) for cell in CELLS for name in CELL_FIELDS),
+    ("nonzero",),
     ("last",),
 )
+DELTA_FLAG_BITS = {"nonzero": len(CELLS), "last": 1}  # the payload's leaves besides the cells
 DELTA_BEAT_COLUMNS = tuple("_".join(path) for path in DELTA_PAYLOAD_PATHS)
 DELTA_RUN_COLUMNS = ("clock", *DELTA_BEAT_COLUMNS)
 
@@ -154,24 +159,38 @@ Cell = tuple[int, int, int]  # x, y, delta
 class DeltaBeat(NamedTuple):
     cells: tuple[Cell, Cell, Cell, Cell]
     last: bool  # the edge's last column
+    nonzero: int  # bit k: cell k's delta is not zero (`nonzero_mask`)
+
+
+def nonzero_mask(cells: Sequence[Cell]) -> int:
+    """The beat's ``nonzero`` field of its cells: bit k set when cell k's delta is not 0."""
+    return sum(1 << k for k, (_, _, delta) in enumerate(cells) if delta != 0)
+
+
+def delta_beat(cells: Sequence[Cell], last: bool) -> DeltaBeat:
+    """The beat of `cells` (four ``(x, y, delta)``), its ``nonzero`` formed from them."""
+    cells = tuple(tuple(cell) for cell in cells)
+    return DeltaBeat(cells, last, nonzero_mask(cells))
 
 
 def delta_column_beats(columns: Sequence[Sequence]) -> list[DeltaBeat]:
     """One edge's columns of `run_edge_deltas` (tuples of four `Delta`) as beats."""
     return [
-        DeltaBeat(tuple((d.x, d.y, d.delta) for d in column), index == len(columns) - 1)
+        delta_beat([(d.x, d.y, d.delta) for d in column], index == len(columns) - 1)
         for index, column in enumerate(columns)
     ]
 
 
 def delta_beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> DeltaBeat:
-    """A delta beat from its payload leaves (`get(path)` of a `DELTA_PAYLOAD_PATHS` entry)."""
+    """A delta beat from its payload leaves (`get(path)` of a `DELTA_PAYLOAD_PATHS` entry),
+    ``nonzero`` as sent (a core's beat is compared with the model's whole)."""
     cells = tuple(tuple(int(get((cell, name))) for name in CELL_FIELDS) for cell in CELLS)
-    return DeltaBeat(cells, bool(get(("last",))))
+    return DeltaBeat(cells, bool(get(("last",))), int(get(("nonzero",))))
 
 
 def delta_beat_row(beat: DeltaBeat) -> list[int]:
-    return [value for cell in beat.cells for value in cell] + [int(beat.last)]
+    cells = [value for cell in beat.cells for value in cell]
+    return cells + [int(beat.nonzero), int(beat.last)]
 
 
 def delta_beats_to_array(beats: Iterable[DeltaBeat]) -> np.ndarray:
@@ -189,6 +208,7 @@ def delta_beats_from_array(rows: np.ndarray) -> list[DeltaBeat]:
         DeltaBeat(
             tuple(tuple(r[k * width : (k + 1) * width]) for k in range(len(CELLS))),
             bool(r[-1]),
+            r[-2],
         )
         for r in rows.astype(np.int64).tolist()
     ]
@@ -207,7 +227,7 @@ class BeatFormat:
 
     stream: str
     paths: tuple[tuple[str, ...], ...]
-    registers: dict[str, str | None]  # leaf name -> width-table register
+    registers: dict[str, str | None]  # leaf name -> width-table register (None: flags)
     from_fields: Callable
     from_array: Callable
     to_array: Callable
@@ -262,7 +282,7 @@ WRITES = BeatFormat(
 DELTAS = BeatFormat(
     DELTA_STREAM,
     DELTA_PAYLOAD_PATHS,
-    {"x": "x", "y": "y", "delta": "delta", "last": None},
+    {"x": "x", "y": "y", "delta": "delta", "nonzero": None, "last": None},
     delta_beat_from_fields,
     delta_beats_from_array,
     delta_beats_to_array,

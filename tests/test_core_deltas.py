@@ -64,7 +64,7 @@ def expected_deltas(config: EdgeConfig, edges) -> list[list[DeltaBeat]]:
 
 def _as_beat(beat: dict) -> DeltaBeat:
     cells = tuple(tuple(beat[f"{cell}.{name}"] for name in ("x", "y", "delta")) for cell in CELLS)
-    return DeltaBeat(cells, bool(beat["last"]))
+    return DeltaBeat(cells, bool(beat["last"]), beat["nonzero"])
 
 
 def simulate(

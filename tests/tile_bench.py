@@ -14,7 +14,7 @@ from amaranth.lib import wiring
 from edgeaa.hdl.accumulator import TileAccumulator
 from edgeaa.hdl.layouts import tile_op_layout
 from edgeaa.hdl.resolve import TileResolve
-from edgeaa.model.beat import CELL_FIELDS, CELLS
+from edgeaa.model.beat import CELL_FIELDS, CELLS, nonzero_mask
 from edgeaa.model.tile import OPS, Beats, Flush, PolygonEnd, TileConfig, TileStart
 from edgeaa.sim.simulators.amaranth_runner import Probe, Sink, Source, row_decoder, run_component
 from edgeaa.sim.simulators.pipeline_harness import (
@@ -33,7 +33,7 @@ def op_payloads(tile: TileConfig, ops) -> list:
     out = []
 
     def put(op: str, **fields):
-        value = {"op": OPS.index(op), "beat": {**junk, "last": 0}}
+        value = {"op": OPS.index(op), "beat": {**junk, "nonzero": 0b1111, "last": 0}}
         value.update(fields)
         out.append(layout.const(value))
 
@@ -42,7 +42,7 @@ def op_payloads(tile: TileConfig, ops) -> list:
             for beat in op.cells.tolist():
                 pairs = zip(CELLS, beat, strict=True)
                 cells = {c: dict(zip(CELL_FIELDS, v, strict=True)) for c, v in pairs}
-                put("beat", beat={**cells, "last": 0})
+                put("beat", beat={**cells, "nonzero": nonzero_mask(beat), "last": 0})
         elif isinstance(op, PolygonEnd):
             put("end", intensity=op.intensity, i_out=op.i_out, evenodd=int(op.rule == "evenodd"))
         elif isinstance(op, TileStart):

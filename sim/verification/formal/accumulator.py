@@ -65,7 +65,7 @@ from ....model.tile import RESOLVE_OPS
 from .spec import all_, implies
 from .tile_common import When, any_, follows, state_checks, track_rows
 
-__all__ = ["check_cells"]
+__all__ = ["check_cells", "nonzero_flags"]
 
 
 def check_cells(m, tile, dut, payload, held_in, read, checks, *, invariants, covers, cells=None):
@@ -111,6 +111,11 @@ def _placed(tile, beat, origin):
     return out
 
 
+def nonzero_flags(beat):
+    """The ``nonzero`` field a beat's deltas give (bit k: cell k's delta is not zero)."""
+    return Cat(*(beat[c].delta != 0 for c in CELLS))
+
+
 def _ghost_sel(pending, placed, lanes: int):
     """The cells of the beat the ghost counts this clock, from its `pending` ones (nonzero, not
     yet counted), as `edgeaa.model.tile.beat_clocks` times them: one lane, the lowest; two,
@@ -138,7 +143,7 @@ def _ghost_cells(m, tile, dut, src, s, checks):
     ops = dut.ops
     done = Signal(4, name="ghost_done")
     pending = Signal(4, name="ghost_pending")
-    m.d.comb += pending.eq(Cat(*(src.beat[c].delta != 0 for c in CELLS)) & ~done)
+    m.d.comb += pending.eq(nonzero_flags(src.beat) & ~done)
     placed = _placed(tile, src.beat, s.origin)
     sel = _ghost_sel(pending, placed, dut.lanes)
     last = (pending & ~sel) == 0

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Mux, Signal, Value
+from amaranth.hdl import Cat, Mux, Signal, Value
 from amaranth.lib import data
 
 from .pipeline import delayed
@@ -357,6 +357,8 @@ def _output(ctx, valid, last, cells):
     last = delayed(m, en, last, "dout_last")
     ctx.emit("dbeat", out.valid == v_out, "dbeat: beat valid")
     ctx.emit("dbeat", implies(v_out, beat.last == last), "dbeat: last")
+    flags = Cat(*(beat[f"cell{k}"].delta != 0 for k in range(len(cells))))
+    ctx.emit("dbeat", implies(out.valid, beat.nonzero == flags), "dbeat: nonzero, the deltas'")
     for k, model in enumerate(cells):
         cell = beat[f"cell{k}"]
         got = (cell.x, cell.y, cell.delta)

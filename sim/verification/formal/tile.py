@@ -48,12 +48,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from amaranth.asserts import AnySeq
-from amaranth.hdl import Array, Assert, Module, Mux, Signal, Value
+from amaranth.hdl import Array, Assert, Assume, Module, Mux, Signal, Value
 
 from ....hdl.accumulator import TileAccumulator
 from ....hdl.resolve import TileResolve
 from ....model.tile import TileConfig, resolve_latency
-from .accumulator import check_cells
+from .accumulator import check_cells, nonzero_flags
 from .harness import ClockedHarness
 from .resolve import check_pixels
 from .run import FormalResult, find_tools, report, run_harness, sby_script
@@ -149,6 +149,8 @@ class TileHarness(ClockedHarness):
         source, sink = (dut.ops, dut.cells) if self.stage == "accumulator" else (dut.cells, None)
         sink = sink if sink is not None else dut.pixels
         payload, held_in = free_source(m, source, self.fault)
+        if self.stage == "accumulator":  # the deltas stream's contract (the core's `dbeat`)
+            m.d.comb += Assume(payload.beat.nonzero == nonzero_flags(payload.beat))
         m.d.comb += sink.ready.eq(AnySeq(1))
         seen = Value.cast(sink.payload)
         was_held = held(m, sink, "held_out")

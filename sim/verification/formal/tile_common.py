@@ -66,15 +66,16 @@ def state_checks(m, checks, covers, prefix="state: "):
 def free_source(m, stream, fault):
     """Drive `stream` from a free source that keeps the hold rule; returns the source's
     payload (a view) and the flag of a held transfer (the payload is the clock before's).
-    Faults ``lost_delta``, ``stale_origin``, ``lost_first``: the stage gets cell 3's delta,
-    x0 or ``first`` zeroed; ``swap_sums``: a beat of two cells with their sums swapped."""
+    Faults ``lost_delta``, ``stale_origin``, ``lost_first``: the stage gets cell 3's delta
+    (and its ``nonzero`` flag), x0 or ``first`` zeroed; ``swap_sums``: a beat of two cells
+    with their sums swapped."""
     layout = stream.payload.shape()
     free = Signal(layout, name="source")
     m.d.comb += [stream.valid.eq(AnySeq(1)), Value.cast(free).eq(AnySeq(layout.size))]
     given = Signal(layout, name="given")
     m.d.comb += given.eq(free)
-    if fault == "lost_delta":
-        m.d.comb += given.beat.cell3.delta.eq(0)
+    if fault == "lost_delta":  # cell 3 dropped: its delta and its nonzero flag
+        m.d.comb += [given.beat.cell3.delta.eq(0), given.beat.nonzero[3].eq(0)]
     if fault == "stale_origin":
         m.d.comb += given.x0.eq(0)
     if fault == "lost_first":
