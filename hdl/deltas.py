@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Cat, Module, Mux, Signal, Value, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, Value, signed, unsigned
 
 from ..model.beat import DELTAS, DELTAS_FAST, BeatFormat
 from ..model.config import EdgeConfig
@@ -153,6 +153,9 @@ def delta_registers(config: EdgeConfig) -> dict[str, Signal]:
         # P1's row minus the loop's: end_row - row0 at load, -1 per row step
         "adj": Signal(signed(widths["x"].bits + 2), name="adj"),
         "first_col": Signal(name="first_col"),
+        # khr - du modulo 2**w, loaded when an edge starts: the piece end's carry is the carry
+        # out of jr + khr_du, one carry chain from registers (Fmax: compact's stepper)
+        "khr_du": Signal(unsigned(widths["du"].bits), name="khr_du"),
     }
 
 
@@ -198,7 +201,9 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
 def _piece_end(m, st, last):
     """`piece_end`: floor(J + K/2), or P1's height in a partial last column."""
     regs = st.delta_regs
-    carry = (st.jr + st.khr) >= st.du
+    # jr + khr >= du: with jr, khr < du, jr + (khr - du mod 2**w) carries out exactly then
+    khr_du = regs["khr_du"]
+    carry = (st.jr + khr_du)[len(khr_du)]
     full = st.jq + st.khq + carry
     adj = regs["adj"]
     # end_height + sign(adj) ifix in one add (-ifix = ~ifix + 1 on ifix made signed)
@@ -225,6 +230,7 @@ def _loop(m, st, he, row_step):
             regs["hs"].eq(bank.hs0),
             regs["adj"].eq(bank.end_row - bank.row0),
             regs["first_col"].eq(1),
+            regs["khr_du"].eq(bank.khr - bank.du),
         ]
 
 

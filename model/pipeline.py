@@ -99,7 +99,7 @@ class PipelineConfig:
     pixel_lanes: int = 1
     scan_lanes: int = 1
     fast_core: bool = False  # the core's output: DELTAS, or DELTAS_FAST (`deltas`)
-    product_stages: int = 1
+    product_stages: int = 2  # compact's and fast's (`PIPELINES`)
     beat_skid: bool = False
 
     def __post_init__(self):
@@ -151,16 +151,17 @@ SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the reso
 # HX8K; fast: for the ECP5, four units (of 2, 3, 4 and 6 measured on the HUD and on text, the
 # knee of clocks over area), a flush of four pixels a clock, a scan of two cells a clock and
 # the fast core (`DELTAS_FAST`: its copied bank and its setup's second lane steps do not fit
-# compact's HX8K, which has no multipliers for its FINAL), and the resolve's products over two
-# clocks (a clock of latency a polygon), and a skid buffer before the accumulator (its ready
-# chain was fast's critical path).
+# compact's HX8K, which has no multipliers for its FINAL), and a skid buffer before the
+# accumulator (its ready chain was fast's critical path). Both take the resolve's products
+# over two clocks (a clock of latency a polygon; the product's rows were on the critical
+# path of each).
 PIPELINES = {
     "compact": {
         "setup_units": 1,
         "pixel_lanes": 1,
         "scan_lanes": 1,
         "fast_core": False,
-        "product_stages": 1,
+        "product_stages": 2,
         "beat_skid": False,
     },
     "fast": {

@@ -301,7 +301,7 @@ def test_deltas_observation_points(fmt):
     harness = FormalHarness(checks=("dbeat",), top=PolygonCore, fmt=fmt)
     harness_rtlil(harness)
     stepper = harness.core.stepper
-    assert set(stepper.delta_regs) == {"hs", "adj", "first_col"}
+    assert set(stepper.delta_regs) == {"hs", "adj", "first_col", "khr_du"}
     names = [stage.valid.name for stage in stepper.delta_stages]
     assert names == ["d1_valid", "d2_valid", "d3_valid"]
     assert stepper.delta_he.name == "he" and len(stepper.delta_cells) == 4

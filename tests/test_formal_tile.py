@@ -115,8 +115,9 @@ def test_fault_is_caught(tools, name, fault, depth, message):
         ("res_pixels_scan", "lost_first", None, "state: stage 0 order (basecase)"),
         ("acc_deltas_scan", "stale_origin", None, "state: origin (basecase)"),
         ("acc_sums_scan", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
-        # the wrong pixel is written 8 clocks from power-on: one past the proof's k
-        ("res_pixels", "wide_range", 9, "state: value (basecase)"),
+        # the wrong pixel is written 9 clocks from power-on (products over two clocks): one
+        # past the proof's k
+        ("res_pixels", "wide_range", 10, "state: value (basecase)"),
     ],
 )
 def test_unbounded_proof_catches_fault(tools, name, fault, depth, message):

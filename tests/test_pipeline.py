@@ -318,7 +318,7 @@ def test_the_named_configurations():
     fields = ("setup_units", "pixel_lanes", "scan_lanes", "fast_core", "product_stages")
     fields += ("beat_skid",)
     want = {
-        "compact": dict(zip(fields, (1, 1, 1, False, 1, False), strict=True)),
+        "compact": dict(zip(fields, (1, 1, 1, False, 2, False), strict=True)),
         "fast": dict(zip(fields, (4, 4, 2, True, 2, True), strict=True)),
     }
     assert want == PIPELINES
@@ -353,7 +353,7 @@ def test_the_named_configurations():
     # the fast core and compact's: both deltas steppers 4 deep, with p3
     assert fast.core.format is DELTAS_FAST and EdgePipeline(TILE).core.format is DELTAS
     assert fast.core.stepper.latency == DELTAS_FAST.pipeline_depth(TILE.config) == 4
-    assert (fast.res.product_stages, EdgePipeline(TILE).res.product_stages) == (2, 1)
+    assert (fast.res.product_stages, EdgePipeline(TILE).res.product_stages) == (2, 2)
     for bad in (0, 3):
         with pytest.raises(ValueError, match=r"product_stages must be one of \(1, 2\), not"):
             PipelineConfig(TILE, product_stages=bad)

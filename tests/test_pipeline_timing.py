@@ -359,7 +359,8 @@ WRONG += ["EMPTY_EDGE_CYCLES"]
 def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
     commands, hw = wrong_model_run
     check_clock_for_clock(SMALL_TILE, commands, hw, "the right model")
-    latency = tile_model.resolve_latency(SMALL_TILE) + 1
+    stages = PipelineConfig(SMALL_TILE).product_stages  # the pipeline `run_transfers` builds
+    latency = tile_model.resolve_latency(SMALL_TILE, stages) + 1
     for module in (timing, tile_model, pipeline_timing):
         if wrong in WRONG_WAITS and hasattr(module, "beat_wait"):
             monkeypatch.setattr(module, "beat_wait", WRONG_WAITS[wrong])

@@ -115,6 +115,9 @@ def _loop_bounds(ctx, st):
     later = whole_column_start(st) if exact else st.jq + st.khq - st.kq
     start = Mux(st.first_col, st.hs0, later)
     ctx.emit("dbounds", implies(active, st.hs == start), "dbounds: piece start")
+    # the edge's khr - du (mod 2**w), which the piece end's carry reads
+    khr_du = st.khr_du == (st.khr - st.du)[: len(st.khr_du)]
+    ctx.emit("dbounds", implies(active, khr_du), "dbounds: khr_du")
     for name, condition in ctx.live.fits.items():
         if name in ("height", "t", "delta"):
             ctx.emit("dbounds", implies(active, condition), f"dbounds: column {name} fits")
@@ -142,9 +145,10 @@ def _loop(ctx, st):
         "hs": live.hs_next,
         "adj": st.end_row - (row + step.row_step),
         "first_col": 0,
+        "khr_du": st.khr_du,
     }
     loaded = {name: getattr(b, name) for name in ("x", "y", "jq", "jr", "remaining")}
-    loaded.update(hs=b.hs0, adj=b.end_row - b.row0, first_col=1)
+    loaded.update(hs=b.hs0, adj=b.end_row - b.row0, first_col=1, khr_du=b.khr - b.du)
     for name, reg in regs.items():
         want = Signal(reg.shape(), name=f"want_{name}")
         with m.If(stepper.step):

@@ -32,8 +32,9 @@ each other's places, or reads the banks the wrong way round).
 
 Scan lanes (``scan_lanes`` 2, `PipelineConfig.scan_lanes`): every group covers them (the
 accumulator's beats of two cells from its memories banked by column parity, the
-resolve's two cells a clock); `TILE_PROOFS` names those runs ``*_scan``, and their
-resolve has the fast pipeline's products over two clocks (``product_stages`` 2).
+resolve's two cells a clock); `TILE_PROOFS` names those runs ``*_scan``. The resolve's
+products take two clocks (``product_stages`` 2, both pipelines') in ``res_stream``,
+``res_pixels`` and the ``*_scan`` runs, one in the ``*_lanes`` runs.
 
 All groups are proved by k-induction for every reachable state (``pixels`` from power-on,
 the memories and registers at their initial values, no reset; the accumulator's from
@@ -271,7 +272,9 @@ TILE_PROOFS: dict[str, TileProof] = {
             TileConfig(),
             reset=True,
             memory_map=False,
-            description="pixels hold rule, any reachable state (k-induction), default tile",
+            description="pixels hold rule (the compact pipeline's resolve: its products over "
+            "two clocks), any reachable state (k-induction), default tile",
+            product_stages=2,
         ),
         TileProof(
             "res_stream_lanes",
@@ -374,10 +377,12 @@ TILE_PROOFS: dict[str, TileProof] = {
             "resolve",
             ("pixels",),
             "prove",
-            resolve_latency(SMALL_TILE) + 1,  # a cell in flight is written within k
+            resolve_latency(SMALL_TILE, 2) + 1,  # a cell in flight is written within k
             description="pixels equal the model's composite of exact prefix sums within the "
             "documented range (no overflow; k-induction with the pipeline's and the pixel "
-            "memory's invariants)",
+            "memory's invariants; the compact pipeline's resolve, its products over two "
+            "clocks)",
+            product_stages=2,
         ),
         TileProof(
             "res_pixels_lanes",
@@ -424,7 +429,7 @@ TILE_PROOFS: dict[str, TileProof] = {
                 ("acc_sums", "accumulator", "sums", 16, 1, 1, 1),
                 ("acc_deltas_scan", "accumulator", "deltas", 16, 1, 2, 1),
                 ("acc_sums_scan", "accumulator", "sums", 16, 1, 2, 1),
-                ("res_pixels", "resolve", "pixels", 14, 1, 1, 1),
+                ("res_pixels", "resolve", "pixels", 14, 1, 1, 2),
                 ("res_pixels_lanes", "resolve", "pixels", 14, 2, 1, 1),
                 ("res_pixels_scan", "resolve", "pixels", 14, 4, 2, 2),
             )
