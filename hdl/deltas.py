@@ -40,7 +40,7 @@ Observation points for the formal harness (attributes of the stepper, set when i
 elaborated): ``delta_he`` the piece end of the column being stepped, ``delta_stages`` the
 registers of p1, p2 and p3 (namespaces, each with ``valid`` and ``last``),
 ``delta_cells`` the four ``(x, y, delta)`` values the output register loads (before the
-payload's cut) and ``delta_nonzero`` the ``nonzero`` flags it loads.
+payload's cut).
 """
 
 from __future__ import annotations
@@ -194,7 +194,6 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
     _output(m, st, en, p3, cells, nonzero)
     # Observation points (formal harness): no logic of their own.
     st.delta_he, st.delta_stages, st.delta_cells = he, stages, cells
-    st.delta_nonzero = nonzero
     return [stage.valid for stage in stages]
 
 

@@ -312,8 +312,8 @@ def total0_steps(unit) -> list:
     ``M``'s carry chains are followed by a select (Fmax: compact's critical path in two
     seeds of five). After FINAL's ``ceil((s + 2) / 2)`` clocks ``y_area0 = M w0`` (modulo
     the register: enough bits for ``total0 = y_area0 >> (s + 2)``); ``M`` reads registers
-    the setup holds from RUN's end until the load. Derivation: docs/hardware.md, "A Booth
-    FINAL"."""
+    the setup holds from RUN's end until the load. Derivation: docs/hardware.md, "The
+    nonzero flags in the beat, and a Booth FINAL"."""
     pc, counter = unit.pieces, unit.regs.counter
     digits = _final_digits(len(pc.w0))
     # b[-1] = 0, then w0 to 2 D bits: digit j reads bits 2 j - 1, 2 j and 2 j + 1 of w0

@@ -135,7 +135,8 @@ def beats_from_array(rows: np.ndarray) -> list[Beat]:
 # order `edgeaa.model.column.delta_cells` gives them (zeros included), ``nonzero`` (bit k:
 # cell k's delta is not zero) and ``last`` on the edge's last column. ``nonzero`` is a
 # function of the deltas, sent so that the accumulator, which takes the nonzero cells, does
-# not form it behind the beat's register (Fmax: docs/hardware.md, "The nonzero flags").
+# not form it behind the beat's register (Fmax: docs/hardware.md, "The nonzero flags in the
+# beat, and a Booth FINAL").
 # The core's payload (`edgeaa.hdl.delta_layout`) is the struct
 # ``cell0 {x, y, delta}`` .. ``cell3 {...}``, ``nonzero``, ``last``; its Verilog ports are
 # ``port_name(path, DELTA_STREAM)``. Array rows: `DELTA_BEAT_COLUMNS` (`DELTA_RUN_COLUMNS` with
