@@ -168,18 +168,14 @@ def nonzero_mask(cells: Sequence[Cell]) -> int:
     return sum(1 << k for k, (_, _, delta) in enumerate(cells) if delta != 0)
 
 
-def delta_beat(cells: Sequence[Cell], last: bool) -> DeltaBeat:
-    """The beat of `cells` (four ``(x, y, delta)``), its ``nonzero`` formed from them."""
-    cells = tuple(tuple(cell) for cell in cells)
-    return DeltaBeat(cells, last, nonzero_mask(cells))
-
-
 def delta_column_beats(columns: Sequence[Sequence]) -> list[DeltaBeat]:
-    """One edge's columns of `run_edge_deltas` (tuples of four `Delta`) as beats."""
-    return [
-        delta_beat([(d.x, d.y, d.delta) for d in column], index == len(columns) - 1)
-        for index, column in enumerate(columns)
-    ]
+    """One edge's columns of `run_edge_deltas` (tuples of four `Delta`) as beats, each
+    ``nonzero`` formed from its cells."""
+    beats = []
+    for index, column in enumerate(columns):
+        cells = tuple((d.x, d.y, d.delta) for d in column)
+        beats.append(DeltaBeat(cells, index == len(columns) - 1, nonzero_mask(cells)))
+    return beats
 
 
 def delta_beat_from_fields(get: Callable[[tuple[str, ...]], int]) -> DeltaBeat:
