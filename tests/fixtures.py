@@ -21,6 +21,7 @@ from __future__ import annotations
 import random
 from dataclasses import replace
 
+import pytest
 from hypothesis import strategies as st
 
 from edgeaa.model import Clip, Edge, EdgeConfig
@@ -52,6 +53,22 @@ CORE_CONFIGS = {
         coord_bits=5, subpixel_bits=6, intensity_bits=2, frac_bits=8, mode="seg2"
     ),
 }
+
+# The core configurations the default run simulates: the default, seg4 (the mode the README
+# recommends), the narrowest and widest words and the fewest fraction bits. pw, seg2 and the
+# truncated accumulator differ from these in the model's arithmetic, not the core's
+# structure; they run with `-m slow` (the default run's time, README "Tests").
+QUICK_CORE_CONFIGS = ("default", "seg4", "small", "wide", "lowfrac")
+
+
+def core_config_params(*extra: str) -> list:
+    """`CORE_CONFIGS`' names (and `extra`) for a parametrize, those not in
+    `QUICK_CORE_CONFIGS` marked slow."""
+    names = [*CORE_CONFIGS, *extra]
+    return [
+        pytest.param(name, marks=() if name in QUICK_CORE_CONFIGS + extra else pytest.mark.slow)
+        for name in names
+    ]
 
 
 # The vectorized model's configurations (test_vector.py), as EdgeConfig fields by name

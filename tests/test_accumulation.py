@@ -572,7 +572,7 @@ FAMILIES = {
 
 @pytest.mark.parametrize("family", list(FAMILIES))
 @seed(1304)
-@examples(200)
+@examples(100)  # the long sweep below: 2,000 a family
 @given(data=st.data())
 def test_every_pixel_is_within_the_sum_of_its_edges_bounds(family, data):
     config, scene = data.draw(scenes(FAMILIES[family]), "scene")

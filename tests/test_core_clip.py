@@ -18,7 +18,7 @@ from core_bench import (
     sim_settings,
     with_window,
 )
-from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
+from fixtures import CORE_CONFIGS, core_config_params, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -99,7 +99,7 @@ def test_clip_corpus(name):
 NARROW = EdgeConfig(coord_bits=4, subpixel_bits=8, intensity_bits=1)
 
 
-@pytest.mark.parametrize("name", [*CORE_CONFIGS, "narrow"])
+@pytest.mark.parametrize("name", core_config_params("narrow"))
 def test_clip_hypothesis(name):
     config = NARROW if name == "narrow" else CORE_CONFIGS[name]
 

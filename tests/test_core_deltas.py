@@ -23,7 +23,7 @@ from core_bench import (
     run_of,
     sim_settings,
 )
-from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
+from fixtures import CORE_CONFIGS, core_config_params, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -148,7 +148,7 @@ def mixed_edges(config: EdgeConfig, seed: int, count: int = 24) -> list[Edge]:
 # -- Amaranth simulator ------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_corpus_and_clipped_edges(name):
     """Every octant, sub-pixel ends, clip windows: the model's deltas, bank and clocks."""
     config = CORE_CONFIGS[name]
@@ -303,7 +303,7 @@ def test_a_wrong_model_is_caught(monkeypatch):
 # -- structure ---------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_deltas_stepper_has_no_multiplier(name):
     assert muldiv_cells(DeltaStepper(CORE_CONFIGS[name])) == {}
 
@@ -405,7 +405,7 @@ def test_python_and_compiled_simulators_agree_clock_for_clock():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_long_edges_compiled_slow(name):
     """Edges over the whole coordinate range (the longest of the corpus among them), with and
     without back-pressure, in the compiled core."""

@@ -16,7 +16,7 @@ from core_bench import (
     run_of,
     sim_settings,
 )
-from fixtures import CORE_CONFIGS, edge_commands, random_edge_commands
+from fixtures import CORE_CONFIGS, core_config_params, edge_commands, random_edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -91,7 +91,7 @@ def boundary_edges(config: EdgeConfig, seed: int, tries: int, per_class: int = 2
 # -- (3)-(5) equivalence with run_edge, trace and timing --------------------------------------
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_corpus(name):
     """Every corner case in one run: writes, bank, trace and beat clocks against the model."""
     config = CORE_CONFIGS[name]
@@ -99,7 +99,7 @@ def test_corpus(name):
     run_and_check(config, [edge for _, edge in cases], label=f"corpus {name}")
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_hypothesis_edges(name):
     config = CORE_CONFIGS[name]
 
@@ -138,7 +138,7 @@ def test_backpressure(name, seed, idle, stall):
     run_and_check(config, edges, seed=seed, idle=idle, stall=stall, label=f"backpressure {name}")
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_boundary_states(name):
     """Edges the model shows to hit the ties of every compare (and the t < 0 clamp)."""
     config = CORE_CONFIGS[name]
@@ -173,7 +173,7 @@ def test_handover(seed):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_longest_edges_slow(name):
     config = CORE_CONFIGS[name]
     run_and_check(config, longest_edges(config), label=f"longest {name}")
@@ -190,7 +190,7 @@ def test_random_long_edges_slow(name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_hypothesis_edges_slow(name):
     config = CORE_CONFIGS[name]
 

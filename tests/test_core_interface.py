@@ -11,7 +11,7 @@ import pytest
 from amaranth.back import rtlil
 from amaranth.hdl import Shape, Value, signed, unsigned
 from amaranth.lib.wiring import In, Out
-from fixtures import CORE_CONFIGS
+from fixtures import CORE_CONFIGS, core_config_params
 
 from edgeaa.hdl import LineCore, LineStepper, clip_layout, verilog
 from edgeaa.model import Clip
@@ -63,7 +63,7 @@ def test_interface(name):
         LineCore(config, errors_bits=0)
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_stepper_registers_use_the_width_table(name):
     config = CORE_CONFIGS[name]
     stepper = LineCore(config).stepper
@@ -85,7 +85,7 @@ def test_stepper_registers_use_the_width_table(name):
 # -- (8) no multiplier or divider in the stepping loop ---------------------------------------
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_stepper_has_no_multiplier_or_divider(name):
     assert muldiv_cells(LineStepper(CORE_CONFIGS[name])) == {}
 

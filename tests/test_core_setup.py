@@ -16,7 +16,7 @@ from core_bench import (
     longest_edges,
     sim_settings,
 )
-from fixtures import CORE_CONFIGS, edge_commands
+from fixtures import CORE_CONFIGS, core_config_params, edge_commands
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -86,7 +86,7 @@ def check_setup(config: EdgeConfig, edges: list[Edge], core=LineCore):
         )
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_setup_matches_model(name):
     config = CORE_CONFIGS[name]
     max_pixels = 1 << config.coord_bits  # full-range edges: only the setup is simulated
@@ -104,7 +104,7 @@ def test_setup_corner_cases():
         check_setup(config, [edge for _, edge in corpus(config)] + longest_edges(config))
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_radix4_setup_matches_model(name):
     """The fast core's setup, two lane steps a clock (`edgeaa.model.timing.run_schedule`:
     leading zero steps, a short first pass or a last |I_d| clock of one step in some
@@ -121,7 +121,7 @@ def test_radix4_setup_matches_model(name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_setup_matches_model_slow(name):
     config = CORE_CONFIGS[name]
 

@@ -13,7 +13,7 @@ from core_bench import (
     run_and_check,
     run_of,
 )
-from fixtures import CORE_CONFIGS, edge_configs
+from fixtures import CORE_CONFIGS, core_config_params, edge_configs
 from hypothesis import given
 
 from edgeaa.hdl import (
@@ -27,7 +27,7 @@ from edgeaa.sim.simulators.commands import edge_payload
 from edgeaa.sim.simulators.streams import stream_put
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_setup_latency_is_the_timing_model(name):
     config = CORE_CONFIGS[name]
     dut = LineCore(config)
@@ -47,7 +47,7 @@ def test_setup_latency_is_the_timing_model(name):
     assert timing_model.run_cycles(config, True) == dut.run_cycles + dut.start_clip_cycles
 
 
-@pytest.mark.parametrize("name", list(CORE_CONFIGS))
+@pytest.mark.parametrize("name", core_config_params())
 def test_deltas_setup_latency_is_the_timing_model(name):
     """The deltas core's setup spends ``ceil((s + 2) / 2)`` clocks in FINAL (the y-major
     total0 product, two bits of w0 a clock): latency and interval grow by that less one over

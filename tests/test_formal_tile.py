@@ -36,19 +36,26 @@ def _explain(result) -> str:
     return "\n".join([result.summary(), *result.failed, result.log_tail])
 
 
+def _formal(*values):
+    """A parameter set run with ``-m formal`` only: the default run keeps one case of each
+    group and fault kind (its time: README, "Tests")."""
+    return pytest.param(*values, marks=pytest.mark.formal)
+
+
 # -- the proofs ------------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize(
     "name",
     ["acc_stream", "res_stream", "res_stream_lanes", "acc_stream_scan", "res_stream_scan"]
-    + ["acc_deltas", "acc_sums", "acc_deltas_scan", "acc_sums_scan"],
+    + ["acc_deltas", "acc_sums", "acc_deltas_scan", _formal("acc_sums_scan")],
 )
 def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
     assert result.passed, _explain(result)
 
 
+@pytest.mark.formal
 @pytest.mark.parametrize(
     "name",
     ["acc_deltas_cover", "acc_sums_cover", "res_pixels_cover", "res_pixels_lanes_cover"]
@@ -76,21 +83,27 @@ def test_slow_proofs(tools, name):
     [
         ("acc_stream", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
         ("res_stream", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
-        ("res_stream_lanes", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
-        ("acc_stream_scan", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"),
-        ("res_stream_scan", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"),
+        _formal(
+            "res_stream_lanes", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"
+        ),
+        _formal(
+            "acc_stream_scan", "stall_cell", 4, "stream: a held output keeps its payload (bmc)"
+        ),
+        _formal(
+            "res_stream_scan", "stall_pixel", 6, "stream: a held output keeps its payload (bmc)"
+        ),
         ("acc_sums", "lost_delta", 6, "cells: a beat taken with its last cell (bmc)"),
-        ("acc_deltas", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
+        _formal("acc_deltas", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         ("acc_sums", "stale_origin", 8, "sums: cell sum (bmc)"),
         ("res_pixels", "wide_range", 16, "pixels: value (bmc)"),
-        ("res_pixels_lanes", "wide_range", 16, "pixels: value (bmc)"),
+        _formal("res_pixels_lanes", "wide_range", 16, "pixels: value (bmc)"),
         ("res_pixels_lanes", "swap_lanes", 16, "pixels: value (bmc)"),
         ("res_pixels_scan", "swap_sums", 16, "pixels: value (bmc)"),
         ("acc_sums_scan", "swap_cells", 8, "sums: cell sum (bmc)"),
         # with two scan lanes the origin decides a pair's clash, so the beat's clocks go first
-        ("acc_sums_scan", "stale_origin", 8, "cells: a beat taken with its last cell (bmc)"),
-        ("acc_deltas_scan", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
-        ("res_pixels_scan", "wide_range", 16, "pixels: value (bmc)"),
+        _formal("acc_sums_scan", "stale_origin", 8, "cells: a beat taken with its last cell (bmc)"),
+        _formal("acc_deltas_scan", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
+        _formal("res_pixels_scan", "wide_range", 16, "pixels: value (bmc)"),
     ],
 )
 def test_fault_is_caught(tools, name, fault, depth, message):
@@ -107,13 +120,15 @@ def test_fault_is_caught(tools, name, fault, depth, message):
 @pytest.mark.parametrize(
     ("name", "fault", "depth", "message"),
     [
-        ("acc_sums", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
+        _formal(
+            "acc_sums", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"
+        ),
         ("acc_deltas", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
         ("acc_deltas", "stale_origin", None, "state: origin (basecase)"),
         ("res_pixels", "lost_first", None, "state: stage 0 order (basecase)"),
-        ("res_pixels_lanes", "lost_first", None, "state: stage 0 order (basecase)"),
-        ("res_pixels_scan", "lost_first", None, "state: stage 0 order (basecase)"),
-        ("acc_deltas_scan", "stale_origin", None, "state: origin (basecase)"),
+        _formal("res_pixels_lanes", "lost_first", None, "state: stage 0 order (basecase)"),
+        _formal("res_pixels_scan", "lost_first", None, "state: stage 0 order (basecase)"),
+        _formal("acc_deltas_scan", "stale_origin", None, "state: origin (basecase)"),
         ("acc_sums_scan", "lost_delta", None, "cells: a beat taken with its last cell (basecase)"),
         # the wrong pixel is written 9 clocks from power-on (products over two clocks): one
         # past the proof's k

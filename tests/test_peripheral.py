@@ -352,10 +352,11 @@ def _colour_plan(config: EdgeConfig, background: str):
     "channels, fmt, bits, seed, idle, stall, latency",
     [
         (3, "rgb565", 8, 11, 0.3, 0.5, 3),
-        (3, "rgb888", 8, 23, 0.1, 0.8, 6),
+        pytest.param(3, "rgb888", 8, 23, 0.1, 0.8, 6, marks=pytest.mark.slow),
         (4, "rgba8888", 8, 5, 0.2, 0.6, 4),
         (4, "rgb565", 4, 7, 0.2, 0.5, 2),  # fields wider than the channels: the table
-        (3, "rgba8888", 8, 13, 0.1, 0.5, 3),  # opaque: alpha full scale
+        # opaque: alpha full scale
+        pytest.param(3, "rgba8888", 8, 13, 0.1, 0.5, 3, marks=pytest.mark.slow),
     ],
 )
 def test_a_colour_scene_lands_in_the_framebuffer_in_its_format_bit_for_bit(

@@ -123,6 +123,15 @@ def check_clock_for_clock(
 SMALL_TILE = TileConfig(SMALL, 16, 8)
 
 
+def _slow(*values):
+    """A parameter set run with ``-m slow`` only (the default run's time: README, "Tests")."""
+    return pytest.param(*values, marks=pytest.mark.slow)
+
+
+# pixel lanes with one or two scan lanes: the default run keeps one of each lane count
+SLOW_LANES = [_slow(4, 2, 1, 7), _slow(1, 2, 2, 2), _slow(2, 2, 2, 10)]
+
+
 def check_scene(scene) -> None:
     commands = scene_commands(plan_scene(scene, SMALL), SMALL_TILE)
     hw = run_transfers(SMALL_TILE, commands)
@@ -230,7 +239,7 @@ def test_a_random_colour_command_stream_with_bad_commands_in_the_models_clocks(m
         check_clock_for_clock(COLOUR_TILE, commands, hw, "the grey latency in colour")
 
 
-@pytest.mark.parametrize(("units", "seed"), [(2, 2), (3, 10), (4, 7)])
+@pytest.mark.parametrize(("units", "seed"), [(2, 2), _slow(3, 10), (4, 7)])
 def test_several_setup_units_in_the_models_clocks(units, seed):
     """The fast pipeline's array of setup units, with the bad commands and the stalls."""
     pipeline = PipelineConfig(SMALL_TILE, units)
@@ -245,7 +254,7 @@ def test_several_setup_units_in_the_models_clocks(units, seed):
 
 @pytest.mark.parametrize(
     ("units", "lanes", "scan", "seed"),
-    [(1, 2, 1, 2), (4, 2, 1, 7), (2, 4, 1, 10), (1, 2, 2, 2), (4, 4, 2, 7), (2, 2, 2, 10)],
+    [(1, 2, 1, 2), (2, 4, 1, 10), (4, 4, 2, 7)] + SLOW_LANES,
 )
 def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed):
     """A flush of `lanes` pixels a clock and a scan of `scan` cells a clock (the fast
@@ -272,7 +281,7 @@ def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed)
 
 
 @pytest.mark.parametrize(
-    ("units", "lanes", "scan", "seed"), [(1, 1, 1, 3), (4, 4, 2, 3), (2, 2, 2, 10)]
+    ("units", "lanes", "scan", "seed"), [(1, 1, 1, 3), (4, 4, 2, 3), _slow(2, 2, 2, 10)]
 )
 def test_a_skid_buffer_before_the_accumulator_in_the_models_clocks(units, lanes, scan, seed):
     """The core's beats through a skid buffer (`beat_skid`, the fast pipeline's), with the
