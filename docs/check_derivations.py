@@ -1140,6 +1140,41 @@ def part_d_exact_rewrites() -> None:
         nonzero = ((a ^ b) & ((1 << bits) - 1)) != 0  # a ^ b's low bits
         bad += nonzero != (((a - b) % (1 << bits)) != 0)
     check("nonzero flag: a ^ b in the payload's bits <=> (a - b) mod 2^bits != 0", bad == 0)
+    part_d_piece_end_rewrites(rng)
+
+
+def part_d_piece_end_rewrites(rng: random.Random) -> None:
+    """The deltas stepper's piece end in one carry chain and its depth less the intercept in
+    one add (hdl/deltas.py `_piece_end`, `_depth_less`)."""
+    bad = 0
+    for _ in range(20000):
+        w, wq = rng.randrange(1, 16), rng.randrange(1, 20)
+        du = rng.randrange(1, 1 << w)
+        jr, khr = rng.randrange(du), rng.randrange(du)
+        jq, khq = rng.randrange(1 << wq), rng.randrange(1 << wq)
+        chain = ((jq << w) + jr + (khq << w) + ((khr - du) % (1 << w))) >> w
+        bad += chain != jq + khq + (jr + khr >= du)
+    check(
+        "piece end: Cat(jr, jq) + Cat(khr - du mod 2^w, khq) >> w = jq + khq + [jr+khr >= du]",
+        bad == 0,
+    )
+    bad = 0
+    for _ in range(20000):
+        hb, ib, cb = rng.randrange(2, 22), rng.randrange(1, 20), rng.randrange(1, 14)
+        he, hs = (rng.randrange(-(1 << (hb - 1)), 1 << (hb - 1)) for _ in range(2))
+        ifix, icpt = rng.randrange(1 << ib), rng.randrange(1 << cb) << 2
+        width = max(max(hb, ib + 1) + 1, cb + 2) + 1  # _depth_width, then the intercept's
+        low = rng.random() < 0.5
+        mask = (1 << width) - 1
+        operand = he if low else ~hs
+        sub = (ifix + icpt) & mask if low else (icpt - 1) & mask
+        got = (operand + (~sub & mask) + 1) & mask
+        # the bits of the add it replaces, (depth - icpt) cut to the same width
+        bad += got != (((he - ifix) if low else -hs) - icpt) & mask
+    check(
+        "depth less intercept: X + ~D + 1 = (he - ifix or -hs) - icpt mod 2^width, D per edge",
+        bad == 0,
+    )
 
 
 def part_d() -> None:

@@ -200,10 +200,11 @@ def delta_pipeline(m, st, en, last, advance) -> list[Signal]:
 def _piece_end(m, st, last):
     """`piece_end`: floor(J + K/2), or P1's height in a partial last column."""
     regs = st.delta_regs
-    # jr + khr >= du: with jr, khr < du, jr + (khr - du mod 2**w) carries out exactly then
+    # jq + khq + [jr + khr >= du] in one carry chain: with jr, khr < du, the low half
+    # jr + (khr - du mod 2**w) carries into the high half exactly then
     khr_du = regs["khr_du"]
-    carry = (st.jr + khr_du)[len(khr_du)]
-    full = st.jq + st.khq + carry
+    w = len(khr_du)
+    full = (Cat(st.jr, st.jq) + Cat(khr_du, st.khq))[w:]
     adj = regs["adj"]
     # end_height + sign(adj) ifix in one add (-ifix = ~ifix + 1 on ifix made signed)
     ifix = signed_widened(st.ifix)
@@ -270,14 +271,12 @@ def _stage0(st, last, he) -> dict:
     )
     assert len(st.seg_intercepts) == n
     assert not any(icpt.shape().signed for icpt in st.seg_intercepts)  # see `_estimate`
-    depth = _depth(low, he, hs, ifix)
     if n == 1:
         # t = (depth >> 2) - intercept = (depth - (intercept << 2)) >> 2: the intercept
-        # folded into the depth here, p1 holds no intercept
-        icpt = st.seg_intercepts[0] << 2
-        values["depth_icpt"] = (depth - icpt)[: max(len(depth), len(icpt)) + 1].as_signed()
+        # folded into the depth's operand here, p1 holds no intercept
+        values["depth_icpt"] = _depth_less(low, he, hs, ifix, st.seg_intercepts[0] << 2)
     elif n:
-        values["depth"] = depth
+        values["depth"] = _depth(low, he, hs, ifix)
         values.update({f"thr{j}": thr for j, thr in enumerate(st.seg_thresholds, start=1)})
         values.update({f"icpt{j}": icpt for j, icpt in enumerate(st.seg_intercepts)})
     return values
@@ -290,6 +289,16 @@ def _depth(low, he, hs, ifix):
     ifix = signed_widened(ifix)
     depth = Mux(low, he, ~hs) + Mux(low, ~ifix, 0) + 1
     return depth[: _depth_width(he, hs, ifix)].as_signed()
+
+
+def _depth_less(low, he, hs, ifix, icpt):
+    """`_depth` less `icpt` in the same one add after ``low``: he + ~(ifix + icpt) + 1 or
+    ~hs + ~(icpt - 1) + 1, whose subtrahends are sums of per-edge constants (formed off the
+    path through ``low``), modulo 2**width (the difference fits: exact)."""
+    width = max(_depth_width(he, hs, signed_widened(ifix)), len(icpt)) + 1
+    sub_low = (ifix + icpt)[:width]
+    sub_high = (signed_widened(icpt) - 1)[:width]  # all ones when icpt is 0
+    return (Mux(low, he, ~hs) + ~Mux(low, sub_low, sub_high) + 1)[:width].as_signed()
 
 
 def _depth_width(he, hs, ifix) -> int:
