@@ -37,8 +37,9 @@ def _explain(result) -> str:
 
 
 def _formal(*values):
-    """A parameter set run with ``-m formal`` only: the default run keeps one case of each
-    group and fault kind (its time: README, "Tests")."""
+    """A parameter set run with ``-m formal`` only: the default run keeps each fault kind at
+    least once, on the accumulator and the resolve, one lane and two (its time: README,
+    "Tests")."""
     return pytest.param(*values, marks=pytest.mark.formal)
 
 
