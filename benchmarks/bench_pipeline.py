@@ -74,7 +74,7 @@ DOC = ROOT / "docs" / "hardware.md"
 # ECP5 25F; docs/hardware.md, "A
 # written flag in each pixel word", "A skid buffer before the accumulator", "The nonzero
 # flags in the beat, and a Booth FINAL").
-FMAX = {"compact": ("iCE40 HX8K", 49.15), "fast": ("ECP5 25F", 54.9)}
+FMAX = {"compact": ("iCE40 HX8K", 49.15), "fast": ("ECP5 25F", 54.3)}
 SERIF_FONTS = ("STIXGeneral", "DejaVuSerif", "cmr10")
 FONT_SIZES = (9, 12, 16, 24, 32)
 
