@@ -69,11 +69,9 @@ from edgeaa.sim.simulators import pipeline_harness, verilator_harness
 
 ROOT = Path(__file__).resolve().parent.parent
 DOC = ROOT / "docs" / "hardware.md"
-# Each configuration's device and measured Fmax (MHz, the median over nextpnr seeds 1 to 5,
-# fast's over those of 1 to 5 whose routing ended: compact on the iCE40 HX8K, fast on the
-# ECP5 25F; docs/hardware.md, "A
-# written flag in each pixel word", "A skid buffer before the accumulator", "The nonzero
-# flags in the beat, and a Booth FINAL").
+# Each configuration's device and measured Fmax (MHz, the median over nextpnr seeds 1 to 5:
+# compact on the iCE40 HX8K, fast on the ECP5 25F; docs/hardware.md, "The piece end in one
+# carry chain, the intercept in the depth's operand").
 FMAX = {"compact": ("iCE40 HX8K", 49.15), "fast": ("ECP5 25F", 54.3)}
 SERIF_FONTS = ("STIXGeneral", "DejaVuSerif", "cmr10")
 FONT_SIZES = (9, 12, 16, 24, 32)

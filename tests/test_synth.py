@@ -398,7 +398,7 @@ def test_synth_top_pipeline_places_a_small_pipeline(capsys):
 def test_default_pipeline_fits_the_hx8k():
     """The default pipeline, in the I/O harness, places and routes on the iCE40 HX8K (issue 11;
     about a minute with router2). nextpnr fails to place a design past the device (as it did
-    at 8,089 logic cells), so a result with its logic cells is the fit; 7,646 cells (99.6 %)
+    at 8,089 logic cells), so a result with its logic cells is the fit; 7,623 cells (99.3 %)
     measured."""
     from edgeaa.hdl.pipeline import EdgePipeline
     from edgeaa.model.tile import TileConfig
