@@ -1145,7 +1145,7 @@ def part_d_exact_rewrites() -> None:
 
 def part_d_piece_end_rewrites(rng: random.Random) -> None:
     """The deltas stepper's piece end in one carry chain and its depth less the intercept in
-    one add (hdl/deltas.py `_piece_end`, `_depth_less`)."""
+    one add (hdl/deltas.py `_piece_end`, `_depth`)."""
     bad = 0
     for _ in range(20000):
         w, wq = rng.randrange(1, 16), rng.randrange(1, 20)

@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import types
 
-from amaranth.hdl import Cat, Module, Mux, Signal, Value, signed, unsigned
+from amaranth.hdl import C, Cat, Module, Mux, Signal, Value, signed, unsigned
 
 from ..model.beat import DELTAS, DELTAS_FAST, BeatFormat
 from ..model.config import EdgeConfig
@@ -274,7 +274,7 @@ def _stage0(st, last, he) -> dict:
     if n == 1:
         # t = (depth >> 2) - intercept = (depth - (intercept << 2)) >> 2: the intercept
         # folded into the depth's operand here, p1 holds no intercept
-        values["depth_icpt"] = _depth_less(low, he, hs, ifix, st.seg_intercepts[0] << 2)
+        values["depth_icpt"] = _depth(low, he, hs, ifix, st.seg_intercepts[0] << 2)
     elif n:
         values["depth"] = _depth(low, he, hs, ifix)
         values.update({f"thr{j}": thr for j, thr in enumerate(st.seg_thresholds, start=1)})
@@ -282,22 +282,19 @@ def _stage0(st, last, he) -> dict:
     return values
 
 
-def _depth(low, he, hs, ifix):
+def _depth(low, he, hs, ifix, icpt=None):
     """The depth of the piece's crossing part, he - ifix when it crosses into the row below,
-    else -hs, in one add: he + ~ifix + 1 or ~hs + 0 + 1 (both made signed), in the width of
-    the wider of the two (exact)."""
-    ifix = signed_widened(ifix)
-    depth = Mux(low, he, ~hs) + Mux(low, ~ifix, 0) + 1
-    return depth[: _depth_width(he, hs, ifix)].as_signed()
-
-
-def _depth_less(low, he, hs, ifix, icpt):
-    """`_depth` less `icpt` in the same one add after ``low``: he + ~(ifix + icpt) + 1 or
-    ~hs + ~(icpt - 1) + 1, whose subtrahends are sums of per-edge constants (formed off the
-    path through ``low``), modulo 2**width (the difference fits: exact)."""
-    width = max(_depth_width(he, hs, signed_widened(ifix)), len(icpt)) + 1
-    sub_low = (ifix + icpt)[:width]
-    sub_high = (signed_widened(icpt) - 1)[:width]  # all ones when icpt is 0
+    else -hs, less `icpt` if given, in one add after ``low``: he + ~(ifix + icpt) + 1 or
+    ~hs + ~(icpt - 1) + 1. The subtrahends are sums of per-edge constants (formed off the path
+    through ``low``; without `icpt`, ifix and all ones). Modulo 2**width, where the difference
+    fits: exact. Without `icpt` the width is `_depth_width` (p1's register for seg2, seg4)."""
+    width = _depth_width(he, hs, signed_widened(ifix))
+    if icpt is None:
+        sub_low, sub_high = signed_widened(ifix), C(-1, signed(1))
+    else:
+        width = max(width, len(icpt)) + 1
+        sub_low = (ifix + icpt)[:width]
+        sub_high = (signed_widened(icpt) - 1)[:width]  # all ones when icpt is 0
     return (Mux(low, he, ~hs) + ~Mux(low, sub_low, sub_high) + 1)[:width].as_signed()
 
 
