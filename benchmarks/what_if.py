@@ -1,0 +1,161 @@
+"""What changes not built would give (issue 26), by the cycle model: a second accumulation
+memory, four scan lanes, more setup units.
+
+Each change is one patch to the exact model (`pipeline_cycles`, equal to the Verilated
+pipeline clock for clock), so the estimate is the exact model's everywhere else; the changes'
+own costs (a clock to switch memories, a longer critical path) are not in it, so the
+figures are optimistic.
+
+- --second-memory (`SecondMemoryClock`): two accumulation memories used in turn, so polygon
+  n + 1 accumulates into one while polygon n's rows are scanned out of the other. After an
+  end in clock a the accumulator is ready in a + 2 or when the scan of the polygon before
+  (whose memory the next polygon takes) has ended, whichever is later. One scan at a time as
+  now (a scan starts once the resolve is quiet after the one before), tile and flush ops
+  after the resolve.
+- --scan-lanes 4 (`four_lane_beat_clocks`): the accumulator and the resolve take four cells a
+  clock, the accumulation memory four banks by column modulo 4 (the scan reads a row's four
+  columns a clock). A beat's four cells go in one clock unless two different cells kept in
+  the tile fall in one bank, then as many clocks as the busiest bank's cells (a beat's cells
+  are two pairs of neighbouring columns in two rows, so its rows' cells of one column clash).
+- --setup-units N: the pipeline with N setup units, in both runs (a configuration the
+  built pipeline takes: up to 16, each holding an edge 17 clocks and more, so about an edge
+  a clock, the issue's "setup of one edge every one or two clocks").
+
+    python benchmarks/what_if.py [--pipeline fast] [--scenes text,HUD] [--setup-units N]
+        [--second-memory] [--scan-lanes 4]
+
+Prints, per scene of `benchmarks/bench_pipeline.py`, the exact clocks of the pipeline as
+built (with --setup-units), the clocks with the changes asked for, their ratio and the
+changed pipeline's pixels a clock.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+from dataclasses import replace
+from unittest import mock
+
+import numpy as np
+from bench_pipeline import scenes  # this folder: the rate table's scenes
+
+from edgeaa.model import pipeline as pipeline_module
+from edgeaa.model import pipeline_timing
+from edgeaa.model import tile as tile_module
+from edgeaa.model.pipeline import PIPELINES, PipelineConfig
+from edgeaa.model.tile import PolygonEnd, TileClock, TileConfig
+from edgeaa.render import plan_scene
+from edgeaa.render.pipeline import scene_commands
+
+
+class SecondMemoryClock(TileClock):
+    """`TileClock` with two accumulation memories used in turn: after a polygon's end the
+    accumulator takes the next polygon's beats once the memory it writes (the one the
+    polygon before this one used) has been scanned, not after this polygon's scan."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.scan_ends = [0, 0]  # the last two scans' ends: the other memory's is first
+
+    def take(self, op, result, clock=None):
+        taken = super().take(op, result, clock)
+        if isinstance(op, PolygonEnd) and result.beats:
+            other = self.scan_ends[-1]  # the memory the next polygon writes: scanned by then
+            self.scan_ends = [other, self.ready]
+            self.ready = max(taken + 2, other)
+        return taken
+
+
+_BUILT_BEAT_CLOCKS = tile_module.beat_clocks
+
+
+def four_lane_beat_clocks(cells, lanes=1, tile=None, origin=(0, 0)):
+    """`beat_clocks` with four lanes added (the built lanes as built): a clock for a beat with
+    a nonzero cell, or the busiest bank's distinct kept cells if more (cells of one cell of
+    the tile add into one write, as with two lanes)."""
+    if lanes != 4:
+        return _BUILT_BEAT_CLOCKS(cells, lanes, tile, origin)
+    cells = np.asarray(cells).reshape(-1, 4, 3)
+    nonzero = cells[:, :, 2] != 0
+    tx, ty = cells[:, :, 0] - origin[0], cells[:, :, 1] - origin[1]
+    kept = nonzero & (ty >= 0) & (ty < tile.height) & (tx < tile.width)
+    col = np.maximum(tx, 0)  # a cell left of the tile goes into its first column
+    # a kept cell is a write of its own unless an earlier kept cell of the beat is the same
+    fresh = kept.copy()
+    for a in range(4):
+        for b in range(a):
+            fresh[:, a] &= ~(kept[:, b] & (col[:, b] == col[:, a]) & (ty[:, b] == ty[:, a]))
+    busiest = np.zeros(len(cells), dtype=np.int64)
+    for bank in range(4):
+        busiest = np.maximum(busiest, np.sum(fresh & (col % 4 == bank), axis=1))
+    return np.maximum(busiest, nonzero.any(axis=1).astype(np.int64)).clip(min=1)
+
+
+@contextlib.contextmanager
+def four_scan_lanes():
+    """The model taking four scan lanes (`four_lane_beat_clocks`), for the `with` block."""
+    with (
+        mock.patch.object(pipeline_module, "SCAN_LANES", (1, 2, 4)),
+        mock.patch.object(tile_module, "beat_clocks", four_lane_beat_clocks),
+    ):
+        yield
+
+
+def _changed_clocks(pipeline, commands, second_memory: bool, scan_lanes: int | None) -> int:
+    with contextlib.ExitStack() as stack:
+        if second_memory:
+            stack.enter_context(mock.patch.object(pipeline_timing, "TileClock", SecondMemoryClock))
+        if scan_lanes == 4:
+            stack.enter_context(four_scan_lanes())
+        if scan_lanes is not None:
+            pipeline = replace(pipeline, scan_lanes=scan_lanes)
+        return pipeline_timing.pipeline_cycles(pipeline, commands).clocks
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--pipeline", default="fast", choices=list(PIPELINES))
+    parser.add_argument("--scenes", default="", help="only the scenes whose name holds one")
+    parser.add_argument("--setup-units", type=int, help="setup units (the pipeline's if not)")
+    parser.add_argument("--second-memory", action="store_true", help="a second accumulation memory")
+    parser.add_argument(
+        "--scan-lanes", type=int, choices=(1, 2, 4), help="scan lanes (the pipeline's if not)"
+    )
+    args = parser.parse_args()
+    if not args.second_memory and args.scan_lanes is None:
+        parser.error("nothing to change: give --second-memory, --scan-lanes or both")
+    tile = TileConfig()
+    pipeline = PipelineConfig.named(args.pipeline, tile)
+    if args.setup_units is not None:
+        try:
+            pipeline = replace(pipeline, setup_units=args.setup_units)
+        except ValueError as error:  # one line: what was wrong and what is allowed
+            parser.error(str(error))
+    if args.scan_lanes is not None and args.scan_lanes > pipeline.pixel_lanes:
+        parser.error(
+            f"--scan-lanes {args.scan_lanes} is more than the pipeline's "
+            f"{pipeline.pixel_lanes} pixel lanes (the resolve's scan lanes are at most those)"
+        )
+    changes = ["a second memory"] * args.second_memory
+    changes += [f"{args.scan_lanes} scan lanes"] * (args.scan_lanes is not None)
+    wanted = [word for word in args.scenes.split(",") if word]
+    name = f"{args.pipeline}, {pipeline.setup_units} setup units"
+    print(f"| scene | {name}: clocks | with {' and '.join(changes)} | fewer clocks | px/clock |")
+    print("|---|---:|---:|---:|---:|")
+    for scene in scenes(tile.config):
+        if wanted and not any(word in scene.name for word in wanted):
+            continue
+        commands = scene_commands(plan_scene(scene, tile.config), tile)
+        exact = pipeline_timing.pipeline_cycles(pipeline, commands).clocks
+        changed = _changed_clocks(pipeline, commands, args.second_memory, args.scan_lanes)
+        rate = scene.width * scene.height / changed
+        print(
+            f"| {scene.name} | {exact:,} | {changed:,} | {exact / changed:.2f}x | {rate:.3f} |",
+            flush=True,
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
