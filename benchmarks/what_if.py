@@ -15,8 +15,7 @@ figures are optimistic.
 - --scan-lanes 4 (`four_lane_beat_clocks`): the accumulator and the resolve take four cells a
   clock, the accumulation memory four banks by column modulo 4 (the scan reads a row's four
   columns a clock). A beat's four cells go in one clock unless two different cells kept in
-  the tile fall in one bank, then as many clocks as the busiest bank's cells (a beat's cells
-  are two pairs of neighbouring columns in two rows, so its rows' cells of one column clash).
+  the tile fall in one bank, then as many clocks as the busiest bank's cells.
 - --setup-units N: the pipeline with N setup units, in both runs (a configuration the
   built pipeline takes: up to 16, each holding an edge 17 clocks and more, so about an edge
   a clock, the issue's "setup of one edge every one or two clocks").
