@@ -1,10 +1,10 @@
-"""What changes not built would give (issue 26), by the cycle model: a second accumulation
-memory, four scan lanes, more setup units.
+"""What changes would give (issue 26), by the cycle model: a second accumulation memory
+(not built), other scan lanes or more setup units (configurations the pipeline takes).
 
-Each change is one patch to the exact model (`pipeline_cycles`, equal to the Verilated
-pipeline clock for clock), so the estimate is the exact model's everywhere else; the changes'
-own costs (a clock to switch memories, a longer critical path) are not in it, so the
-figures are optimistic.
+The second memory is one patch to the exact model (`pipeline_cycles`, equal to the Verilated
+pipeline clock for clock), so its estimate is the exact model's everywhere else; its own
+costs (a clock to switch memories, a longer critical path) are not in it, so the figures are
+optimistic.
 
 - --second-memory (`SecondMemoryClock`): two accumulation memories used in turn, so polygon
   n + 1 accumulates into one while polygon n's rows are scanned out of the other. After an
@@ -12,13 +12,12 @@ figures are optimistic.
   (whose memory the next polygon takes) has ended, whichever is later. One scan at a time as
   now (a scan starts once the resolve is quiet after the one before), tile and flush ops
   after the resolve.
-- --scan-lanes 4 (`four_lane_beat_clocks`): the accumulator and the resolve take four cells a
-  clock, the accumulation memory four banks by column modulo 4 (the scan reads a row's four
-  columns a clock). A beat's four cells go in one clock unless two different cells kept in
-  the tile fall in one bank, then as many clocks as the busiest bank's cells.
-- --setup-units N: the pipeline with N setup units, in both runs (a configuration the
-  built pipeline takes: up to 16, each holding an edge 17 clocks and more, so about an edge
-  a clock, the issue's "setup of one edge every one or two clocks").
+- --scan-lanes N: the pipeline with N scan lanes (`PipelineConfig.scan_lanes`, at most its
+  pixel lanes; four: the accumulation memory in four banks by column modulo 4, every bank
+  taking a cell a clock, `edgeaa.model.tile.beat_clocks`), exact.
+- --setup-units N: the pipeline with N setup units, in both runs (up to 16, each holding an
+  edge 17 clocks and more, so about an edge a clock, the issue's "setup of one edge every
+  one or two clocks").
 
     python benchmarks/what_if.py [--pipeline fast] [--scenes text,HUD] [--setup-units N]
         [--second-memory] [--scan-lanes 4]
@@ -31,17 +30,13 @@ changed pipeline's pixels a clock.
 from __future__ import annotations
 
 import argparse
-import contextlib
 import sys
 from dataclasses import replace
 from unittest import mock
 
-import numpy as np
 from bench_pipeline import scenes  # this folder: the rate table's scenes
 
-from edgeaa.model import pipeline as pipeline_module
 from edgeaa.model import pipeline_timing
-from edgeaa.model import tile as tile_module
 from edgeaa.model.pipeline import PIPELINES, PipelineConfig
 from edgeaa.model.tile import PolygonEnd, TileClock, TileConfig
 from edgeaa.render import plan_scene
@@ -66,49 +61,12 @@ class SecondMemoryClock(TileClock):
         return taken
 
 
-_BUILT_BEAT_CLOCKS = tile_module.beat_clocks
-
-
-def four_lane_beat_clocks(cells, lanes=1, tile=None, origin=(0, 0)):
-    """`beat_clocks` with four lanes added (the built lanes as built): a clock for a beat with
-    a nonzero cell, or the busiest bank's distinct kept cells if more (cells of one cell of
-    the tile add into one write, as with two lanes)."""
-    if lanes != 4:
-        return _BUILT_BEAT_CLOCKS(cells, lanes, tile, origin)
-    cells = np.asarray(cells).reshape(-1, 4, 3)
-    nonzero = cells[:, :, 2] != 0
-    tx, ty = cells[:, :, 0] - origin[0], cells[:, :, 1] - origin[1]
-    kept = nonzero & (ty >= 0) & (ty < tile.height) & (tx < tile.width)
-    col = np.maximum(tx, 0)  # a cell left of the tile goes into its first column
-    # a kept cell is a write of its own unless an earlier kept cell of the beat is the same
-    fresh = kept.copy()
-    for a in range(4):
-        for b in range(a):
-            fresh[:, a] &= ~(kept[:, b] & (col[:, b] == col[:, a]) & (ty[:, b] == ty[:, a]))
-    busiest = np.zeros(len(cells), dtype=np.int64)
-    for bank in range(4):
-        busiest = np.maximum(busiest, np.sum(fresh & (col % 4 == bank), axis=1))
-    return np.maximum(busiest, nonzero.any(axis=1).astype(np.int64)).clip(min=1)
-
-
-@contextlib.contextmanager
-def four_scan_lanes():
-    """The model taking four scan lanes (`four_lane_beat_clocks`), for the `with` block."""
-    with (
-        mock.patch.object(pipeline_module, "SCAN_LANES", (1, 2, 4)),
-        mock.patch.object(tile_module, "beat_clocks", four_lane_beat_clocks),
-    ):
-        yield
-
-
 def _changed_clocks(pipeline, commands, second_memory: bool, scan_lanes: int | None) -> int:
-    with contextlib.ExitStack() as stack:
-        if second_memory:
-            stack.enter_context(mock.patch.object(pipeline_timing, "TileClock", SecondMemoryClock))
-        if scan_lanes == 4:
-            stack.enter_context(four_scan_lanes())
-        if scan_lanes is not None:
-            pipeline = replace(pipeline, scan_lanes=scan_lanes)
+    if scan_lanes is not None:
+        pipeline = replace(pipeline, scan_lanes=scan_lanes)
+    if not second_memory:
+        return pipeline_timing.pipeline_cycles(pipeline, commands).clocks
+    with mock.patch.object(pipeline_timing, "TileClock", SecondMemoryClock):
         return pipeline_timing.pipeline_cycles(pipeline, commands).clocks
 
 

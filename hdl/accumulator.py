@@ -9,10 +9,12 @@ clock, in cell order, and the beat in the clock of its last (one clock for a bea
 cells make a beat, repeats included. With two scan lanes the cells go in by pairs, (0, 1)
 then (2, 3), a clock for a pair with a nonzero cell, each cell into its column's bank (two
 cells at one cell added first), two clocks when the pair's cells are two cells of one bank
-(`accumulator_cells.route_pair`). A cell left of the tile moves into its row's first
+(`accumulator_cells.route_pair`). With four, every bank (column modulo 4) takes a cell a
+clock, with the cells of the beat at that cell (`accumulator_cells.route_quad`). A cell
+left of the tile moves into its row's first
 column; one right of, above or below it is dropped (it still takes its clock). A cell holds
 its sum modulo ``2**cell_bits`` in one `amaranth.lib.memory.Memory` of ``width x height``
-cells (a simple dual-port block RAM; with two lanes a memory per bank); back-to-back deltas
+cells (a simple dual-port block RAM; with more lanes a memory per bank); back-to-back deltas
 to one cell are neither lost nor doubled (read-modify-write with forwarding,
 `accumulator_cells.read_modify_write`, a copy per bank).
 
@@ -44,7 +46,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..model.pipeline import SCAN_LANES
 from ..model.tile import TileConfig
-from .accumulator_cells import read_modify_write, route_cell, route_pair
+from .accumulator_cells import read_modify_write, route_cell, route_pair, route_quad
 from .accumulator_scan import scan_states
 from .layouts import CELL_OP, TILE_OP, cell_sum_fields, tile_cell_layout, tile_op_layout
 
@@ -103,7 +105,7 @@ class TileAccumulator(wiring.Component):
         o_valid = Signal()
         advance = ~o_valid | self.cells.ready
         free = Signal()  # in ACC, the output register free and no clear pending: take
-        cell = (route_cell if lanes == 1 else route_pair)(m, self, free)
+        cell = {1: route_cell, 2: route_pair, 4: route_quad}[lanes](m, self, free)
         read_modify_write(m, self, rd, wr, cell)
         self._control(m, rd, o_valid, advance, free, cell)
         return m
@@ -132,12 +134,11 @@ class TileAccumulator(wiring.Component):
             rows = touched | (Const(1, tile.height) << cell.y)
             new_lo, new_hi = Mux(cell.x < lo, cell.x, lo), Mux(cell.x > hi, cell.x, hi)
         else:  # a cell a bank this clock, each kept or not (``want``: if taken; the
-            # registers load only when one is)
-            rows, new_lo, new_hi = touched, lo, hi
+            # registers load only when one is); the span as the router says (`span`)
+            rows = touched
             for c in cell.banks:
                 rows = rows | Mux(c.want, Const(1, tile.height) << c.y, 0)
-                new_lo = Mux(c.want & (c.x < new_lo), c.x, new_lo)
-                new_hi = Mux(c.want & (c.x > new_hi), c.x, new_hi)
+            new_lo, new_hi = cell.span(lo, hi)
         with m.If(cell.keep):
             m.d.sync += [dirty.eq(1), touched.eq(rows), lo.eq(new_lo), hi.eq(new_hi)]
         self.observe.__dict__.update(
@@ -161,7 +162,7 @@ class TileAccumulator(wiring.Component):
             m.d.sync += rsum.eq(total)
         self.observe.__dict__.update(rsum=rsum, total=total)
         if self._lanes > 1:  # the scan's row-stop test, total == 0, with no carry chain
-            self.observe.cancels = _sum_is(sums[0], sums[1], (-base)[: tile.cell_bits])
+            self.observe.cancels = _sum_is(*_carry_save(sums), (-base)[: tile.cell_bits])
         with m.FSM() as fsm:
             with m.State("ACC"):
                 m.d.comb += [
@@ -206,6 +207,19 @@ class TileAccumulator(wiring.Component):
             out.background.eq(background),
             *(out[name].eq(reg) for name, reg in params.items()),
         ]
+
+
+def _carry_save(values):
+    """Two values whose sum is the sum of `values` (two or more, of one width) modulo
+    ``2**width``, with no carry chain: three become two by a full adder per bit (the sum bits
+    and the carries one place up) until two are left."""
+    width = len(values[0])
+    values = [v.as_unsigned() for v in values]
+    while len(values) > 2:
+        a, b, c, *rest = values
+        carries = (a & b) | (a & c) | (b & c)
+        values = [(a ^ b ^ c)[:width], Cat(Const(0, 1), carries)[:width], *rest]
+    return values
 
 
 def _sum_is(a, b, t):

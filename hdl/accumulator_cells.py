@@ -14,9 +14,9 @@ import types
 
 from amaranth.hdl import Cat, Const, Mux, Signal, signed
 
-from .layouts import TILE_OP
+from .layouts import TILE_OP, log2
 
-__all__ = ["read_modify_write", "route_cell", "route_pair"]
+__all__ = ["read_modify_write", "route_cell", "route_pair", "route_quad"]
 
 
 def _select(sel, values):
@@ -146,10 +146,97 @@ def route_pair(m, unit, free) -> types.SimpleNamespace:
             cell.delta.eq(Mux(hits[0], pair[0][3], 0) + Mux(hits[1], pair[1][3], 0)),
         ]
         banks.append(cell)
+
+    def span(lo, hi):  # the banks' cells in turn
+        for c in banks:
+            lo = Mux(c.want & (c.x < lo), c.x, lo)
+            hi = Mux(c.want & (c.x > hi), c.x, hi)
+        return lo, hi
+
     out = types.SimpleNamespace(
-        banks=banks, keep=banks[0].keep | banks[1].keep, last=last, done=done
+        banks=banks, keep=banks[0].keep | banks[1].keep, last=last, done=done, span=span
     )
     unit.observe.__dict__.update(origin=(x0, y0), cell=out)
+    return out
+
+
+def route_quad(m, unit, free) -> types.SimpleNamespace:
+    """The cells taken this clock with four lanes (a memory bank per column modulo 4,
+    `edgeaa.model.tile.beat_clocks`): every bank takes its lowest waiting kept cell (its
+    *lead*) and the waiting cells at that same cell, their deltas added; waiting cells not
+    kept go at once. ``banks``, ``keep``, ``last`` and ``done`` as `route_pair`'s."""
+    tile = unit.tile
+    (x0, y0), cells, done, pending = _beat_source(m, unit)
+    # places, banks and which cells are one cell: from the beat's coordinates alone, beside
+    # its flags (Fmax, as `route_pair`)
+    places = [_place(m, tile, c, x0, y0, k) for k, c in enumerate(cells)]
+    bank = [x[:2] for _, x, _ in places]
+    same = {
+        (j, k): (places[j][1] == places[k][1]) & (places[j][2] == places[k][2])
+        for k in range(4)
+        for j in range(k)
+    }
+    kept = [pending[k] & places[k][0] for k in range(4)]
+    lead = [kept[k] & ~_any(kept[j] & (bank[j] == bank[k]) for j in range(k)) for k in range(4)]
+    take = [kept[k] & (lead[k] | _any(lead[j] & same[j, k] for j in range(k))) for k in range(4)]
+    sel = Cat(*(take[k] | (pending[k] & ~places[k][0]) for k in range(4)))
+    last = (pending & ~sel) == 0
+    taking = _take(m, unit, free, done, sel, last)
+    banks = []
+    for b in range(4):
+        leads = [lead[k] & (bank[k] == b) for k in range(4)]
+        # zero unless taken: a scan's clear writes stage B's delta (`read_modify_write`)
+        adds = [taking & take[k] & (bank[k] == b) for k in range(4)]
+        cell = types.SimpleNamespace(
+            keep=Signal(name=f"bank{b}_keep"),
+            want=Signal(name=f"bank{b}_want"),  # as `route_pair`'s: without ``taking``
+            x=Signal(tile.x_bits, name=f"bank{b}_x"),
+            y=Signal(tile.y_bits, name=f"bank{b}_y"),
+            delta=Signal(signed(tile.cell_bits), name=f"bank{b}_delta"),
+        )
+        m.d.comb += [
+            cell.want.eq(_any(leads)),
+            cell.keep.eq(taking & cell.want),
+            cell.x.eq(_one_hot_or(leads, [x for _, x, _ in places])),
+            cell.y.eq(_one_hot_or(leads, [y for _, _, y in places])),
+            cell.delta.eq(sum(Mux(adds[k], cells[k].delta, 0) for k in range(4))),
+        ]
+        banks.append(cell)
+
+    def span(lo, hi):
+        # every kept cell of the beat, taken this clock or later in it (the span ends the
+        # same): not behind the banks' picks, and a tree of compares, not a chain (Fmax)
+        los = [Mux(kept[k], x, lo) for k, (_, x, _) in enumerate(places)]
+        his = [Mux(kept[k], x, hi) for k, (_, x, _) in enumerate(places)]
+        return _tree(lambda a, b: Mux(a < b, a, b), [lo, *los]), _tree(
+            lambda a, b: Mux(a > b, a, b), [hi, *his]
+        )
+
+    out = types.SimpleNamespace(
+        banks=banks, keep=_any(c.keep for c in banks), last=last, done=done, span=span
+    )
+    unit.observe.__dict__.update(origin=(x0, y0), cell=out)
+    return out
+
+
+def _tree(pick, values):
+    """`values` reduced pairwise by `pick` (of two), in a balanced tree."""
+    while len(values) > 1:
+        pairs = [pick(a, b) for a, b in zip(values[::2], values[1::2], strict=False)]
+        values = pairs + values[len(pairs) * 2 :]
+    return values[0]
+
+
+def _any(bits):
+    """The OR of `bits` (0 when none)."""
+    return Cat(Const(0, 1), *bits).any()
+
+
+def _one_hot_or(sel, values):
+    """The value of `values` whose bit of one-hot `sel` is set (zero when none)."""
+    out = Const(0, 1)
+    for bit, value in zip(sel, values, strict=True):
+        out = out | Mux(bit, value, 0)
     return out
 
 
@@ -176,8 +263,8 @@ def read_modify_write(m, unit, rd, wr, cell):
     which the read did not see; write the sum). Stage B's delta is zero when it holds no
     cell, so a scan's clear is the same add with the read forced to zero. `unit._clear`
     (the scan's) takes the write port when set and writes zero at `unit._scan_addr`. `rd` and
-    `wr` may be lists, a port of each lane's memory (banked by column parity, two lanes):
-    then `cell` is `route_pair`'s and each bank runs its own stages on its cell
+    `wr` may be lists, a port of each lane's memory (banked by column modulo the lanes):
+    then `cell` is `route_pair`'s or `route_quad`'s and each bank runs its own stages on its cell
     (`_stages`), and a clear zeroes every lane's word at the beat `unit._scan_addr`."""
     tile = unit.tile
     addr_bits = tile.x_bits + tile.y_bits  # a cell's full address (lanes: bank and word)
@@ -185,9 +272,10 @@ def read_modify_write(m, unit, rd, wr, cell):
     unit._clear = Signal()
     unit._read_en = Signal()
     if isinstance(rd, list):
+        low = log2(len(rd))  # the bank: the column's low bits
         banks = zip(rd, wr, cell.banks, strict=True)
         unit.observe.stages = [
-            _stages(m, unit, r, w, bank, Cat(bank.x[1:], bank.y), unit._scan_addr[1:], k)
+            _stages(m, unit, r, w, bank, Cat(bank.x[low:], bank.y), unit._scan_addr[low:], k)
             for k, (r, w, bank) in enumerate(banks)
         ]
     else:
@@ -230,8 +318,8 @@ def _stages(m, unit, rd, wr, cell, addr, scan_addr, bank: int | None = None):
         wr.en.eq(unit._clear | b_valid),
     ]
 
-    def full(address):  # a bank's word with its bank bit: the cell's full address
-        return address if bank is None else Cat(Const(bank, 1), address)
+    def full(address):  # a bank's word with its bank bits: the cell's full address
+        return address if bank is None else Cat(Const(bank, log2(unit.lanes)), address)
 
     return types.SimpleNamespace(
         b_valid=b_valid,

@@ -144,7 +144,7 @@ def _check_count(name: str, value, allowed) -> int:
 
 
 PIXEL_LANES = (1, 2, 4)  # a tile is at least 4 pixels wide: a row is whole beats
-SCAN_LANES = (1, 2)  # cells a clock through the accumulator's scan and the resolve
+SCAN_LANES = (1, 2, 4)  # cells a clock through the accumulator's scan and the resolve
 
 # The named configurations, built from the same components (docs/hardware.md, "Display
 # rate"): their setup units, pixel lanes and scan lanes. compact: the smallest, fits an iCE40

@@ -21,7 +21,8 @@ The stall. The accumulator is not ready while it scans the previous polygon's ro
 a tile or flush op the resolve has not taken: from the polygon's begin it is ready from
 `TileClock.ready` (T) on, and then takes the polygon's beats until its end (the only other
 op, sent when the core is idle), each over `beat_clocks` clocks (a nonzero cell a clock, or
-with two scan lanes a pair of cells with a nonzero one, `TileModel.beat_clocks`). So
+with two scan lanes a pair of cells with a nonzero one, with four a cell a bank,
+`TileModel.beat_clocks`). So
 the core sees a sink first ready in clock T that holds each beat that long:
 `schedule(..., sink_ready=T, holds=...)`. The stepper's one enable freezes the loop and its
 pipeline while a beat waits (`edgeaa.model.timing.beat_wait`), while the setup runs on until

@@ -6,8 +6,9 @@ order, a stream of *ops* (the accumulator's input):
 
 * `TileStart` (origin, background): the tile's pixels become the background.
 * `Beats`: delta beats of the stepper (`edgeaa.model.beat.DeltaBeat`), a cell a clock (two
-  with two scan lanes, one a bank): a beat takes a clock per nonzero cell (per pair of cells
-  with a nonzero one), one when it has none (`beat_clocks`). A cell is moved
+  or four with two or four scan lanes, one a bank): a beat takes a clock per nonzero cell
+  (per pair of cells with a nonzero one; with four, per cell of its busiest bank), one when
+  it has none (`beat_clocks`). A cell is moved
   into the tile (origin subtracted); one left of it is added into its row's first column (the
   prefix sum carries it), one right of, above or below it is dropped, as
   `edgeaa.model.accumulate.resolve_rows` does. A row holding a nonzero delta is *touched*.
@@ -224,22 +225,41 @@ def beat_clocks(cells: np.ndarray, lanes: int = 1, tile: TileConfig | None = Non
     into one cell (their deltas added), but two clocks (first cell, then second) when the
     pair *clashes*: both nonzero and kept in the tile at `origin` (`tile_cells`) at two
     cells of one bank. The stepper's beats never clash (a pair is two neighbouring columns
-    of a row, or both moved into its first column)."""
+    of a row, or both moved into its first column). Four lanes (a bank per column modulo
+    4): each clock every bank takes its lowest waiting kept cell, with the cells at that
+    same cell (their deltas added), and the cells not kept go in the first clock; so a beat
+    with a nonzero cell takes as many clocks as its busiest bank has different kept cells,
+    at least one."""
     cells = np.asarray(cells).reshape(-1, 4, 3)
     nonzero = cells[:, :, 2] != 0
     if lanes == 1:
         return np.maximum(np.count_nonzero(nonzero, axis=1), 1)
-    if lanes != 2 or tile is None:
-        raise ValueError(f"beat_clocks takes one lane, or two with the tile, not {lanes!r}")
+    if lanes not in (2, 4) or tile is None:
+        raise ValueError(f"beat_clocks takes 1 lane, or 2 or 4 with the tile, not {lanes!r}")
     tx, ty = cells[:, :, 0] - origin[0], cells[:, :, 1] - origin[1]
     kept = nonzero & (ty >= 0) & (ty < tile.height) & (tx < tile.width)
     col = np.maximum(tx, 0)
+    if lanes == 4:
+        return _busiest_bank_clocks(kept, col, ty, nonzero)
     clocks = np.zeros(len(cells), dtype=np.int64)
     for a, b in ((0, 1), (2, 3)):
         clash = kept[:, a] & kept[:, b] & (col[:, a] % 2 == col[:, b] % 2)
         clash &= (col[:, a] != col[:, b]) | (ty[:, a] != ty[:, b])
         clocks += (nonzero[:, a] | nonzero[:, b]).astype(np.int64) + clash  # not bool's +
     return np.maximum(clocks, 1)
+
+
+def _busiest_bank_clocks(kept, col, row, nonzero) -> np.ndarray:
+    """Four lanes' clocks a beat (`beat_clocks`): the most different kept cells in one bank
+    (column modulo 4), at least one."""
+    fresh = kept.copy()  # a kept cell no earlier kept cell of its beat is the same as
+    for a in range(4):
+        for b in range(a):
+            fresh[:, a] &= ~(kept[:, b] & (col[:, b] == col[:, a]) & (row[:, b] == row[:, a]))
+    busiest = np.zeros(len(kept), dtype=np.int64)
+    for bank in range(4):
+        busiest = np.maximum(busiest, np.count_nonzero(fresh & (col % 4 == bank), axis=1))
+    return np.maximum(busiest, 1)
 
 
 def composite_steps(below: int, q: int, intensity: int, d: int, bits: int) -> int:

@@ -438,7 +438,8 @@ def beat_wait(valid: int, sink_ready: int, hold: int) -> int:
     """Clocks a beat valid in clock `valid` waits in the stepper's output register: until the
     sink is ready (`sink_ready`, the polygon pipeline's accumulator after a scan), then
     ``hold - 1`` more while the sink takes it (the accumulator takes a beat's nonzero cells
-    one a clock, or two with two scan lanes, `edgeaa.model.tile.beat_clocks`, and the beat in
+    one a clock, or two or four with two or four scan lanes, `edgeaa.model.tile.beat_clocks`,
+    and the beat in
     the last of them)."""
     return max(0, sink_ready - valid) + hold - 1
 

@@ -391,7 +391,10 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
     units = pipeline.setup_units
     unit = unit_cycles(config, units, pipeline.deltas)  # a unit's clocks per edge, but its columns
 
-    per_cell = 2 // pipeline.scan_lanes  # accumulator clocks per minor line a beat touches
+    # four scan lanes are counted as two: never more clocks a beat (`beat_clocks`) nor a
+    # row's scan (its span widened to beats of four is at most two more cells than to pairs)
+    lanes = min(pipeline.scan_lanes, 2)
+    per_cell = 2 // lanes  # accumulator clocks per minor line a beat touches
     setup = unit / units
     clipped = start_clip_cycles(config, pipeline.deltas) / pipeline.setup_units
     # a polygon's first edge, over its setup
@@ -437,7 +440,7 @@ def clock_estimate(plan: Plan, pipeline: PipelineConfig | TileConfig) -> tuple[i
             work = _edge_clocks(columns[crossing], b_slope[crossing], *costs).sum()
             work += (_edge_clocks(extent, 0, *costs) * n_merged).sum()  # vertical: no minor step
             work += clipped * (crossing & starts_above).sum()
-            work += (latency + 8) * present + scanned / pipeline.scan_lanes
+            work += (latency + 8) * present + scanned / lanes
             if present:  # the last scan's cells through the resolve before the flush reads
                 work += SCAN_START + resolve_latency(tile, pipeline.product_stages)
             # the flush (its beats) runs beside the next tile's work
@@ -451,7 +454,7 @@ def _edge_clocks(columns, slope, per_cell: int, unit: float, units: int):
     and a clock (the stepper waits for each), or its unit's clocks (`unit`) and those over
     the `units` (a unit holds the edge while it is stepped). A beat (a column of the major
     axis) has nonzero cells in one line of the minor axis, two a line (`per_cell`: one
-    accumulator clock each, or a pair a clock with two scan lanes), and in two lines where
+    accumulator clock each, or a pair a clock with two or four scan lanes), and in two lines where
     the edge steps along the minor axis, at most ``ceil(columns * slope)`` times:
     docs/hardware.md, "The clock estimate, an upper bound". For the fast core, which copies
     the bank, both terms count ``C`` or a clock too many: an over-estimate, as the engines'

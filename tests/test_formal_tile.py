@@ -49,7 +49,8 @@ def _formal(*values):
 @pytest.mark.parametrize(
     "name",
     ["acc_stream", "res_stream", "res_stream_lanes", "acc_stream_scan", "res_stream_scan"]
-    + ["acc_deltas", "acc_sums", "acc_deltas_scan", _formal("acc_sums_scan")],
+    + ["acc_deltas", "acc_sums", "acc_deltas_scan", _formal("acc_sums_scan")]
+    + ["acc_stream_scan4", "acc_deltas_scan4", _formal("acc_sums_scan4")],
 )
 def test_fast_proofs(tools, name):
     result = run_tile_proof(name, timeout=600)
@@ -60,7 +61,8 @@ def test_fast_proofs(tools, name):
 @pytest.mark.parametrize(
     "name",
     ["acc_deltas_cover", "acc_sums_cover", "res_pixels_cover", "res_pixels_lanes_cover"]
-    + ["res_pixels_scan_cover", "acc_deltas_scan_cover", "acc_sums_scan_cover"],
+    + ["res_pixels_scan_cover", "acc_deltas_scan_cover", "acc_sums_scan_cover"]
+    + ["acc_deltas_scan4_cover", "acc_sums_scan4_cover", "res_pixels_scan4_cover"],
 )
 def test_invariants_not_vacuous(tools, name):
     """Each invariant's premise is reached with its conclusion from power-on on `SMALL_TILE`
@@ -70,7 +72,9 @@ def test_invariants_not_vacuous(tools, name):
 
 
 @pytest.mark.formal
-@pytest.mark.parametrize("name", ["res_pixels", "res_pixels_lanes", "res_pixels_scan"])
+@pytest.mark.parametrize(
+    "name", ["res_pixels", "res_pixels_lanes", "res_pixels_scan", "res_pixels_scan4"]
+)
 def test_slow_proofs(tools, name):
     result = run_tile_proof(name, timeout=SLOW_TIMEOUT)
     assert result.passed, _explain(result)
@@ -105,6 +109,10 @@ def test_slow_proofs(tools, name):
         _formal("acc_sums_scan", "stale_origin", 8, "cells: a beat taken with its last cell (bmc)"),
         _formal("acc_deltas_scan", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"),
         _formal("res_pixels_scan", "wide_range", 16, "pixels: value (bmc)"),
+        ("acc_sums_scan4", "swap_cells", 8, "sums: cell sum (bmc)"),
+        _formal(
+            "acc_deltas_scan4", "lost_delta", 8, "cells: a beat taken with its last cell (bmc)"
+        ),
     ],
 )
 def test_fault_is_caught(tools, name, fault, depth, message):

@@ -254,13 +254,13 @@ def test_several_setup_units_in_the_models_clocks(units, seed):
 
 @pytest.mark.parametrize(
     ("units", "lanes", "scan", "seed"),
-    [(1, 2, 1, 2), (2, 4, 1, 10), (4, 4, 2, 7)] + SLOW_LANES,
+    [(1, 2, 1, 2), (2, 4, 1, 10), (4, 4, 2, 7), (4, 4, 4, 3)] + SLOW_LANES,
 )
 def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed):
     """A flush of `lanes` pixels a clock and a scan of `scan` cells a clock (the fast
     pipeline's four and two; two scan lanes also take a beat's cells into the accumulator by
-    pairs), with the bad commands and the stalls: each pixel in its beat's clock, each beat
-    of cells in its clock."""
+    pairs, four a cell a bank), with the bad commands and the stalls: each pixel in its
+    beat's clock, each beat of cells in its clock."""
     pipeline = PipelineConfig(SMALL_TILE, units, lanes, scan)
     commands = random_commands(random.Random(seed), SMALL_TILE)
     hw = run_transfers(pipeline, commands)
@@ -268,12 +268,13 @@ def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed)
     check_clock_for_clock(pipeline, commands, hw, label)
     assert hw.stats["acc_stall"] > 0  # the stall is exercised
     # the model of a flush of one pixel a clock, or of a scan of one cell a clock, does not fit
-    wrongs = [{"pixel_lanes": 1, "scan_lanes": 1}] + [{"scan_lanes": 3 - scan}] * (lanes > 1)
+    other_scan = {1: 2, 2: 1, 4: 2}[scan]
+    wrongs = [{"pixel_lanes": 1, "scan_lanes": 1}] + [{"scan_lanes": other_scan}] * (lanes > 1)
     wrongs += [{"pixel_lanes": 2}] * (lanes == 4 and scan == 2)
     for wrong in wrongs:
         with pytest.raises(AssertionError):
             check_clock_for_clock(replace(pipeline, **wrong), commands, hw, f"{wrong}")
-    if scan == 2:  # nor does two scan lanes' model with a cell a clock into the accumulator
+    if scan > 1:  # nor does the scan lanes' model with a cell a clock into the accumulator
         one = tile_model.beat_clocks
         monkeypatch.setattr(tile_model.TileModel, "beat_clocks", lambda self, cells: one(cells))
         with pytest.raises(AssertionError):
@@ -281,7 +282,8 @@ def test_pixel_lanes_in_the_models_clocks(monkeypatch, units, lanes, scan, seed)
 
 
 @pytest.mark.parametrize(
-    ("units", "lanes", "scan", "seed"), [(1, 1, 1, 3), (4, 4, 2, 3), _slow(2, 2, 2, 10)]
+    ("units", "lanes", "scan", "seed"),
+    [(1, 1, 1, 3), (4, 4, 2, 3), _slow(2, 2, 2, 10), _slow(4, 4, 4, 3)],
 )
 def test_a_skid_buffer_before_the_accumulator_in_the_models_clocks(units, lanes, scan, seed):
     """The core's beats through a skid buffer (`beat_skid`, the fast pipeline's), with the
@@ -387,23 +389,25 @@ def test_a_wrong_model_is_caught(wrong_model_run, monkeypatch, wrong):
 
 
 @pytest.mark.parametrize(
-    ("name", "pipeline"),
+    ("name", "pipeline", "scan_lanes"),
     [
-        ("text", "compact"),
-        ("text", "fast"),
-        ("starburst", "compact"),
-        pytest.param("starburst", "fast", marks=pytest.mark.slow),
-        pytest.param("hatch", "compact", marks=pytest.mark.slow),
-        pytest.param("hatch", "fast", marks=pytest.mark.slow),
+        ("text", "compact", 1),
+        ("text", "fast", 2),
+        ("starburst", "compact", 1),
+        pytest.param("starburst", "fast", 2, marks=pytest.mark.slow),
+        pytest.param("hatch", "compact", 1, marks=pytest.mark.slow),
+        pytest.param("hatch", "fast", 2, marks=pytest.mark.slow),
+        pytest.param("text", "fast", 4, marks=pytest.mark.slow),
+        pytest.param("starburst", "fast", 4, marks=pytest.mark.slow),
     ],
 )
-def test_verilator_runs_the_builtins_in_the_models_clocks(name, pipeline):
+def test_verilator_runs_the_builtins_in_the_models_clocks(name, pipeline, scan_lanes):
     from edgeaa.render import builtin
     from edgeaa.sim.simulators import pipeline_harness
 
     tile = TileConfig(DEFAULT)
     commands = scene_commands(plan_scene(builtin(name, DEFAULT), DEFAULT), tile)
-    tile = PipelineConfig.named(pipeline, tile)
+    tile = replace(PipelineConfig.named(pipeline, tile), scan_lanes=scan_lanes)
     run = pipeline_harness.run(tile, commands)
     model = pipeline_cycles(tile, commands)
     got = run.pixels[:, 0]

@@ -1286,9 +1286,11 @@ def test_the_clock_estimate_is_above_the_simulated_clocks_and_within_about_twice
     assert len(commands) <= count <= 1.1 * len(commands)
 
 
-@pytest.mark.parametrize("pipeline", ["compact", "fast"])
+@pytest.mark.parametrize(("pipeline", "scan_lanes"), [("compact", 1), ("fast", 2), ("fast", 4)])
 @pytest.mark.parametrize(("width", "height"), [(8, 4), (16, 8)])
-def test_the_clock_estimate_is_above_the_clocks_of_random_pages(pipeline, width, height):
+def test_the_clock_estimate_is_above_the_clocks_of_random_pages(
+    pipeline, scan_lanes, width, height
+):
     """Seeded random scenes cut to a small page, half of them inside a frame polygon, so that
     polygons reach past every side of the image (merged edges in every tile, edges culled
     right of it): the estimate is never below the cycle model's clocks. It was, down to 0.62
@@ -1304,6 +1306,7 @@ def test_the_clock_estimate_is_above_the_clocks_of_random_pages(pipeline, width,
     page_w, page_h = 5 * width, 6 * height
     frame = frame_polygon(page_w, page_h, DEFAULT)
     config = PipelineConfig.named(pipeline, TileConfig(DEFAULT, width, height))
+    config = replace(config, scan_lanes=scan_lanes)  # fast's, or four (counted as two)
     for seed in range(12):
         scene = random_scene(DEFAULT, seed)
         polygons = (frame, *scene.polygons) if seed % 2 else scene.polygons

@@ -196,8 +196,45 @@ def test_two_lanes_take_a_beats_cells_by_pairs():
     # the bank is the tile's column: moved into column 0 the cell's parity is the origin's
     moved = np.array([[(-1, 0, d), (1, 0, d), (0, 0, 0), (0, 0, 0)]])
     assert [beat_clocks(moved, 2, tile, (x, 0)).tolist() for x in (0, -1, -2)] == [[1], [2], [2]]
-    with pytest.raises(ValueError, match="two with the tile"):
+    with pytest.raises(ValueError, match="2 or 4 with the tile"):
         beat_clocks(cells, 2)
+
+
+def test_four_lanes_take_a_cell_a_bank_a_clock():
+    """`beat_clocks` with four lanes (a bank per column modulo 4): a clock for a beat with a
+    nonzero cell, or as many as its busiest bank's different kept cells; cells at one cell
+    add into one write; cells dropped or zero take none of their own."""
+    tile, d = TileConfig(SMALL, 8, 4), 5
+    beats = [
+        [(0, 0, d), (1, 0, d), (2, 0, d), (3, 0, d)],  # four banks: one clock
+        [(4, 1, d), (5, 1, d), (4, 2, d), (5, 2, d)],  # two rows of two columns: two
+        [(7, 1, d), (7, 1, d), (0, 0, 0), (0, 0, 0)],  # one cell twice: one write
+        [(0, 0, d), (4, 0, d), (0, 1, d), (4, 1, d)],  # four cells of bank 0: four
+        [(-1, 1, d), (-2, 1, d), (0, 2, d), (1, 9, d)],  # column 0 twice, row 2; one dropped
+        [(0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0)],  # no nonzero cell: one clock
+        [(9, 0, d), (1, 9, d), (0, 0, 0), (0, 0, 0)],  # both dropped: one clock
+    ]
+    cells = np.array(beats)
+    assert beat_clocks(cells, 4, tile).tolist() == [1, 2, 1, 4, 2, 1, 1]
+    # the bank is the tile's column: moved into column 0 a cell is in bank 0 wherever it was
+    moved = np.array([[(-1, 0, d), (3, 0, d), (0, 0, 0), (0, 0, 0)]])
+    assert [beat_clocks(moved, 4, tile, (x, 0)).tolist() for x in (0, -1)] == [[1], [2]]
+    with pytest.raises(ValueError, match="4 with the tile"):
+        beat_clocks(cells, 4)
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    st.lists(
+        st.tuples(*[st.tuples(st.integers(-3, 10), st.integers(-2, 5), st.integers(-2, 2))] * 4),
+        min_size=1,
+        max_size=8,
+    )
+)
+def test_four_lanes_never_take_more_clocks_than_two(beats):
+    tile = TileConfig(SMALL, 8, 4)
+    cells = np.array(beats, dtype=np.int64)
+    assert (beat_clocks(cells, 4, tile) <= beat_clocks(cells, 2, tile)).all()
 
 
 def _pair_clocks(tile: TileConfig, plan):

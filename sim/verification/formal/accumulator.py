@@ -120,9 +120,11 @@ def _ghost_sel(pending, placed, lanes: int):
     """The cells of the beat the ghost counts this clock, from its `pending` ones (nonzero, not
     yet counted), as `edgeaa.model.tile.beat_clocks` times them: one lane, the lowest; two,
     the pair (0, 1) while either is pending, else (2, 3), both unless they clash (both kept
-    at two cells of one column parity: then the first)."""
+    at two cells of one column parity: then the first); four, `_ghost_sel_banks`."""
     if lanes == 1:
         return (pending & -pending)[:4]
+    if lanes == 4:
+        return _ghost_sel_banks(pending, placed)
     takes = []
     for a in (0, 2):
         (ka, xa, ya, _), (kb, xb, yb, _) = placed[a], placed[a + 1]
@@ -131,6 +133,23 @@ def _ghost_sel(pending, placed, lanes: int):
         takes.append(Cat(pending[a], pending[a + 1] & ~clash))
     first = pending[0] | pending[1]
     return Mux(first, Cat(takes[0], Const(0, 2)), Cat(Const(0, 2), takes[1]))
+
+
+def _ghost_sel_banks(pending, placed):
+    """Four lanes (a bank per column modulo 4): the cells not kept at once; of the kept, in
+    each bank the lowest pending one and those at its cell, so a beat takes as many clocks as
+    its busiest bank has cells."""
+    kept = [pending[k] & keep for k, (keep, _, _, _) in enumerate(placed)]
+    bank = [x[:2] for _, x, _, _ in placed]
+
+    def one_cell(j, k):
+        return (placed[j][1] == placed[k][1]) & (placed[j][2] == placed[k][2])
+
+    lowest = [kept[k] & ~any_(kept[j] & (bank[j] == bank[k]) for j in range(k)) for k in range(4)]
+    taken = [
+        kept[k] & (lowest[k] | any_(lowest[j] & one_cell(j, k) for j in range(k))) for k in range(4)
+    ]
+    return Cat(*(taken[k] | (pending[k] & ~placed[k][0]) for k in range(4)))
 
 
 def _ghost_cells(m, tile, dut, src, s, checks):

@@ -409,6 +409,59 @@ TILE_PROOFS: dict[str, TileProof] = {
             scan_lanes=2,
             product_stages=2,
         ),
+        TileProof(
+            "acc_stream_scan4",
+            "accumulator",
+            ("stream",),
+            "prove",
+            1,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="cells hold rule with four scan lanes (beats of four cells from the "
+            "memories banked by column modulo 4), any reachable state (k-induction), default "
+            "tile",
+            scan_lanes=4,
+        ),
+        TileProof(
+            "acc_deltas_scan4",
+            "accumulator",
+            ("deltas",),
+            "prove",
+            2,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="acc_deltas with four scan lanes: a beat's cells taken a cell a bank a "
+            "clock, each cell kept sent once per end in its beat of four",
+            scan_lanes=4,
+        ),
+        TileProof(
+            "acc_sums_scan4",
+            "accumulator",
+            ("sums",),
+            "prove",
+            2,
+            TileConfig(),
+            reset=True,
+            memory_map=False,
+            description="acc_sums with four scan lanes: the accumulation memory in four banks "
+            "by column modulo 4, the cells of a beat at one cell added, each cell's sum in its "
+            "lane of the beat",
+            scan_lanes=4,
+        ),
+        TileProof(
+            "res_pixels_scan4",
+            "resolve",
+            ("pixels",),
+            "prove",
+            resolve_latency(SMALL_TILE, 2) + 1,
+            description="res_pixels with four pixel lanes, four scan lanes and the products "
+            "over two clocks: a beat of four cells a clock, each composited in its lane",
+            lanes=4,
+            scan_lanes=4,
+            product_stages=2,
+        ),
         *(
             TileProof(
                 f"{name}_cover",
@@ -432,6 +485,9 @@ TILE_PROOFS: dict[str, TileProof] = {
                 ("res_pixels", "resolve", "pixels", 14, 1, 1, 2),
                 ("res_pixels_lanes", "resolve", "pixels", 14, 2, 1, 1),
                 ("res_pixels_scan", "resolve", "pixels", 14, 4, 2, 2),
+                ("acc_deltas_scan4", "accumulator", "deltas", 16, 1, 4, 1),
+                ("acc_sums_scan4", "accumulator", "sums", 16, 1, 4, 1),
+                ("res_pixels_scan4", "resolve", "pixels", 14, 4, 4, 2),
             )
         ),
     )
