@@ -206,11 +206,10 @@ def route_quad(m, unit, free) -> types.SimpleNamespace:
     def span(lo, hi):
         # every kept cell of the beat, taken this clock or later in it (the span ends the
         # same): not behind the banks' picks, and a tree of compares, not a chain (Fmax)
-        los = [Mux(kept[k], x, lo) for k, (_, x, _) in enumerate(places)]
-        his = [Mux(kept[k], x, hi) for k, (_, x, _) in enumerate(places)]
-        return _tree(lambda a, b: Mux(a < b, a, b), [lo, *los]), _tree(
-            lambda a, b: Mux(a > b, a, b), [hi, *his]
-        )
+        xs = [x for _, x, _ in places]
+        low = _tree(lambda a, b: Mux(a < b, a, b), [lo, *map(Mux, kept, xs, [lo] * 4)])
+        high = _tree(lambda a, b: Mux(a > b, a, b), [hi, *map(Mux, kept, xs, [hi] * 4)])
+        return low, high
 
     out = types.SimpleNamespace(
         banks=banks, keep=_any(c.keep for c in banks), last=last, done=done, span=span

@@ -166,7 +166,7 @@ def test_two_lanes_take_a_pair_of_cells_a_clock_clock_for_clock(seed):
     assert seen["clash"] and seen["one cell"], seen  # both cases were driven
 
 
-@pytest.mark.parametrize("seed", [7, 8])
+@pytest.mark.parametrize("seed", [7, pytest.param(8, marks=pytest.mark.slow)])
 def test_four_lanes_take_a_cell_a_bank_a_clock_clock_for_clock(seed):
     """Four lanes (a memory bank per column modulo 4): every bank takes a cell a clock, the
     cells at one cell added, as many clocks as the busiest bank's cells; random beats of any
@@ -277,7 +277,10 @@ def test_a_scene_through_the_stages_is_the_renderers_image():
     assert np.array_equal(image, render_tiles(plan, tile))
 
 
-@pytest.mark.parametrize(("seed", "lanes"), [(5, 1), (6, 1), (5, 2), (6, 2), (5, 4), (6, 4)])
+@pytest.mark.parametrize(
+    ("seed", "lanes"),
+    [(5, 1), (6, 1), (5, 2), (6, 2), (5, 4), pytest.param(6, 4, marks=pytest.mark.slow)],
+)
 def test_random_back_pressure_gives_the_same_frames(seed, lanes):
     tile = TileConfig(SMALL, 8, 4)
     ops = random_ops(tile, SMALL, seed)

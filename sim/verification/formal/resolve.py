@@ -200,7 +200,8 @@ def _resolve_invariants(m, tile, dut, read, g, covers):
     tracked = Cat(g.X, g.Y)
     scan, count, lanes = g.scan, g.count, g.lanes
     # the beat of cells holding (X, Y), and the flush's beat holding it: their first columns
-    tracked_beat = Cat(g.X if scan == 1 else Cat(Const(0, 1), g.X[1:]), g.Y)
+    scan_bits = scan.bit_length() - 1
+    tracked_beat = Cat(Const(0, scan_bits), g.X[scan_bits:], g.Y) if scan > 1 else tracked
     lane_bits = lanes.bit_length() - 1
     flush_beat = Cat(Const(0, lane_bits), tracked[lane_bits:]) if lanes > 1 else tracked
 

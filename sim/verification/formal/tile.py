@@ -249,6 +249,8 @@ class TileProof:
     product_stages: int = 1  # the resolve's (`PipelineConfig.product_stages`)
 
 
+WIDE_TILE = TileConfig(SMALL_TILE.config, 8, 2)  # `SMALL_TILE` with two beats of four a row
+
 TILE_PROOFS: dict[str, TileProof] = {
     proof.name: proof
     for proof in (
@@ -476,6 +478,8 @@ TILE_PROOFS: dict[str, TileProof] = {
                 lanes=lanes,
                 scan_lanes=scan,
                 product_stages=stages,
+                # four scan lanes: a row of two beats, so that one can stop before the last
+                tile=WIDE_TILE if (stage, scan) == ("accumulator", 4) else SMALL_TILE,
             )
             for name, stage, check, depth, lanes, scan, stages in (
                 ("acc_deltas", "accumulator", "deltas", 16, 1, 1, 1),
