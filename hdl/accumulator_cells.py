@@ -197,8 +197,8 @@ def route_quad(m, unit, free) -> types.SimpleNamespace:
         m.d.comb += [
             cell.want.eq(_any(leads)),
             cell.keep.eq(taking & cell.want),
-            cell.x.eq(_one_hot_or(leads, [x for _, x, _ in places])),
-            cell.y.eq(_one_hot_or(leads, [y for _, _, y in places])),
+            cell.x.eq(_select(Cat(*leads), [x for _, x, _ in places])),
+            cell.y.eq(_select(Cat(*leads), [y for _, _, y in places])),
             cell.delta.eq(sum(Mux(adds[k], cells[k].delta, 0) for k in range(4))),
         ]
         banks.append(cell)
@@ -229,14 +229,6 @@ def _tree(pick, values):
 def _any(bits):
     """The OR of `bits` (0 when none)."""
     return Cat(Const(0, 1), *bits).any()
-
-
-def _one_hot_or(sel, values):
-    """The value of `values` whose bit of one-hot `sel` is set (zero when none)."""
-    out = Const(0, 1)
-    for bit, value in zip(sel, values, strict=True):
-        out = out | Mux(bit, value, 0)
-    return out
 
 
 def _place(m, tile, cell, x0, y0, k: int):

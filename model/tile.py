@@ -240,7 +240,7 @@ def beat_clocks(cells: np.ndarray, lanes: int = 1, tile: TileConfig | None = Non
     kept = nonzero & (ty >= 0) & (ty < tile.height) & (tx < tile.width)
     col = np.maximum(tx, 0)
     if lanes == 4:
-        return _busiest_bank_clocks(kept, col, ty, nonzero)
+        return _busiest_bank_clocks(kept, col, ty)
     clocks = np.zeros(len(cells), dtype=np.int64)
     for a, b in ((0, 1), (2, 3)):
         clash = kept[:, a] & kept[:, b] & (col[:, a] % 2 == col[:, b] % 2)
@@ -249,7 +249,7 @@ def beat_clocks(cells: np.ndarray, lanes: int = 1, tile: TileConfig | None = Non
     return np.maximum(clocks, 1)
 
 
-def _busiest_bank_clocks(kept, col, row, nonzero) -> np.ndarray:
+def _busiest_bank_clocks(kept, col, row) -> np.ndarray:
     """Four lanes' clocks a beat (`beat_clocks`): the most different kept cells in one bank
     (column modulo 4), at least one."""
     fresh = kept.copy()  # a kept cell no earlier kept cell of its beat is the same as
